@@ -1,0 +1,33 @@
+// ngi errors: every failure is an ngi::Error whose message names the operation and the object involved.
+#pragma once
+#include <stdexcept>
+#include <string>
+
+namespace ngi {
+
+// Base class of every exception ngi throws.
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& what) : std::runtime_error(what) {}
+};
+
+// An OpenCL call failed. what() = "<operation>: <clCall> failed with CL_<NAME> (<code>)[: detail]".
+class ClError : public Error {
+public:
+    ClError(const std::string& operation, const std::string& call, int code, const std::string& detail = "");
+    int code() const { return code_; }
+
+private:
+    int code_;
+};
+
+// Bad user input: a file, tensor or argument that cannot be used. The message names it.
+class InputError : public Error {
+public:
+    using Error::Error;
+};
+
+// "CL_OUT_OF_RESOURCES" for -5 etc.; "CL_UNKNOWN_ERROR" for codes OpenCL 1.2/3.0 does not define.
+const char* cl_error_name(int code);
+
+}  // namespace ngi

@@ -1,0 +1,68 @@
+// A trained generator loaded from an ngi model file (.safetensors + architecture metadata) and run on a Device.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ngi/device.hpp"
+#include "ngi/tensor.hpp"
+
+namespace ngi {
+
+// The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
+struct ModelConfig {
+    std::string family;              // "pix2pix_unet" | "deepillumination"
+    int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
+    std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
+    float bn_eps = 1e-5f;
+    std::string dropout = "off";     // "off" | "seeded"
+    float dropout_p = 0.5f;
+    std::uint32_t dropout_seed = 0;
+    float leaky_slope = 0.2f;
+    std::vector<std::string> input_layout;  // channel names, may be empty
+    float input_range[2] = {-1.0f, 1.0f};
+    float output_range[2] = {-1.0f, 1.0f};
+    std::string source;
+    std::string json;                // the metadata exactly as stored
+};
+
+// Overrides of the file's settings; an empty string keeps the file's value.
+struct ModelOptions {
+    std::string bn_mode;
+    std::string dropout;
+};
+
+struct LayerTiming {
+    std::string name, kind;
+    double ms = 0, gflop = 0;
+};
+
+struct RunInfo {
+    int sanitized_inputs = 0;        // NaN/Inf input values replaced (NaN -> 0, +-Inf -> +-FLT_MAX)
+    std::vector<LayerTiming> layers; // per graph node, when the device was opened with profiling
+    std::size_t arena_bytes = 0;     // planned peak of intermediate tensors
+    std::size_t naive_bytes = 0;     // what one buffer per tensor would need
+    std::size_t scratch_bytes = 0;   // im2col / cols scratch, shared by all nodes
+    std::size_t weight_bytes = 0;    // packed weights on the device
+};
+
+class Model {
+public:
+    static Model load(const Device& device, const std::string& path, const ModelOptions& options = {});
+    Model(Model&&) noexcept;
+    Model& operator=(Model&&) noexcept;
+    ~Model();
+
+    const ModelConfig& config() const;
+    // input: [1, input_nc, H, W] with H and W multiples of 2^num_downs. Returns [1, output_nc, H, W].
+    // The graph for each new H x W is built and planned on first use and reused afterwards.
+    Tensor run(const Tensor& input, RunInfo* info = nullptr);
+
+private:
+    struct Impl;
+    explicit Model(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ngi

@@ -1,0 +1,37 @@
+// Small value types shared by the ops and the graph: activations and CHW shapes (batch 1).
+#pragma once
+#include <cstddef>
+#include <string>
+
+namespace ngi {
+
+// Codes match kernels/common.cl.
+enum class Activation : int { None = 0, ReLU = 1, LeakyReLU = 2, Tanh = 3, Sigmoid = 4 };
+
+struct Act {
+    Activation kind = Activation::None;
+    float alpha = 0.0f;  // LeakyReLU slope
+    static Act none() { return {}; }
+    static Act relu() { return {Activation::ReLU, 0.0f}; }
+    static Act leaky(float a) { return {Activation::LeakyReLU, a}; }
+    static Act tanh() { return {Activation::Tanh, 0.0f}; }
+    static Act sigmoid() { return {Activation::Sigmoid, 0.0f}; }
+};
+
+std::string to_string(Activation a);
+
+// A C x H x W tensor (batch 1, NCHW: w fastest).
+struct Shape {
+    int c = 0, h = 0, w = 0;
+    std::size_t size() const { return std::size_t(c) * h * w; }
+    bool operator==(const Shape&) const = default;
+};
+
+std::string to_string(const Shape& s);  // "64x256x512"
+
+// Convolution geometry: square kernels are not assumed.
+struct ConvGeometry {
+    int kh = 4, kw = 4, stride = 2, pad = 1;
+};
+
+}  // namespace ngi

@@ -1,0 +1,94 @@
+// Graph adapters over the ops in host/src/ops (one small class per op; no model knowledge).
+#pragma once
+#include <memory>
+
+#include "graph/graph.hpp"
+#include "ops/conv.hpp"
+#include "ops/elementwise.hpp"
+#include "ops/norm.hpp"
+
+namespace ngi::detail {
+
+class ConvNode : public Op {
+public:
+    template <class... A>
+    explicit ConvNode(A&&... a) : conv_(std::forward<A>(a)...) {}
+    std::string kind() const override { return "conv2d"; }
+    Shape infer(const std::vector<Shape>& in) const override { return conv_.output_shape(one(in)); }
+    std::size_t scratch_floats(const std::vector<Shape>& in) const override { return conv_.scratch_floats(one(in)); }
+    double flops(const std::vector<Shape>& in) const override {
+        const Shape o = conv_.output_shape(in[0]);
+        const auto& s = conv_.spec();
+        return 2.0 * s.cout * s.cin * s.geom.kh * s.geom.kw * o.h * o.w;
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem scratch,
+                 std::vector<cl_event>* ev) override {
+        conv_.enqueue(ctx, in[0], out, scratch, 0, ev);
+    }
+    static const Shape& one(const std::vector<Shape>& in) {
+        if (in.size() != 1) throw InputError("conv2d takes one input");
+        return in[0];
+    }
+
+private:
+    Conv2d conv_;
+};
+
+class ConvTransposeNode : public Op {
+public:
+    template <class... A>
+    explicit ConvTransposeNode(A&&... a) : conv_(std::forward<A>(a)...) {}
+    std::string kind() const override { return "conv_transpose2d"; }
+    Shape infer(const std::vector<Shape>& in) const override { return conv_.output_shape(ConvNode::one(in)); }
+    std::size_t scratch_floats(const std::vector<Shape>& in) const override {
+        return conv_.scratch_floats(ConvNode::one(in));
+    }
+    double flops(const std::vector<Shape>& in) const override {
+        const auto& s = conv_.spec();
+        return 2.0 * s.cout * s.cin * s.geom.kh * s.geom.kw * in[0].h * in[0].w;
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem scratch,
+                 std::vector<cl_event>* ev) override {
+        conv_.enqueue(ctx, in[0], out, scratch, 0, ev);
+    }
+
+private:
+    ConvTranspose2d conv_;
+};
+
+class BatchNormNode : public Op {
+public:
+    template <class... A>
+    explicit BatchNormNode(A&&... a) : bn_(std::forward<A>(a)...) {}
+    std::string kind() const override { return "batch_norm_per_image"; }
+    Shape infer(const std::vector<Shape>& in) const override { return ConvNode::one(in); }
+    std::size_t scratch_floats(const std::vector<Shape>& in) const override { return bn_.scratch_floats(in[0]); }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem scratch,
+                 std::vector<cl_event>* ev) override {
+        bn_.enqueue(ctx, in[0], scratch, 0, ev);
+    }
+
+private:
+    BatchNormPerImage bn_;
+};
+
+class DropoutNode : public Op {
+public:
+    DropoutNode(Context& ctx, std::uint32_t seed, std::uint32_t site, float p)
+        : ew_(ctx), seed_(seed), site_(site), p_(p) {}
+    std::string kind() const override { return "dropout_seeded"; }
+    Shape infer(const std::vector<Shape>& in) const override { return ConvNode::one(in); }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem, std::vector<cl_event>* ev) override {
+        cl_event e = ew_.dropout(ctx, in[0], seed_, site_, p_, ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    Elementwise ew_;
+    std::uint32_t seed_, site_;
+    float p_;
+};
+
+}  // namespace ngi::detail

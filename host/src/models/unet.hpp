@@ -1,0 +1,48 @@
+// The U-Net generators (pix2pix UnetGenerator, DeepIllumination G) as one level-by-level description, so both
+// families share the same graph builder and differ only in names, bias, norm placement and concat order.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "graph/graph.hpp"
+#include "models/safetensors.hpp"
+#include "ngi/model.hpp"
+#include "ops/gemm.hpp"
+
+namespace ngi::detail {
+
+// One U-Net level i (0 = outermost): down conv in_c -> inner_c at half resolution, up conv back.
+struct LevelSpec {
+    int in_c = 0, inner_c = 0;
+    std::string down_w, down_b, down_bn;  // state_dict keys / BN module prefix; "" = absent
+    int up_in = 0, up_out = 0;
+    std::string up_w, up_b, up_bn;
+    bool dropout = false;
+};
+
+struct UNetSpec {
+    std::vector<LevelSpec> levels;
+    bool decoder_first = false;  // concat order: pix2pix cat(skip, decoder); DeepIllumination cat(decoder, skip)
+};
+
+ModelConfig parse_model_config(const std::string& json, const std::string& path);
+UNetSpec unet_spec(const ModelConfig& cfg);
+// Expected tensor name -> shape, derived from the spec (used to report missing / unexpected / misshaped tensors).
+std::vector<std::pair<std::string, std::vector<int>>> expected_tensors(const UNetSpec& spec);
+
+// Device-side ops of every layer, built once per model (weights packed and uploaded).
+struct UNetOps {
+    struct Level {
+        std::shared_ptr<Op> down, down_bn, up, up_bn, dropout;
+    };
+    std::vector<Level> levels;
+    bool decoder_first = false;
+    int input_nc = 0;
+    std::size_t weight_bytes = 0;
+};
+
+UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm);
+std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width);
+
+}  // namespace ngi::detail

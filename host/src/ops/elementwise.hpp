@@ -1,0 +1,26 @@
+// In-place elementwise ops: activation, seeded dropout, NaN/Inf sanitizing.
+#pragma once
+#include <cstdint>
+
+#include "ops/view.hpp"
+#include "ngi/ops.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi::detail {
+
+class Elementwise {
+public:
+    explicit Elementwise(Context& ctx);
+    cl_event activate(Context& ctx, const View& x, Act act, bool want_event = false);
+    // Inverted dropout; the mask is a hash of (seed, site, flat index): see kernels/elementwise.cl.
+    cl_event dropout(Context& ctx, const View& x, std::uint32_t seed, std::uint32_t site, float p,
+                     bool want_event = false);
+    // Replaces NaN with 0 and +-Inf with +-FLT_MAX; returns how many values were replaced (blocks).
+    int sanitize(Context& ctx, const View& x);
+
+private:
+    Kernel act_, dropout_, sanitize_;
+    Buffer counter_;
+};
+
+}  // namespace ngi::detail

@@ -1,0 +1,64 @@
+#include "ops/gemm.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace ngi::detail {
+
+std::string GemmParams::defines() const {
+    return "-DMR=" + std::to_string(mr) + " -DVW=" + std::to_string(vw) + " -DNV=" + std::to_string(nv) +
+           " -DKU=" + std::to_string(ku);
+}
+
+std::string GemmParams::to_string() const {
+    return std::to_string(mr) + "," + std::to_string(vw) + "," + std::to_string(nv) + "," + std::to_string(ku) +
+           "," + std::to_string(local0) + "," + std::to_string(local1);
+}
+
+GemmParams parse_gemm_params(const std::string& s) {
+    GemmParams p;
+    char tail = 0;
+    if (std::sscanf(s.c_str(), "%d,%d,%d,%d,%d,%d%c", &p.mr, &p.vw, &p.nv, &p.ku, &p.local0, &p.local1, &tail) != 6 ||
+        p.mr < 1 || p.mr > 16 || !(p.vw == 1 || p.vw == 2 || p.vw == 4 || p.vw == 8 || p.vw == 16) || p.nv < 1 ||
+        p.nv > 8 || p.ku < 1 || p.ku > 16 || p.local0 < 1 || p.local1 < 1)
+        throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1 with MR 1..16, VW in {1,2,4,8,16}, "
+                         "NV 1..8, KU 1..16, L0,L1 >= 1");
+    return p;
+}
+
+// The per-device table (CLBlast style: vendor/type first, then a default). Entries are measured by
+// perf/ngi_bench --tune; see docs/PERFORMANCE.md.
+GemmParams gemm_params_for(const DeviceInfo& info) {
+    if (const char* e = std::getenv("NGI_GEMM"); e && *e) return parse_gemm_params(e);
+    GemmParams p;
+    if (info.is_cpu) {
+        // PoCL on x86: one work-item per work-group, explicit 16-wide vectors (AVX-512/AVX2 registers).
+        p = {8, 16, 2, 1, 1, 1};
+    } else {
+        // GPUs: many small tiles per work-group so a warp/wavefront is full. Not tuned on real hardware yet.
+        p = {4, 4, 1, 1, 16, 16};
+    }
+    return p;
+}
+
+std::vector<float> pack_a(const float* a, int M, int K, int ld, const GemmParams& p) {
+    const int panels = (M + p.mr - 1) / p.mr;
+    const int kp = padded_k(K, p);
+    std::vector<float> out(std::size_t(panels) * kp * p.mr, 0.0f);
+    for (int m = 0; m < M; ++m)
+        for (int k = 0; k < K; ++k)
+            out[(std::size_t(m / p.mr) * kp + k) * p.mr + m % p.mr] = a[std::size_t(m) * ld + k];
+    return out;
+}
+
+Gemm::Gemm(Context& ctx, const GemmParams& p) : p_(p), kernel_(ctx.kernel("gemm", "gemm_packed", p.defines())) {}
+
+cl_event Gemm::enqueue(Context& ctx, int M, int N, int K, cl_mem ap, cl_mem bp, std::size_t b_off, cl_mem c, std::size_t c_off, int ldc,
+                       cl_mem scale, cl_mem shift, Act act, bool want_event) {
+    kernel_.args(M, N, padded_k(K, p_), ap, bp, int(b_off), c, int(c_off), ldc, scale, shift, int(act.kind), act.alpha);
+    const std::size_t global[2] = {std::size_t((M + p_.mr - 1) / p_.mr), std::size_t((N + p_.nr() - 1) / p_.nr())};
+    const std::size_t local[2] = {std::size_t(p_.local0), std::size_t(p_.local1)};
+    return ctx.launch(kernel_, 2, global, local, want_event);
+}
+
+}  // namespace ngi::detail

@@ -1,0 +1,48 @@
+// The packed, register-tiled GEMM (kernels/gemm.cl) and its per-device parameters.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "ngi/ops.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi::detail {
+
+// Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for(), overridable with
+// NGI_GEMM="MR,VW,NV,KU,L0,L1" for tuning.
+struct GemmParams {
+    int mr = 8, vw = 16, nv = 2, ku = 1;
+    int local0 = 1, local1 = 1;  // work-group shape (tiles per work-group along m, n)
+    int nr() const { return vw * nv; }
+    std::string defines() const;
+    std::string to_string() const;
+};
+
+GemmParams gemm_params_for(const DeviceInfo& info);
+GemmParams parse_gemm_params(const std::string& s);  // "MR,VW,NV,KU,L0,L1"; throws InputError
+
+// K rounded up so every packed panel has whole unroll steps.
+inline int padded_k(int k, const GemmParams& p) { return int(round_up(std::size_t(k), std::size_t(p.ku))); }
+
+// Host-side packing of a row-major M x K matrix (ld = row stride) into Ap panels of MR rows (zero padded).
+std::vector<float> pack_a(const float* a, int M, int K, int ld, const GemmParams& p);
+
+// Size in floats of a packed B for K x N.
+inline std::size_t packed_b_floats(int K, int N, const GemmParams& p) {
+    return round_up(std::size_t(N), std::size_t(p.nr())) * std::size_t(padded_k(K, p));
+}
+
+class Gemm {
+public:
+    Gemm(Context& ctx, const GemmParams& p);
+    const GemmParams& params() const { return p_; }
+    // C[m][n] (at c_off, row stride ldc) = act(scale[m] * (A B)[m][n] + shift[m]).
+    cl_event enqueue(Context& ctx, int M, int N, int K, cl_mem ap, cl_mem bp, std::size_t b_off, cl_mem c, std::size_t c_off, int ldc,
+                     cl_mem scale, cl_mem shift, Act act, bool want_event = false);
+
+private:
+    GemmParams p_;
+    Kernel kernel_;
+};
+
+}  // namespace ngi::detail

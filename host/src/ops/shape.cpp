@@ -1,0 +1,20 @@
+#include "ngi/ops.hpp"
+
+namespace ngi {
+
+std::string to_string(Activation a) {
+    switch (a) {
+        case Activation::None: return "none";
+        case Activation::ReLU: return "relu";
+        case Activation::LeakyReLU: return "leaky_relu";
+        case Activation::Tanh: return "tanh";
+        case Activation::Sigmoid: return "sigmoid";
+    }
+    return "unknown";
+}
+
+std::string to_string(const Shape& s) {
+    return std::to_string(s.c) + "x" + std::to_string(s.h) + "x" + std::to_string(s.w);
+}
+
+}  // namespace ngi

@@ -1,0 +1,314 @@
+#include "runtime/context.hpp"
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "runtime/embedded_kernels.hpp"
+
+namespace ngi {
+namespace detail {
+namespace {
+
+std::string device_string(cl_device_id d, cl_device_info what) {
+    std::size_t n = 0;
+    check(clGetDeviceInfo(d, what, 0, nullptr, &n), "query device", "clGetDeviceInfo");
+    std::string s(n, '\0');
+    check(clGetDeviceInfo(d, what, n, s.data(), nullptr), "query device", "clGetDeviceInfo");
+    while (!s.empty() && (s.back() == '\0' || s.back() == ' ')) s.pop_back();
+    return s;
+}
+
+template <class T>
+T device_value(cl_device_id d, cl_device_info what) {
+    T v{};
+    check(clGetDeviceInfo(d, what, sizeof(T), &v, nullptr), "query device", "clGetDeviceInfo");
+    return v;
+}
+
+std::string platform_string(cl_platform_id p, cl_platform_info what) {
+    std::size_t n = 0;
+    check(clGetPlatformInfo(p, what, 0, nullptr, &n), "query platform", "clGetPlatformInfo");
+    std::string s(n, '\0');
+    check(clGetPlatformInfo(p, what, n, s.data(), nullptr), "query platform", "clGetPlatformInfo");
+    while (!s.empty() && s.back() == '\0') s.pop_back();
+    return s;
+}
+
+std::vector<cl_platform_id> platforms() {
+    cl_uint n = 0;
+    cl_int err = clGetPlatformIDs(0, nullptr, &n);
+    if (err == -1001 /* CL_PLATFORM_NOT_FOUND_KHR */ || n == 0) return {};
+    check(err, "list OpenCL platforms", "clGetPlatformIDs");
+    std::vector<cl_platform_id> p(n);
+    check(clGetPlatformIDs(n, p.data(), nullptr), "list OpenCL platforms", "clGetPlatformIDs");
+    return p;
+}
+
+std::vector<cl_device_id> devices_of(cl_platform_id p) {
+    cl_uint n = 0;
+    cl_int err = clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 0, nullptr, &n);
+    if (err == CL_DEVICE_NOT_FOUND || n == 0) return {};
+    check(err, "list OpenCL devices", "clGetDeviceIDs");
+    std::vector<cl_device_id> d(n);
+    check(clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, n, d.data(), nullptr), "list OpenCL devices", "clGetDeviceIDs");
+    return d;
+}
+
+DeviceInfo describe(cl_platform_id p, cl_device_id d, int pi, int di) {
+    DeviceInfo info;
+    info.platform_index = pi;
+    info.device_index = di;
+    info.platform_name = platform_string(p, CL_PLATFORM_NAME);
+    info.name = device_string(d, CL_DEVICE_NAME);
+    info.vendor = device_string(d, CL_DEVICE_VENDOR);
+    info.driver_version = device_string(d, CL_DRIVER_VERSION);
+    info.device_version = device_string(d, CL_DEVICE_VERSION);
+    info.opencl_c_version = device_string(d, CL_DEVICE_OPENCL_C_VERSION);
+    info.extensions = device_string(d, CL_DEVICE_EXTENSIONS);
+    auto type = device_value<cl_device_type>(d, CL_DEVICE_TYPE);
+    info.is_gpu = (type & CL_DEVICE_TYPE_GPU) != 0;
+    info.is_cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
+    info.fp16 = info.extensions.find("cl_khr_fp16") != std::string::npos;
+    info.local_mem_bytes = device_value<cl_ulong>(d, CL_DEVICE_LOCAL_MEM_SIZE);
+    info.local_mem_is_dedicated = device_value<cl_device_local_mem_type>(d, CL_DEVICE_LOCAL_MEM_TYPE) == CL_LOCAL;
+    info.global_mem_bytes = device_value<cl_ulong>(d, CL_DEVICE_GLOBAL_MEM_SIZE);
+    info.max_alloc_bytes = device_value<cl_ulong>(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
+    info.max_work_group_size = device_value<std::size_t>(d, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+    info.compute_units = device_value<cl_uint>(d, CL_DEVICE_MAX_COMPUTE_UNITS);
+    return info;
+}
+
+// FNV-1a 64: stable across runs and platforms (std::hash is not), good enough to key a cache.
+std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603ull) {
+    for (unsigned char c : s) { h ^= c; h *= 1099511628211ull; }
+    return h;
+}
+
+std::filesystem::path cache_dir() {
+    if (const char* d = std::getenv("NGI_CACHE_DIR"); d && *d) return d;
+    if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return std::filesystem::path(d) / "ngi";
+    if (const char* d = std::getenv("HOME"); d && *d) return std::filesystem::path(d) / ".cache" / "ngi";
+    return std::filesystem::temp_directory_path() / "ngi-cache";
+}
+
+const EmbeddedKernel& embedded(const std::string& file) {
+    for (std::size_t i = 0; i < kEmbeddedKernelCount; ++i)
+        if (file == kEmbeddedKernels[i].name) return kEmbeddedKernels[i];
+    throw Error("load kernel source: no embedded kernel file '" + file + ".cl'");
+}
+
+std::string build_log(cl_program prog, cl_device_id dev) {
+    std::size_t n = 0;
+    if (clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, 0, nullptr, &n) != CL_SUCCESS) return "";
+    std::string log(n, '\0');
+    clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, n, log.data(), nullptr);
+    while (!log.empty() && (log.back() == '\0' || log.back() == '\n')) log.pop_back();
+    return log;
+}
+
+}  // namespace
+
+Context::Context(cl_platform_id platform, cl_device_id device, DeviceInfo info, DeviceOptions options)
+    : platform_(platform), device_(device), info_(std::move(info)), options_(options) {
+    cl_int err = CL_SUCCESS;
+    cl_context_properties props[] = {CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(platform_), 0};
+    context_ = clCreateContext(props, 1, &device_, nullptr, nullptr, &err);
+    check(err, ("create context on " + info_.name).c_str(), "clCreateContext");
+    cl_command_queue_properties qp = options_.profiling ? CL_QUEUE_PROFILING_ENABLE : 0;
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-declarations"
+    queue_ = clCreateCommandQueue(context_, device_, qp, &err);  // OpenCL 1.2 entry point: works everywhere
+#pragma GCC diagnostic pop
+    if (err != CL_SUCCESS) {
+        clReleaseContext(context_);
+        check(err, ("create queue on " + info_.name).c_str(), "clCreateCommandQueue");
+    }
+}
+
+Context::~Context() {
+    for (auto& [k, p] : programs_) clReleaseProgram(p);
+    if (queue_) { clFinish(queue_); clReleaseCommandQueue(queue_); }
+    if (context_) clReleaseContext(context_);
+}
+
+cl_program Context::program(const std::string& file, const std::string& defines) {
+    const std::string key = file + '\n' + defines;
+    if (auto it = programs_.find(key); it != programs_.end()) return it->second;
+
+    // Every program = kernels/common.cl + kernels/<file>.cl (one translation unit; OpenCL 1.2 has no linking
+    // of headers from the library).
+    const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
+    const std::string options = "-cl-std=CL1.2 " + defines;
+    const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
+    const std::uint64_t h = fnv1a(source,
+                                  fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
+                                        '\n' + info_.device_version + '\n' + options));
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    const std::filesystem::path cached = cache_dir() / (file + "-" + hex + ".bin");
+
+    cl_int err = CL_SUCCESS;
+    cl_program prog = nullptr;
+    // 1. A binary cached on disk by an earlier process (same device, driver, source and options).
+    if (std::ifstream in{cached, std::ios::binary}) {
+        std::string bin((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const unsigned char* ptr = reinterpret_cast<const unsigned char*>(bin.data());
+        std::size_t len = bin.size();
+        cl_int status = CL_SUCCESS;
+        prog = clCreateProgramWithBinary(context_, 1, &device_, &len, &ptr, &status, &err);
+        if (err != CL_SUCCESS || status != CL_SUCCESS ||
+            clBuildProgram(prog, 1, &device_, options.c_str(), nullptr, nullptr) != CL_SUCCESS) {
+            if (prog) clReleaseProgram(prog);
+            prog = nullptr;  // stale or foreign binary: rebuild from source below
+        }
+    }
+    // 2. From the embedded source.
+    if (!prog) {
+        const char* s = source.c_str();
+        std::size_t len = source.size();
+        prog = clCreateProgramWithSource(context_, 1, &s, &len, &err);
+        check(err, op.c_str(), "clCreateProgramWithSource");
+        err = clBuildProgram(prog, 1, &device_, options.c_str(), nullptr, nullptr);
+        if (err != CL_SUCCESS) {
+            std::string log = build_log(prog, device_);
+            clReleaseProgram(prog);
+            throw ClError(op, "clBuildProgram", err, "build log:\n" + log);
+        }
+        // Store the binary for the next process; a cache we cannot write is not an error.
+        std::size_t bin_size = 0;
+        if (clGetProgramInfo(prog, CL_PROGRAM_BINARY_SIZES, sizeof bin_size, &bin_size, nullptr) == CL_SUCCESS &&
+            bin_size > 0) {
+            std::string bin(bin_size, '\0');
+            unsigned char* ptr = reinterpret_cast<unsigned char*>(bin.data());
+            if (clGetProgramInfo(prog, CL_PROGRAM_BINARIES, sizeof ptr, &ptr, nullptr) == CL_SUCCESS) {
+                std::error_code ec;
+                std::filesystem::create_directories(cached.parent_path(), ec);
+                const auto tmp = cached.string() + ".tmp" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+                if (std::ofstream out{tmp, std::ios::binary}; out.write(bin.data(), bin.size())) {
+                    out.close();
+                    std::filesystem::rename(tmp, cached, ec);
+                }
+                std::filesystem::remove(tmp, ec);
+            }
+        }
+    }
+    programs_.emplace(key, prog);
+    return prog;
+}
+
+Kernel Context::kernel(const std::string& file, const std::string& name, const std::string& defines) {
+    cl_program prog = program(file, defines);
+    cl_int err = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, name.c_str(), &err);
+    check(err, ("create kernel " + name + " from kernels/" + file + ".cl").c_str(), "clCreateKernel");
+    return Kernel(k, name);
+}
+
+Buffer Context::alloc(std::size_t bytes, const char* what) {
+    cl_int err = CL_SUCCESS;
+    if (bytes == 0) bytes = 4;  // OpenCL forbids empty buffers; a 0-element tensor still needs a handle
+    if (bytes > info_.max_alloc_bytes)
+        throw Error(std::string("allocate ") + what + ": " + std::to_string(bytes) + " bytes exceeds the device's " +
+                    "CL_DEVICE_MAX_MEM_ALLOC_SIZE of " + std::to_string(info_.max_alloc_bytes));
+    cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, bytes, nullptr, &err);
+    check(err, (std::string("allocate ") + what + " (" + std::to_string(bytes) + " bytes)").c_str(),
+          "clCreateBuffer");
+    return Buffer(m, bytes);
+}
+
+void Context::write(const Buffer& b, std::size_t off, std::size_t bytes, const void* src, const char* what) {
+    if (bytes == 0) return;
+    check(clEnqueueWriteBuffer(queue_, b.get(), CL_TRUE, off, bytes, src, 0, nullptr, nullptr),
+          (std::string("upload ") + what).c_str(), "clEnqueueWriteBuffer");
+}
+
+void Context::read(const Buffer& b, std::size_t off, std::size_t bytes, void* dst, const char* what) {
+    if (bytes == 0) return;
+    check(clEnqueueReadBuffer(queue_, b.get(), CL_TRUE, off, bytes, dst, 0, nullptr, nullptr),
+          (std::string("download ") + what).c_str(), "clEnqueueReadBuffer");
+}
+
+void Context::fill_zero(const Buffer& b, std::size_t off, std::size_t bytes, const char* what) {
+    if (bytes == 0) return;
+    const float zero = 0.0f;
+    check(clEnqueueFillBuffer(queue_, b.get(), &zero, sizeof zero, off, bytes, 0, nullptr, nullptr),
+          (std::string("clear ") + what).c_str(), "clEnqueueFillBuffer");
+}
+
+cl_event Context::launch(const Kernel& k, int dims, const std::size_t* global, const std::size_t* local,
+                         bool want_event) {
+    std::size_t g[3];
+    for (int i = 0; i < dims; ++i) {
+        if (global[i] == 0) return nullptr;  // empty NDRange: nothing to do
+        g[i] = local ? round_up(global[i], local[i]) : global[i];
+    }
+    cl_event ev = nullptr;
+    check(clEnqueueNDRangeKernel(queue_, k.get(), static_cast<cl_uint>(dims), nullptr, g, local, 0, nullptr,
+                                 want_event ? &ev : nullptr),
+          ("run kernel " + k.name()).c_str(), "clEnqueueNDRangeKernel");
+    return ev;
+}
+
+void Context::finish() { check(clFinish(queue_), "wait for the device queue", "clFinish"); }
+
+}  // namespace detail
+
+std::vector<DeviceInfo> list_devices() {
+    std::vector<DeviceInfo> out;
+    auto ps = detail::platforms();
+    for (std::size_t pi = 0; pi < ps.size(); ++pi) {
+        auto ds = detail::devices_of(ps[pi]);
+        for (std::size_t di = 0; di < ds.size(); ++di)
+            out.push_back(detail::describe(ps[pi], ds[di], static_cast<int>(pi), static_cast<int>(di)));
+    }
+    return out;
+}
+
+Device Device::open(const std::string& spec_in, DeviceOptions options) {
+    std::string spec = spec_in;
+    if (spec.empty())
+        if (const char* e = std::getenv("NGI_DEVICE")) spec = e;
+    auto ps = detail::platforms();
+    if (ps.empty())
+        throw Error("open device: no OpenCL platform found (is an ICD such as pocl-opencl-icd installed, and "
+                    "/etc/OpenCL/vendors populated?)");
+    struct Candidate { cl_platform_id p; cl_device_id d; DeviceInfo info; };
+    std::vector<Candidate> all;
+    for (std::size_t pi = 0; pi < ps.size(); ++pi) {
+        auto ds = detail::devices_of(ps[pi]);
+        for (std::size_t di = 0; di < ds.size(); ++di)
+            all.push_back({ps[pi], ds[di], detail::describe(ps[pi], ds[di], int(pi), int(di))});
+    }
+    const Candidate* pick = nullptr;
+    if (spec.empty()) {
+        for (auto& c : all) if (c.info.is_gpu) { pick = &c; break; }
+        if (!pick) for (auto& c : all) if (c.info.is_cpu) { pick = &c; break; }
+        if (!pick && !all.empty()) pick = &all.front();
+    } else if (spec == "gpu" || spec == "cpu") {
+        for (auto& c : all) if ((spec == "gpu" && c.info.is_gpu) || (spec == "cpu" && c.info.is_cpu)) { pick = &c; break; }
+    } else {
+        int p = -1, d = -1;
+        char tail = 0;
+        if (std::sscanf(spec.c_str(), "%d:%d%c", &p, &d, &tail) != 2)
+            throw InputError("open device: '" + spec + "' is not a device spec (use cpu, gpu or P:D, e.g. 0:0)");
+        for (auto& c : all) if (c.info.platform_index == p && c.info.device_index == d) pick = &c;
+    }
+    if (!pick) {
+        std::string have;
+        for (auto& c : all)
+            have += "\n  " + std::to_string(c.info.platform_index) + ":" + std::to_string(c.info.device_index) + " " +
+                    c.info.name + (c.info.is_gpu ? " (gpu)" : c.info.is_cpu ? " (cpu)" : "");
+        throw InputError("open device: no device matches '" + spec + "'; available:" + (have.empty() ? " none" : have));
+    }
+    return Device(std::make_shared<detail::Context>(pick->p, pick->d, pick->info, options));
+}
+
+const DeviceInfo& Device::info() const { return context_->info(); }
+bool Device::profiling() const { return context_->options().profiling; }
+void Device::finish() const { context_->finish(); }
+
+}  // namespace ngi

@@ -1,0 +1,127 @@
+// OpenCL context, queue, program cache and small RAII handles. Library-internal.
+#pragma once
+#include <CL/cl.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "ngi/device.hpp"
+#include "ngi/error.hpp"
+
+namespace ngi::detail {
+
+// Throws ClError naming the operation and the OpenCL call when err != CL_SUCCESS.
+inline void check(cl_int err, const char* operation, const char* call, const std::string& detail = "") {
+    if (err != CL_SUCCESS) throw ClError(operation, call, err, detail);
+}
+
+// A device buffer (RAII). Size in bytes.
+class Buffer {
+public:
+    Buffer() = default;
+    Buffer(cl_mem m, std::size_t bytes) : mem_(m), bytes_(bytes) {}
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+    Buffer(Buffer&& o) noexcept : mem_(std::exchange(o.mem_, nullptr)), bytes_(std::exchange(o.bytes_, 0)) {}
+    Buffer& operator=(Buffer&& o) noexcept {
+        if (this != &o) { reset(); mem_ = std::exchange(o.mem_, nullptr); bytes_ = std::exchange(o.bytes_, 0); }
+        return *this;
+    }
+    ~Buffer() { reset(); }
+    void reset() { if (mem_) clReleaseMemObject(mem_); mem_ = nullptr; bytes_ = 0; }
+    cl_mem get() const { return mem_; }
+    std::size_t bytes() const { return bytes_; }
+    explicit operator bool() const { return mem_ != nullptr; }
+
+private:
+    cl_mem mem_ = nullptr;
+    std::size_t bytes_ = 0;
+};
+
+// A kernel with typed argument setting: k.args(a, b, c) then ctx.launch(k, ...).
+class Kernel {
+public:
+    Kernel() = default;
+    Kernel(cl_kernel k, std::string name) : k_(k), name_(std::move(name)) {}
+    Kernel(const Kernel&) = delete;
+    Kernel& operator=(const Kernel&) = delete;
+    Kernel(Kernel&& o) noexcept : k_(std::exchange(o.k_, nullptr)), name_(std::move(o.name_)) {}
+    Kernel& operator=(Kernel&& o) noexcept {
+        if (this != &o) { if (k_) clReleaseKernel(k_); k_ = std::exchange(o.k_, nullptr); name_ = std::move(o.name_); }
+        return *this;
+    }
+    ~Kernel() { if (k_) clReleaseKernel(k_); }
+    cl_kernel get() const { return k_; }
+    const std::string& name() const { return name_; }
+
+    template <class... Args>
+    Kernel& args(const Args&... a) {
+        cl_uint i = 0;
+        (set(i++, a), ...);
+        return *this;
+    }
+
+private:
+    void set(cl_uint i, const Buffer& b) { cl_mem m = b.get(); set_raw(i, sizeof(cl_mem), &m); }
+    void set(cl_uint i, cl_mem m) { set_raw(i, sizeof(cl_mem), &m); }
+    template <class T>
+    void set(cl_uint i, const T& v) {
+        static_assert(std::is_arithmetic_v<T>, "kernel arguments are buffers or scalars");
+        set_raw(i, sizeof(T), &v);
+    }
+    void set_raw(cl_uint i, std::size_t size, const void* p) {
+        check(clSetKernelArg(k_, i, size, p), ("set argument " + std::to_string(i) + " of kernel " + name_).c_str(),
+              "clSetKernelArg");
+    }
+    cl_kernel k_ = nullptr;
+    std::string name_;
+};
+
+class Context {
+public:
+    Context(cl_platform_id platform, cl_device_id device, DeviceInfo info, DeviceOptions options);
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    const DeviceInfo& info() const { return info_; }
+    const DeviceOptions& options() const { return options_; }
+    cl_context context() const { return context_; }
+    cl_command_queue queue() const { return queue_; }
+    cl_device_id device() const { return device_; }
+
+    // Builds (once per process, and once per device+driver+source+options on disk) the embedded kernel file
+    // `file` (kernels/<file>.cl) with `defines` prepended as build options ("-DMWG=64 ..."), and returns a
+    // new kernel object for `kernel`. Kernel objects are cheap; keep them in the op that uses them.
+    Kernel kernel(const std::string& file, const std::string& kernel, const std::string& defines = "");
+
+    Buffer alloc(std::size_t bytes, const char* what);
+    void write(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const void* src, const char* what);
+    void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
+    void fill_zero(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const char* what);
+
+    // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds).
+    // Returns the event when `want_event` (profiling), else nullptr.
+    cl_event launch(const Kernel& k, int dims, const std::size_t* global, const std::size_t* local,
+                    bool want_event = false);
+    void finish();
+
+private:
+    cl_program program(const std::string& file, const std::string& defines);
+
+    cl_platform_id platform_;
+    cl_device_id device_;
+    DeviceInfo info_;
+    DeviceOptions options_;
+    cl_context context_ = nullptr;
+    cl_command_queue queue_ = nullptr;
+    std::map<std::string, cl_program> programs_;  // key: file + '\n' + defines
+};
+
+inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
+
+}  // namespace ngi::detail

@@ -1,0 +1,86 @@
+#include "ngi/error.hpp"
+
+namespace ngi {
+
+const char* cl_error_name(int code) {
+    switch (code) {
+#define NGI_CASE(n, v) case v: return #n;
+        NGI_CASE(CL_SUCCESS, 0)
+        NGI_CASE(CL_DEVICE_NOT_FOUND, -1)
+        NGI_CASE(CL_DEVICE_NOT_AVAILABLE, -2)
+        NGI_CASE(CL_COMPILER_NOT_AVAILABLE, -3)
+        NGI_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE, -4)
+        NGI_CASE(CL_OUT_OF_RESOURCES, -5)
+        NGI_CASE(CL_OUT_OF_HOST_MEMORY, -6)
+        NGI_CASE(CL_PROFILING_INFO_NOT_AVAILABLE, -7)
+        NGI_CASE(CL_MEM_COPY_OVERLAP, -8)
+        NGI_CASE(CL_IMAGE_FORMAT_MISMATCH, -9)
+        NGI_CASE(CL_IMAGE_FORMAT_NOT_SUPPORTED, -10)
+        NGI_CASE(CL_BUILD_PROGRAM_FAILURE, -11)
+        NGI_CASE(CL_MAP_FAILURE, -12)
+        NGI_CASE(CL_MISALIGNED_SUB_BUFFER_OFFSET, -13)
+        NGI_CASE(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST, -14)
+        NGI_CASE(CL_COMPILE_PROGRAM_FAILURE, -15)
+        NGI_CASE(CL_LINKER_NOT_AVAILABLE, -16)
+        NGI_CASE(CL_LINK_PROGRAM_FAILURE, -17)
+        NGI_CASE(CL_DEVICE_PARTITION_FAILED, -18)
+        NGI_CASE(CL_KERNEL_ARG_INFO_NOT_AVAILABLE, -19)
+        NGI_CASE(CL_INVALID_VALUE, -30)
+        NGI_CASE(CL_INVALID_DEVICE_TYPE, -31)
+        NGI_CASE(CL_INVALID_PLATFORM, -32)
+        NGI_CASE(CL_INVALID_DEVICE, -33)
+        NGI_CASE(CL_INVALID_CONTEXT, -34)
+        NGI_CASE(CL_INVALID_QUEUE_PROPERTIES, -35)
+        NGI_CASE(CL_INVALID_COMMAND_QUEUE, -36)
+        NGI_CASE(CL_INVALID_HOST_PTR, -37)
+        NGI_CASE(CL_INVALID_MEM_OBJECT, -38)
+        NGI_CASE(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR, -39)
+        NGI_CASE(CL_INVALID_IMAGE_SIZE, -40)
+        NGI_CASE(CL_INVALID_SAMPLER, -41)
+        NGI_CASE(CL_INVALID_BINARY, -42)
+        NGI_CASE(CL_INVALID_BUILD_OPTIONS, -43)
+        NGI_CASE(CL_INVALID_PROGRAM, -44)
+        NGI_CASE(CL_INVALID_PROGRAM_EXECUTABLE, -45)
+        NGI_CASE(CL_INVALID_KERNEL_NAME, -46)
+        NGI_CASE(CL_INVALID_KERNEL_DEFINITION, -47)
+        NGI_CASE(CL_INVALID_KERNEL, -48)
+        NGI_CASE(CL_INVALID_ARG_INDEX, -49)
+        NGI_CASE(CL_INVALID_ARG_VALUE, -50)
+        NGI_CASE(CL_INVALID_ARG_SIZE, -51)
+        NGI_CASE(CL_INVALID_KERNEL_ARGS, -52)
+        NGI_CASE(CL_INVALID_WORK_DIMENSION, -53)
+        NGI_CASE(CL_INVALID_WORK_GROUP_SIZE, -54)
+        NGI_CASE(CL_INVALID_WORK_ITEM_SIZE, -55)
+        NGI_CASE(CL_INVALID_GLOBAL_OFFSET, -56)
+        NGI_CASE(CL_INVALID_EVENT_WAIT_LIST, -57)
+        NGI_CASE(CL_INVALID_EVENT, -58)
+        NGI_CASE(CL_INVALID_OPERATION, -59)
+        NGI_CASE(CL_INVALID_GL_OBJECT, -60)
+        NGI_CASE(CL_INVALID_BUFFER_SIZE, -61)
+        NGI_CASE(CL_INVALID_MIP_LEVEL, -62)
+        NGI_CASE(CL_INVALID_GLOBAL_WORK_SIZE, -63)
+        NGI_CASE(CL_INVALID_PROPERTY, -64)
+        NGI_CASE(CL_INVALID_IMAGE_DESCRIPTOR, -65)
+        NGI_CASE(CL_INVALID_COMPILER_OPTIONS, -66)
+        NGI_CASE(CL_INVALID_LINKER_OPTIONS, -67)
+        NGI_CASE(CL_INVALID_DEVICE_PARTITION_COUNT, -68)
+        NGI_CASE(CL_INVALID_PIPE_SIZE, -69)
+        NGI_CASE(CL_INVALID_DEVICE_QUEUE, -70)
+        NGI_CASE(CL_INVALID_SPEC_ID, -71)
+        NGI_CASE(CL_MAX_SIZE_RESTRICTION_EXCEEDED, -72)
+        NGI_CASE(CL_PLATFORM_NOT_FOUND_KHR, -1001)
+#undef NGI_CASE
+        default: return "CL_UNKNOWN_ERROR";
+    }
+}
+
+static std::string format(const std::string& op, const std::string& call, int code, const std::string& detail) {
+    std::string s = op + ": " + call + " failed with " + cl_error_name(code) + " (" + std::to_string(code) + ")";
+    if (!detail.empty()) s += ": " + detail;
+    return s;
+}
+
+ClError::ClError(const std::string& operation, const std::string& call, int code, const std::string& detail)
+    : Error(format(operation, call, code, detail)), code_(code) {}
+
+}  // namespace ngi

@@ -1,0 +1,38 @@
+// Elementwise ops on a contiguous range of n floats.
+
+// y = act(x), in place.
+__kernel void activate_inplace(__global float* restrict x, const int x_off, const int n, const int act,
+                               const float alpha) {
+    const int i = get_global_id(0);
+    if (i < n) x[x_off + i] = ngi_activate(x[x_off + i], act, alpha);
+}
+
+// Counter-based hash (a 32-bit integer finalizer): the dropout mask depends only on (seed, site, index),
+// never on launch order, so a PyTorch script can reproduce it exactly (docs/MODEL_FORMAT.md).
+inline uint ngi_mix(uint x) {
+    x ^= x >> 16; x *= 0x7feb352du;
+    x ^= x >> 15; x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+// Inverted dropout with a seeded mask, in place: keep with probability 1-p and scale by 1/(1-p).
+__kernel void dropout_seeded(__global float* restrict x, const int x_off, const int n, const uint seed,
+                             const uint site, const float p) {
+    const int i = get_global_id(0);
+    if (i >= n) return;
+    const uint u = ngi_mix(ngi_mix(seed + 0x9E3779B9u * (site + 1u)) ^ (uint)i);
+    const float r = (float)(u >> 8) * (1.0f / 16777216.0f);
+    x[x_off + i] = r >= p ? x[x_off + i] * (1.0f / (1.0f - p)) : 0.0f;
+}
+
+// Replaces NaN by 0 and +-Inf by +-FLT_MAX, in place, and counts the replaced values (atomic counter).
+// Runs on every graph input: one bad texel must not turn the whole lightmap into NaN.
+__kernel void sanitize_inplace(__global float* restrict x, const int x_off, const int n,
+                               volatile __global int* restrict bad_count) {
+    const int i = get_global_id(0);
+    if (i >= n) return;
+    const float v = x[x_off + i];
+    if (isnan(v)) { x[x_off + i] = 0.0f; atomic_inc(bad_count); }
+    else if (isinf(v)) { x[x_off + i] = v > 0.0f ? FLT_MAX : -FLT_MAX; atomic_inc(bad_count); }
+}

@@ -1,0 +1,92 @@
+// Naive C++ references for every kernel: straight loops in double precision, written from the definitions
+// (PyTorch's documented semantics), sharing no code with the library.
+#pragma once
+#include <cmath>
+#include <vector>
+
+namespace ngi::ref {
+
+inline double activate(double x, int act, double alpha) {
+    switch (act) {
+        case 1: return x > 0 ? x : 0;
+        case 2: return x >= 0 ? x : alpha * x;
+        case 3: return std::tanh(x);
+        case 4: return 1.0 / (1.0 + std::exp(-x));
+        default: return x;
+    }
+}
+
+// y[co][oy][ox] = act(scale[co] * (sum w[co][ci][ky][kx] * in_act(x[ci][iy][ix])) + shift[co])
+inline std::vector<float> conv2d(const std::vector<float>& x, int C, int H, int W, const std::vector<float>& w, int Co,
+                                 int KH, int KW, int s, int p, const std::vector<float>& scale,
+                                 const std::vector<float>& shift, int in_act, int act, double alpha, int& OH, int& OW) {
+    OH = (H + 2 * p - KH) / s + 1;
+    OW = (W + 2 * p - KW) / s + 1;
+    std::vector<float> y(std::size_t(Co) * OH * OW);
+    for (int co = 0; co < Co; ++co)
+        for (int oy = 0; oy < OH; ++oy)
+            for (int ox = 0; ox < OW; ++ox) {
+                double acc = 0;
+                for (int ci = 0; ci < C; ++ci)
+                    for (int ky = 0; ky < KH; ++ky)
+                        for (int kx = 0; kx < KW; ++kx) {
+                            int iy = oy * s - p + ky, ix = ox * s - p + kx;
+                            if (iy < 0 || iy >= H || ix < 0 || ix >= W) continue;
+                            acc += double(w[((std::size_t(co) * C + ci) * KH + ky) * KW + kx]) *
+                                   activate(x[(std::size_t(ci) * H + iy) * W + ix], in_act, alpha);
+                        }
+                y[(std::size_t(co) * OH + oy) * OW + ox] = float(activate(acc * scale[co] + shift[co], act, alpha));
+            }
+    return y;
+}
+
+// PyTorch ConvTranspose2d: w is [C][Co][KH][KW]; each input pixel scatters into the output.
+inline std::vector<float> conv_transpose2d(const std::vector<float>& x, int C, int H, int W,
+                                           const std::vector<float>& w, int Co, int KH, int KW, int s, int p,
+                                           const std::vector<float>& scale, const std::vector<float>& shift,
+                                           int in_act, int act, double alpha, int& OH, int& OW) {
+    OH = (H - 1) * s - 2 * p + KH;
+    OW = (W - 1) * s - 2 * p + KW;
+    std::vector<double> acc(std::size_t(Co) * OH * OW, 0.0);
+    for (int ci = 0; ci < C; ++ci)
+        for (int iy = 0; iy < H; ++iy)
+            for (int ix = 0; ix < W; ++ix) {
+                double v = activate(x[(std::size_t(ci) * H + iy) * W + ix], in_act, alpha);
+                for (int co = 0; co < Co; ++co)
+                    for (int ky = 0; ky < KH; ++ky)
+                        for (int kx = 0; kx < KW; ++kx) {
+                            int oy = iy * s - p + ky, ox = ix * s - p + kx;
+                            if (oy < 0 || oy >= OH || ox < 0 || ox >= OW) continue;
+                            acc[(std::size_t(co) * OH + oy) * OW + ox] +=
+                                v * w[((std::size_t(ci) * Co + co) * KH + ky) * KW + kx];
+                        }
+            }
+    std::vector<float> y(acc.size());
+    for (int co = 0; co < Co; ++co)
+        for (int i = 0; i < OH * OW; ++i) {
+            std::size_t j = std::size_t(co) * OH * OW + i;
+            y[j] = float(activate(acc[j] * scale[co] + shift[co], act, alpha));
+        }
+    return y;
+}
+
+// Per-image batch norm: two-pass mean / biased variance in double, then act(gamma*(x-mean)/sqrt(var+eps)+beta).
+inline std::vector<float> batch_norm_per_image(const std::vector<float>& x, int C, int HW,
+                                               const std::vector<float>& gamma, const std::vector<float>& beta,
+                                               double eps, int act, double alpha) {
+    std::vector<float> y(x.size());
+    for (int c = 0; c < C; ++c) {
+        double mean = 0, var = 0;
+        for (int i = 0; i < HW; ++i) mean += x[std::size_t(c) * HW + i];
+        mean /= HW;
+        for (int i = 0; i < HW; ++i) { double d = x[std::size_t(c) * HW + i] - mean; var += d * d; }
+        var /= HW;
+        for (int i = 0; i < HW; ++i) {
+            std::size_t j = std::size_t(c) * HW + i;
+            y[j] = float(activate((x[j] - mean) / std::sqrt(var + eps) * gamma[c] + beta[c], act, alpha));
+        }
+    }
+    return y;
+}
+
+}  // namespace ngi::ref

@@ -1,0 +1,67 @@
+// Shared helpers for the Catch2 suite: the device under test, random data, comparisons, naive references.
+#pragma once
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "ngi/device.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi::test {
+
+// The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu").
+inline Device& device() {
+    static Device d = [] {
+        const char* e = std::getenv("NGI_TEST_DEVICE");
+        return Device::open(e && *e ? e : "cpu");
+    }();
+    return d;
+}
+inline detail::Context& ctx() { return device().context(); }
+
+inline std::vector<float> random_vector(std::size_t n, std::mt19937& rng, float lo = -1.0f, float hi = 1.0f) {
+    std::uniform_real_distribution<float> u(lo, hi);
+    std::vector<float> v(n);
+    for (auto& x : v) x = u(rng);
+    return v;
+}
+
+inline detail::Buffer upload(const std::vector<float>& v) {
+    auto b = ctx().alloc(v.size() * sizeof(float), "test input");
+    ctx().write(b, 0, v.size() * sizeof(float), v.data(), "test input");
+    return b;
+}
+
+inline std::vector<float> download(const detail::Buffer& b, std::size_t n, std::size_t offset = 0) {
+    std::vector<float> v(n);
+    ctx().read(b, offset * sizeof(float), n * sizeof(float), v.data(), "test output");
+    return v;
+}
+
+// Largest |a-b| / (atol + rtol*|b|); <= 1 means every element is within tolerance.
+inline double worst_ratio(const std::vector<float>& a, const std::vector<float>& b, double atol, double rtol) {
+    double worst = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        if (!std::isfinite(a[i])) return INFINITY;
+        worst = std::max(worst, std::abs(double(a[i]) - b[i]) / (atol + rtol * std::abs(double(b[i]))));
+    }
+    return worst;
+}
+
+inline double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+    double m = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        if (!std::isfinite(a[i])) return INFINITY;
+        m = std::max(m, std::abs(double(a[i]) - double(b[i])));
+    }
+    return m;
+}
+
+inline bool all_finite(const std::vector<float>& v) {
+    for (float x : v) if (!std::isfinite(x)) return false;
+    return true;
+}
+
+}  // namespace ngi::test
