@@ -26,13 +26,14 @@ __kernel void dropout_seeded(__global float* restrict x, const int x_off, const 
     x[x_off + i] = r >= p ? x[x_off + i] * (1.0f / (1.0f - p)) : 0.0f;
 }
 
-// Replaces NaN by 0 and +-Inf by +-FLT_MAX, in place, and counts the replaced values (atomic counter).
-// Runs on every graph input: one bad texel must not turn the whole lightmap into NaN.
-__kernel void sanitize_inplace(__global float* restrict x, const int x_off, const int n,
-                               volatile __global int* restrict bad_count) {
+// Replaces NaN by 0, -Inf by lo and +Inf by hi, in place, and counts the replaced values (atomic counter).
+// Runs on every graph input: one bad texel must not turn the whole lightmap into NaN. lo/hi are the ends of
+// the model's input range (an infinitely bright texel is as bright as the model can see).
+__kernel void sanitize_inplace(__global float* restrict x, const int x_off, const int n, const float lo,
+                               const float hi, volatile __global int* restrict bad_count) {
     const int i = get_global_id(0);
     if (i >= n) return;
     const float v = x[x_off + i];
     if (isnan(v)) { x[x_off + i] = 0.0f; atomic_inc(bad_count); }
-    else if (isinf(v)) { x[x_off + i] = v > 0.0f ? FLT_MAX : -FLT_MAX; atomic_inc(bad_count); }
+    else if (isinf(v)) { x[x_off + i] = v > 0.0f ? hi : lo; atomic_inc(bad_count); }
 }

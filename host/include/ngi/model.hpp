@@ -39,7 +39,7 @@ struct LayerTiming {
 };
 
 struct RunInfo {
-    int sanitized_inputs = 0;        // NaN/Inf input values replaced (NaN -> 0, +-Inf -> +-FLT_MAX)
+    int sanitized_inputs = 0;        // NaN/Inf input values replaced (NaN -> 0, +-Inf -> ends of input_range)
     std::vector<LayerTiming> layers; // per graph node, when the device was opened with profiling
     std::size_t arena_bytes = 0;     // planned peak of intermediate tensors
     std::size_t naive_bytes = 0;     // what one buffer per tensor would need

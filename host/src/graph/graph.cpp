@@ -129,7 +129,7 @@ RunStats Graph::run(Context& ctx, const float* input, float* output) {
     const View in = view(input_), out = view(output_);
     ctx.write(arena_, in.offset * sizeof(float), in.shape.size() * sizeof(float), input,
               ("graph input " + tensors_[input_].name).c_str());
-    stats.sanitized_inputs = elementwise_->sanitize(ctx, in);
+    stats.sanitized_inputs = elementwise_->sanitize(ctx, in, input_lo_, input_hi_);
 
     const bool profile = ctx.options().profiling;
     std::vector<std::vector<cl_event>> events(profile ? nodes_.size() : 0);

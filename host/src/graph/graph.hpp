@@ -46,6 +46,8 @@ public:
     // Channel concatenation without a copy: the inputs are placed one after the other inside the result.
     TensorId concat(const std::vector<TensorId>& inputs, const std::string& name);
     void set_output(TensorId t) { output_ = t; }
+    // What +-Inf in the input becomes (NaN always becomes 0); default: the float range.
+    void set_input_limits(float lo, float hi) { input_lo_ = lo; input_hi_ = hi; }
 
     const Shape& shape(TensorId t) const { return tensors_.at(t).shape; }
     std::size_t node_count() const { return nodes_.size(); }
@@ -81,6 +83,7 @@ private:
     std::vector<Tensor> tensors_;
     std::vector<Node> nodes_;
     TensorId input_ = -1, output_ = -1;
+    float input_lo_ = -3.402823466e38f, input_hi_ = 3.402823466e38f;
     ArenaPlan plan_;
     std::vector<std::size_t> root_offset_;  // per tensor: offset of its root in the arena (floats)
     std::size_t scratch_floats_ = 0;

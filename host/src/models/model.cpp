@@ -52,6 +52,7 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
     auto& graph = impl_->graphs[{h, w}];
     if (!graph) {
         auto g = detail::build_unet_graph(impl_->ops, h, w);
+        g->set_input_limits(c.input_range[0], c.input_range[1]);
         g->compile(impl_->device.context());
         graph = std::move(g);
     }

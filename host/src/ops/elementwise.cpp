@@ -28,11 +28,11 @@ cl_event Elementwise::dropout(Context& ctx, const View& x, std::uint32_t seed, s
     return ctx.launch(dropout_, 1, g, kLocal, want_event);
 }
 
-int Elementwise::sanitize(Context& ctx, const View& x) {
+int Elementwise::sanitize(Context& ctx, const View& x, float lo, float hi) {
     const int n = int(x.shape.size());
     int zero = 0;
     ctx.write(counter_, 0, sizeof zero, &zero, "sanitize counter");
-    sanitize_.args(x.mem, int(x.offset), n, counter_);
+    sanitize_.args(x.mem, int(x.offset), n, lo, hi, counter_);
     const std::size_t g[1] = {std::size_t(n)};
     ctx.launch(sanitize_, 1, g, kLocal);
     int bad = 0;

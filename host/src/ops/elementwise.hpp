@@ -15,8 +15,8 @@ public:
     // Inverted dropout; the mask is a hash of (seed, site, flat index): see kernels/elementwise.cl.
     cl_event dropout(Context& ctx, const View& x, std::uint32_t seed, std::uint32_t site, float p,
                      bool want_event = false);
-    // Replaces NaN with 0 and +-Inf with +-FLT_MAX; returns how many values were replaced (blocks).
-    int sanitize(Context& ctx, const View& x);
+    // Replaces NaN with 0, -Inf with lo and +Inf with hi; returns how many values were replaced (blocks).
+    int sanitize(Context& ctx, const View& x, float lo, float hi);
 
 private:
     Kernel act_, dropout_, sanitize_;

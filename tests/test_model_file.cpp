@@ -1,0 +1,166 @@
+// Model files that must be refused with a clear message naming the problem (and the file or tensor).
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "ngi/error.hpp"
+#include "ngi/model.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+
+namespace {
+
+struct Entry {
+    std::string name;
+    std::vector<int> shape;
+    float value;
+};
+
+// Writes a safetensors file from (name, shape, constant value) entries plus a config; `mutate` may edit the
+// header JSON or the final bytes to produce the broken variants.
+std::string write_file(const std::string& stem, const std::vector<Entry>& entries, const nlohmann::json& config,
+                       const std::function<void(nlohmann::json&)>& edit_header = {},
+                       const std::function<void(std::string&)>& edit_bytes = {}) {
+    nlohmann::json header;
+    std::string data;
+    for (const auto& e : entries) {
+        std::size_t n = 1;
+        for (int d : e.shape) n *= d;
+        std::vector<float> v(n, e.value);
+        header[e.name] = {{"dtype", "F32"}, {"shape", e.shape}, {"data_offsets", {data.size(), data.size() + 4 * n}}};
+        data.append(reinterpret_cast<const char*>(v.data()), 4 * n);
+    }
+    header["__metadata__"] = {{"ngi", config.dump()}};
+    if (edit_header) edit_header(header);
+    std::string h = header.dump();
+    while (h.size() % 8) h += ' ';
+    std::string bytes(8, '\0');
+    std::uint64_t len = h.size();
+    for (int i = 0; i < 8; ++i) bytes[i] = char((len >> (8 * i)) & 0xff);
+    bytes += h + data;
+    if (edit_bytes) edit_bytes(bytes);
+    const fs::path p = fs::temp_directory_path() / ("ngi_test_" + stem + ".safetensors");
+    std::ofstream(p, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    return p.string();
+}
+
+// The smallest valid pix2pix generator: num_downs 5, ngf 1, 1 -> 1 channels.
+nlohmann::json tiny_config() {
+    return {{"family", "pix2pix_unet"}, {"input_nc", 1}, {"output_nc", 1}, {"ngf", 1}, {"num_downs", 5},
+            {"bn_mode", "running"}};
+}
+
+std::vector<Entry> tiny_entries() {
+    std::vector<Entry> e;
+    auto bn = [&](const std::string& p, int c) {
+        e.push_back({p + ".weight", {c}, 1.0f});
+        e.push_back({p + ".bias", {c}, 0.0f});
+        e.push_back({p + ".running_mean", {c}, 0.0f});
+        e.push_back({p + ".running_var", {c}, 1.0f});
+    };
+    // level 0
+    e.push_back({"model.model.0.weight", {1, 1, 4, 4}, 0.1f});
+    e.push_back({"model.model.3.weight", {2, 1, 4, 4}, 0.1f});
+    e.push_back({"model.model.3.bias", {1}, 0.0f});
+    // levels 1..3 (middle) and 4 (innermost); channels 1 -> 2 -> 4 -> 8 -> 8
+    const int inner[5] = {1, 2, 4, 8, 8};
+    std::string seq = "model.model.1.model";
+    for (int i = 1; i <= 3; ++i) {
+        e.push_back({seq + ".1.weight", {inner[i], inner[i - 1], 4, 4}, 0.1f});
+        bn(seq + ".2", inner[i]);
+        e.push_back({seq + ".5.weight", {2 * inner[i], inner[i - 1], 4, 4}, 0.1f});
+        bn(seq + ".6", inner[i - 1]);
+        seq += ".3.model";
+    }
+    e.push_back({seq + ".1.weight", {8, 8, 4, 4}, 0.1f});
+    e.push_back({seq + ".3.weight", {8, 8, 4, 4}, 0.1f});
+    bn(seq + ".4", 8);
+    return e;
+}
+
+void expect_error(const std::string& path, const std::string& fragment) {
+    INFO("file " << path);
+    REQUIRE_THROWS_WITH(ngi::Model::load(ngi::test::device(), path), Contains(fragment));
+}
+
+}  // namespace
+
+TEST_CASE("a valid tiny model loads and runs; its output is finite", "[model][file]") {
+    auto m = ngi::Model::load(ngi::test::device(), write_file("valid", tiny_entries(), tiny_config()));
+    ngi::Tensor x({1, 1, 32, 64});
+    for (std::size_t i = 0; i < x.size(); ++i) x.data[i] = float(i % 7) - 3.0f;
+    const ngi::Tensor y = m.run(x);
+    CHECK(y.shape == std::vector<int>{1, 1, 32, 64});
+    CHECK(ngi::test::all_finite(y.data));
+    REQUIRE_THROWS_WITH(m.run(ngi::Tensor({1, 1, 30, 64})), Contains("multiple of 2^num_downs"));
+    REQUIRE_THROWS_WITH(m.run(ngi::Tensor({1, 2, 32, 64})), Contains("expected [1, 1, H, W]"));
+}
+
+TEST_CASE("broken model files give clear errors", "[model][file]") {
+    const auto cfg = tiny_config();
+    auto entries = tiny_entries();
+
+    SECTION("missing tensor") {
+        auto e = entries;
+        e.erase(e.begin());
+        expect_error(write_file("missing", e, cfg), "missing tensors: model.model.0.weight");
+    }
+    SECTION("unexpected tensor") {
+        auto e = entries;
+        e.push_back({"model.extra.weight", {3}, 0.0f});
+        expect_error(write_file("unexpected", e, cfg), "unexpected tensors: model.extra.weight");
+    }
+    SECTION("shape mismatch") {
+        auto e = entries;
+        e[0].shape = {1, 2, 4, 4};
+        expect_error(write_file("shape", e, cfg), "model.model.0.weight is [1, 2, 4, 4], expected [1, 1, 4, 4]");
+    }
+    SECTION("non-finite weight") {
+        auto e = entries;
+        e[1].value = std::numeric_limits<float>::quiet_NaN();
+        expect_error(write_file("nan", e, cfg), "tensor 'model.model.3.weight': value 0 is not finite");
+    }
+    SECTION("truncated data") {
+        expect_error(write_file("truncated", entries, cfg, {}, [](std::string& b) { b.resize(b.size() - 10); }),
+                     "the file is truncated");
+    }
+    SECTION("header length beyond the file") {
+        expect_error(write_file("header_len", entries, cfg, {}, [](std::string& b) { b[5] = 0x7f; }),
+                     "runs beyond the end of the file");
+    }
+    SECTION("malformed JSON header") {
+        expect_error(write_file("json", entries, cfg, {}, [](std::string& b) { b[8] = '['; b[9] = '{'; }),
+                     "malformed JSON header");
+    }
+    SECTION("no architecture metadata") {
+        expect_error(write_file("nometa", entries, cfg, [](nlohmann::json& h) { h.erase("__metadata__"); }),
+                     "no __metadata__[\"ngi\"]");
+    }
+    SECTION("unknown family") {
+        auto c = cfg;
+        c["family"] = "resnet";
+        expect_error(write_file("family", entries, c), "family 'resnet' is not supported");
+    }
+    SECTION("file too short") {
+        expect_error(write_file("short", entries, cfg, {}, [](std::string& b) { b.resize(5); }), "too short");
+    }
+    SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
+}
+
+TEST_CASE("NaN and Inf in the input are sanitized and counted", "[model][extremes]") {
+    auto m = ngi::Model::load(ngi::test::device(), write_file("sanitize", tiny_entries(), tiny_config()));
+    ngi::Tensor x({1, 1, 32, 32});
+    x.data[3] = std::numeric_limits<float>::quiet_NaN();
+    x.data[40] = std::numeric_limits<float>::infinity();
+    x.data[41] = -std::numeric_limits<float>::infinity();
+    x.data[42] = 1e30f;  // finite values far above 65504 pass through unchanged
+    ngi::RunInfo info;
+    const ngi::Tensor y = m.run(x, &info);
+    CHECK(info.sanitized_inputs == 3);
+    CHECK(ngi::test::all_finite(y.data));
+}
