@@ -1,0 +1,16 @@
+// The ngi sample's commands; one file each (cmd_<name>.cpp). Each returns the process exit code.
+#pragma once
+#include "args.hpp"
+
+namespace ngi_cli {
+
+struct Command {
+    const char* name;
+    const char* synopsis;
+    int (*run)(int argc, char** argv);  // argv[0] = "ngi", argv[1] = command name
+};
+
+int cmd_devices(int argc, char** argv);
+int cmd_generate(int argc, char** argv);
+
+}  // namespace ngi_cli

@@ -1,0 +1,53 @@
+// ngi: the command-line sample. It uses only the public API (host/include/ngi, bindings/c), so every command
+// doubles as a usage example.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+
+#include "commands.hpp"
+#include "ngi/error.hpp"
+
+namespace {
+
+const ngi_cli::Command kCommands[] = {
+    {"devices", "ngi devices                      list OpenCL devices and their capabilities", ngi_cli::cmd_devices},
+    {"generate", "ngi generate --model M.safetensors --input x.npy --output y.npy [--device D] [--profile]\n"
+                 "             [--bn-mode running|per_image] [--dropout off|seeded]\n"
+                 "                                 run a generator on a NumPy NCHW float32 tensor (N=1)",
+     ngi_cli::cmd_generate},
+};
+
+void usage(FILE* out) {
+    std::fprintf(out, "usage:\n");
+    for (const auto& c : kCommands) std::fprintf(out, "  %s\n", c.synopsis);
+    std::fprintf(out, "devices: --device cpu | gpu | P:D (platform:device, see `ngi devices`); default $NGI_DEVICE, "
+                      "else the first GPU, else the first CPU\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    for (const auto& c : kCommands) {
+        if (std::strcmp(argv[1], c.name) != 0) continue;
+        try {
+            return c.run(argc, argv);
+        } catch (const ngi_cli::UsageError& e) {
+            std::fprintf(stderr, "ngi %s: %s\n", c.name, e.what());
+            usage(stderr);
+            return 2;
+        } catch (const ngi::Error& e) {
+            std::fprintf(stderr, "ngi %s: error: %s\n", c.name, e.what());
+            return 1;
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "ngi %s: unexpected error: %s\n", c.name, e.what());
+            return 1;
+        }
+    }
+    std::fprintf(stderr, "ngi: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return 2;
+}
