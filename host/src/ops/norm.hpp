@@ -13,7 +13,7 @@ class BatchNormPerImage {
 public:
     BatchNormPerImage(Context& ctx, int channels, const std::vector<float>& gamma, const std::vector<float>& beta,
                       float eps, Act act);
-    std::size_t scratch_floats(const Shape& s) const { return 2 * std::size_t(s.c); }  // mean, rstd per channel
+    std::size_t scratch_floats(const Shape& s) const { return 3 * std::size_t(s.c); }  // shift, mean, rstd
     void enqueue(Context& ctx, const View& x, cl_mem scratch, std::size_t scratch_off,
                  std::vector<cl_event>* events = nullptr);
 

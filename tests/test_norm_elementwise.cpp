@@ -1,0 +1,132 @@
+// Per-image batch norm, activations, seeded dropout and input sanitizing against naive references,
+// including the numerical extremes: zero variance, 1x1 spatial, large offsets, HDR values, saturated tanh.
+#include <catch2/catch.hpp>
+
+#include "ops/elementwise.hpp"
+#include "ops/norm.hpp"
+#include "reference.hpp"
+#include "test_support.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+
+namespace {
+
+std::vector<float> run_bn(const std::vector<float>& x, int C, int H, int W, const std::vector<float>& g,
+                          const std::vector<float>& b, Act act) {
+    auto& c = test::ctx();
+    BatchNormPerImage bn(c, C, g, b, 1e-5f, act);
+    Buffer xb = c.alloc((x.size() + 3) * sizeof(float), "x");
+    c.write(xb, 3 * sizeof(float), x.size() * sizeof(float), x.data(), "x");
+    Buffer sb = c.alloc((3 * C + 9) * sizeof(float), "stats");
+    bn.enqueue(c, View{xb.get(), 3, {C, H, W}}, sb.get(), 9);
+    return test::download(xb, x.size(), 3);
+}
+
+}  // namespace
+
+TEST_CASE("per-image batch norm matches a two-pass double reference", "[norm]") {
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> C(1, 9), S(1, 37);
+    for (int trial = 0; trial < 15; ++trial) {
+        const int c = C(rng), h = S(rng), w = S(rng);
+        auto x = test::random_vector(std::size_t(c) * h * w, rng, -3.0f, 5.0f);
+        auto g = test::random_vector(c, rng, 0.5f, 1.5f), b = test::random_vector(c, rng);
+        const Act act = trial % 2 ? Act::leaky(0.2f) : Act::none();
+        auto y = run_bn(x, c, h, w, g, b, act);
+        auto r = ref::batch_norm_per_image(x, c, h * w, g, b, 1e-5, int(act.kind), 0.2);
+        INFO("C" << c << " " << h << "x" << w);
+        CHECK(test::worst_ratio(y, r, 1e-5, 1e-5) <= 1.0);
+    }
+}
+
+TEST_CASE("per-image batch norm at the extremes stays finite and accurate", "[norm][extremes]") {
+    std::mt19937 rng(9);
+    const std::vector<float> g = {1.3f, 0.7f, 1.0f}, b = {0.25f, -0.5f, 0.1f};
+    SECTION("zero variance: a constant channel normalizes to beta, not NaN") {
+        std::vector<float> x(3 * 64, 0.0f);
+        for (int i = 0; i < 64; ++i) { x[i] = 7.5f; x[64 + i] = -65504.0f; x[128 + i] = 0.0f; }
+        auto y = run_bn(x, 3, 8, 8, g, b, Act::none());
+        REQUIRE(test::all_finite(y));
+        for (int i = 0; i < 64; ++i) {
+            CHECK(y[i] == Approx(b[0]).margin(1e-6));
+            CHECK(y[64 + i] == Approx(b[1]).margin(1e-6));
+            CHECK(y[128 + i] == Approx(b[2]).margin(1e-6));
+        }
+    }
+    SECTION("1x1 spatial (the U-Net's innermost level at 256x256)") {
+        std::vector<float> x = {3.0f, -1e6f, 42.0f};
+        auto y = run_bn(x, 3, 1, 1, g, b, Act::none());
+        CHECK(y[0] == Approx(b[0]).margin(1e-6));
+        CHECK(y[1] == Approx(b[1]).margin(1e-6));
+        CHECK(y[2] == Approx(b[2]).margin(1e-6));
+    }
+    SECTION("large offset, small spread: no catastrophic cancellation") {
+        // E[x^2] - E[x]^2 in fp32 would lose every digit here (1e4^2 = 1e8 vs a variance of ~1).
+        const int hw = 4096;
+        std::vector<float> x(3 * hw);
+        std::normal_distribution<float> n(0.0f, 1.0f);
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < hw; ++i) x[c * hw + i] = (c == 0 ? 1e4f : c == 1 ? 65504.0f : -3e5f) + n(rng);
+        auto y = run_bn(x, 3, 64, 64, g, b, Act::none());
+        auto r = ref::batch_norm_per_image(x, 3, hw, g, b, 1e-5, 0, 0);
+        // An fp32 mean alone would be off by up to half an ulp of 3e5 (0.016 = 1.6% of the spread).
+        CHECK(test::worst_ratio(y, r, 1e-4, 1e-4) <= 1.0);
+    }
+    SECTION("HDR values far above 65504 with a wide spread") {
+        auto x = test::random_vector(2 * 1000, rng, 0.0f, 1e7f);
+        auto y = run_bn(x, 2, 25, 40, {1.0f, 2.0f}, {0.0f, 1.0f}, Act::none());
+        auto r = ref::batch_norm_per_image(x, 2, 1000, {1.0f, 2.0f}, {0.0f, 1.0f}, 1e-5, 0, 0);
+        CHECK(test::worst_ratio(y, r, 1e-5, 1e-5) <= 1.0);
+    }
+}
+
+TEST_CASE("activations match the reference and saturate without NaN", "[elementwise][extremes]") {
+    auto& c = test::ctx();
+    Elementwise ew(c);
+    std::vector<float> x = {0.0f, -0.0f, 1.0f, -1.0f, 20.0f, -20.0f, 88.8f, -88.8f, 1e30f, -1e30f, 65504.0f,
+                            -65504.0f, 3.4e38f, -3.4e38f, 1e-30f, -1e-30f, 0.5f};
+    for (Act act : {Act::none(), Act::relu(), Act::leaky(0.2f), Act::tanh(), Act::sigmoid()}) {
+        Buffer b = test::upload(x);
+        ew.activate(c, View{b.get(), 0, {1, 1, int(x.size())}}, act);
+        auto y = test::download(b, x.size());
+        INFO("activation " << to_string(act.kind));
+        REQUIRE(test::all_finite(y));
+        for (std::size_t i = 0; i < x.size(); ++i) {
+            const double r = ref::activate(x[i], int(act.kind), 0.2);
+            CHECK(y[i] == Approx(r).epsilon(2e-6).margin(1e-7));
+        }
+    }
+}
+
+TEST_CASE("seeded dropout reproduces docs/MODEL_FORMAT.md's hash test vectors", "[elementwise][dropout]") {
+    auto& c = test::ctx();
+    Elementwise ew(c);
+    struct Vec { std::uint32_t seed, site; int keep[4]; };
+    for (const Vec& v : {Vec{0, 0, {1, 1, 0, 0}}, Vec{1234, 0, {0, 1, 0, 1}}, Vec{7, 2, {1, 0, 0, 1}}}) {
+        Buffer b = test::upload({1.0f, 2.0f, 3.0f, 4.0f});
+        ew.dropout(c, View{b.get(), 0, {1, 1, 4}}, v.seed, v.site, 0.5f);
+        auto y = test::download(b, 4);
+        for (int i = 0; i < 4; ++i) CHECK(y[i] == (v.keep[i] ? 2.0f * float(i + 1) : 0.0f));
+    }
+    // Over many elements the keep rate is 1-p and the mean is preserved (inverted dropout).
+    std::vector<float> ones(100000, 1.0f);
+    Buffer b = test::upload(ones);
+    ew.dropout(c, View{b.get(), 0, {1, 1, int(ones.size())}}, 99, 0, 0.3f);
+    auto y = test::download(b, ones.size());
+    double sum = 0;
+    int kept = 0;
+    for (float v : y) { sum += v; kept += v != 0.0f; }
+    CHECK(kept / 100000.0 == Approx(0.7).margin(0.01));
+    CHECK(sum / 100000.0 == Approx(1.0).margin(0.015));
+}
+
+TEST_CASE("sanitize replaces NaN and Inf and counts them", "[elementwise][extremes]") {
+    auto& c = test::ctx();
+    Elementwise ew(c);
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    Buffer b = test::upload({1.0f, nan, inf, -inf, 65504.0f, -2.0f, nan});
+    const int bad = ew.sanitize(c, View{b.get(), 0, {1, 1, 7}}, -1.0f, 1.0f);
+    CHECK(bad == 4);
+    CHECK(test::download(b, 7) == std::vector<float>{1.0f, 0.0f, 1.0f, -1.0f, 65504.0f, -2.0f, 0.0f});
+}
