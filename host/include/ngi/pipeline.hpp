@@ -1,0 +1,118 @@
+// The surround-aware pipeline around the generator (docs/CONVENTIONS.md has every convention used here):
+//
+//   Frame (6 faces x features) --network_input--> NCHW tensor [1, 12, 2N, 4N] (or [1, 10, N, N] front only)
+//   model output [1, 3, 2N, 4N] --front_lightmap--> N x N linear lightmap --compose--> final --tonemap--> display
+//
+// A SurroundPipeline is built for one face size N; it builds its lookup tables once and keeps its device
+// buffers between frames. It is not thread-safe (one in-order device queue).
+#pragma once
+#include <array>
+#include <glm/glm.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ngi/device.hpp"
+#include "ngi/image.hpp"
+#include "ngi/model.hpp"
+#include "ngi/tensor.hpp"
+
+namespace ngi {
+
+// How six N x N faces become one 4N x 2N global view.
+enum class GlobalViewMode {
+    Thesis,       // the thesis's MergeToGlobalView: side faces copied, up/down faces resampled into the bands
+    Equirect,     // every pixel resampled at its own (phi, theta): a true equirectangular panorama
+};
+const char* global_view_mode_name(GlobalViewMode m);                 // "thesis", "equirect"
+GlobalViewMode global_view_mode_from_name(const std::string& name);  // throws InputError
+
+// Unit direction, in cluster space, of the centre of global-view pixel (x, y) (row 0 = top) of a 4N x 2N view.
+// The single definition behind the merge's lookup table and the coordinate map.
+glm::vec3 global_view_direction(int x, int y, int n, GlobalViewMode mode);
+
+// Normalized spherical coordinates of a cluster-space direction d (any length > 0):
+// phi = atan2(d.x, -d.z) / (2 pi) + 0.5 in [0, 1] (0.5 = straight ahead, increasing to the right),
+// theta = acos(d.y / |d|) / pi in [0, 1] (0 = up). And the inverse (a unit vector).
+glm::vec2 direction_to_phi_theta(glm::vec3 d);
+glm::vec3 phi_theta_to_direction(float phi, float theta);
+
+// How HDR lumination (linear, >= 0, unbounded) is brought to [0, 1] before the model's input scaling, and
+// how the model's output is brought back. Reinhard: y = x / (1 + x), x = y / (1 - y). Clamp: y = min(x, 1)
+// (the thesis's 8-bit data sets), x = y.
+enum class LuminationTransfer { Reinhard, Clamp };
+const char* lumination_transfer_name(LuminationTransfer t);                     // "reinhard", "clamp"
+LuminationTransfer lumination_transfer_from_name(const std::string& name);      // throws InputError
+
+// Channel names of the network input, in tensor order: surround (12) or front view only (10). A model's
+// ModelConfig::input_layout, when not empty, must equal one of these.
+const std::vector<std::string>& surround_input_channels();
+const std::vector<std::string>& single_view_input_channels();
+
+// What preprocessing found in a frame's raw buffers (all faces it used).
+struct PreprocessStats {
+    std::array<int, kFeatureCount> nonfinite{};  // NaN / +-Inf values replaced, per Feature
+    int sky_normals = 0;                         // zero-length normals (sky), kept as the zero vector
+    int far_depths = 0;                          // depths beyond 1000 m (clamped to 1)
+    int total_nonfinite() const;
+};
+
+// Display transform for 8-bit output: exposure, tone curve, sRGB OETF; the result lies in [0, 1].
+enum class ToneCurve { AcesFitted, Reinhard, Clamp };
+struct ToneMapOptions {
+    float exposure_ev = 0.0f;           // multiply by 2^exposure_ev first
+    ToneCurve curve = ToneCurve::AcesFitted;
+    bool srgb = true;                   // apply the sRGB OETF (PNG expects sRGB-encoded values)
+};
+const char* tone_curve_name(ToneCurve c);                   // "aces", "reinhard", "clamp"
+ToneCurve tone_curve_from_name(const std::string& name);    // throws InputError
+
+class SurroundPipeline {
+public:
+    // n: face size, even, 2 <= n <= 2048. Builds the merge and extract lookup tables and the coordinate map.
+    SurroundPipeline(const Device& device, int n, GlobalViewMode mode = GlobalViewMode::Thesis,
+                     LuminationTransfer transfer = LuminationTransfer::Reinhard);
+    SurroundPipeline(SurroundPipeline&&) noexcept;
+    SurroundPipeline& operator=(SurroundPipeline&&) noexcept;
+    ~SurroundPipeline();
+
+    int n() const;
+    GlobalViewMode mode() const;
+    LuminationTransfer transfer() const;
+    int width() const { return 4 * n(); }   // global view size
+    int height() const { return 2 * n(); }
+
+    // One raw feature of all six faces merged into a 4N x 2N image (no preprocessing, no sanitizing).
+    Image global_view(const Frame& frame, Feature feature);
+
+    // The 2-channel coordinate map (phi, theta in [0, 1]) of the global view, 4N x 2N.
+    const Image& coord_map() const;
+
+    // The generator's input for `frame`: config.input_nc = 12 gives the global view [1, 12, 2N, 4N], 10 gives
+    // the front face only [1, 10, N, N]; channel order as surround_input_channels(), values in
+    // config.input_range. Needs albedo, normal, depth and direct of every face used; emission and env are
+    // optional (all six faces or none). Throws InputError for a frame or config that does not fit.
+    Tensor network_input(const Frame& frame, const ModelConfig& config, PreprocessStats* stats = nullptr);
+
+    // The front view's linear HDR lightmap (N x N x 3) from the generator's output: [1, 3, 2N, 4N] (front
+    // view extracted: an exact crop in Thesis mode) or [1, 3, N, N]; values mapped from config.output_range
+    // through the inverse lumination transfer.
+    Image front_lightmap(const Tensor& model_output, const ModelConfig& config);
+
+    // final = lightmap x albedo + emission + env of the front face (the terms the frame has). The lightmap
+    // must be N x N x 3; with frame.reference as the lightmap this gives the reference final image.
+    Image compose(const Image& lightmap, const Frame& frame);
+
+    // Bilinear resize (pixel centres, edge clamped) of any image to width x height.
+    Image upscale(const Image& image, int width, int height);
+
+    // Linear 3-channel image to display-referred [0, 1] values (see ToneMapOptions).
+    Image tonemap(const Image& linear, const ToneMapOptions& options = {});
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ngi

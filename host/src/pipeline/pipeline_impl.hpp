@@ -1,0 +1,62 @@
+// Library-internal state of SurroundPipeline and the lookup tables behind the merge and the extraction
+// (exposed here so tests can check them against naive references).
+#pragma once
+#include <array>
+#include <vector>
+
+#include "ngi/pipeline.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi::detail {
+
+// A gather table: output pixel p = sum_k w[p][k] * source[idx[p][k]] (per channel plane).
+struct GatherLut {
+    std::vector<std::array<int, 4>> idx;
+    std::vector<std::array<float, 4>> w;
+};
+
+// Merge table: output = global view (4N x 2N, index y * 4N + x); source = six faces stacked in Face order
+// (index face * N * N + row * N + col).
+GatherLut build_merge_lut(int n, GlobalViewMode mode);
+// Extraction table: output = front face (N x N); source = global view (index y * 4N + x).
+GatherLut build_extract_lut(int n, GlobalViewMode mode);
+
+// Checks one face image of a frame: present, square, N x N, with the feature's channel count. `what` names
+// the operation for the message.
+void check_face_image(const Image& image, Feature feature, Face face, int n, const char* what);
+// Whether an optional feature (emission, env) is present: on every listed face, or on none (else InputError).
+bool optional_feature_present(const Frame& frame, Feature feature, const Face* faces, int face_count, int n,
+                              const char* what);
+
+// Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept).
+bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what);
+
+}  // namespace ngi::detail
+
+namespace ngi {
+
+struct SurroundPipeline::Impl {
+    Device device;  // keeps the context alive
+    detail::Context& ctx;
+    int n;
+    GlobalViewMode mode;
+    LuminationTransfer transfer;
+
+    detail::Kernel gather, preprocess, decode, resize, compose, tonemap;
+    detail::Buffer merge_idx, merge_w;      // 8 N^2 entries
+    detail::Buffer extract_idx, extract_w;  // N^2 entries
+    Image coords;                           // 4N x 2N x 2, phi and theta in [0, 1]
+
+    // Scratch reused between frames, grown on demand.
+    detail::Buffer raw, stack, view, counters, light, aux[3], out;
+    // The coordinate planes of `view` hold the coordinate map scaled to this input range.
+    float coords_lo = 0.0f, coords_hi = 0.0f;
+
+    Impl(const Device& d, int n, GlobalViewMode mode, LuminationTransfer transfer);
+
+    // Launches lut_gather: `channels` planes of src (plane stride src_plane) through the table into dst.
+    void gather_planes(const detail::Buffer& src, int src_plane, const detail::Buffer& idx,
+                       const detail::Buffer& w, int npix, int channels, const detail::Buffer& dst, int dst_plane);
+};
+
+}  // namespace ngi

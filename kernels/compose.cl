@@ -1,0 +1,82 @@
+// Output side of the surround-aware pipeline: model output -> linear lightmap, resize, final composition,
+// display transform. Value rules: docs/CONVENTIONS.md ("Output side").
+
+// Keep in sync with ngi::LuminationTransfer and ngi::ToneCurve (host/include/ngi/pipeline.hpp).
+#define TRANSFER_REINHARD 0
+#define TRANSFER_CLAMP 1
+#define CURVE_ACES 0
+#define CURVE_REINHARD 1
+#define CURVE_CLAMP 2
+
+// The decoded lightmap stops at the largest half float, so it survives a half-float EXR.
+#define LIGHT_MAX 65504.0f
+
+// In place: model output v in [lo, hi] -> [0, 1] -> linear lightmap through the inverse lumination transfer
+// (Reinhard: x = y / (1 - y)). NaN (a broken model output) becomes 0.
+__kernel void decode_lightmap(__global float* restrict x, const int count, const float lo, const float hi,
+                              const int transfer) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    float y = (x[i] - lo) / (hi - lo);
+    y = isnan(y) ? 0.0f : clamp(y, 0.0f, 1.0f);
+    if (transfer == TRANSFER_REINHARD) y = y < 1.0f ? fmin(y / (1.0f - y), LIGHT_MAX) : LIGHT_MAX;
+    x[i] = y;
+}
+
+// Bilinear resize of a planar image, pixel centres at +0.5 (PyTorch align_corners=False), edges clamped.
+// Launch: 2-D (dst_w, dst_h), local 8 x 8.
+__kernel void resize_bilinear(__global const float* restrict src, const int src_w, const int src_h,
+                              __global float* restrict dst, const int dst_w, const int dst_h, const int channels) {
+    const int x = get_global_id(0), y = get_global_id(1);
+    if (x >= dst_w || y >= dst_h) return;
+    const float fx = clamp(((float)x + 0.5f) * ((float)src_w / (float)dst_w) - 0.5f, 0.0f, (float)(src_w - 1));
+    const float fy = clamp(((float)y + 0.5f) * ((float)src_h / (float)dst_h) - 0.5f, 0.0f, (float)(src_h - 1));
+    const int x0 = (int)fx, y0 = (int)fy;
+    const int x1 = min(x0 + 1, src_w - 1), y1 = min(y0 + 1, src_h - 1);
+    const float ax = fx - (float)x0, ay = fy - (float)y0;
+    for (int c = 0; c < channels; ++c) {
+        __global const float* s = src + c * src_w * src_h;
+        const float top = (1.0f - ax) * s[y0 * src_w + x0] + ax * s[y0 * src_w + x1];
+        const float bottom = (1.0f - ax) * s[y1 * src_w + x0] + ax * s[y1 * src_w + x1];
+        dst[(c * dst_h + y) * dst_w + x] = (1.0f - ay) * top + ay * bottom;
+    }
+}
+
+// Light terms: NaN -> 0, negative -> 0, +Inf -> FLT_MAX.
+inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
+
+// final = lightmap * albedo + emission + env, elementwise over `count` values of planar RGB images of one size.
+// Albedo is sanitized as in preprocessing (NaN -> 0, clamped to [0, 1]); the sum saturates at FLT_MAX.
+__kernel void compose_final(__global const float* restrict light, __global const float* restrict albedo,
+                            __global const float* restrict emission, __global const float* restrict env,
+                            const int has_emission, const int has_env, __global float* restrict out,
+                            const int count) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    const float a = isnan(albedo[i]) ? 0.0f : clamp(albedo[i], 0.0f, 1.0f);
+    float v = clean_light(light[i]) * a;
+    if (has_emission) v = fmin(v + clean_light(emission[i]), FLT_MAX);
+    if (has_env) v = fmin(v + clean_light(env[i]), FLT_MAX);
+    out[i] = v;
+}
+
+// Linear -> display [0, 1]: scale (2^exposure), tone curve, optional sRGB OETF. Elementwise over `count`.
+// ACES: Narkowicz's fit of the ACES filmic curve, x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14); its input is
+// capped at 1e4 (where it is long saturated) so x*x cannot overflow.
+__kernel void tonemap(__global const float* restrict src, __global float* restrict dst, const int count,
+                      const float scale, const int curve, const int srgb) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    float x = isnan(src[i]) ? 0.0f : fmax(src[i], 0.0f);
+    x = fmin(x * scale, FLT_MAX);
+    if (curve == CURVE_ACES) {
+        x = fmin(x, 1e4f);
+        x = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
+    } else if (curve == CURVE_REINHARD) {
+        x = x / (1.0f + x);
+    }
+    x = clamp(x, 0.0f, 1.0f);
+    // x^(1/2.4) as exp2(log2(x) / 2.4): x > 0.0031308 here, and PoCL's general pow() is ~5x slower.
+    if (srgb) x = x <= 0.0031308f ? 12.92f * x : 1.055f * exp2(log2(x) * (1.0f / 2.4f)) - 0.055f;
+    dst[i] = clamp(x, 0.0f, 1.0f);
+}

@@ -1,0 +1,109 @@
+// Preprocessing of raw G-buffer features (thesis section 4.3.1), per texel, before the merge.
+// Value rules and ranges: docs/CONVENTIONS.md ("Preprocessing").
+
+// Keep in sync with ngi::LuminationTransfer (host/include/ngi/pipeline.hpp).
+#define TRANSFER_REINHARD 0
+#define TRANSFER_CLAMP 1
+
+// Counter slots: 0..5 non-finite values per Feature (albedo, normal, depth, direct, emission, env),
+// then sky normals and far depths. Keep in sync with host/src/pipeline/preprocess.cpp.
+#define COUNT_SKY 6
+#define COUNT_FAR 7
+#define COUNT_SLOTS 8
+
+// Raw plane order (16 planes of npix values): albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12,
+// env 13-15. Output plane order (10 planes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
+
+#define MAX_DEPTH_M 1000.0f
+// A normal whose largest component is below this is the zero vector: the renderer's "no surface" (sky).
+#define SKY_NORMAL_EPS 1e-6f
+
+// Replaces a non-finite value (NaN -> nan_to, -Inf -> neg_to, +Inf -> pos_to) and counts it.
+inline float clean(float v, float nan_to, float neg_to, float pos_to, int* bad) {
+    if (isnan(v)) { ++*bad; return nan_to; }
+    if (isinf(v)) { ++*bad; return v > 0.0f ? pos_to : neg_to; }
+    return v;
+}
+
+// Linear lumination x in [0, FLT_MAX] to [0, 1]. Reinhard x / (1 + x): 1 + FLT_MAX rounds to FLT_MAX, so the
+// largest value gives exactly 1 and nothing overflows; the fmin guards a division that is not correctly
+// rounded on some devices.
+inline float lum_encode(float x, int transfer) {
+    if (transfer == TRANSFER_CLAMP) return fmin(x, 1.0f);
+    return fmin(x / (1.0f + x), 1.0f);
+}
+
+// S = [alpha; beta; gamma] (cluster basis rows) maps world-space normals into cluster space. lo/hi: the model's
+// input range; every feature is first brought to [0, 1], then to lo + v * (hi - lo).
+// Launch: 1-D, local size 64 (the counters are summed per work-group in local memory, then added once).
+__kernel void preprocess_gbuffer(__global const float* restrict raw, __global float* restrict out, const int npix,
+                                 const int has_emission, const int has_env,
+                                 const float ax, const float ay, const float az,
+                                 const float bx, const float by, const float bz,
+                                 const float gx, const float gy, const float gz,
+                                 const float lo, const float hi, const int transfer,
+                                 __global int* restrict counters) {
+    __local int group_counts[COUNT_SLOTS];
+    const int p = get_global_id(0), lid = get_local_id(0);
+    if (lid < COUNT_SLOTS) group_counts[lid] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+
+    if (p < npix) {
+        const float scale = hi - lo;
+        int bad_albedo = 0, bad_normal = 0, bad_depth = 0, bad_direct = 0, bad_emission = 0, bad_env = 0;
+
+        // Albedo: reflectance, clamped to [0, 1].
+        for (int c = 0; c < 3; ++c) {
+            const float a = clamp(clean(raw[c * npix + p], 0.0f, 0.0f, 1.0f, &bad_albedo), 0.0f, 1.0f);
+            out[c * npix + p] = lo + a * scale;
+        }
+
+        // Normal: a non-finite component makes the whole normal unknown, i.e. zero (sky). Scaled by its largest
+        // component before the length so that huge finite values cannot overflow.
+        float nx = clean(raw[3 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float ny = clean(raw[4 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float nz = clean(raw[5 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
+        const float m = fmax(fabs(nx), fmax(fabs(ny), fabs(nz)));
+        float cx = 0.0f, cy = 0.0f, cz = 0.0f;
+        if (bad_normal == 0 && m >= SKY_NORMAL_EPS) {
+            nx /= m; ny /= m; nz /= m;
+            const float inv = 1.0f / sqrt(nx * nx + ny * ny + nz * nz);
+            nx *= inv; ny *= inv; nz *= inv;
+            cx = ax * nx + ay * ny + az * nz;
+            cy = bx * nx + by * ny + bz * nz;
+            cz = gx * nx + gy * ny + gz * nz;
+        } else {
+            atomic_inc(&group_counts[COUNT_SKY]);
+        }
+        // [-1, 1] -> [0, 1] (the zero vector of the sky lands on 0.5), clamped against rounding.
+        out[3 * npix + p] = lo + clamp(cx * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
+        out[4 * npix + p] = lo + clamp(cy * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
+        out[5 * npix + p] = lo + clamp(cz * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
+
+        // Depth in metres -> depth / 1000 in [0, 1]; unknown (NaN) and +Inf are as far as it gets.
+        const float d = clean(raw[6 * npix + p], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
+        if (d > MAX_DEPTH_M) atomic_inc(&group_counts[COUNT_FAR]);
+        out[6 * npix + p] = lo + clamp(d / MAX_DEPTH_M, 0.0f, 1.0f) * scale;
+
+        // Lumination = direct + emission + env (eq. 4.2): light is >= 0; +Inf is the brightest finite light, and
+        // the sum saturates at FLT_MAX instead of overflowing.
+        for (int c = 0; c < 3; ++c) {
+            float l = fmax(clean(raw[(7 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_direct), 0.0f);
+            if (has_emission)
+                l = fmin(l + fmax(clean(raw[(10 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_emission), 0.0f), FLT_MAX);
+            if (has_env)
+                l = fmin(l + fmax(clean(raw[(13 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_env), 0.0f), FLT_MAX);
+            out[(7 + c) * npix + p] = lo + lum_encode(l, transfer) * scale;
+        }
+
+        if (bad_albedo) atomic_add(&group_counts[0], bad_albedo);
+        if (bad_normal) atomic_add(&group_counts[1], bad_normal);
+        if (bad_depth) atomic_add(&group_counts[2], bad_depth);
+        if (bad_direct) atomic_add(&group_counts[3], bad_direct);
+        if (bad_emission) atomic_add(&group_counts[4], bad_emission);
+        if (bad_env) atomic_add(&group_counts[5], bad_env);
+    }
+
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid < COUNT_SLOTS && group_counts[lid] != 0) atomic_add(&counters[lid], group_counts[lid]);
+}
