@@ -1,0 +1,58 @@
+// Image files: OpenEXR (half/float), PNG (8-bit, 16-bit read), NumPy .npy.
+//
+// Every reader throws InputError naming the file when it cannot be opened, is not of the expected format, is
+// truncated or corrupt. Every writer encodes the whole file in memory, writes it to a temporary file next to
+// the target and renames it into place, so a failed write leaves neither a partial file nor a temporary behind.
+// Images are planar CHW float, row 0 = top (ngi/image.hpp).
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "ngi/image.hpp"
+
+namespace ngi {
+
+// ---- OpenEXR ------------------------------------------------------------------------------------------------
+
+enum class ExrPixelType { Half, Float };
+
+// The channel names ngi writes for an image with `channels` channels: 1 -> Y; 3 -> R, G, B; 4 -> R, G, B, A;
+// any other count -> c0, c1, ..., c<N-1>.
+std::vector<std::string> exr_channel_names(int channels);
+
+// Reads every channel of the first part (scanline or tiled; half, float or uint samples, converted to float).
+// The image has the size of the display window; pixels of the display window outside the data window are 0.
+// Channel order: Y, R, G, B, A first (in that order, whichever are present), then every other channel by name
+// in natural order (c2 before c10), so files written by write_exr read back in their original order.
+// `channel_names`, when given, receives the names in that order. Subsampled (chroma) channels are rejected.
+// NaN and Inf values are returned as stored.
+Image read_exr(const std::string& path, std::vector<std::string>* channel_names = nullptr);
+
+// Writes 1..N channels named by exr_channel_names, ZIP-compressed, scanline. With ExrPixelType::Half, finite
+// values beyond the half range are clamped to +-65504 (half has no larger finite value); NaN/Inf are kept.
+void write_exr(const std::string& path, const Image& image, ExrPixelType type = ExrPixelType::Half);
+
+// ---- PNG ----------------------------------------------------------------------------------------------------
+
+// Linear: sample / (2^bits - 1), no transfer function (the default; gAMA/sRGB/iCCP chunks are ignored).
+// Srgb: additionally apply the sRGB EOTF (read) / its inverse (write) to the colour channels; alpha stays linear.
+enum class PngEncoding { Linear, Srgb };
+
+// Reads 8- and 16-bit PNGs (1/2/4-bit grey and palettes are expanded to 8 bits, tRNS to an alpha channel).
+// Channels: 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA; values in [0, 1].
+Image read_png(const std::string& path, PngEncoding encoding = PngEncoding::Linear);
+
+// Writes 8-bit PNG with 1, 2, 3 or 4 channels (grey, grey + alpha, RGB, RGBA). Values are clamped to [0, 1]
+// (NaN -> 0) and rounded to the nearest of the 256 levels.
+void write_png(const std::string& path, const Image& image, PngEncoding encoding = PngEncoding::Linear);
+
+// ---- any of the above, by extension ---------------------------------------------------------------------------
+
+// .exr (read_exr), .png (read_png, linear), .npy (float32/64/16 with shape [H, W], [C, H, W] or [1, C, H, W]).
+// The extension is matched case-insensitively; anything else is an InputError.
+Image read_image(const std::string& path);
+// .exr (float samples, lossless), .png (8-bit, linear), .npy (float32, shape [C, H, W]).
+void write_image(const std::string& path, const Image& image);
+
+}  // namespace ngi

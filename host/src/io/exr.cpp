@@ -1,0 +1,203 @@
+// OpenEXR read/write through in-memory streams: the reader sees exactly the bytes of the file (a short file is
+// reported as truncated, not as an I/O error deep inside OpenEXR), and the writer's output only reaches the
+// disk through write_file_atomic, after OpenEXR has finished (its OutputFile destructor swallows errors).
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfVersion.h>
+#include <half.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
+#include "ngi/image_io.hpp"
+
+namespace ngi {
+namespace {
+
+class MemoryIStream : public Imf::IStream {
+public:
+    MemoryIStream(const std::string& bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
+    bool read(char c[], int n) override {
+        if (n < 0 || bytes_.size() - pos_ < std::size_t(n)) throw std::runtime_error("unexpected end of file (truncated)");
+        std::memcpy(c, bytes_.data() + pos_, std::size_t(n));
+        pos_ += std::size_t(n);
+        return pos_ < bytes_.size();
+    }
+    std::uint64_t tellg() override { return pos_; }
+    void seekg(std::uint64_t pos) override { pos_ = std::min<std::uint64_t>(pos, bytes_.size()); }
+
+private:
+    const std::string& bytes_;
+    std::size_t pos_ = 0;
+};
+
+class MemoryOStream : public Imf::OStream {
+public:
+    MemoryOStream() : Imf::OStream("memory") {}
+    void write(const char c[], int n) override {
+        if (pos_ + std::size_t(n) > bytes.size()) bytes.resize(pos_ + std::size_t(n));
+        std::memcpy(bytes.data() + pos_, c, std::size_t(n));
+        pos_ += std::size_t(n);
+    }
+    std::uint64_t tellp() override { return pos_; }
+    void seekp(std::uint64_t pos) override { pos_ = pos; }
+    std::string bytes;
+
+private:
+    std::size_t pos_ = 0;
+};
+
+// Sort key: Y, R, G, B, A first; then by name with digit runs compared as numbers ("c2" < "c10").
+bool channel_less(const std::string& a, const std::string& b) {
+    static const char* first[] = {"Y", "R", "G", "B", "A"};
+    auto rank = [](const std::string& s) {
+        for (int i = 0; i < 5; ++i) if (s == first[i]) return i;
+        return 5;
+    };
+    const int ra = rank(a), rb = rank(b);
+    if (ra != rb || ra < 5) return ra < rb;
+    std::size_t i = 0, j = 0;
+    while (i < a.size() && j < b.size()) {
+        if (std::isdigit((unsigned char)a[i]) && std::isdigit((unsigned char)b[j])) {
+            std::size_t ie = i, je = j;
+            while (ie < a.size() && std::isdigit((unsigned char)a[ie])) ++ie;
+            while (je < b.size() && std::isdigit((unsigned char)b[je])) ++je;
+            const std::string na = a.substr(i, ie - i), nb = b.substr(j, je - j);
+            const std::size_t za = na.find_first_not_of('0'), zb = nb.find_first_not_of('0');
+            const std::string ta = za == std::string::npos ? "" : na.substr(za);
+            const std::string tb = zb == std::string::npos ? "" : nb.substr(zb);
+            if (ta.size() != tb.size()) return ta.size() < tb.size();
+            if (ta != tb) return ta < tb;
+            i = ie;
+            j = je;
+        } else {
+            if (a[i] != b[j]) return a[i] < b[j];
+            ++i;
+            ++j;
+        }
+    }
+    return a.size() - i < b.size() - j || (a.size() - i == b.size() - j && a < b);
+}
+
+}  // namespace
+
+std::vector<std::string> exr_channel_names(int channels) {
+    if (channels == 1) return {"Y"};
+    if (channels == 3) return {"R", "G", "B"};
+    if (channels == 4) return {"R", "G", "B", "A"};
+    std::vector<std::string> names;
+    for (int c = 0; c < channels; ++c) names.push_back(std::string(1, 'c').append(std::to_string(c)));
+    return names;
+}
+
+Image read_exr(const std::string& path, std::vector<std::string>* channel_names) {
+    const std::string bytes = detail::read_file(path);
+    const std::string what = "read " + path + ": ";
+    if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data()))
+        throw InputError(what + "not an OpenEXR file (bad magic number)");
+    Image img;
+    std::vector<std::string> names;
+    try {
+        MemoryIStream stream(bytes, path);
+        Imf::InputFile file(stream, 1);
+        const Imf::Header& h = file.header();
+        const Imath::Box2i dw = h.dataWindow(), disp = h.displayWindow();
+        const long long dw_w = (long long)dw.max.x - dw.min.x + 1, dw_h = (long long)dw.max.y - dw.min.y + 1;
+        const long long w = (long long)disp.max.x - disp.min.x + 1, hgt = (long long)disp.max.y - disp.min.y + 1;
+        for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
+            if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+                throw InputError(what + "channel " + it.name() + " is subsampled; only full-resolution channels "
+                                 "are supported");
+            names.push_back(it.name());
+        }
+        if (names.empty()) throw InputError(what + "the file has no channels");
+        // Refuse absurd headers before allocating (a corrupt header must not become a std::bad_alloc).
+        const long long limit = 1ll << 31;
+        if (w <= 0 || hgt <= 0 || dw_w <= 0 || dw_h <= 0 || w * hgt > limit / (long long)names.size() ||
+            dw_w * dw_h > limit / (long long)names.size())
+            throw InputError(what + "unsupported image size (display window " + std::to_string(w) + "x" +
+                             std::to_string(hgt) + ", data window " + std::to_string(dw_w) + "x" +
+                             std::to_string(dw_h) + ", " + std::to_string(names.size()) + " channels)");
+        std::sort(names.begin(), names.end(), channel_less);
+
+        // Read the data window into its own planes, then copy its overlap with the display window.
+        const std::size_t plane = std::size_t(dw_w) * std::size_t(dw_h);
+        std::vector<float> data(plane * names.size());
+        Imf::FrameBuffer fb;
+        for (std::size_t c = 0; c < names.size(); ++c) {
+            // OpenEXR addresses pixel (x, y) at base + x * xStride + y * yStride with absolute coordinates.
+            char* base = reinterpret_cast<char*>(data.data() + c * plane) -
+                         (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * dw_w) * std::ptrdiff_t(sizeof(float));
+            fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(dw_w)));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+
+        img = Image(int(w), int(hgt), int(names.size()));
+        const int x0 = std::max(dw.min.x, disp.min.x), x1 = std::min(dw.max.x, disp.max.x);
+        const int y0 = std::max(dw.min.y, disp.min.y), y1 = std::min(dw.max.y, disp.max.y);
+        for (std::size_t c = 0; c < names.size(); ++c)
+            for (int y = y0; y <= y1; ++y)
+                for (int x = x0; x <= x1; ++x)
+                    img.at(int(c), y - disp.min.y, x - disp.min.x) =
+                        data[c * plane + std::size_t(y - dw.min.y) * std::size_t(dw_w) + std::size_t(x - dw.min.x)];
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(what + "corrupt or truncated OpenEXR file: " + e.what());
+    }
+    if (channel_names) *channel_names = std::move(names);
+    return img;
+}
+
+void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
+    const std::string what = "write " + path + ": ";
+    if (image.width <= 0 || image.height <= 0 || image.channels <= 0 || image.data.size() != image.plane() * image.channels)
+        throw InputError(what + "invalid image (" + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                         "x" + std::to_string(image.channels) + " with " + std::to_string(image.data.size()) +
+                         " values)");
+    // OpenEXR converts sample types when reading but not when writing: hand it halves for a half file. Imath's
+    // conversion rounds to nearest but turns finite values beyond 65504 into Inf, hence the clamp.
+    const bool half = type == ExrPixelType::Half;
+    std::vector<Imath::half> halves;
+    if (half) {
+        halves.resize(image.data.size());
+        for (std::size_t i = 0; i < halves.size(); ++i) {
+            const float v = image.data[i];
+            halves[i] = Imath::half(std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : v);
+        }
+    }
+    const std::size_t elem = half ? sizeof(Imath::half) : sizeof(float);
+    const char* base = half ? reinterpret_cast<const char*>(halves.data()) : reinterpret_cast<const char*>(image.data.data());
+    const std::vector<std::string> names = exr_channel_names(image.channels);
+    MemoryOStream stream;
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        Imf::FrameBuffer fb;
+        for (int c = 0; c < image.channels; ++c) {
+            header.channels().insert(names[c], Imf::Channel(half ? Imf::HALF : Imf::FLOAT));
+            fb.insert(names[c], Imf::Slice(half ? Imf::HALF : Imf::FLOAT,
+                                           const_cast<char*>(base + c * image.plane() * elem), elem,
+                                           elem * std::size_t(image.width)));
+        }
+        Imf::OutputFile file(stream, header, 1);
+        file.setFrameBuffer(fb);
+        file.writePixels(image.height);
+    } catch (const std::exception& e) {
+        throw InputError(what + "OpenEXR encoding failed: " + e.what());
+    }
+    detail::write_file_atomic(path, stream.bytes);
+}
+
+}  // namespace ngi
