@@ -1,4 +1,4 @@
-// Image files: OpenEXR (half/float), PNG (8-bit, 16-bit read), NumPy .npy.
+// Image files and the frame folder: OpenEXR (half/float), PNG (8-bit, 16-bit read), NumPy .npy.
 //
 // Every reader throws InputError naming the file when it cannot be opened, is not of the expected format, is
 // truncated or corrupt. Every writer encodes the whole file in memory, writes it to a temporary file next to
@@ -54,5 +54,48 @@ void write_png(const std::string& path, const Image& image, PngEncoding encoding
 Image read_image(const std::string& path);
 // .exr (float samples, lossless), .png (8-bit, linear), .npy (float32, shape [C, H, W]).
 void write_image(const std::string& path, const Image& image);
+
+// ---- frame folder ---------------------------------------------------------------------------------------------
+//
+// <dir>/<face>_<feature>.exr   face in {front, back, left, right, up, down},
+//                              feature in {albedo, normal, depth, direct, emission, env};
+//                              albedo, direct, emission and env may instead be 8/16-bit <face>_<feature>.png,
+//                              read linearly (value / 255, no sRGB decode): such files are LDR and reported in
+//                              FrameReadStats::ldr_files. Having both the .exr and the .png is an error.
+// <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera (other keys ignored)
+// <dir>/reference.exr          optional: front-view reference lighting, 3 channels, any size
+//
+// All 36 face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
+// feature may carry a 4th channel named A / a PNG alpha channel, which is dropped).
+//
+// Sanitizing (not fatal, counted per file in FrameReadStats): NaN -> 0 everywhere; +-Inf -> 0 in colour and
+// normal buffers (an infinite radiance or normal is a renderer fault, and 0 is the neutral value for the merge
+// and the network); +Inf depth (a ray that hit nothing) -> the largest finite depth of that file, so the
+// background stays the farthest thing in view. Negative depth values (including -Inf) are an InputError naming
+// the file and the number of such pixels.
+
+struct SanitizedFile {
+    std::string file;          // file name within the frame folder
+    std::size_t nan = 0;       // NaN values replaced
+    std::size_t inf = 0;       // +-Inf values replaced
+};
+
+struct FrameReadStats {
+    std::vector<SanitizedFile> sanitized;  // one entry per file with NaN/Inf values, in read order
+    std::vector<std::string> ldr_files;    // features read from PNG
+    std::size_t total_sanitized() const;   // sum of nan + inf over all files
+};
+
+Frame read_frame(const std::string& dir, FrameReadStats* stats = nullptr);
+
+// Writes every face image, camera.json and (if present) reference.exr. Pixel types: albedo, direct, emission and
+// env as half (11-bit mantissa, more than enough for colours; a file with a finite value beyond the half range
+// is written as float instead, so nothing is clamped); normal, depth and reference as float (depth >> 1000 m
+// needs float's precision; the reference is what metrics are measured against). Depth is one channel named Y.
+// The frame is validated first (sizes, channel counts). The files are written into a fresh <dir>.tmp-<id>
+// folder that is renamed to <dir> at the end, so no partial frame folder is ever visible under <dir>. An
+// existing <dir> is replaced only if it is empty or a frame folder (holds camera.json); anything else is an
+// InputError, so a mistyped path never deletes unrelated files.
+void write_frame(const std::string& dir, const Frame& frame);
 
 }  // namespace ngi

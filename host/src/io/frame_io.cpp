@@ -1,0 +1,224 @@
+// The frame folder (layout, sanitizing and pixel types are documented in ngi/image_io.hpp).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
+#include "ngi/image_io.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ngi {
+namespace {
+
+bool png_allowed(Feature f) { return f != Feature::Normal && f != Feature::Depth; }
+
+std::string size_string(const Image& img) { return std::to_string(img.width) + "x" + std::to_string(img.height); }
+
+// Keeps the first `want` channels when the only extra one is an alpha channel; anything else is an error.
+Image fit_channels(Image img, int want, bool extra_is_alpha, const std::string& path) {
+    if (img.channels == want) return img;
+    if (want == 3 && img.channels == 4 && extra_is_alpha) {
+        img.data.resize(img.plane() * 3);  // planar: dropping the last plane is a resize
+        img.channels = 3;
+        return img;
+    }
+    throw InputError("read " + path + ": has " + std::to_string(img.channels) + " channel(s), expected " +
+                     std::to_string(want) + (want == 3 ? " (R, G, B; an extra alpha channel A is allowed)" : ""));
+}
+
+// NaN -> 0; +-Inf -> 0, except +Inf depth -> the file's largest finite depth. Negative depth is an error.
+void sanitize(Image& img, bool depth, const std::string& file, const std::string& path, FrameReadStats& stats) {
+    SanitizedFile s{file, 0, 0};
+    float far = 0.0f;
+    if (depth) {
+        std::size_t negative = 0;
+        for (float v : img.data) {
+            if (v < 0.0f) ++negative;  // includes -Inf; NaN compares false
+            else if (std::isfinite(v)) far = std::max(far, v);
+        }
+        if (negative)
+            throw InputError("read " + path + ": " + std::to_string(negative) + " of " +
+                             std::to_string(img.data.size()) + " pixels have a negative depth (depth is a distance)");
+    }
+    for (float& v : img.data) {
+        if (std::isnan(v)) { v = 0.0f; ++s.nan; }
+        else if (std::isinf(v)) { v = depth ? far : 0.0f; ++s.inf; }
+    }
+    if (s.nan || s.inf) stats.sanitized.push_back(std::move(s));
+}
+
+glm::vec3 json_vec3(const nlohmann::json& j, const char* key, const std::string& path) {
+    if (!j.contains(key)) throw InputError("read " + path + ": missing \"" + key + "\"");
+    const nlohmann::json& a = j[key];
+    if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() || !a[2].is_number())
+        throw InputError("read " + path + ": \"" + key + "\" must be an array of 3 numbers");
+    const glm::vec3 v(a[0].get<float>(), a[1].get<float>(), a[2].get<float>());
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        throw InputError("read " + path + ": \"" + key + "\" must be finite");
+    return v;
+}
+
+void read_camera(Frame& frame, const fs::path& file) {
+    const std::string path = file.string();
+    const std::string text = detail::read_file(path);
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const std::exception& e) {
+        throw InputError("read " + path + ": not valid JSON: " + e.what());
+    }
+    if (!j.is_object()) throw InputError("read " + path + ": expected a JSON object with \"look\" and \"up\"");
+    frame.look = json_vec3(j, "look", path);
+    frame.up = json_vec3(j, "up", path);
+    try {
+        CameraCluster::from_look_up(frame.look, frame.up);
+    } catch (const InputError& e) {
+        throw InputError("read " + path + ": " + e.what());
+    }
+}
+
+void check_image(const Image& img, int channels, int n, const std::string& name) {
+    const bool shape_ok = img.channels == channels && (n < 0 || (img.width == n && img.height == n)) &&
+                          img.width > 0 && img.height > 0 && img.data.size() == img.plane() * img.channels;
+    if (!shape_ok)
+        throw InputError(name + " is " + size_string(img) + "x" + std::to_string(img.channels) + " with " +
+                         std::to_string(img.data.size()) + " values; expected " +
+                         (n < 0 ? std::string("any size") : std::to_string(n) + "x" + std::to_string(n)) + "x" +
+                         std::to_string(channels));
+}
+
+}  // namespace
+
+std::size_t FrameReadStats::total_sanitized() const {
+    std::size_t n = 0;
+    for (const auto& s : sanitized) n += s.nan + s.inf;
+    return n;
+}
+
+Frame read_frame(const std::string& dir, FrameReadStats* stats) {
+    const fs::path root(dir);
+    std::error_code ec;
+    if (!fs::is_directory(root, ec)) throw InputError("read frame " + dir + ": not a directory");
+    FrameReadStats local;
+    FrameReadStats& st = stats ? *stats : local;
+    st = {};
+    Frame frame;
+    read_camera(frame, root / "camera.json");
+
+    std::string first;  // the first face file read: the size every other face must have
+    for (int fi = 0; fi < kFeatureCount; ++fi) {
+        const Feature feature = Feature(fi);
+        for (int k = 0; k < kFaceCount; ++k) {
+            const std::string name = std::string(face_name(Face(k))) + "_" + feature_name(feature);
+            const fs::path exr = root / (name + ".exr"), png = root / (name + ".png");
+            const bool has_exr = fs::exists(exr, ec), has_png = png_allowed(feature) && fs::exists(png, ec);
+            if (!has_exr && !has_png)
+                throw InputError("read frame " + dir + ": missing " + exr.string() +
+                                 (png_allowed(feature) ? " (or .png)" : ""));
+            if (has_exr && has_png)
+                throw InputError("read frame " + dir + ": both " + exr.string() + " and " + png.string() +
+                                 " exist; keep one");
+            const fs::path file = has_exr ? exr : png;
+            const std::string path = file.string();
+            std::vector<std::string> names;
+            Image img = has_exr ? read_exr(path, &names) : read_png(path);
+            if (has_png) st.ldr_files.push_back(file.filename().string());
+            img = fit_channels(std::move(img), feature_channels(feature), has_png || names.back() == "A", path);
+            if (img.width != img.height)
+                throw InputError("read " + path + ": is " + size_string(img) + "; face images must be square");
+            if (first.empty()) {
+                frame.n = img.width;
+                first = path;
+            } else if (img.width != frame.n) {
+                throw InputError("read " + path + ": is " + size_string(img) + ", but " + first + " is " +
+                                 std::to_string(frame.n) + "x" + std::to_string(frame.n) +
+                                 "; all faces of a frame have one size");
+            }
+            sanitize(img, feature == Feature::Depth, file.filename().string(), path, st);
+            frame.get(feature, Face(k)) = std::move(img);
+        }
+    }
+
+    const fs::path ref = root / "reference.exr";
+    if (fs::exists(ref, ec)) {
+        std::vector<std::string> names;
+        Image img = read_exr(ref.string(), &names);
+        img = fit_channels(std::move(img), 3, names.back() == "A", ref.string());
+        sanitize(img, false, "reference.exr", ref.string(), st);
+        frame.reference = std::move(img);
+    }
+    return frame;
+}
+
+void write_frame(const std::string& dir, const Frame& frame) {
+    const std::string what = "write frame " + dir + ": ";
+    // Validate everything before touching the disk.
+    if (frame.n <= 0) throw InputError(what + "frame.n is " + std::to_string(frame.n));
+    for (int fi = 0; fi < kFeatureCount; ++fi)
+        for (int k = 0; k < kFaceCount; ++k)
+            check_image(frame.get(Feature(fi), Face(k)), feature_channels(Feature(fi)), frame.n,
+                        what + face_name(Face(k)) + " " + feature_name(Feature(fi)));
+    if (frame.reference) check_image(*frame.reference, 3, -1, what + "reference");
+    try {
+        CameraCluster::from_look_up(frame.look, frame.up);
+    } catch (const InputError& e) {
+        throw InputError(what + e.what());
+    }
+
+    fs::path target = fs::path(dir).lexically_normal();
+    if (target.filename().empty()) target = target.parent_path();  // "out/frame/" -> "out/frame"
+    if (target.empty()) throw InputError(what + "empty path");
+    std::error_code ec;
+    const bool exists = fs::exists(target, ec);
+    if (exists && !fs::is_directory(target, ec)) throw InputError(what + "exists and is not a directory");
+    if (exists && !fs::is_empty(target, ec) && !fs::exists(target / "camera.json", ec))
+        throw InputError(what + "exists and is not a frame folder (no camera.json); refusing to replace it");
+
+    const fs::path tmp = detail::temp_name(target.string());
+    if (!fs::create_directory(tmp, ec) || ec)
+        throw InputError(what + "cannot create " + tmp.string() + ": " + ec.message());
+    try {
+        for (int fi = 0; fi < kFeatureCount; ++fi) {
+            const Feature f = Feature(fi);
+            for (int k = 0; k < kFaceCount; ++k) {
+                const Image& img = frame.get(f, Face(k));
+                ExrPixelType type = ExrPixelType::Float;
+                if (f != Feature::Normal && f != Feature::Depth) {
+                    const bool fits_half = std::all_of(img.data.begin(), img.data.end(),
+                                                       [](float v) { return !std::isfinite(v) || std::abs(v) <= 65504.0f; });
+                    type = fits_half ? ExrPixelType::Half : ExrPixelType::Float;
+                }
+                write_exr((tmp / (std::string(face_name(Face(k))) + "_" + feature_name(f) + ".exr")).string(), img,
+                          type);
+            }
+        }
+        if (frame.reference) write_exr((tmp / "reference.exr").string(), *frame.reference, ExrPixelType::Float);
+        const nlohmann::json camera = {{"look", {frame.look.x, frame.look.y, frame.look.z}},
+                                       {"up", {frame.up.x, frame.up.y, frame.up.z}}};
+        detail::write_file_atomic((tmp / "camera.json").string(), camera.dump(2) + "\n");
+
+        // Swap the finished folder in. Between the two renames <dir> briefly does not exist; it is never partial.
+        fs::path old;
+        if (exists) {
+            old = detail::temp_name(target.string() + ".old");
+            fs::rename(target, old, ec);
+            if (ec) throw InputError(what + "cannot move the existing folder aside: " + ec.message());
+        }
+        fs::rename(tmp, target, ec);
+        if (ec) {
+            const std::string reason = ec.message();
+            if (exists) fs::rename(old, target, ec);  // put the previous frame back
+            throw InputError(what + "cannot move the finished folder into place: " + reason);
+        }
+        if (exists) fs::remove_all(old, ec);
+    } catch (...) {
+        fs::remove_all(tmp, ec);
+        throw;
+    }
+}
+
+}  // namespace ngi
