@@ -1,0 +1,148 @@
+// MSE / PSNR / SSIM: enqueues kernels/metrics.cl and adds the per-work-group partial sums in double.
+#include "ngi/metrics.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "ngi/error.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi {
+namespace {
+
+constexpr double kSigma = 1.5, kTruncate = 3.5, kK1 = 0.01, kK2 = 0.03;
+constexpr int kRadius = int(kTruncate * kSigma + 0.5);  // scipy.ndimage's radius: 5, i.e. 11 taps (SSIM_R)
+constexpr int kTile = 16;                               // TILE in kernels/metrics.cl
+constexpr std::size_t kSeLocal = 256, kSeMaxGroups = 1024;
+
+std::string dims(const Image& i) {
+    return std::to_string(i.width) + "x" + std::to_string(i.height) + "x" + std::to_string(i.channels);
+}
+
+void check_inputs(const Image& a, const Image& b, const char* op) {
+    const std::string what = std::string(op) + ": ";
+    for (const Image* i : {&a, &b})
+        if (i->width <= 0 || i->height <= 0 || i->channels <= 0 || i->data.size() != i->plane() * i->channels)
+            throw InputError(what + "invalid image " + dims(*i) + " with " + std::to_string(i->data.size()) + " values");
+    if (a.width != b.width || a.height != b.height || a.channels != b.channels)
+        throw InputError(what + "images differ in size: " + dims(a) + " vs " + dims(b) + " (width x height x channels)");
+    if (a.data.size() > std::size_t(std::numeric_limits<int>::max()))
+        throw InputError(what + "image too large (" + dims(a) + ")");
+    const char* names[] = {"first", "second"};
+    int k = 0;
+    for (const Image* i : {&a, &b}) {
+        std::size_t bad = 0;
+        for (float v : i->data) bad += !std::isfinite(v);
+        if (bad)
+            throw InputError(what + "the " + names[k] + " image has " + std::to_string(bad) + " NaN/Inf values");
+        ++k;
+    }
+}
+
+void check_range(double data_range, const char* op) {
+    if (!(data_range > 0.0) || !std::isfinite(data_range))
+        throw InputError(std::string(op) + ": data_range must be finite and > 0, got " + std::to_string(data_range));
+}
+
+struct Pair {
+    detail::Buffer a, b;
+};
+
+Pair upload(detail::Context& ctx, const Image& a, const Image& b) {
+    const std::size_t bytes = a.data.size() * sizeof(float);
+    Pair p{ctx.alloc(bytes, "metrics image a"), ctx.alloc(bytes, "metrics image b")};
+    ctx.write(p.a, 0, bytes, a.data.data(), "metrics image a");
+    ctx.write(p.b, 0, bytes, b.data.data(), "metrics image b");
+    return p;
+}
+
+double run_mse(detail::Context& ctx, const Pair& p, std::size_t n) {
+    const std::size_t groups = std::min(kSeMaxGroups, (n + kSeLocal - 1) / kSeLocal);
+    detail::Buffer partial = ctx.alloc(groups * sizeof(float), "squared-error partial sums");
+    detail::Kernel k = ctx.kernel("metrics", "squared_error_partials");
+    k.args(p.a, p.b, int(n), partial);
+    const std::size_t global = groups * kSeLocal, local = kSeLocal;
+    ctx.launch(k, 1, &global, &local);
+    std::vector<float> sums(groups);
+    ctx.read(partial, 0, groups * sizeof(float), sums.data(), "squared-error partial sums");
+    double total = 0;
+    for (float s : sums) total += s;
+    return total / double(n);
+}
+
+double run_ssim(detail::Context& ctx, const Pair& p, int width, int height, int channels, double data_range) {
+    // scipy.ndimage's 1-D Gaussian: exp(-x^2 / (2 sigma^2)) for x in [-r, r], normalized to sum 1.
+    std::vector<double> wd(2 * kRadius + 1);
+    double wsum = 0;
+    for (int x = -kRadius; x <= kRadius; ++x) wsum += wd[x + kRadius] = std::exp(-0.5 * x * x / (kSigma * kSigma));
+    std::vector<float> w(wd.size());
+    for (std::size_t i = 0; i < wd.size(); ++i) w[i] = float(wd[i] / wsum);
+    detail::Buffer weights = ctx.alloc(w.size() * sizeof(float), "SSIM Gaussian weights");
+    ctx.write(weights, 0, w.size() * sizeof(float), w.data(), "SSIM Gaussian weights");
+
+    // Only the map pixels skimage keeps after cropping kRadius from every border: a (W - 2r) x (H - 2r) grid.
+    const int crop_w = width - 2 * kRadius, crop_h = height - 2 * kRadius;
+    const std::size_t gx = (crop_w + kTile - 1) / kTile, gy = (crop_h + kTile - 1) / kTile;
+    const std::size_t count = gx * gy * std::size_t(channels);
+    detail::Buffer partial = ctx.alloc(count * sizeof(float), "SSIM partial sums");
+    detail::Kernel k = ctx.kernel("metrics", "ssim_tiles", "-DSSIM_R=" + std::to_string(kRadius));
+    const double c1 = (kK1 * data_range) * (kK1 * data_range), c2 = (kK2 * data_range) * (kK2 * data_range);
+    k.args(p.a, p.b, width, height, weights, float(c1), float(c2), partial);
+    const std::size_t global[3] = {gx * kTile, gy * kTile, std::size_t(channels)}, local[3] = {kTile, kTile, 1};
+    ctx.launch(k, 3, global, local);
+    std::vector<float> sums(count);
+    ctx.read(partial, 0, count * sizeof(float), sums.data(), "SSIM partial sums");
+    // Per channel mean, then the mean over channels (skimage's channel_axis loop).
+    double total = 0;
+    for (int c = 0; c < channels; ++c) {
+        double s = 0;
+        for (std::size_t i = 0; i < gx * gy; ++i) s += sums[c * gx * gy + i];
+        total += s / (double(crop_w) * crop_h);
+    }
+    return total / channels;
+}
+
+void check_ssim_size(const Image& a, const char* op) {
+    if (a.width < 2 * kRadius + 1 || a.height < 2 * kRadius + 1)
+        throw InputError(std::string(op) + ": SSIM needs images of at least " + std::to_string(2 * kRadius + 1) +
+                         "x" + std::to_string(2 * kRadius + 1) + " pixels (the Gaussian window), got " +
+                         std::to_string(a.width) + "x" + std::to_string(a.height));
+}
+
+}  // namespace
+
+double psnr_from_mse(double mse, double data_range) {
+    if (mse == 0.0) return std::numeric_limits<double>::infinity();
+    return 10.0 * std::log10(data_range * data_range / mse);
+}
+
+double mse(const Device& device, const Image& a, const Image& b) {
+    check_inputs(a, b, "mse");
+    detail::Context& ctx = device.context();
+    return run_mse(ctx, upload(ctx, a, b), a.data.size());
+}
+
+double ssim(const Device& device, const Image& a, const Image& b, double data_range) {
+    check_inputs(a, b, "ssim");
+    check_range(data_range, "ssim");
+    check_ssim_size(a, "ssim");
+    detail::Context& ctx = device.context();
+    return run_ssim(ctx, upload(ctx, a, b), a.width, a.height, a.channels, data_range);
+}
+
+ImageMetrics compare_images(const Device& device, const Image& a, const Image& b, double data_range) {
+    check_inputs(a, b, "compare images");
+    check_range(data_range, "compare images");
+    check_ssim_size(a, "compare images");
+    detail::Context& ctx = device.context();
+    const Pair p = upload(ctx, a, b);
+    ImageMetrics m;
+    m.mse = run_mse(ctx, p, a.data.size());
+    m.psnr = psnr_from_mse(m.mse, data_range);
+    m.ssim = run_ssim(ctx, p, a.width, a.height, a.channels, data_range);
+    return m;
+}
+
+}  // namespace ngi

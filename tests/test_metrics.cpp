@@ -1,0 +1,172 @@
+// MSE / PSNR / SSIM: parity with scikit-image (the oracle; tests/parity/ssim_reference.py) and with a naive
+// double-precision transcription of skimage's definition (full 2-D window, reflect padding, crop, mean).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "ngi/error.hpp"
+#include "ngi/image_io.hpp"
+#include "ngi/metrics.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Generates the reference data once per build tree (well under a second) with Debian's python3-skimage.
+fs::path reference_dir() {
+    const fs::path dir = fs::path(NGI_BINARY_DIR) / "metrics_ref";
+    if (!fs::exists(dir / "cases.json")) {
+        const std::string cmd = "/usr/bin/python3 " + std::string(NGI_SOURCE_DIR) +
+                                "/tests/parity/ssim_reference.py --out " + dir.string() + " > " +
+                                (fs::path(NGI_BINARY_DIR) / "metrics_ref.log").string() + " 2>&1";
+        INFO("running: " << cmd);
+        REQUIRE(std::system(cmd.c_str()) == 0);
+    }
+    return dir;
+}
+
+// scipy.ndimage mode 'reflect' (d c b a | a b c d | d c b a), valid for any offset.
+int reflect(int i, int n) {
+    const int period = 2 * n;
+    i %= period;
+    if (i < 0) i += period;
+    return i < n ? i : period - 1 - i;
+}
+
+// skimage's structural_similarity(gaussian_weights=True, sigma=1.5, use_sample_covariance=False), literally:
+// the SSIM map of every pixel with reflect padding, then the mean over the map cropped by 5 pixels, per channel.
+double naive_ssim(const ngi::Image& a, const ngi::Image& b, double range) {
+    const int r = 5;
+    double w1[2 * r + 1], wsum = 0;
+    for (int i = -r; i <= r; ++i) wsum += w1[i + r] = std::exp(-0.5 * i * i / (1.5 * 1.5));
+    for (double& v : w1) v /= wsum;
+    const double c1 = (0.01 * range) * (0.01 * range), c2 = (0.03 * range) * (0.03 * range);
+    double total = 0;
+    for (int c = 0; c < a.channels; ++c) {
+        double sum = 0;
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) {
+                double mx = 0, my = 0, mxx = 0, myy = 0, mxy = 0;
+                for (int dy = -r; dy <= r; ++dy)
+                    for (int dx = -r; dx <= r; ++dx) {
+                        const double w = w1[dy + r] * w1[dx + r];
+                        const int yy = reflect(y + dy, a.height), xx = reflect(x + dx, a.width);
+                        const double u = a.at(c, yy, xx), v = b.at(c, yy, xx);
+                        mx += w * u; my += w * v; mxx += w * u * u; myy += w * v * v; mxy += w * u * v;
+                    }
+                const double s = ((2 * mx * my + c1) * (2 * (mxy - mx * my) + c2)) /
+                                 ((mx * mx + my * my + c1) * (mxx - mx * mx + myy - my * my + c2));
+                if (y >= r && y < a.height - r && x >= r && x < a.width - r) sum += s;
+            }
+        total += sum / (double(a.width - 2 * r) * (a.height - 2 * r));
+    }
+    return total / a.channels;
+}
+
+ngi::Image random_image(int w, int h, int c, std::mt19937& rng, float lo = 0.0f, float hi = 1.0f) {
+    ngi::Image img(w, h, c);
+    img.data = ngi::test::random_vector(img.data.size(), rng, lo, hi);
+    return img;
+}
+
+}  // namespace
+
+TEST_CASE("MSE, PSNR and SSIM match scikit-image", "[metrics][parity]") {
+    const fs::path dir = reference_dir();
+    nlohmann::json cases;
+    std::ifstream(dir / "cases.json") >> cases;
+    REQUIRE(cases.size() >= 20);
+    double worst_ssim = 0, worst_mse_rel = 0, worst_psnr = 0;
+    std::string worst_case;
+    for (const auto& c : cases) {
+        const std::string name = c["name"];
+        INFO(name);
+        const ngi::Image a = ngi::read_image((dir / c["a"].get<std::string>()).string());
+        const ngi::Image b = ngi::read_image((dir / c["b"].get<std::string>()).string());
+        const double range = c["data_range"];
+        const ngi::ImageMetrics m = ngi::compare_images(ngi::test::device(), a, b, range);
+        const double ssim_err = std::abs(m.ssim - c["ssim"].get<double>());
+        const double ref_mse = c["mse"];
+        const double mse_rel = ref_mse == 0 ? m.mse : std::abs(m.mse - ref_mse) / ref_mse;
+        // Tolerances: ngi works in float32 (skimage here in float64 on the same float32 values). SSIM is a mean
+        // of ratios of O(1); observed differences are ~1e-7, and a wrong tap, weight, constant or crop moves it by
+        // 1e-3 or more. MSE: float32 differences and squares, summed with Kahan + double partials.
+        CHECK(ssim_err < 2e-6);
+        CHECK(mse_rel < 1e-6);
+        if (c["psnr"].is_null()) {
+            CHECK(m.mse == 0.0);
+            CHECK(std::isinf(m.psnr));
+            CHECK(m.ssim == Approx(1.0).margin(1e-6));
+        } else {
+            const double psnr_err = std::abs(m.psnr - c["psnr"].get<double>());
+            CHECK(psnr_err < 1e-5);
+            worst_psnr = std::max(worst_psnr, psnr_err);
+        }
+        if (ssim_err > worst_ssim) { worst_ssim = ssim_err; worst_case = name; }
+        worst_mse_rel = std::max(worst_mse_rel, mse_rel);
+    }
+    WARN("largest |ngi - skimage|: SSIM " << worst_ssim << " (" << worst_case << "), MSE relative " << worst_mse_rel
+                                          << ", PSNR " << worst_psnr << " dB over " << cases.size() << " cases");
+}
+
+TEST_CASE("SSIM matches a naive double-precision transcription of its definition", "[metrics]") {
+    std::mt19937 rng(7);
+    const int sizes[][3] = {{11, 11, 1}, {12, 19, 3}, {16, 16, 1}, {17, 33, 2}, {48, 31, 3}, {70, 21, 1}};
+    for (const auto& s : sizes) {
+        const ngi::Image a = random_image(s[0], s[1], s[2], rng);
+        ngi::Image b = a;
+        std::normal_distribution<float> noise(0.0f, 0.2f);
+        for (float& v : b.data) v += noise(rng);
+        for (const double range : {1.0, 2.5}) {
+            INFO(s[0] << "x" << s[1] << "x" << s[2] << " range " << range);
+            CHECK(ngi::ssim(ngi::test::device(), a, b, range) == Approx(naive_ssim(a, b, range)).margin(2e-6));
+        }
+    }
+}
+
+TEST_CASE("metrics: identities and symmetry", "[metrics]") {
+    std::mt19937 rng(11);
+    const ngi::Image a = random_image(40, 27, 3, rng), b = random_image(40, 27, 3, rng);
+    auto& dev = ngi::test::device();
+    const ngi::ImageMetrics same = ngi::compare_images(dev, a, a);
+    CHECK(same.mse == 0.0);
+    CHECK(std::isinf(same.psnr));
+    CHECK(same.psnr > 0);
+    CHECK(same.ssim == Approx(1.0).margin(1e-6));
+    CHECK(ngi::ssim(dev, a, b) == Approx(ngi::ssim(dev, b, a)).margin(1e-7));
+    // A constant offset d gives MSE d^2 exactly in exact arithmetic.
+    ngi::Image shifted = a;
+    for (float& v : shifted.data) v += 0.25f;
+    CHECK(ngi::mse(dev, a, shifted) == Approx(0.0625).epsilon(1e-6));
+    CHECK(ngi::psnr_from_mse(0.01, 1.0) == Approx(20.0));
+    CHECK(ngi::psnr_from_mse(0.01, 10.0) == Approx(40.0));
+    const ngi::ImageMetrics m = ngi::compare_images(dev, a, b, 2.0);
+    CHECK(m.mse == Approx(ngi::mse(dev, a, b)).epsilon(1e-12));
+    CHECK(m.psnr == Approx(ngi::psnr_from_mse(m.mse, 2.0)).epsilon(1e-12));
+    CHECK(m.ssim == Approx(ngi::ssim(dev, a, b, 2.0)).epsilon(1e-12));
+}
+
+TEST_CASE("metrics: bad input is an InputError that says what is wrong", "[metrics]") {
+    std::mt19937 rng(3);
+    auto& dev = ngi::test::device();
+    const ngi::Image a = random_image(20, 20, 3, rng);
+    using Catch::Matchers::Contains;
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, random_image(20, 21, 3, rng)), Contains("differ in size"));
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, random_image(20, 20, 1, rng)), Contains("20x20x3 vs 20x20x1"));
+    CHECK_THROWS_WITH(ngi::ssim(dev, random_image(10, 30, 1, rng), random_image(10, 30, 1, rng)),
+                      Contains("at least 11x11"));
+    CHECK_NOTHROW(ngi::mse(dev, random_image(3, 2, 1, rng), random_image(3, 2, 1, rng)));  // MSE has no window
+    ngi::Image nan = a;
+    nan.data[5] = std::numeric_limits<float>::quiet_NaN();
+    nan.data[9] = std::numeric_limits<float>::infinity();
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, nan), Contains("second image has 2 NaN/Inf"));
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, 0.0), Contains("data_range"));
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, -1.0), Contains("data_range"));
+    CHECK_THROWS_AS(ngi::compare_images(dev, a, a, std::nan("")), ngi::InputError);
+}
