@@ -12,5 +12,6 @@ struct Command {
 
 int cmd_devices(int argc, char** argv);
 int cmd_generate(int argc, char** argv);
+int cmd_metrics(int argc, char** argv);
 
 }  // namespace ngi_cli

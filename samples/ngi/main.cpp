@@ -15,6 +15,10 @@ const ngi_cli::Command kCommands[] = {
                  "             [--bn-mode running|per_image] [--dropout off|seeded]\n"
                  "                                 run a generator on a NumPy NCHW float32 tensor (N=1)",
      ngi_cli::cmd_generate},
+    {"metrics", "ngi metrics A B [--range R] [--device D]\n"
+                "                                 MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON; R = data\n"
+                "                                 range (default 1); psnr is null for identical images",
+     ngi_cli::cmd_metrics},
 };
 
 void usage(FILE* out) {
