@@ -11,8 +11,11 @@
 #define COUNT_FAR 7
 #define COUNT_SLOTS 8
 
-// Raw plane order (16 planes of npix values): albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12,
-// env 13-15. Output plane order (10 planes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
+// Raw input: per face, 16 planes of face_texels values (each face's feature images land contiguously, so the
+// host uploads them without repacking): albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12, env 13-15.
+// Output: 10 planes of npix = faces * face_texels values, faces in order inside each plane (the layout the merge
+// table indexes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
+#define RAW_PLANES 16
 
 #define MAX_DEPTH_M 1000.0f
 // A normal whose largest component is below this is the zero vector: the renderer's "no surface" (sky).
@@ -35,34 +38,37 @@ inline float lum_encode(float x, int transfer) {
 
 // S = [alpha; beta; gamma] (cluster basis rows) maps world-space normals into cluster space. lo/hi: the model's
 // input range; every feature is first brought to [0, 1], then to lo + v * (hi - lo).
-// Launch: 1-D, local size 64 (the counters are summed per work-group in local memory, then added once).
-__kernel void preprocess_gbuffer(__global const float* restrict raw, __global float* restrict out, const int npix,
-                                 const int has_emission, const int has_env,
+// Launch: 2-D (face_texels, faces), local (64, 1); the counters are summed per work-group in local memory,
+// then added once.
+__kernel void preprocess_gbuffer(__global const float* restrict raw, __global float* restrict out,
+                                 const int face_texels, const int faces, const int has_emission, const int has_env,
                                  const float ax, const float ay, const float az,
                                  const float bx, const float by, const float bz,
                                  const float gx, const float gy, const float gz,
                                  const float lo, const float hi, const int transfer,
                                  __global int* restrict counters) {
     __local int group_counts[COUNT_SLOTS];
-    const int p = get_global_id(0), lid = get_local_id(0);
+    const int t = get_global_id(0), face = get_global_id(1), lid = get_local_id(0);
+    const int npix = face_texels * faces, p = face * face_texels + t;
     if (lid < COUNT_SLOTS) group_counts[lid] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    if (p < npix) {
+    if (t < face_texels) {
+        __global const float* r = raw + face * RAW_PLANES * face_texels + t;
         const float scale = hi - lo;
         int bad_albedo = 0, bad_normal = 0, bad_depth = 0, bad_direct = 0, bad_emission = 0, bad_env = 0;
 
         // Albedo: reflectance, clamped to [0, 1].
         for (int c = 0; c < 3; ++c) {
-            const float a = clamp(clean(raw[c * npix + p], 0.0f, 0.0f, 1.0f, &bad_albedo), 0.0f, 1.0f);
+            const float a = clamp(clean(r[c * face_texels], 0.0f, 0.0f, 1.0f, &bad_albedo), 0.0f, 1.0f);
             out[c * npix + p] = lo + a * scale;
         }
 
         // Normal: a non-finite component makes the whole normal unknown, i.e. zero (sky). Scaled by its largest
         // component before the length so that huge finite values cannot overflow.
-        float nx = clean(raw[3 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
-        float ny = clean(raw[4 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
-        float nz = clean(raw[5 * npix + p], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float nx = clean(r[3 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float ny = clean(r[4 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float nz = clean(r[5 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
         const float m = fmax(fabs(nx), fmax(fabs(ny), fabs(nz)));
         float cx = 0.0f, cy = 0.0f, cz = 0.0f;
         if (bad_normal == 0 && m >= SKY_NORMAL_EPS) {
@@ -81,18 +87,18 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
         out[5 * npix + p] = lo + clamp(cz * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
 
         // Depth in metres -> depth / 1000 in [0, 1]; unknown (NaN) and +Inf are as far as it gets.
-        const float d = clean(raw[6 * npix + p], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
+        const float d = clean(r[6 * face_texels], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
         if (d > MAX_DEPTH_M) atomic_inc(&group_counts[COUNT_FAR]);
         out[6 * npix + p] = lo + clamp(d / MAX_DEPTH_M, 0.0f, 1.0f) * scale;
 
         // Lumination = direct + emission + env (eq. 4.2): light is >= 0; +Inf is the brightest finite light, and
         // the sum saturates at FLT_MAX instead of overflowing.
         for (int c = 0; c < 3; ++c) {
-            float l = fmax(clean(raw[(7 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_direct), 0.0f);
+            float l = fmax(clean(r[(7 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_direct), 0.0f);
             if (has_emission)
-                l = fmin(l + fmax(clean(raw[(10 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_emission), 0.0f), FLT_MAX);
+                l = fmin(l + fmax(clean(r[(10 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_emission), 0.0f), FLT_MAX);
             if (has_env)
-                l = fmin(l + fmax(clean(raw[(13 + c) * npix + p], 0.0f, 0.0f, FLT_MAX, &bad_env), 0.0f), FLT_MAX);
+                l = fmin(l + fmax(clean(r[(13 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_env), 0.0f), FLT_MAX);
             out[(7 + c) * npix + p] = lo + lum_encode(l, transfer) * scale;
         }
 

@@ -2,7 +2,6 @@
 // faces into it and extract the front view from it, and the coordinate map. Layout: docs/CONVENTIONS.md.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
@@ -175,16 +174,17 @@ Image SurroundPipeline::global_view(const Frame& frame, Feature feature) {
     Impl& im = *impl_;
     const int n = im.n, channels = feature_channels(feature);
     const std::size_t face_plane = std::size_t(n) * n, stack_plane = face_plane * kFaceCount;
-    // Stack the faces as [channel][face][row][col]: one table index (face, row, col) serves every channel.
-    std::vector<float> stacked(stack_plane * channels);
+    // Faces stacked as [channel][face][row][col] on the device: one table index (face, row, col) serves every
+    // channel. Each face plane is uploaded straight from the frame.
+    for (int f = 0; f < kFaceCount; ++f)
+        detail::check_face_image(frame.get(feature, Face(f)), feature, Face(f), n, "global view");
+    detail::ensure_buffer(im.ctx, im.raw, stack_plane * channels * sizeof(float), "global view input");
     for (int f = 0; f < kFaceCount; ++f) {
         const Image& src = frame.get(feature, Face(f));
-        detail::check_face_image(src, feature, Face(f), n, "global view");
         for (int c = 0; c < channels; ++c)
-            std::memcpy(&stacked[c * stack_plane + f * face_plane], &src.data[c * face_plane], face_plane * sizeof(float));
+            im.ctx.write(im.raw, (c * stack_plane + f * face_plane) * sizeof(float), face_plane * sizeof(float),
+                         &src.data[c * face_plane], "global view input");
     }
-    detail::ensure_buffer(im.ctx, im.raw, stacked.size() * sizeof(float), "global view input");
-    im.ctx.write(im.raw, 0, stacked.size() * sizeof(float), stacked.data(), "global view input");
     Image out(4 * n, 2 * n, channels);
     detail::ensure_buffer(im.ctx, im.out, out.data.size() * sizeof(float), "global view");
     im.gather_planes(im.raw, int(stack_plane), im.merge_idx, im.merge_w, int(out.plane()), channels, im.out,

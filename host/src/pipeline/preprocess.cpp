@@ -1,7 +1,6 @@
 // The generator's input: raw faces -> preprocess_gbuffer (kernels/gbuffer.cl) -> merge (lut_gather) ->
 // NCHW tensor with the coordinate map. Channel order and value rules: docs/CONVENTIONS.md.
 #include <cmath>
-#include <cstring>
 
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
@@ -56,32 +55,31 @@ Tensor SurroundPipeline::network_input(const Frame& frame, const ModelConfig& co
     const bool has_emission = detail::optional_feature_present(frame, Feature::Emission, kAll, faces, n, "network input");
     const bool has_env = detail::optional_feature_present(frame, Feature::Env, kAll, faces, n, "network input");
 
-    // Raw planes [16][face][row][col]; planes of absent optional features stay unwritten (the kernel skips them).
+    // Raw planes [face][16][row][col]: each face image is uploaded as it is, without repacking on the host.
+    // Planes of absent optional features stay unwritten (the kernel does not read them).
     const std::size_t face_plane = std::size_t(n) * n, npix = face_plane * faces;
-    std::vector<float> raw(kRawPlanes * npix);
+    detail::ensure_buffer(im.ctx, im.raw, kRawPlanes * npix * sizeof(float), "raw features");
     for (int fi = 0; fi < kFeatureCount; ++fi) {
         const Feature f = Feature(fi);
         if ((f == Feature::Emission && !has_emission) || (f == Feature::Env && !has_env)) continue;
         for (int i = 0; i < faces; ++i) {
             const Image& src = frame.get(f, kAll[i]);
-            for (int c = 0; c < src.channels; ++c)
-                std::memcpy(&raw[(kRawFirstPlane[fi] + c) * npix + i * face_plane], &src.data[c * face_plane],
-                            face_plane * sizeof(float));
+            im.ctx.write(im.raw, (i * kRawPlanes + kRawFirstPlane[fi]) * face_plane * sizeof(float),
+                         src.data.size() * sizeof(float), src.data.data(), "raw features");
         }
     }
-    detail::ensure_buffer(im.ctx, im.raw, raw.size() * sizeof(float), "raw features");
-    im.ctx.write(im.raw, 0, raw.size() * sizeof(float), raw.data(), "raw features");
     detail::ensure_buffer(im.ctx, im.stack, kFeaturePlanes * npix * sizeof(float), "preprocessed features");
     detail::ensure_buffer(im.ctx, im.counters, kCounterSlots * sizeof(int), "preprocessing counters");
     const int zeros[kCounterSlots] = {};
     im.ctx.write(im.counters, 0, sizeof zeros, zeros, "preprocessing counters");
 
     const glm::vec3 a = cluster.alpha, b = cluster.beta, g = cluster.gamma;
-    im.preprocess.args(im.raw, im.stack, int(npix), int(has_emission), int(has_env), a.x, a.y, a.z, b.x, b.y, b.z,
-                       g.x, g.y, g.z, config.input_range[0], config.input_range[1], int(im.transfer), im.counters);
-    static const std::size_t local[1] = {64};
-    const std::size_t global[1] = {npix};
-    im.ctx.launch(im.preprocess, 1, global, local);
+    im.preprocess.args(im.raw, im.stack, int(face_plane), faces, int(has_emission), int(has_env), a.x, a.y, a.z, b.x,
+                       b.y, b.z, g.x, g.y, g.z, config.input_range[0], config.input_range[1], int(im.transfer),
+                       im.counters);
+    static const std::size_t local[2] = {64, 1};
+    const std::size_t global[2] = {face_plane, std::size_t(faces)};
+    im.ctx.launch(im.preprocess, 2, global, local);
 
     Tensor out;
     if (surround) {
