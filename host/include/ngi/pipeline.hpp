@@ -106,7 +106,7 @@ public:
     // Bilinear resize (pixel centres, edge clamped) of any image to width x height.
     Image upscale(const Image& image, int width, int height);
 
-    // Linear 3-channel image to display-referred [0, 1] values (see ToneMapOptions).
+    // Linear image (any channel count) to display-referred [0, 1] values (see ToneMapOptions).
     Image tonemap(const Image& linear, const ToneMapOptions& options = {});
 
     struct Impl;
