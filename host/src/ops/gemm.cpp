@@ -33,7 +33,7 @@ GemmParams gemm_params_for(const DeviceInfo& info) {
     GemmParams p;
     if (info.is_cpu) {
         // PoCL on x86: one work-item per work-group, explicit 16-wide vectors (AVX-512/AVX2 registers).
-        p = {8, 16, 2, 1, 1, 1};
+        p = {6, 16, 2, 1, 1, 1};
     } else {
         // GPUs: many small tiles per work-group so a warp/wavefront is full. Not tuned on real hardware yet.
         p = {4, 4, 1, 1, 16, 16};

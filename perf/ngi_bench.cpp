@@ -1,0 +1,278 @@
+// ngi_bench: kernel and model microbenchmarks. Prints one JSON object on stdout, progress on stderr.
+//
+//   ngi_bench gemm [--device D] [--repeats R]          GEMM GFLOP/s at 1024^3 and at the thesis generator's
+//                                                       layer shapes (conv: M=Cout, N=HWout, K=Cin*16;
+//                                                       transposed conv: M=Cout*16, N=HWin, K=Cin)
+//   ngi_bench tune [--device D]                         try GEMM parameter sets (each checked against a
+//                                                       reference first, CLBlast style) and rank them
+//   ngi_bench generator --model M.safetensors [--width 1024 --height 512] [--repeats R] [--device D]
+//                                                       whole-model wall time (median) + per-op device time
+//
+// Timings: warm-up first (PoCL compiles work-group functions at the first launch), then the median of R runs.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "ngi/model.hpp"
+#include "ops/gemm.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+using json = nlohmann::json;
+
+namespace {
+
+std::string arg(int argc, char** argv, const char* name, const std::string& fallback = "") {
+    for (int i = 2; i + 1 < argc; ++i)
+        if (!std::strcmp(argv[i], name)) return argv[i + 1];
+    return fallback;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+template <class F>
+std::vector<double> time_runs(Context& ctx, int repeats, F&& f) {
+    f();  // warm-up
+    ctx.finish();
+    std::vector<double> ms;
+    for (int r = 0; r < repeats; ++r) {
+        auto t0 = std::chrono::steady_clock::now();
+        f();
+        ctx.finish();
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return ms;
+}
+
+struct GemmShape {
+    std::string name;
+    int m, n, k;
+};
+
+// The thesis generator (12 -> 3 channels, ngf 64, 8 downs) at 1024 x 512, as GEMMs.
+std::vector<GemmShape> generator_shapes() {
+    std::vector<GemmShape> s;
+    int c = 12, h = 512, w = 1024;
+    const int inner[8] = {64, 128, 256, 512, 512, 512, 512, 512};
+    for (int i = 0; i < 8; ++i) {
+        h /= 2, w /= 2;
+        s.push_back({"down" + std::to_string(i), inner[i], h * w, c * 16});
+        c = inner[i];
+    }
+    for (int i = 7; i >= 0; --i) {  // up-conv input is h x w (then doubled), cin = 2*inner except innermost
+        const int cin = i == 7 ? inner[i] : 2 * inner[i], cout = i == 0 ? 3 : inner[i - 1];
+        s.push_back({"up" + std::to_string(i), cout * 16, h * w, cin});
+        h *= 2, w *= 2;
+    }
+    return s;
+}
+
+struct GemmBuffers {
+    Buffer a, b, c, scale, shift;
+};
+
+GemmBuffers make_gemm_buffers(Context& ctx, const GemmParams& p, int M, int N, int K, std::mt19937& rng,
+                              std::vector<float>* a_out = nullptr, std::vector<float>* b_out = nullptr) {
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> a(std::size_t(M) * K), b(std::size_t(K) * N);
+    for (auto& x : a) x = u(rng);
+    for (auto& x : b) x = u(rng);
+    // Pack B on the host the way im2col would (panels of NR columns, zero padded).
+    const int nr = p.nr(), kp = padded_k(K, p);
+    std::vector<float> bp(packed_b_floats(K, N, p), 0.0f);
+    for (int k = 0; k < K; ++k)
+        for (int n = 0; n < N; ++n) bp[(std::size_t(n / nr) * kp + k) * nr + n % nr] = b[std::size_t(k) * N + n];
+    const auto ap = pack_a(a.data(), M, K, K, p);
+    GemmBuffers g;
+    g.a = ctx.alloc(ap.size() * 4, "bench A");
+    ctx.write(g.a, 0, ap.size() * 4, ap.data(), "bench A");
+    g.b = ctx.alloc(bp.size() * 4, "bench B");
+    ctx.write(g.b, 0, bp.size() * 4, bp.data(), "bench B");
+    g.c = ctx.alloc(std::size_t(M) * N * 4, "bench C");
+    std::vector<float> one(M, 1.0f), zero(M, 0.0f);
+    g.scale = ctx.alloc(M * 4, "bench scale");
+    ctx.write(g.scale, 0, M * 4, one.data(), "bench scale");
+    g.shift = ctx.alloc(M * 4, "bench shift");
+    ctx.write(g.shift, 0, M * 4, zero.data(), "bench shift");
+    if (a_out) *a_out = std::move(a);
+    if (b_out) *b_out = std::move(b);
+    return g;
+}
+
+json bench_gemm(Context& ctx, const GemmParams& p, const GemmShape& s, int repeats) {
+    std::mt19937 rng(1);
+    Gemm gemm(ctx, p);
+    GemmBuffers g = make_gemm_buffers(ctx, p, s.m, s.n, s.k, rng);
+    const auto ms = time_runs(ctx, repeats, [&] {
+        gemm.enqueue(ctx, s.m, s.n, s.k, g.a.get(), g.b.get(), 0, g.c.get(), 0, s.n, g.scale.get(), g.shift.get(),
+                     Act::none());
+    });
+    const double med = median(ms);
+    return {{"name", s.name}, {"M", s.m}, {"N", s.n}, {"K", s.k}, {"ms", med},
+            {"gflops", 2.0 * s.m * s.n * s.k / (med * 1e-3) / 1e9}};
+}
+
+// A candidate must reproduce a double-precision reference before it is timed (CLBlast's tuner rule).
+bool gemm_correct(Context& ctx, const GemmParams& p, double* max_err) {
+    const int M = 37, N = 101, K = 133;  // no dimension is a tile multiple
+    std::mt19937 rng(2);
+    std::vector<float> a, b;
+    Gemm gemm(ctx, p);
+    GemmBuffers g = make_gemm_buffers(ctx, p, M, N, K, rng, &a, &b);
+    gemm.enqueue(ctx, M, N, K, g.a.get(), g.b.get(), 0, g.c.get(), 0, N, g.scale.get(), g.shift.get(), Act::none());
+    std::vector<float> c(std::size_t(M) * N);
+    ctx.read(g.c, 0, c.size() * 4, c.data(), "bench C");
+    *max_err = 0;
+    for (int m = 0; m < M; ++m)
+        for (int n = 0; n < N; ++n) {
+            double r = 0;
+            for (int k = 0; k < K; ++k) r += double(a[std::size_t(m) * K + k]) * b[std::size_t(k) * N + n];
+            *max_err = std::max(*max_err, std::abs(r - c[std::size_t(m) * N + n]));
+        }
+    return *max_err < 1e-3;
+}
+
+json device_json(const Device& d, const GemmParams& p) {
+    const auto& i = d.info();
+    return {{"name", i.name}, {"platform", i.platform_name}, {"driver", i.driver_version},
+            {"compute_units", i.compute_units}, {"gemm_params", p.to_string()}};
+}
+
+int run_gemm(int argc, char** argv) {
+    Device d = Device::open(arg(argc, argv, "--device"));
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "7"));
+    const GemmParams p = gemm_params_for(d.info());
+    json out = {{"device", device_json(d, p)}, {"repeats", repeats}};
+    std::fprintf(stderr, "gemm 1024^3 ...\n");
+    out["gemm_1024"] = bench_gemm(d.context(), p, {"1024^3", 1024, 1024, 1024}, repeats);
+    json layers = json::array();
+    double flop = 0, ms = 0;
+    for (const auto& s : generator_shapes()) {
+        std::fprintf(stderr, "gemm %s (M %d N %d K %d) ...\n", s.name.c_str(), s.m, s.n, s.k);
+        layers.push_back(bench_gemm(d.context(), p, s, std::max(1, repeats / 2)));
+        flop += 2.0 * s.m * s.n * s.k;
+        ms += layers.back()["ms"].get<double>();
+    }
+    out["generator_layers"] = layers;
+    out["generator_gemm_total"] = {{"gflop", flop / 1e9}, {"ms", ms}, {"gflops", flop / (ms * 1e-3) / 1e9}};
+    std::printf("%s\n", out.dump(2).c_str());
+    return 0;
+}
+
+int run_tune(int argc, char** argv) {
+    Device d = Device::open(arg(argc, argv, "--device"));
+    std::vector<GemmParams> space;
+    for (int mr : {4, 6, 8, 12, 16})
+        for (int vw : {8, 16})
+            for (int nv : {1, 2})
+                for (int ku : {1, 4}) space.push_back({mr, vw, nv, ku, 1, 1});
+    if (d.info().is_gpu) {  // GPUs need full work-groups
+        space.clear();
+        for (int mr : {2, 4, 8})
+            for (int vw : {1, 4})
+                for (int l : {8, 16}) space.push_back({mr, vw, 1, 1, l, l});
+    }
+    const GemmShape shapes[] = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
+    json results = json::array();
+    for (const auto& p : space) {
+        double err = 0;
+        json r = {{"params", p.to_string()}};
+        if (!gemm_correct(d.context(), p, &err)) {
+            r["rejected"] = "max error " + std::to_string(err);
+        } else {
+            double sum = 0;
+            for (const auto& s : shapes) {
+                r[s.name] = bench_gemm(d.context(), p, s, 3)["gflops"];
+                sum += std::log(r[s.name].get<double>());
+            }
+            r["geomean_gflops"] = std::exp(sum / 3);
+        }
+        std::fprintf(stderr, "%s\n", r.dump().c_str());
+        results.push_back(r);
+    }
+    std::sort(results.begin(), results.end(), [](const json& a, const json& b) {
+        return a.value("geomean_gflops", 0.0) > b.value("geomean_gflops", 0.0);
+    });
+    std::printf("%s\n", json{{"device", device_json(d, gemm_params_for(d.info()))}, {"ranked", results}}.dump(2).c_str());
+    return 0;
+}
+
+int run_generator(int argc, char** argv) {
+    const std::string path = arg(argc, argv, "--model");
+    if (path.empty()) throw InputError("generator: --model M.safetensors is required");
+    const int w = std::stoi(arg(argc, argv, "--width", "1024")), h = std::stoi(arg(argc, argv, "--height", "512"));
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "5"));
+    const std::string device_spec = arg(argc, argv, "--device");
+
+    json out;
+    {
+        Device d = Device::open(device_spec);
+        Model m = Model::load(d, path);
+        const auto& c = m.config();
+        Tensor x({1, c.input_nc, h, w});
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<float> u(-1, 1);
+        for (auto& v : x.data) v = u(rng);
+        if (const std::string in = arg(argc, argv, "--input"); !in.empty()) x = read_npy(in);
+        std::fprintf(stderr, "generator %s %dx%d: warm-up + %d runs ...\n", c.family.c_str(), w, h, repeats);
+        RunInfo info;
+        Tensor y;
+        const auto ms = time_runs(d.context(), repeats, [&] { y = m.run(x, &info); });
+        if (const std::string o = arg(argc, argv, "--output"); !o.empty()) write_npy(o, y);
+        out = {{"device", device_json(d, gemm_params_for(d.info()))},
+               {"model", {{"family", c.family}, {"ngf", c.ngf}, {"num_downs", c.num_downs}, {"bn_mode", c.bn_mode},
+                          {"width", w}, {"height", h}}},
+               {"ms_median", median(ms)}, {"ms_all", ms},
+               {"memory_mib", {{"weights", info.weight_bytes / 1048576.0}, {"arena", info.arena_bytes / 1048576.0},
+                               {"arena_without_reuse", info.naive_bytes / 1048576.0},
+                               {"scratch", info.scratch_bytes / 1048576.0}}}};
+    }
+    {  // One profiled run for the per-op breakdown (profiling can perturb the total, so it is timed apart).
+        Device d = Device::open(device_spec, DeviceOptions{true});
+        Model m = Model::load(d, path);
+        const auto& c = m.config();
+        Tensor x({1, c.input_nc, h, w});
+        RunInfo info;
+        m.run(x, &info);
+        m.run(x, &info);
+        json ops = json::array();
+        double total = 0, flop = 0;
+        for (const auto& l : info.layers) {
+            ops.push_back({{"name", l.name}, {"kind", l.kind}, {"ms", l.ms}, {"gflop", l.gflop},
+                           {"gflops", l.ms > 0 ? l.gflop / (l.ms * 1e-3) : 0.0}});
+            total += l.ms;
+            flop += l.gflop;
+        }
+        out["per_op"] = ops;
+        out["device_ms_total"] = total;
+        out["gflop_total"] = flop;
+    }
+    std::printf("%s\n", out.dump(2).c_str());
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const std::string cmd = argc > 1 ? argv[1] : "";
+    try {
+        if (cmd == "gemm") return run_gemm(argc, argv);
+        if (cmd == "tune") return run_tune(argc, argv);
+        if (cmd == "generator") return run_generator(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ngi_bench %s: error: %s\n", cmd.c_str(), e.what());
+        return 1;
+    }
+    std::fprintf(stderr, "usage: ngi_bench gemm|tune|generator [options]  (see the comment at the top of "
+                         "perf/ngi_bench.cpp)\n");
+    return 2;
+}

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what ngi needs on Debian 12 (as root), skipping packages that are already there.
+# Build: cmake, ninja, g++, OpenCL headers + ICD loader, PoCL (the CPU OpenCL device every test runs on),
+# Catch2, nlohmann-json, OpenEXR, libpng, GLM. Python side (parity oracle, training, perf baseline):
+# Debian's python3-torch/numpy/skimage/matplotlib, and OpenBLAS so PyTorch's BLAS is not the reference one.
+set -euo pipefail
+packages=(
+  cmake ninja-build g++ pkg-config
+  ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
+  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev
+  python3-torch python3-numpy python3-skimage python3-matplotlib libopenblas0-pthread
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}" >&2
+  if [ "$(id -u)" -ne 0 ]; then echo "install-deps: run as root (apt-get needs it)" >&2; exit 1; fi
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
