@@ -54,9 +54,10 @@ TEST_CASE("frame folder: write_frame -> read_frame round trip", "[io][frame]") {
     TempDir root("frame-rt");
     std::mt19937 rng(1);
     const ngi::Frame f = make_frame(16, rng);
-    const std::string dir = root / "frame0";
-    ngi::write_frame(dir + "/", f);  // a trailing slash names the same folder
-    CHECK(siblings(root) == std::vector<std::string>{"frame0"});
+    const std::string dir = root / "train/frame0";
+    ngi::write_frame(dir + "/", f);  // a trailing slash names the same folder; missing parents are created
+    CHECK(siblings(root) == std::vector<std::string>{"train"});
+    CHECK(fs::is_regular_file(dir + "/camera.json"));
 
     ngi::FrameReadStats stats;
     const ngi::Frame r = ngi::read_frame(dir, &stats);

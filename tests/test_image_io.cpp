@@ -1,6 +1,7 @@
 // Image files: OpenEXR (half/float, 1..N channels), PNG (8-bit round trips; 16-bit and palette files from an
 // independent hand-made encoder below), .npy, dispatch by extension, and bad input: missing, wrong-format and
 // truncated files must give an InputError naming the file, and a failing write must leave nothing behind.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
@@ -42,11 +43,23 @@ void chunk(std::string& png, const char* type, const std::string& data) {
     png += body;
     put32(png, crc32(body));
 }
-// rows: the unfiltered scanlines (without the filter byte).
+// rows: the unfiltered scanlines (without the filter byte). adam7_pixel_bytes > 0: write them Adam7-interlaced
+// (bytes per pixel of the 8/16-bit formats used here).
 std::string make_png(int w, int h, int bit_depth, int color_type, const std::vector<std::string>& rows,
-                     const std::string& plte = "", const std::string& trns = "") {
+                     const std::string& plte = "", const std::string& trns = "", int adam7_pixel_bytes = 0) {
     std::string raw;
-    for (const auto& r : rows) raw += '\0' + r;  // filter type 0 (None)
+    if (adam7_pixel_bytes == 0) {
+        for (const auto& r : rows) raw += '\0' + r;  // filter type 0 (None)
+    } else {
+        const int pass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4}, {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+        for (const auto& p : pass) {  // {x0, y0, dx, dy}; passes with no pixels write no rows
+            if (p[0] >= w) continue;
+            for (int y = p[1]; y < h; y += p[3]) {
+                raw += '\0';
+                for (int x = p[0]; x < w; x += p[2]) raw += rows[y].substr(std::size_t(x) * adam7_pixel_bytes, adam7_pixel_bytes);
+            }
+        }
+    }
     std::string z = "\x78\x01";
     for (std::size_t off = 0; off < raw.size() || off == 0; off += 65535) {
         const std::size_t n = std::min<std::size_t>(65535, raw.size() - off);
@@ -60,7 +73,7 @@ std::string make_png(int w, int h, int bit_depth, int color_type, const std::vec
     std::string ihdr;
     put32(ihdr, std::uint32_t(w));
     put32(ihdr, std::uint32_t(h));
-    ihdr += char(bit_depth); ihdr += char(color_type); ihdr += std::string(3, '\0');
+    ihdr += char(bit_depth); ihdr += char(color_type); ihdr += std::string(2, '\0'); ihdr += char(adam7_pixel_bytes ? 1 : 0);
     std::string png = "\x89PNG\r\n\x1a\n";
     chunk(png, "IHDR", ihdr);
     if (!plte.empty()) chunk(png, "PLTE", plte);
@@ -105,6 +118,35 @@ TEST_CASE("EXR round trips in float (exact) and half (rounded), 1..12 channels",
     CHECK(ngi::exr_channel_names(4) == std::vector<std::string>{"R", "G", "B", "A"});
     CHECK(ngi::exr_channel_names(12)[10] == "c10");
     CHECK(dir.list() == std::vector<std::string>{"f.exr", "h.exr"});  // no temporaries left
+}
+
+TEST_CASE("EXR channel order of foreign files: R, G, B, others in natural order, A; by layer", "[io]") {
+    TempDir dir("exr-names");
+    // Channel k holds the value k, so the order read back is visible in the data.
+    auto check = [&](const std::vector<std::string>& written, const std::vector<std::string>& expected) {
+        ngi::Image img(2, 2, int(written.size()));
+        for (int c = 0; c < img.channels; ++c)
+            for (std::size_t i = 0; i < img.plane(); ++i) img.data[c * img.plane() + i] = float(c);
+        ngi::write_exr(dir / "n.exr", img, ngi::ExrPixelType::Half, written);
+        std::vector<std::string> names;
+        const ngi::Image r = ngi::read_exr(dir / "n.exr", &names);
+        CHECK(names == expected);
+        for (int c = 0; c < r.channels; ++c) {
+            const auto k = std::find(written.begin(), written.end(), names[c]) - written.begin();
+            CHECK(r.at(c, 1, 1) == float(k));
+        }
+    };
+    check({"A", "B", "G", "R"}, {"R", "G", "B", "A"});
+    check({"Z", "Y", "X"}, {"X", "Y", "Z"});
+    check({"Y", "A"}, {"Y", "A"});
+    check({"R", "G", "B", "Z"}, {"R", "G", "B", "Z"});
+    check({"c10", "c2", "c1", "c0"}, {"c0", "c1", "c2", "c10"});
+    check({"diffuse.B", "diffuse.R", "diffuse.G", "R", "G", "B", "layer2.A", "layer10.R", "layer2.R"},
+          {"R", "G", "B", "diffuse.R", "diffuse.G", "diffuse.B", "layer2.R", "layer2.A", "layer10.R"});
+    CHECK_THROWS_WITH(ngi::write_exr(dir / "d.exr", ngi::Image(2, 2, 2), ngi::ExrPixelType::Half, {"R", "R"}),
+                      Contains("d.exr") && Contains("distinct"));
+    CHECK_THROWS_WITH(ngi::write_exr(dir / "d.exr", ngi::Image(2, 2, 2), ngi::ExrPixelType::Half, {"R"}),
+                      Contains("2 distinct"));
 }
 
 TEST_CASE("EXR half: finite values beyond the half range clamp, NaN and Inf are kept", "[io]") {
@@ -167,6 +209,18 @@ TEST_CASE("PNG: 8-bit round trips, sRGB, and 16-bit / palette files from an inde
     for (int y = 0; y < 2; ++y)
         for (int x = 0; x < 2; ++x)
             for (int c = 0; c < 3; ++c) CHECK(p16.at(c, y, x) == Approx(v16[y][x][c] / 65535.0).margin(1e-7));
+
+    // The same pixels Adam7-interlaced, and a larger interlaced 8-bit RGB image against its plain twin.
+    ngi::test::spit(dir / "d16i.png", make_png(2, 2, 16, 2, rows16, "", "", 6));
+    CHECK(ngi::read_png(dir / "d16i.png").data == p16.data);
+    std::vector<std::string> rows8(13);
+    for (int y = 0; y < 13; ++y)
+        for (int x = 0; x < 11 * 3; ++x) rows8[y] += char(rng() & 0xff);
+    ngi::test::spit(dir / "plain.png", make_png(11, 13, 8, 2, rows8));
+    ngi::test::spit(dir / "adam7.png", make_png(11, 13, 8, 2, rows8, "", "", 3));
+    const ngi::Image plain = ngi::read_png(dir / "plain.png");
+    CHECK(plain.at(1, 12, 10) == float((unsigned char)rows8[12][10 * 3 + 1]) / 255.0f);
+    CHECK(ngi::read_png(dir / "adam7.png").data == plain.data);
 
     // 8-bit palette with transparency -> RGBA.
     const std::string plte = std::string("\xff\x00\x00", 3) + std::string("\x00\x80\x00", 3);

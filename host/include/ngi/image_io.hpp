@@ -23,15 +23,18 @@ std::vector<std::string> exr_channel_names(int channels);
 
 // Reads every channel of the first part (scanline or tiled; half, float or uint samples, converted to float).
 // The image has the size of the display window; pixels of the display window outside the data window are 0.
-// Channel order: Y, R, G, B, A first (in that order, whichever are present), then every other channel by name
-// in natural order (c2 before c10), so files written by write_exr read back in their original order.
+// Channel order: by layer ("diffuse.R" is channel R of layer "diffuse"; plain names are the unnamed layer, first),
+// within a layer R, G, B, then the other names in natural order (c2 before c10, X before Y before Z), then A.
+// So RGB(A) files read as R, G, B(, A), and files written by write_exr read back in their original order.
 // `channel_names`, when given, receives the names in that order. Subsampled (chroma) channels are rejected.
 // NaN and Inf values are returned as stored.
 Image read_exr(const std::string& path, std::vector<std::string>* channel_names = nullptr);
 
-// Writes 1..N channels named by exr_channel_names, ZIP-compressed, scanline. With ExrPixelType::Half, finite
-// values beyond the half range are clamped to +-65504 (half has no larger finite value); NaN/Inf are kept.
-void write_exr(const std::string& path, const Image& image, ExrPixelType type = ExrPixelType::Half);
+// Writes 1..N channels, ZIP-compressed, scanline, named channel_names (one distinct name per channel) or, when
+// that is empty, exr_channel_names(). With ExrPixelType::Half, finite values beyond the half range are clamped to
+// +-65504 (half has no larger finite value); NaN/Inf are kept.
+void write_exr(const std::string& path, const Image& image, ExrPixelType type = ExrPixelType::Half,
+               const std::vector<std::string>& channel_names = {});
 
 // ---- PNG ----------------------------------------------------------------------------------------------------
 

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <set>
 
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
@@ -57,27 +58,17 @@ private:
     std::size_t pos_ = 0;
 };
 
-// Sort key: Y, R, G, B, A first; then by name with digit runs compared as numbers ("c2" < "c10").
-bool channel_less(const std::string& a, const std::string& b) {
-    static const char* first[] = {"Y", "R", "G", "B", "A"};
-    auto rank = [](const std::string& s) {
-        for (int i = 0; i < 5; ++i) if (s == first[i]) return i;
-        return 5;
-    };
-    const int ra = rank(a), rb = rank(b);
-    if (ra != rb || ra < 5) return ra < rb;
+// Natural order: digit runs compare as numbers ("c2" < "c10").
+bool natural_less(const std::string& a, const std::string& b) {
     std::size_t i = 0, j = 0;
     while (i < a.size() && j < b.size()) {
         if (std::isdigit((unsigned char)a[i]) && std::isdigit((unsigned char)b[j])) {
             std::size_t ie = i, je = j;
             while (ie < a.size() && std::isdigit((unsigned char)a[ie])) ++ie;
             while (je < b.size() && std::isdigit((unsigned char)b[je])) ++je;
-            const std::string na = a.substr(i, ie - i), nb = b.substr(j, je - j);
-            const std::size_t za = na.find_first_not_of('0'), zb = nb.find_first_not_of('0');
-            const std::string ta = za == std::string::npos ? "" : na.substr(za);
-            const std::string tb = zb == std::string::npos ? "" : nb.substr(zb);
-            if (ta.size() != tb.size()) return ta.size() < tb.size();
-            if (ta != tb) return ta < tb;
+            const std::size_t za = std::min(a.find_first_not_of('0', i), ie), zb = std::min(b.find_first_not_of('0', j), je);
+            if (ie - za != je - zb) return ie - za < je - zb;  // more significant digits: larger
+            if (const int c = a.compare(za, ie - za, b, zb, je - zb); c != 0) return c < 0;
             i = ie;
             j = je;
         } else {
@@ -87,6 +78,20 @@ bool channel_less(const std::string& a, const std::string& b) {
         }
     }
     return a.size() - i < b.size() - j || (a.size() - i == b.size() - j && a < b);
+}
+
+// Channel order within a layer ("diffuse.R" is channel R of layer diffuse): R, G, B, then other names in natural
+// order, then A. OpenEXR stores channels sorted by name (B, G, R), which is never the order anyone means.
+bool channel_less(const std::string& a, const std::string& b) {
+    const std::size_t da = a.rfind('.'), db = b.rfind('.');
+    const std::string la = da == std::string::npos ? "" : a.substr(0, da);
+    const std::string lb = db == std::string::npos ? "" : b.substr(0, db);
+    if (la != lb) return natural_less(la, lb);
+    const std::string ba = da == std::string::npos ? a : a.substr(da + 1);
+    const std::string bb = db == std::string::npos ? b : b.substr(db + 1);
+    auto rank = [](const std::string& s) { return s == "R" ? 0 : s == "G" ? 1 : s == "B" ? 2 : s == "A" ? 4 : 3; };
+    if (rank(ba) != rank(bb)) return rank(ba) < rank(bb);
+    return natural_less(ba, bb);
 }
 
 }  // namespace
@@ -109,7 +114,7 @@ Image read_exr(const std::string& path, std::vector<std::string>* channel_names)
     std::vector<std::string> names;
     try {
         MemoryIStream stream(bytes, path);
-        Imf::InputFile file(stream, 1);
+        Imf::InputFile file(stream);
         const Imf::Header& h = file.header();
         const Imath::Box2i dw = h.dataWindow(), disp = h.displayWindow();
         const long long dw_w = (long long)dw.max.x - dw.min.x + 1, dw_h = (long long)dw.max.y - dw.min.y + 1;
@@ -154,13 +159,14 @@ Image read_exr(const std::string& path, std::vector<std::string>* channel_names)
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(what + "corrupt or truncated OpenEXR file: " + e.what());
+        throw InputError(what + "cannot decode (corrupt, truncated or unsupported OpenEXR file): " + e.what());
     }
     if (channel_names) *channel_names = std::move(names);
     return img;
 }
 
-void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
+void write_exr(const std::string& path, const Image& image, ExrPixelType type,
+               const std::vector<std::string>& channel_names) {
     const std::string what = "write " + path + ": ";
     if (image.width <= 0 || image.height <= 0 || image.channels <= 0 || image.data.size() != image.plane() * image.channels)
         throw InputError(what + "invalid image (" + std::to_string(image.width) + "x" + std::to_string(image.height) +
@@ -179,7 +185,12 @@ void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
     }
     const std::size_t elem = half ? sizeof(Imath::half) : sizeof(float);
     const char* base = half ? reinterpret_cast<const char*>(halves.data()) : reinterpret_cast<const char*>(image.data.data());
-    const std::vector<std::string> names = exr_channel_names(image.channels);
+    const std::vector<std::string> names = channel_names.empty() ? exr_channel_names(image.channels) : channel_names;
+    if (names.size() != std::size_t(image.channels) ||
+        std::set<std::string>(names.begin(), names.end()).size() != names.size() ||
+        std::find(names.begin(), names.end(), std::string()) != names.end())
+        throw InputError(what + "needs " + std::to_string(image.channels) + " distinct, non-empty channel names, got " +
+                         std::to_string(names.size()));
     MemoryOStream stream;
     try {
         Imf::Header header(image.width, image.height);
@@ -191,7 +202,7 @@ void write_exr(const std::string& path, const Image& image, ExrPixelType type) {
                                            const_cast<char*>(base + c * image.plane() * elem), elem,
                                            elem * std::size_t(image.width)));
         }
-        Imf::OutputFile file(stream, header, 1);
+        Imf::OutputFile file(stream, header);
         file.setFrameBuffer(fb);
         file.writePixels(image.height);
     } catch (const std::exception& e) {

@@ -178,6 +178,7 @@ void write_frame(const std::string& dir, const Frame& frame) {
     if (exists && !fs::is_empty(target, ec) && !fs::exists(target / "camera.json", ec))
         throw InputError(what + "exists and is not a frame folder (no camera.json); refusing to replace it");
 
+    if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);  // "out/train/frame_0007"
     const fs::path tmp = detail::temp_name(target.string());
     if (!fs::create_directory(tmp, ec) || ec)
         throw InputError(what + "cannot create " + tmp.string() + ": " + ec.message());

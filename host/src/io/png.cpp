@@ -65,6 +65,7 @@ bool decode(png_structp png, png_infop info, Raw& raw) {
     if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
     if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
     if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
+    png_set_interlace_handling(png);  // Adam7 files: png_read_image then returns the final rows
     png_read_update_info(png, info);
     raw.channels = png_get_channels(png, info);
     raw.bits = png_get_bit_depth(png, info);
