@@ -1,0 +1,94 @@
+// The OpenCL voxel path tracer: lighting (sun, sky, lamps; time of day), feature buffers for the six faces of the
+// camera cluster and the path-traced reference lighting of one face. docs/RENDERER.md defines every quantity.
+//
+// Light normalization: every lighting buffer ("direct", the reference) holds irradiance / pi, i.e. the radiance a
+// white Lambertian surface would reflect, so that reflected radiance = albedo * lighting. Emission and sky values
+// are radiance in the same unit. A frame composes as  final = albedo * (reference) + emission + env.
+#pragma once
+#include <cstdint>
+#include <memory>
+
+#include <glm/glm.hpp>
+
+#include "ngi/device.hpp"
+#include "ngi/image.hpp"
+#include "ngi/scene.hpp"
+
+namespace ngi {
+
+// A distant sun: a disc of uniform radiance subtending `angular_radius` around `direction`.
+struct Sun {
+    glm::vec3 direction{0, 1, 0};  // unit, from the scene toward the sun
+    glm::vec3 irradiance{0.0f};    // on a surface facing the sun, unoccluded (so direct = irradiance * cos / pi)
+    float angular_radius = 0.0f;   // radians; 0 = hard shadows
+};
+
+// Analytic sky radiance (the sun disc is not part of it: the sun is a separate light, as in Blender):
+//   up (d.y >= 0):  horizon + (zenith - horizon) * d.y^0.5  +  glow * ((1 + d.sun) / 2)^8
+//   down (d.y < 0): ground  (light from the world below the horizon, outside the grid)
+struct Sky {
+    glm::vec3 zenith{0.0f}, horizon{0.0f}, ground{0.0f}, glow{0.0f};
+};
+
+struct Lighting {
+    Sun sun;
+    Sky sky;
+    float lamp_level = 0.0f;  // multiplies the emission of lamp materials (0 = off by day, 1 = on at night)
+};
+
+// Time of day in hours (0..24; 6 = sunrise, 12 = noon, 18 = sunset, night after ~18.7): the sun's path (heading
+// `sun_azimuth` at noon, 70 degrees high), its reddening and fading near the horizon, the sky's colours from
+// blue day through orange twilight to dark night, and the lamps coming on as the sun sets.
+Lighting lighting_at(float hours, float sun_azimuth);
+
+// The sky model above, evaluated on the host (the kernel has the same formula; tests compare them).
+glm::vec3 sky_radiance(const Sky& sky, const Sun& sun, glm::vec3 unit_dir);
+
+// Position of the cluster centre (world metres) and the front camera's look and up (camera.hpp conventions).
+struct CameraPose {
+    glm::vec3 position{0.0f};
+    glm::vec3 look{0, 0, -1}, up{0, 1, 0};
+};
+
+struct RenderSettings {
+    int n = 128;               // face size in pixels
+    int feature_spp = 4;       // samples per pixel of the "direct" feature (the other features are exact)
+    int reference_spp = 32;    // samples per pixel of the reference lighting
+    int max_bounces = 8;       // indirect bounces of the reference (0 = direct light only); Russian roulette
+    int rr_start = 2;          // bounces before Russian roulette starts
+    bool reference = true;     // also render the reference of `reference_face`
+    Face reference_face = Face::Front;
+    std::uint32_t seed = 0;    // per-frame seed of the counter-based RNG: same seed, same image
+};
+
+struct RenderStats {
+    double feature_ms = 0, reference_ms = 0;  // device time incl. read-back
+    std::uint64_t feature_rays = 0, reference_rays = 0;  // rays traced (primary, shadow and bounce rays)
+    double reference_rel_stderr = 0;          // mean over lit pixels of stderr/mean of the reference (luminance)
+};
+
+// A scene uploaded to one device. Rendering is deterministic: same scene, pose, lighting and settings (seed),
+// same result, whatever the device's work-group scheduling.
+class Renderer {
+public:
+    Renderer(const Device& device, const VoxelScene& scene);
+    ~Renderer();
+    Renderer(Renderer&&) noexcept;
+    Renderer& operator=(Renderer&&) noexcept;
+
+    // All six faces' features (albedo, normal, depth, direct, emission, env) and, if settings.reference, the
+    // reference lighting of settings.reference_face in Frame::reference. Frame::look/up come from the pose.
+    Frame render(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
+                 RenderStats* stats = nullptr);
+
+    // The reference lighting of one face (3 x N x N) and, if `variance` is given, the per-pixel variance of that
+    // estimate (the sample variance / spp, per channel), for error bars.
+    Image render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
+                           Image* variance = nullptr, RenderStats* stats = nullptr);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ngi

@@ -1,0 +1,79 @@
+// Voxel scenes for the path tracer: a grid of blocks, each a palette index into a small table of diffuse
+// materials. Procedural families (seeded), MagicaVoxel .vox files, and the scene spec strings of the CLI.
+// Units and axes (docs/RENDERER.md): 1 block = 1 metre; block (x, y, z) covers [x, x+1) x [y, y+1) x [z, z+1) in
+// world space; +y is up; the grid's minimum corner is the world origin.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace ngi {
+
+// A Lambertian block material. Colours are linear RGB.
+struct Material {
+    glm::vec3 albedo{0.8f};
+    glm::vec3 emission{0.0f};  // emitted radiance (same unit as the sky and the lighting buffers), all faces
+    bool lamp = false;         // emission is scaled by Lighting::lamp_level (lamps switch on at dusk)
+};
+
+// Where the automatic camera path may go, and which way it prefers to look (scene-family knowledge).
+struct CameraHints {
+    glm::vec3 region_lo{0.0f}, region_hi{0.0f};  // keyframes lie inside this box (world metres)
+    std::optional<glm::vec3> look;                // preferred horizontal look direction (e.g. away from an opening)
+};
+
+struct VoxelScene {
+    static constexpr int kMaxMaterials = 256;  // palette index 0 is air, so 255 usable materials
+
+    std::string name;                          // the spec it was made from ("room:seed=3", "a/b.vox")
+    glm::ivec3 size{0};                        // blocks per axis
+    std::vector<std::uint8_t> voxels;          // palette index per block, 0 = empty; x + size.x * (y + size.y * z)
+    std::vector<Material> palette{Material{}}; // palette[0] = air (never looked up)
+    float sun_azimuth = 0.6f;                  // radians about +y; the sun's heading at noon (see lighting)
+    float default_time = 13.0f;                // hours, for renders that do not give a time of day
+    CameraHints camera;
+
+    VoxelScene() = default;
+    VoxelScene(glm::ivec3 size, std::string name);  // all air; camera region = the whole grid
+
+    bool inside(glm::ivec3 c) const { return glm::all(glm::greaterThanEqual(c, glm::ivec3(0))) && glm::all(glm::lessThan(c, size)); }
+    std::size_t index(glm::ivec3 c) const { return std::size_t(c.x) + std::size_t(size.x) * (std::size_t(c.y) + std::size_t(size.y) * std::size_t(c.z)); }
+    std::uint8_t at(glm::ivec3 c) const { return inside(c) ? voxels[index(c)] : 0; }  // air outside the grid
+    bool solid(glm::ivec3 c) const { return at(c) != 0; }
+    void set(glm::ivec3 c, std::uint8_t m) { if (inside(c)) voxels[index(c)] = m; }
+    void fill(glm::ivec3 lo, glm::ivec3 hi, std::uint8_t m);  // the box [lo, hi) clipped to the grid
+    std::uint8_t add_material(const Material& m);             // new palette index; throws Error when full
+    std::size_t solid_count() const;
+};
+
+// Procedural families. Each is deterministic in its seed (std::mt19937 + explicit distributions of our own, so the
+// same seed gives the same scene on every platform):
+//   room     indoor rooms with windows, a door and holes in the walls/roof; furniture; ceiling lamps
+//   street   outdoor street: road, pavement, houses with windows and doors, street lamps, trees
+//   cave     tunnels carved through rock plus straight mine corridors, a few openings to the sky, glowing crystals
+//   backlit  a room lit only through a large opening behind the camera (the camera looks away from it)
+//   bleed    a room with strongly coloured walls and blocks in sunlight through a skylight (colour bleeding)
+const std::vector<std::string>& scene_families();
+VoxelScene generate_scene(const std::string& family, std::uint32_t seed);
+
+// MagicaVoxel .vox (versions 150 and 200): SIZE/XYZI models placed through the scene graph (nTRN translation and
+// rotation, nGRP, nSHP) or, without one, side by side at the origin; RGBA palette (else the default palette);
+// MATL emission (_type _emit). Every other chunk (LAYR, rOBJ, rCAM, NOTE, IMAP, MATT, ...) is skipped by its size.
+// Colours are sRGB in the file and become linear albedo. MagicaVoxel's z-up axes map to ours as
+// (x, y, z)_vox -> (x, z, -y) (a rotation: handedness is kept), then the scene is moved to start at the origin.
+// Throws InputError naming the file for truncated data, malformed chunk structure, models over 256 blocks per
+// axis, scenes over kMaxVoxBlocks blocks, or voxels outside their model.
+constexpr std::size_t kMaxVoxBlocks = std::size_t(1) << 26;  // 64 Mi blocks = 64 MiB of palette indices
+VoxelScene load_vox(const std::string& path);
+
+// "family:seed=S" (any key=value list after the colon; only seed is defined, default 0) or a path to a .vox file.
+// Throws InputError for unknown families, keys or bad numbers.
+VoxelScene make_scene(const std::string& spec);
+// The canonical name of a spec ("room" -> "room:seed=0"; a .vox path stays as it is), validated like make_scene
+// but without building the scene. VoxelScene::name of make_scene(spec) equals it.
+std::string scene_spec_name(const std::string& spec);
+
+}  // namespace ngi

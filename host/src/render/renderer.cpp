@@ -1,0 +1,229 @@
+// Host side of the path tracer (kernels/pathtrace.cl): scene upload, per-frame lights and camera, read-back into
+// a Frame.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "ngi/camera.hpp"
+#include "ngi/error.hpp"
+#include "ngi/render.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi {
+namespace {
+
+constexpr std::size_t kLocal = 64;   // fixed work-group size (PoCL compiles one work-group function per size)
+constexpr int kFeatureChannels = 16; // pathtrace.cl F_CHANNELS: albedo 3, normal 3, depth 1, direct 3, emission 3, env 3
+constexpr int kFeatureOffset[kFeatureCount] = {0, 3, 6, 7, 10, 13};  // per ngi::Feature
+constexpr int kLightParams = 20;     // pathtrace.cl L_* layout
+
+float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+// A face of an emissive block that borders air inside the grid (only such faces can be seen or sampled).
+struct EmitterFace {
+    glm::ivec3 cell;
+    int face;  // 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z
+    std::uint8_t material;
+};
+
+void check_settings(const RenderSettings& s) {
+    if (s.n < 1 || s.n > 8192) throw InputError("render: face size n must be in 1..8192, got " + std::to_string(s.n));
+    if (s.feature_spp < 1 || s.reference_spp < 1) throw InputError("render: samples per pixel must be at least 1");
+    if (s.max_bounces < 0 || s.rr_start < 0) throw InputError("render: bounces must not be negative");
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+    std::shared_ptr<detail::Context> ctx;
+    std::vector<Material> palette;
+    std::vector<EmitterFace> emitters;
+    glm::ivec3 size;
+    detail::Buffer grid, mats, lights, cdf, light, cam;
+    detail::Buffer features, feature_rays, mean, var, ref_rays;
+    int buffers_n = 0;
+    int nlights = 0;
+    float inv_total = 0.0f;
+    detail::Kernel k_features, k_reference;
+
+    // Per frame: lamp level into the material table, the emitter list and its CDF, sun/sky, camera.
+    void upload_frame(const CameraPose& pose, const Lighting& l) {
+        std::vector<float> m(palette.size() * 8, 0.0f);
+        for (std::size_t i = 0; i < palette.size(); ++i) {
+            const Material& p = palette[i];
+            const glm::vec3 e = p.emission * (p.lamp ? l.lamp_level : 1.0f);
+            const float v[8] = {p.albedo.r, p.albedo.g, p.albedo.b, 0, e.r, e.g, e.b, 0};
+            std::copy(v, v + 8, m.begin() + std::ptrdiff_t(i * 8));
+        }
+        ctx->write(mats, 0, m.size() * sizeof(float), m.data(), "render: upload materials");
+
+        std::vector<std::int32_t> faces;
+        std::vector<double> weight;
+        double total = 0;
+        for (const auto& f : emitters) {
+            const float w = luminance(glm::vec3(m[f.material * 8 + 4], m[f.material * 8 + 5], m[f.material * 8 + 6]));
+            if (!(w > 0.0f)) continue;  // a lamp that is off
+            faces.insert(faces.end(), {f.cell.x, f.cell.y, f.cell.z, f.face});
+            weight.push_back(w);
+            total += w;
+        }
+        nlights = int(weight.size());
+        inv_total = nlights ? float(1.0 / total) : 0.0f;
+        std::vector<float> c(std::max<std::size_t>(weight.size(), 1), 1.0f);
+        double acc = 0;
+        for (std::size_t i = 0; i < weight.size(); ++i) c[i] = float((acc += weight[i]) / total);
+        if (nlights) c.back() = 1.0f;
+        faces.resize(std::max<std::size_t>(faces.size(), 4), 0);
+        if (lights.bytes() < faces.size() * 4) lights = ctx->alloc(faces.size() * 4, "render: emitter list");
+        if (cdf.bytes() < c.size() * 4) cdf = ctx->alloc(c.size() * 4, "render: emitter CDF");
+        ctx->write(lights, 0, faces.size() * 4, faces.data(), "render: upload emitter list");
+        ctx->write(cdf, 0, c.size() * 4, c.data(), "render: upload emitter CDF");
+
+        const float L[kLightParams] = {
+            l.sun.direction.x, l.sun.direction.y, l.sun.direction.z,
+            l.sun.irradiance.r, l.sun.irradiance.g, l.sun.irradiance.b,
+            std::cos(l.sun.angular_radius), 0.0f,
+            l.sky.zenith.r, l.sky.zenith.g, l.sky.zenith.b,
+            l.sky.horizon.r, l.sky.horizon.g, l.sky.horizon.b,
+            l.sky.ground.r, l.sky.ground.g, l.sky.ground.b,
+            l.sky.glow.r, l.sky.glow.g, l.sky.glow.b};
+        ctx->write(light, 0, sizeof(L), L, "render: upload lighting");
+
+        const CameraCluster cluster = CameraCluster::from_look_up(pose.look, pose.up);
+        float cb[3 + 9 * kFaceCount] = {pose.position.x, pose.position.y, pose.position.z};
+        for (int f = 0; f < kFaceCount; ++f) {
+            const FaceBasis b = cluster.face(Face(f));
+            const glm::vec3 v[3] = {b.look, b.right, b.up};
+            for (int k = 0; k < 3; ++k)
+                for (int j = 0; j < 3; ++j) cb[3 + 9 * f + 3 * k + j] = v[k][j];
+        }
+        ctx->write(cam, 0, sizeof(cb), cb, "render: upload camera");
+    }
+
+    void ensure_buffers(int n) {
+        if (n == buffers_n) return;
+        const std::size_t npix = std::size_t(n) * n;
+        features = ctx->alloc(npix * kFaceCount * kFeatureChannels * sizeof(float), "render: feature buffers");
+        feature_rays = ctx->alloc(npix * kFaceCount * sizeof(std::uint32_t), "render: ray counts");
+        mean = ctx->alloc(npix * 3 * sizeof(float), "render: reference");
+        var = ctx->alloc(npix * 3 * sizeof(float), "render: reference variance");
+        ref_rays = ctx->alloc(npix * sizeof(std::uint32_t), "render: ray counts");
+        buffers_n = n;
+    }
+
+    template <class... A>
+    void set_scene_args(detail::Kernel& k, const A&... rest) {
+        k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, cam, rest...);
+    }
+
+    std::uint64_t sum_rays(const detail::Buffer& b, std::size_t count) {
+        std::vector<std::uint32_t> r(count);
+        ctx->read(b, 0, count * sizeof(std::uint32_t), r.data(), "render: read ray counts");
+        std::uint64_t s = 0;
+        for (auto v : r) s += v;
+        return s;
+    }
+};
+
+Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::make_unique<Impl>()) {
+    Impl& m = *impl_;
+    m.ctx = device.shared_context();
+    m.size = scene.size;
+    m.palette = scene.palette;
+    const std::size_t blocks = std::size_t(scene.size.x) * scene.size.y * scene.size.z;
+    if (blocks == 0 || scene.voxels.size() != blocks)
+        throw InputError("render: scene " + scene.name + " has " + std::to_string(scene.voxels.size()) +
+                         " voxels for a grid of " + std::to_string(blocks));
+    for (std::uint8_t v : scene.voxels)
+        if (v >= scene.palette.size())
+            throw InputError("render: scene " + scene.name + " uses material " + std::to_string(v) + " of " +
+                             std::to_string(scene.palette.size()));
+    const glm::ivec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int z = 0; z < scene.size.z; ++z)
+        for (int y = 0; y < scene.size.y; ++y)
+            for (int x = 0; x < scene.size.x; ++x) {
+                const glm::ivec3 c(x, y, z);
+                const std::uint8_t mat = scene.voxels[scene.index(c)];
+                if (mat == 0 || scene.palette[mat].emission == glm::vec3(0.0f)) continue;
+                for (int f = 0; f < 6; ++f)
+                    if (scene.inside(c + dirs[f]) && !scene.solid(c + dirs[f])) m.emitters.push_back({c, f, mat});
+            }
+    m.grid = m.ctx->alloc(blocks, "render: voxel grid");
+    m.ctx->write(m.grid, 0, blocks, scene.voxels.data(), "render: upload voxel grid");
+    m.mats = m.ctx->alloc(scene.palette.size() * 8 * sizeof(float), "render: materials");
+    m.light = m.ctx->alloc(kLightParams * sizeof(float), "render: lighting");
+    m.cam = m.ctx->alloc((3 + 9 * kFaceCount) * sizeof(float), "render: camera");
+    m.k_features = m.ctx->kernel("pathtrace", "pt_features");
+    m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
+}
+
+Renderer::~Renderer() = default;
+Renderer::Renderer(Renderer&&) noexcept = default;
+Renderer& Renderer::operator=(Renderer&&) noexcept = default;
+
+Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s, RenderStats* stats) {
+    check_settings(s);
+    Impl& m = *impl_;
+    const auto t0 = std::chrono::steady_clock::now();
+    m.upload_frame(pose, lighting);
+    m.ensure_buffers(s.n);
+    const std::size_t npix = std::size_t(s.n) * s.n;
+    m.set_scene_args(m.k_features, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
+    const std::size_t global = npix * kFaceCount;
+    m.ctx->launch(m.k_features, 1, &global, &kLocal);
+    std::vector<float> out(npix * kFaceCount * kFeatureChannels);
+    m.ctx->read(m.features, 0, out.size() * sizeof(float), out.data(), "render: read feature buffers");
+
+    Frame fr;
+    fr.n = s.n;
+    fr.look = pose.look;
+    fr.up = pose.up;
+    for (int f = 0; f < kFeatureCount; ++f)
+        for (int face = 0; face < kFaceCount; ++face) {
+            Image img(s.n, s.n, feature_channels(Feature(f)));
+            const float* src = out.data() + (std::size_t(face) * kFeatureChannels + kFeatureOffset[f]) * npix;
+            std::copy(src, src + img.data.size(), img.data.begin());
+            fr.faces[f][face] = std::move(img);
+        }
+    const auto t1 = std::chrono::steady_clock::now();
+    if (stats) {
+        stats->feature_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+        stats->feature_rays = m.sum_rays(m.feature_rays, global);
+    }
+    if (s.reference) fr.reference = render_reference(pose, lighting, s, nullptr, stats);
+    return fr;
+}
+
+Image Renderer::render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,
+                                 Image* variance, RenderStats* stats) {
+    check_settings(s);
+    Impl& m = *impl_;
+    const auto t0 = std::chrono::steady_clock::now();
+    m.upload_frame(pose, lighting);
+    m.ensure_buffers(s.n);
+    const std::size_t npix = std::size_t(s.n) * s.n;
+    m.set_scene_args(m.k_reference, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
+                     std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
+    m.ctx->launch(m.k_reference, 1, &npix, &kLocal);
+    Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
+    m.ctx->read(m.mean, 0, mean.data.size() * sizeof(float), mean.data.data(), "render: read reference");
+    m.ctx->read(m.var, 0, var.data.size() * sizeof(float), var.data.data(), "render: read reference variance");
+    const auto t1 = std::chrono::steady_clock::now();
+    if (stats) {
+        stats->reference_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+        stats->reference_rays = m.sum_rays(m.ref_rays, npix);
+        // Mean relative standard error over lit pixel channels.
+        double sum = 0;
+        std::size_t cnt = 0;
+        for (std::size_t i = 0; i < mean.data.size(); ++i)
+            if (mean.data[i] > 1e-4f) {
+                sum += std::sqrt(double(var.data[i])) / mean.data[i];
+                ++cnt;
+            }
+        stats->reference_rel_stderr = cnt ? sum / double(cnt) : 0.0;
+    }
+    if (variance) *variance = std::move(var);
+    return mean;
+}
+
+}  // namespace ngi

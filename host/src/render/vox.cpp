@@ -1,0 +1,325 @@
+// MagicaVoxel .vox reader (https://github.com/ephtracy/voxel-model, format and its scene-graph extension).
+// The file is a RIFF-like tree: "VOX " version, then MAIN whose children are SIZE/XYZI model pairs, RGBA, MATL,
+// the scene graph (nTRN/nGRP/nSHP) and chunks we do not use; every chunk is id, content bytes, children bytes.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <array>
+
+#include "ngi/error.hpp"
+#include "ngi/scene.hpp"
+
+namespace ngi {
+namespace {
+
+constexpr int kMaxModelAxis = 256;  // MagicaVoxel's own limit per model
+constexpr std::size_t kMaxModels = 4096;
+
+class Reader {
+public:
+    Reader(const std::string& path, const std::string& bytes, std::size_t begin, std::size_t end)
+        : path_(&path), b_(&bytes), pos_(begin), end_(end) {}
+    [[noreturn]] void fail(const std::string& what) const {
+        throw InputError("read " + *path_ + ": " + what + " (byte " + std::to_string(pos_) + ")");
+    }
+    std::size_t pos() const { return pos_; }
+    std::size_t left() const { return end_ - pos_; }
+    void need(std::size_t n, const char* what) const {
+        if (left() < n) fail(std::string("truncated ") + what);
+    }
+    std::int32_t i32(const char* what) {
+        need(4, what);
+        const auto* p = reinterpret_cast<const unsigned char*>(b_->data() + pos_);
+        pos_ += 4;
+        return std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
+                            std::uint32_t(p[3]) << 24);
+    }
+    std::string bytes(std::size_t n, const char* what) {
+        need(n, what);
+        std::string s = b_->substr(pos_, n);
+        pos_ += n;
+        return s;
+    }
+    std::string str(const char* what) {
+        const std::int32_t n = i32(what);
+        if (n < 0) fail(std::string("negative string length in ") + what);
+        return bytes(std::size_t(n), what);
+    }
+    std::map<std::string, std::string> dict(const char* what) {
+        const std::int32_t n = i32(what);
+        if (n < 0 || std::size_t(n) > left() / 8) fail(std::string("bad dictionary size in ") + what);
+        std::map<std::string, std::string> d;
+        for (int i = 0; i < n; ++i) {
+            std::string k = str(what);
+            d[k] = str(what);
+        }
+        return d;
+    }
+
+private:
+    const std::string* path_;
+    const std::string* b_;
+    std::size_t pos_, end_;
+};
+
+struct Model {
+    glm::ivec3 size{0};
+    std::vector<std::array<std::uint8_t, 4>> voxels;  // x, y, z, colour index
+};
+
+// A MagicaVoxel rotation: a signed permutation matrix, rows packed in one byte.
+using IMat = std::array<glm::ivec3, 3>;  // rows
+IMat identity() { return {glm::ivec3(1, 0, 0), glm::ivec3(0, 1, 0), glm::ivec3(0, 0, 1)}; }
+int idot(glm::ivec3 a, glm::ivec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+glm::ivec3 mul(const IMat& m, glm::ivec3 v) { return {idot(m[0], v), idot(m[1], v), idot(m[2], v)}; }
+IMat mul(const IMat& a, const IMat& b) {
+    IMat r;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+    return r;
+}
+
+struct Node {
+    enum Kind { Transform, Group, Shape } kind;
+    IMat rot = identity();
+    glm::ivec3 t{0};
+    std::vector<int> children;  // node ids (transform: one; group: many) or model ids (shape)
+};
+
+float srgb_to_linear(std::uint8_t v) {
+    const float c = float(v) / 255.0f;
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+// The default palette (used when a file has no RGBA chunk), generated from its structure: index 0 unused;
+// 1..215 the 6x6x6 colour cube (r outer, g, b inner, each ff cc 99 66 33 00, without black); then ten-step ramps
+// (ee dd bb aa 88 77 55 44 22 11) of red, green, blue and grey.
+std::array<std::array<std::uint8_t, 3>, 256> default_palette() {
+    std::array<std::array<std::uint8_t, 3>, 256> p{};
+    int i = 1;
+    for (int r = 5; r >= 0; --r)
+        for (int g = 5; g >= 0; --g)
+            for (int b = 5; b >= 0; --b)
+                if (r || g || b) p[i++] = {std::uint8_t(r * 0x33), std::uint8_t(g * 0x33), std::uint8_t(b * 0x33)};
+    const std::uint8_t ramp[10] = {0xee, 0xdd, 0xbb, 0xaa, 0x88, 0x77, 0x55, 0x44, 0x22, 0x11};
+    for (int c = 0; c < 4; ++c)
+        for (std::uint8_t v : ramp)
+            p[i++] = {std::uint8_t(c == 0 || c == 3 ? v : 0), std::uint8_t(c == 1 || c == 3 ? v : 0),
+                      std::uint8_t(c == 2 || c == 3 ? v : 0)};
+    return p;
+}
+
+IMat decode_rotation(const Reader& rd, int bits) {
+    const int i0 = bits & 3, i1 = (bits >> 2) & 3;
+    if (i0 > 2 || i1 > 2 || i0 == i1) rd.fail("invalid rotation " + std::to_string(bits) + " in nTRN");
+    const int i2 = 3 - i0 - i1;
+    IMat m{glm::ivec3(0), glm::ivec3(0), glm::ivec3(0)};
+    m[0][i0] = (bits & 16) ? -1 : 1;
+    m[1][i1] = (bits & 32) ? -1 : 1;
+    m[2][i2] = (bits & 64) ? -1 : 1;
+    return m;
+}
+
+int parse_int(const Reader& rd, const std::string& s, const char* what) {
+    try {
+        std::size_t used = 0;
+        const int v = std::stoi(s, &used);
+        if (used != s.size()) throw std::invalid_argument(s);
+        return v;
+    } catch (const std::exception&) {
+        rd.fail(std::string("bad number '") + s + "' in " + what);
+    }
+}
+
+}  // namespace
+
+VoxelScene load_vox(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError("read " + path + ": cannot open file");
+    const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    Reader rd(path, b, 0, b.size());
+    if (rd.left() < 8 || b.compare(0, 4, "VOX ") != 0) rd.fail("not a MagicaVoxel file (no \"VOX \" header)");
+    rd.bytes(4, "header");
+    const std::int32_t version = rd.i32("header");
+    if (version < 150 || version > 200) rd.fail("unsupported .vox version " + std::to_string(version));
+
+    // Reads a chunk header; checks the id is printable and both sizes fit inside `limit`.
+    struct Chunk { std::string id; std::size_t content, children, begin; };
+    auto chunk = [&](Reader& r) {
+        Chunk c;
+        c.id = r.bytes(4, "chunk header");
+        for (unsigned char ch : c.id)
+            if (ch < 0x20 || ch > 0x7e) r.fail("malformed chunk structure: chunk id is not text");
+        const std::int32_t n = r.i32("chunk header"), m = r.i32("chunk header");
+        if (n < 0 || m < 0) r.fail("malformed chunk structure: negative size in chunk '" + c.id + "'");
+        c.content = std::size_t(n);
+        c.children = std::size_t(m);
+        c.begin = r.pos();
+        if (c.content > r.left() || c.children > r.left() - c.content)
+            r.fail("truncated chunk '" + c.id + "' (" + std::to_string(c.content + c.children) + " bytes declared, " +
+                   std::to_string(r.left()) + " left)");
+        return c;
+    };
+
+    const Chunk main = chunk(rd);
+    if (main.id != "MAIN") rd.fail("malformed chunk structure: expected MAIN, found '" + main.id + "'");
+    std::vector<Model> models;
+    std::array<std::array<std::uint8_t, 3>, 256> colours = default_palette();
+    std::map<int, glm::vec3> emit;  // MATL emission per colour index
+    std::map<int, Node> nodes;
+    Reader kids(path, b, main.begin + main.content, main.begin + main.content + main.children);
+    while (kids.left() > 0) {
+        const Chunk c = chunk(kids);
+        Reader r(path, b, c.begin, c.begin + c.content);
+        if (c.id == "SIZE") {
+            glm::ivec3 s;
+            s.x = r.i32("SIZE");
+            s.y = r.i32("SIZE");
+            s.z = r.i32("SIZE");
+            if (glm::any(glm::lessThan(s, glm::ivec3(1))) || glm::any(glm::greaterThan(s, glm::ivec3(kMaxModelAxis))))
+                r.fail("model size " + std::to_string(s.x) + " x " + std::to_string(s.y) + " x " + std::to_string(s.z) +
+                       " is outside 1.." + std::to_string(kMaxModelAxis) + " per axis");
+            if (models.size() >= kMaxModels) r.fail("more than " + std::to_string(kMaxModels) + " models");
+            models.push_back({s, {}});
+        } else if (c.id == "XYZI") {
+            if (models.empty() || !models.back().voxels.empty()) r.fail("malformed chunk structure: XYZI without SIZE");
+            Model& m = models.back();
+            const std::int32_t n = r.i32("XYZI");
+            if (n < 0 || std::size_t(n) > r.left() / 4) r.fail("truncated XYZI (" + std::to_string(n) + " voxels declared)");
+            m.voxels.resize(std::size_t(n));
+            for (auto& v : m.voxels) {
+                const std::string e = r.bytes(4, "XYZI");
+                for (int k = 0; k < 4; ++k) v[k] = std::uint8_t(e[k]);
+                if (v[0] >= m.size.x || v[1] >= m.size.y || v[2] >= m.size.z)
+                    r.fail("voxel (" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " + std::to_string(v[2]) +
+                           ") outside its model");
+            }
+        } else if (c.id == "RGBA") {
+            for (int i = 1; i <= 255; ++i) {  // entry i-1 of the chunk is colour index i
+                const std::string e = r.bytes(4, "RGBA");
+                colours[i] = {std::uint8_t(e[0]), std::uint8_t(e[1]), std::uint8_t(e[2])};
+            }
+        } else if (c.id == "MATL") {
+            const int id = r.i32("MATL");
+            auto d = r.dict("MATL");
+            if (d["_type"] == "_emit" && id >= 1 && id <= 255) {
+                const float e = d.count("_emit") ? std::strtof(d["_emit"].c_str(), nullptr) : 1.0f;
+                const float flux = d.count("_flux") ? std::strtof(d["_flux"].c_str(), nullptr) : 0.0f;
+                emit[id] = glm::vec3(std::max(0.0f, e) * 4.0f * std::exp2(std::clamp(flux, 0.0f, 4.0f)));
+            }
+        } else if (c.id == "nTRN" || c.id == "nGRP" || c.id == "nSHP") {
+            const int id = r.i32(c.id.c_str());
+            r.dict(c.id.c_str());
+            Node node;
+            if (c.id == "nTRN") {
+                node.kind = Node::Transform;
+                node.children.push_back(r.i32("nTRN"));
+                r.i32("nTRN");  // reserved
+                r.i32("nTRN");  // layer
+                const int frames = r.i32("nTRN");
+                if (frames < 1) r.fail("nTRN without frames");
+                auto f = r.dict("nTRN");  // frame 0; animation frames are ignored
+                if (f.count("_r")) node.rot = decode_rotation(r, parse_int(r, f["_r"], "nTRN _r"));
+                if (f.count("_t")) {
+                    std::istringstream ts(f["_t"]);
+                    if (!(ts >> node.t.x >> node.t.y >> node.t.z)) r.fail("bad translation '" + f["_t"] + "' in nTRN");
+                }
+            } else if (c.id == "nGRP") {
+                node.kind = Node::Group;
+                const int n = r.i32("nGRP");
+                if (n < 0 || std::size_t(n) > r.left() / 4) r.fail("bad child count in nGRP");
+                for (int i = 0; i < n; ++i) node.children.push_back(r.i32("nGRP"));
+            } else {
+                node.kind = Node::Shape;
+                const int n = r.i32("nSHP");
+                if (n < 0 || std::size_t(n) > r.left() / 8) r.fail("bad model count in nSHP");
+                for (int i = 0; i < n; ++i) {
+                    node.children.push_back(r.i32("nSHP"));
+                    r.dict("nSHP");
+                }
+            }
+            if (!nodes.emplace(id, std::move(node)).second) r.fail("duplicate scene-graph node " + std::to_string(id));
+        }
+        // Every other chunk (PACK, LAYR, rOBJ, rCAM, NOTE, IMAP, MATT, ...) is skipped by its declared sizes.
+        kids = Reader(path, b, c.begin + c.content + c.children, main.begin + main.content + main.children);
+    }
+    if (models.empty()) throw InputError("read " + path + ": no model (SIZE/XYZI chunks) in the file");
+
+    // Model instances in MagicaVoxel space (z up): each voxel centre goes to rot * (v + 0.5 - size / 2) + t.
+    struct Instance { int model; IMat rot; glm::ivec3 t; };
+    std::vector<Instance> instances;
+    if (!nodes.empty()) {
+        std::set<int> on_path;
+        auto walk = [&](auto&& self, int id, IMat rot, glm::ivec3 t) -> void {
+            auto it = nodes.find(id);
+            if (it == nodes.end()) throw InputError("read " + path + ": scene graph refers to missing node " + std::to_string(id));
+            if (!on_path.insert(id).second) throw InputError("read " + path + ": scene graph has a cycle at node " + std::to_string(id));
+            const Node& n = it->second;
+            if (n.kind == Node::Transform) {
+                self(self, n.children.at(0), mul(rot, n.rot), t + mul(rot, n.t));
+            } else if (n.kind == Node::Group) {
+                for (int c : n.children) self(self, c, rot, t);
+            } else {
+                for (int m : n.children) {
+                    if (m < 0 || std::size_t(m) >= models.size())
+                        throw InputError("read " + path + ": scene graph refers to missing model " + std::to_string(m));
+                    instances.push_back({m, rot, t});
+                }
+            }
+            on_path.erase(id);
+        };
+        walk(walk, 0, identity(), glm::ivec3(0));
+    } else {
+        for (std::size_t m = 0; m < models.size(); ++m) instances.push_back({int(m), identity(), glm::ivec3(0)});
+    }
+
+    // World cell of a voxel: floor of its centre. Twice the centre is integral (half-voxel offsets of even sizes).
+    auto floor_half = [](int a) { return a >= 0 ? a / 2 : -((1 - a) / 2); };  // floor(a / 2)
+    auto place = [&](const Instance& in, glm::ivec3 v) {
+        const glm::ivec3 c2 = mul(in.rot, 2 * v + 1 - models[in.model].size) + 2 * in.t;
+        return glm::ivec3(floor_half(c2.x), floor_half(c2.y), floor_half(c2.z));
+    };
+    glm::ivec3 lo(INT32_MAX), hi(INT32_MIN);
+    std::size_t count = 0;
+    for (const auto& in : instances)
+        for (const auto& v : models[in.model].voxels) {
+            if (v[3] == 0) continue;
+            const glm::ivec3 c = place(in, {v[0], v[1], v[2]});
+            lo = glm::min(lo, c);
+            hi = glm::max(hi, c);
+            ++count;
+        }
+    if (count == 0) throw InputError("read " + path + ": the file has no voxels");
+    const glm::ivec3 ext = hi - lo + 1;  // MagicaVoxel axes
+    const double blocks = double(ext.x) * ext.y * ext.z;
+    if (blocks > double(kMaxVoxBlocks))
+        throw InputError("read " + path + ": scene of " + std::to_string(ext.x) + " x " + std::to_string(ext.y) + " x " +
+                         std::to_string(ext.z) + " blocks exceeds the budget of " + std::to_string(kMaxVoxBlocks) +
+                         " blocks");
+
+    // (x, y, z)_vox -> (x, z, -y): z-up to y-up, a proper rotation.
+    VoxelScene s({ext.x, ext.z, ext.y}, path);
+    std::array<int, 256> material{};  // colour index -> palette index, 0 = not yet added
+    for (const auto& in : instances)
+        for (const auto& v : models[in.model].voxels) {
+            if (v[3] == 0) continue;
+            const glm::ivec3 c = place(in, {v[0], v[1], v[2]}) - lo;
+            int& m = material[v[3]];
+            if (m == 0) {
+                const auto& rgb = colours[v[3]];
+                const glm::vec3 albedo = glm::min(
+                    glm::vec3(srgb_to_linear(rgb[0]), srgb_to_linear(rgb[1]), srgb_to_linear(rgb[2])), glm::vec3(0.95f));
+                const auto e = emit.find(v[3]);
+                m = s.add_material({albedo, e == emit.end() ? glm::vec3(0.0f) : albedo * e->second, false});
+            }
+            s.set({c.x, c.z, ext.y - 1 - c.y}, std::uint8_t(m));
+        }
+    s.name = path;
+    return s;
+}
+
+}  // namespace ngi

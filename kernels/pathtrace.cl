@@ -1,0 +1,355 @@
+// Voxel path tracer: feature buffers of the six faces of the camera cluster and the path-traced reference
+// lighting of one face. Host side: host/src/render/renderer.cpp; definitions: docs/RENDERER.md.
+//
+// Scene: a grid of palette indices (uchar, 0 = air), x + sx * (y + sy * z); block (x, y, z) covers the unit cube
+// at that corner. Rays are traversed with Amanatides & Woo's 3D DDA.
+// Lighting buffers hold irradiance / pi ("lighting without albedo"); emission and sky values are radiance.
+// One work-item per pixel; every random number comes from a counter-based hash of (pixel, sample, seed, counter),
+// so the result does not depend on scheduling, work-group size or device.
+
+// Layout of the `light` parameter array (keep in sync with renderer.cpp).
+#define L_SUN_DIR 0      // 3: unit vector toward the sun
+#define L_SUN_E 3        // 3: sun irradiance (facing the sun)
+#define L_SUN_COS 6      // 1: cosine of the sun's angular radius
+#define L_ZENITH 8       // 3: sky radiance straight up
+#define L_HORIZON 11     // 3: sky radiance at the horizon
+#define L_GROUND 14      // 3: radiance from below the horizon
+#define L_GLOW 17        // 3: sun-centred glow added to the sky
+
+#define SKY_DEPTH 1.0e4f     // depth reported where the primary ray escapes (finite on purpose)
+#define T_INF 1.0e30f
+#define RAY_OFFSET 1.0e-3f   // secondary rays start this far off the surface, along the normal
+
+// Features: channel planes per face (keep in sync with renderer.cpp).
+#define F_ALBEDO 0
+#define F_NORMAL 3
+#define F_DEPTH 6
+#define F_DIRECT 7
+#define F_EMISSION 10
+#define F_ENV 13
+#define F_CHANNELS 16
+
+typedef struct {
+    __global const uchar* grid;
+    int3 dims;
+    __global const float4* mats;   // per material: albedo, emission (lamp level applied)
+    __global const int4* lights;   // emissive faces that border air: cell xyz, face id
+    __global const float* cdf;     // cumulative selection probability of lights (proportional to luminance)
+    int nlights;
+    float inv_total;               // 1 / sum of the luminance of all emissive faces
+    __global const float* light;   // L_* parameters
+} Scene;
+
+typedef struct {
+    float t;      // distance along the (unit) ray
+    int3 cell;
+    int face;     // outward normal of the face hit: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z
+    int mat;      // palette index; 0 = the ray left the grid
+} Hit;
+
+// ---- random numbers: PCG4D (Jarzynski & Olano 2020), a counter-based hash ----------------------------------
+
+typedef struct {
+    uint a, b, c, n;
+} Rng;
+
+inline uint4 pcg4d(uint4 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    return v;
+}
+
+inline float2 rng2(Rng* r) {
+    uint4 v = pcg4d((uint4)(r->a, r->b, r->c, r->n++));
+    return convert_float2(v.xy >> 8) * (1.0f / 16777216.0f);  // 24 bits: uniform in [0, 1)
+}
+
+// ---- geometry --------------------------------------------------------------------------------------------------
+
+inline float3 face_normal(int f) {
+    const float s = (f & 1) ? -1.0f : 1.0f;
+    const int a = f >> 1;
+    return (float3)(a == 0 ? s : 0.0f, a == 1 ? s : 0.0f, a == 2 ? s : 0.0f);
+}
+
+inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+// Orthonormal basis around a unit vector (Duff et al. 2017, branchless).
+inline void onb(float3 n, float3* t, float3* b) {
+    const float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    const float a = -1.0f / (s + n.z);
+    const float c = n.x * n.y * a;
+    *t = (float3)(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    *b = (float3)(c, s + n.y * n.y * a, -n.y);
+}
+
+inline float3 cosine_sample(float3 n, float2 u) {
+    float3 t, b;
+    onb(n, &t, &b);
+    const float r = sqrt(u.x), phi = 2.0f * M_PI_F * u.y;
+    return t * (r * cos(phi)) + b * (r * sin(phi)) + n * sqrt(fmax(0.0f, 1.0f - u.x));
+}
+
+inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
+
+// First solid block along o + t d (d unit), t in [0, tmax]. Counts one ray.
+inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
+    Hit h;
+    h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
+    ++*rays;
+    const float3 inv = (float3)(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
+    const float3 ta = -o * inv, tb = (convert_float3(s->dims) - o) * inv;
+    const float3 lo = fmin(ta, tb), hi = fmax(ta, tb);
+    const float t_enter = fmax(fmax(lo.x, lo.y), lo.z), t_exit = fmin(fmin(hi.x, hi.y), hi.z);
+    float t = fmax(t_enter, 0.0f);
+    if (t_exit < t || t > tmax) return h;
+    // Axis of the last plane crossed (the face a hit block is entered through); -1 while still in the start cell
+    // of a ray that begins inside the grid.
+    int axis = t_enter > 0.0f ? (lo.x >= lo.y && lo.x >= lo.z ? 0 : (lo.y >= lo.z ? 1 : 2)) : -1;
+    const float3 p = o + d * t;
+    int3 c = clamp(convert_int3(floor(p)), (int3)(0), s->dims - 1);
+    const int3 step = (int3)(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
+    const float3 delta = fabs(inv);
+    float3 next = (convert_float3(c + (step > 0 ? (int3)(1) : (int3)(0))) - o) * inv;
+    const int sx = s->dims.x, sxy = s->dims.x * s->dims.y;
+    const int max_steps = s->dims.x + s->dims.y + s->dims.z + 3;
+    for (int i = 0; i < max_steps; ++i) {
+        const int m = s->grid[c.x + sx * c.y + sxy * c.z];
+        if (m != 0) {
+            if (axis < 0) {  // the ray starts inside a block: report the face it would leave backwards through
+                const float3 ad = fabs(d);
+                axis = ad.x >= ad.y && ad.x >= ad.z ? 0 : (ad.y >= ad.z ? 1 : 2);
+            }
+            const int st = axis == 0 ? step.x : (axis == 1 ? step.y : step.z);
+            h.t = t; h.cell = c; h.mat = m;
+            h.face = 2 * axis + (st > 0 ? 1 : 0);  // entered moving +axis: the face's normal points -axis
+            return h;
+        }
+        if (next.x < next.y && next.x < next.z) {
+            axis = 0; t = next.x; c.x += step.x; next.x += delta.x;
+            if ((uint)c.x >= (uint)s->dims.x) break;
+        } else if (next.y < next.z) {
+            axis = 1; t = next.y; c.y += step.y; next.y += delta.y;
+            if ((uint)c.y >= (uint)s->dims.y) break;
+        } else {
+            axis = 2; t = next.z; c.z += step.z; next.z += delta.z;
+            if ((uint)c.z >= (uint)s->dims.z) break;
+        }
+        if (t > tmax) break;
+    }
+    return h;
+}
+
+// The hit point, snapped onto the face's plane (removes the DDA's rounding along the normal), then lifted off
+// the surface so that a ray leaving it starts in the air cell in front of the face.
+inline float3 hit_origin(float3 o, float3 d, const Hit* h) {
+    float3 p = o + d * h->t;
+    const int a = h->face >> 1;
+    const float plane = (a == 0 ? (float)h->cell.x : (a == 1 ? (float)h->cell.y : (float)h->cell.z)) +
+                        ((h->face & 1) ? 0.0f : 1.0f);
+    if (a == 0) p.x = plane; else if (a == 1) p.y = plane; else p.z = plane;
+    return p + face_normal(h->face) * RAY_OFFSET;
+}
+
+// ---- lights -------------------------------------------------------------------------------------------------
+
+inline float3 lv(__global const float* L, int i) { return (float3)(L[i], L[i + 1], L[i + 2]); }
+
+// Sky radiance toward unit direction d (the sun disc excluded: the sun is sampled as a light).
+inline float3 sky_radiance(__global const float* L, float3 d) {
+    if (d.y < 0.0f) return lv(L, L_GROUND);
+    float g = 0.5f * (1.0f + dot(d, lv(L, L_SUN_DIR)));
+    g *= g; g *= g; g *= g;  // ^8: a broad glow around the sun
+    return lv(L, L_HORIZON) + (lv(L, L_ZENITH) - lv(L, L_HORIZON)) * sqrt(d.y) + lv(L, L_GLOW) * g;
+}
+
+// Sun: one shadow ray toward a uniform point of the sun's cone. Irradiance E of a disc of small solid angle gives
+// lighting E cos / pi.
+inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
+    const float3 E = lv(s->light, L_SUN_E);
+    const float2 u = rng2(r);
+    if (E.x + E.y + E.z <= 0.0f) return (float3)(0.0f);
+    const float3 sd = lv(s->light, L_SUN_DIR);
+    const float cmax = s->light[L_SUN_COS];
+    const float z = 1.0f - u.x * (1.0f - cmax), sr = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * M_PI_F * u.y;
+    float3 t, b;
+    onb(sd, &t, &b);
+    const float3 w = t * (sr * cos(phi)) + b * (sr * sin(phi)) + sd * z;
+    const float c = dot(n, w);
+    if (c <= 0.0f) return (float3)(0.0f);
+    const Hit h = trace(s, p, w, T_INF, rays);
+    return h.mat ? (float3)(0.0f) : E * (c * M_1_PI_F);
+}
+
+// Solid-angle density with which emitter sampling picks the direction toward a point on an emissive face at
+// distance `dist` whose normal makes cosine `cos_l` with the direction back to the shading point.
+inline float emitter_pdf(const Scene* s, float3 Le, float dist, float cos_l) {
+    return luminance(Le) * s->inv_total * dist * dist / cos_l;
+}
+
+// Power heuristic (beta = 2) weight of a sample drawn with density pa, the other strategy having density pb.
+inline float power_heuristic(float pa, float pb) {
+    const float a2 = pa * pa;
+    return a2 / (a2 + pb * pb);
+}
+
+// Emissive blocks: pick a face in proportion to its luminance (every face has area 1 m^2), a uniform point on
+// it, one shadow ray; MIS-weighted against the cosine-sampled bounce ray that can hit the same face.
+inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
+    const float2 u = rng2(r), v = rng2(r);
+    if (s->nlights == 0) return (float3)(0.0f);
+    int lo = 0, hi = s->nlights - 1;
+    while (lo < hi) {  // first face whose cumulative probability exceeds u.x
+        const int mid = (lo + hi) >> 1;
+        if (s->cdf[mid] > u.x) hi = mid; else lo = mid + 1;
+    }
+    const int4 e = s->lights[lo];
+    const int a = e.w >> 1;
+    const float plane = (e.w & 1) ? 0.0f : 1.0f;
+    float3 q = convert_float3(e.xyz);
+    if (a == 0) q += (float3)(plane, v.x, v.y);
+    else if (a == 1) q += (float3)(v.x, plane, v.y);
+    else q += (float3)(v.x, v.y, plane);
+    float3 w = q - p;
+    const float dist = length(w);
+    w /= dist;
+    const float cos_x = dot(n, w), cos_l = -dot(face_normal(e.w), w);
+    if (cos_x <= 0.0f || cos_l <= 1.0e-6f) return (float3)(0.0f);
+    const Hit h = trace(s, p, w, dist + 1.0f, rays);
+    if (h.mat == 0 || h.face != e.w || any(h.cell != e.xyz)) return (float3)(0.0f);  // occluded
+    const float3 Le = s->mats[2 * h.mat + 1].xyz;
+    const float pl = emitter_pdf(s, Le, dist, cos_l), pb = cos_x * M_1_PI_F;
+    return Le * (power_heuristic(pl, pb) * cos_x * M_1_PI_F / pl);
+}
+
+// One sample of the lighting (irradiance / pi) arriving at surface point p with normal n: direct light from the
+// sun, emissive blocks and the sky (depth 0), plus up to max_bounces indirect bounces. Sun and emitters use
+// next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray (emitters MIS-
+// weighted). Russian roulette after rr_start bounces keeps long paths unbiased.
+inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
+                              uint* rays) {
+    float3 sum = (float3)(0.0f), beta = (float3)(1.0f);
+    for (int depth = 0;; ++depth) {
+        sum += beta * (sun_light(s, p, n, r, rays) + emitter_light(s, p, n, r, rays));
+        const float3 w = cosine_sample(n, rng2(r));
+        const Hit h = trace(s, p, w, T_INF, rays);
+        if (h.mat == 0) {
+            sum += beta * sky_radiance(s->light, w);
+            break;
+        }
+        const float3 Le = s->mats[2 * h.mat + 1].xyz;
+        if (Le.x + Le.y + Le.z > 0.0f) {
+            const float cos_l = fabs(dot(face_normal(h.face), w));
+            const float pl = emitter_pdf(s, Le, h.t, cos_l), pb = dot(n, w) * M_1_PI_F;
+            sum += beta * Le * power_heuristic(pb, pl);
+        }
+        if (depth >= max_bounces) break;
+        beta *= s->mats[2 * h.mat].xyz;
+        if (depth + 1 >= rr_start) {
+            const float q = fmin(0.95f, fmax(beta.x, fmax(beta.y, beta.z)));
+            if (rng2(r).x >= q) break;
+            beta /= q;
+        }
+        p = hit_origin(p, w, &h);
+        n = face_normal(h.face);
+    }
+    return sum;
+}
+
+// ---- kernels ------------------------------------------------------------------------------------------------
+
+#define SCENE_ARGS                                                                                           \
+    __global const uchar *grid, int sx, int sy, int sz, __global const float4 *mats, __global const int4 *lights, \
+        __global const float *cdf, int nlights, float inv_total, __global const float *light
+
+#define MAKE_SCENE(s)                                                                                       \
+    Scene s;                                                                                                \
+    s.grid = grid; s.dims = (int3)(sx, sy, sz); s.mats = mats; s.lights = lights; s.cdf = cdf;             \
+    s.nlights = nlights; s.inv_total = inv_total; s.light = light
+
+// cam: centre (3), then per face look, right, up (9 each) in camera.hpp's face order.
+// Unit direction through the centre of pixel (col, row) of face f (camera.hpp: face_pixel_direction).
+inline float3 pixel_ray(__global const float* cam, int f, int col, int row, int n, float3* look) {
+    __global const float* b = cam + 3 + 9 * f;
+    *look = (float3)(b[0], b[1], b[2]);
+    const float u = 2.0f * ((float)col + 0.5f) / (float)n - 1.0f;
+    const float v = 1.0f - 2.0f * ((float)row + 0.5f) / (float)n;
+    return normalize(*look + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]));
+}
+
+// Feature buffers of all six faces: out[(face * F_CHANNELS + channel) * n * n + row * n + col].
+// global size: 6 n^2 (one work-item per pixel).
+__kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp, uint seed, __global float* out,
+                          __global uint* rays_out) {
+    const int gid = get_global_id(0);
+    const int npix = n * n;
+    if (gid >= 6 * npix) return;
+    MAKE_SCENE(s);
+    const int f = gid / npix, pix = gid - f * npix, row = pix / n, col = pix - row * n;
+    float3 look;
+    const float3 o = (float3)(cam[0], cam[1], cam[2]);
+    const float3 d = pixel_ray(cam, f, col, row, n, &look);
+    uint rays = 0;
+    const Hit h = trace(&s, o, d, T_INF, &rays);
+    float3 albedo = (float3)(0.0f), normal = (float3)(0.0f), direct = (float3)(0.0f), emission = (float3)(0.0f),
+           env = (float3)(0.0f);
+    float depth = SKY_DEPTH;
+    if (h.mat == 0) {
+        env = sky_radiance(light, d);
+    } else {
+        albedo = mats[2 * h.mat].xyz;
+        emission = mats[2 * h.mat + 1].xyz;
+        normal = face_normal(h.face);
+        depth = h.t * dot(d, look);  // planar depth along the face's look axis
+        const float3 p = hit_origin(o, d, &h);
+        Rng r;
+        r.a = (uint)gid; r.c = seed ^ 0x68e31da4u;
+        for (int i = 0; i < spp; ++i) {
+            r.b = (uint)i; r.n = 0;
+            direct += lighting_sample(&s, p, normal, 0, 0, &r, &rays);
+        }
+        direct /= (float)max(spp, 1);
+    }
+    __global float* q = out + (size_t)f * F_CHANNELS * npix + pix;
+    const float v[F_CHANNELS] = {albedo.x, albedo.y, albedo.z, normal.x, normal.y, normal.z, depth,
+                                 direct.x, direct.y, direct.z, emission.x, emission.y, emission.z,
+                                 env.x, env.y, env.z};
+    for (int c = 0; c < F_CHANNELS; ++c) q[(size_t)c * npix] = v[c];
+    rays_out[gid] = rays;
+}
+
+// Reference lighting of face `face`: mean[c * n^2 + pix] and the variance of that mean (sample variance / spp).
+// Zero where the primary ray escapes (sky has no surface to light). global size: n^2.
+__kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int n, int spp, int max_bounces,
+                           int rr_start, uint seed, __global float* mean_out, __global float* var_out,
+                           __global uint* rays_out) {
+    const int pix = get_global_id(0);
+    const int npix = n * n;
+    if (pix >= npix) return;
+    MAKE_SCENE(s);
+    const int row = pix / n, col = pix - row * n;
+    float3 look;
+    const float3 o = (float3)(cam[0], cam[1], cam[2]);
+    const float3 d = pixel_ray(cam, face, col, row, n, &look);
+    uint rays = 0;
+    const Hit h = trace(&s, o, d, T_INF, &rays);
+    float3 mean = (float3)(0.0f), m2 = (float3)(0.0f);
+    if (h.mat != 0) {
+        const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
+        Rng r;
+        r.a = (uint)(face * npix + pix); r.c = seed ^ 0x2545f491u;
+        for (int i = 0; i < spp; ++i) {  // Welford: stable mean and variance in float
+            r.b = (uint)i; r.n = 0;
+            const float3 x = lighting_sample(&s, p, nrm, max_bounces, rr_start, &r, &rays);
+            const float3 dx = x - mean;
+            mean += dx / (float)(i + 1);
+            m2 += dx * (x - mean);
+        }
+    }
+    const float3 var = spp > 1 ? m2 / ((float)(spp - 1) * (float)spp) : (float3)(0.0f);
+    mean_out[pix] = mean.x; mean_out[npix + pix] = mean.y; mean_out[2 * npix + pix] = mean.z;
+    var_out[pix] = var.x; var_out[npix + pix] = var.y; var_out[2 * npix + pix] = var.z;
+    rays_out[pix] = rays;
+}
