@@ -13,5 +13,7 @@ struct Command {
 int cmd_devices(int argc, char** argv);
 int cmd_generate(int argc, char** argv);
 int cmd_metrics(int argc, char** argv);
+int cmd_render(int argc, char** argv);
+int cmd_dataset(int argc, char** argv);
 
 }  // namespace ngi_cli

@@ -19,6 +19,14 @@ const ngi_cli::Command kCommands[] = {
                 "                                 MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON; R = data\n"
                 "                                 range (default 1); psnr is null for identical images",
      ngi_cli::cmd_metrics},
+    {"render", "ngi render --scene SPEC --out DIR [--frame K] [--face N] [--spp S] [--time HOURS] [--device D]\n"
+               "           [--feature-spp F] [--bounces B] [--path-frames P] [--no-reference] [--preview PNG]\n"
+               "                                 path-trace one frame folder; SPEC = room|street|cave|backlit|bleed"
+               "[:seed=S] or a .vox file",
+     ngi_cli::cmd_render},
+    {"dataset", "ngi dataset --config FILE.json --out DIR [--device D]\n"
+                "                                 render a train/test dataset (resumable; see configs/)",
+     ngi_cli::cmd_dataset},
 };
 
 void usage(FILE* out) {

@@ -138,11 +138,11 @@ VoxelScene room(std::uint32_t seed) {
     int windows = 0;
     for (int w = 0; w < 4; ++w) {
         for (int k = r.irange(0, 2); k > 0; --k, ++windows) {
-            const int len = wall_length(in_lo, in_hi, w), ww = r.irange(1, 3), wh = r.irange(1, 2);
+            const int len = wall_length(in_lo, in_hi, w), ww = r.irange(2, 4), wh = r.irange(2, std::min(3, H - 1));
             wall_rect(s, in_lo, in_hi, w, r.irange(1, len - ww - 1), r.irange(1, H - wh), ww, wh, 0);
         }
     }
-    if (windows == 0) wall_rect(s, in_lo, in_hi, 1, 2, 1, 2, 2, 0);
+    if (windows < 2) wall_rect(s, in_lo, in_hi, windows == 0 ? 1 : 0, 2, 1, 3, 2, 0);  // at least some daylight
     const int door_wall = r.irange(0, 3), door_w = r.irange(1, 2);
     wall_rect(s, in_lo, in_hi, door_wall, r.irange(1, wall_length(in_lo, in_hi, door_wall) - door_w - 1), 0, door_w,
               std::min(3, H - 1), 0);
@@ -386,7 +386,7 @@ VoxelScene bleed(std::uint32_t seed) {
         const glm::ivec3 p(r.irange(in_lo.x, in_hi.x - a), in_lo.y, r.irange(in_lo.z, in_hi.z - c));
         s.fill(p, p + glm::ivec3(a, b, c), add(s, r, r.pick(kWool)));
     }
-    const int sw = std::max(2, W / 3), sd = std::max(2, D / 3);  // skylight
+    const int sw = std::max(3, W / 2), sd = std::max(3, D / 2);  // skylight
     const int sx = r.irange(in_lo.x, in_hi.x - sw), sz = r.irange(in_lo.z, in_hi.z - sd);
     s.fill({sx, in_hi.y, sz}, {sx + sw, in_hi.y + 1, sz + sd}, 0);
     if (r.chance(0.5f)) wall_rect(s, in_lo, in_hi, r.irange(0, 3), 2, 1, 2, 2, 0);

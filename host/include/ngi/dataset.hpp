@@ -1,0 +1,62 @@
+// Rendering a training/test dataset of frame folders from a JSON config: scene families and seeds (or .vox
+// files), frames per scene along automatic camera paths, time of day per frame, face size and sample counts, a
+// train/test split with disjoint scenes. Deterministic (same config, same files) and resumable (finished frames
+// are never rendered twice; a killed run loses at most the frames in flight). Layout and format: docs/RENDERER.md.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ngi/camera_path.hpp"
+#include "ngi/device.hpp"
+#include "ngi/render.hpp"
+
+namespace ngi {
+
+struct DatasetScene {
+    std::string spec;                       // make_scene() spec: "room:seed=3" or a .vox path
+    float time_start = 13.0f, time_end = 13.0f;  // hours at the first / last frame (linear in between)
+    int frames = 0;                         // frames of this scene (0 = the config's frames_per_scene)
+};
+
+struct DatasetConfig {
+    RenderSettings render;                  // n, feature_spp, reference_spp, max_bounces, rr_start (seed: per frame)
+    int frames_per_scene = 100;
+    int keyframe_interval = 25;
+    std::vector<DatasetScene> train, test;
+
+    // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "max_bounces", "frames_per_scene",
+    // "keyframe_interval", "train": [entry...], "test": [entry...]}, entry = {"scene": "room:seed=3"} or
+    // {"family": "room", "seeds": [1, 2] | {"first": 1, "count": 4}} or {"vox": "file.vox"}, plus optional
+    // "time": hours | [start, end] and "frames". Relative .vox paths are relative to the config file.
+    // Throws InputError naming the file for bad JSON, unknown keys, bad values, and scenes in both splits.
+    static DatasetConfig load(const std::string& path);
+};
+
+// The per-scene camera path and per-frame seed the dataset uses, so that `ngi render --frame K` reproduces
+// frame K of a dataset scene exactly.
+CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval);
+std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame);
+float dataset_frame_time(const DatasetScene& scene, int frame, int frames);
+
+// A file-system-safe folder name for a scene: "room_seed3", or the .vox file's stem.
+std::string dataset_scene_folder(const std::string& scene_name);
+
+struct DatasetProgress {
+    int frames_total = 0;
+    int frames_done = 0;       // rendered in this run + skipped
+    int frames_skipped = 0;    // already on disk
+    int frames_rendered = 0;
+    double rendered_seconds = 0;   // wall time spent rendering in this run
+    std::string scene;             // the scene being worked on
+    double last_rel_stderr = 0;    // of the last rendered reference
+};
+
+// Renders every frame missing under out_dir: <out_dir>/<split>/<scene folder>/<frame:04d>/ frame folders, a
+// scene.json per scene (spec, times and camera poses of every frame) and <out_dir>/dataset.json (the config).
+// Throws InputError if out_dir holds a dataset.json of a different config.
+void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
+                    const std::function<void(const DatasetProgress&)>& progress = {});
+
+}  // namespace ngi

@@ -1,0 +1,293 @@
+// Dataset rendering: config parsing, the split, deterministic per-frame parameters, resumable frame folders.
+#include "ngi/dataset.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
+#include "ngi/image_io.hpp"
+
+namespace ngi {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+std::uint32_t fnv1a(const std::string& s) {
+    std::uint32_t h = 2166136261u;
+    for (unsigned char c : s) h = (h ^ c) * 16777619u;
+    return h;
+}
+
+std::uint32_t mix32(std::uint32_t x) {  // a 32-bit finalizer (lowbias32): spreads nearby inputs apart
+    x ^= x >> 16; x *= 0x7feb352dU; x ^= x >> 15; x *= 0x846ca68bU; x ^= x >> 16;
+    return x;
+}
+
+bool is_vox(const std::string& spec) {
+    std::string e = fs::path(spec).extension().string();
+    for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return e == ".vox";
+}
+
+struct ConfigReader {
+    std::string file;
+    [[noreturn]] void fail(const std::string& what) const { throw InputError("dataset config " + file + ": " + what); }
+
+    void keys(const json& j, const std::set<std::string>& allowed, const std::string& where) const {
+        if (!j.is_object()) fail(where + " must be an object");
+        for (auto it = j.begin(); it != j.end(); ++it)
+            if (!allowed.count(it.key())) fail("unknown key '" + it.key() + "' in " + where);
+    }
+    int integer(const json& j, const char* key, int fallback, int lo, int hi) const {
+        if (!j.contains(key)) return fallback;
+        const json& v = j[key];
+        if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+            fail(std::string("'") + key + "' must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+        return v.get<int>();
+    }
+    float hours(const json& v, const std::string& where) const {
+        if (!v.is_number() || v.get<double>() < 0.0 || v.get<double>() > 48.0)
+            fail("'time' in " + where + " must be hours in 0..48 (or a [start, end] pair)");
+        return v.get<float>();
+    }
+
+    std::vector<DatasetScene> split(const json& arr, const std::string& name, const fs::path& base) const {
+        if (!arr.is_array()) fail("'" + name + "' must be an array of scene entries");
+        std::vector<DatasetScene> out;
+        for (std::size_t i = 0; i < arr.size(); ++i) {
+            const json& e = arr[i];
+            const std::string where = name + "[" + std::to_string(i) + "]";
+            keys(e, {"scene", "family", "seeds", "vox", "time", "frames"}, where);
+            DatasetScene proto;
+            if (e.contains("time")) {
+                const json& t = e["time"];
+                if (t.is_array()) {
+                    if (t.size() != 2) fail("'time' in " + where + " must be hours or [start, end]");
+                    proto.time_start = hours(t[0], where);
+                    proto.time_end = hours(t[1], where);
+                } else {
+                    proto.time_start = proto.time_end = hours(t, where);
+                }
+            } else {
+                proto.time_start = proto.time_end = -1.0f;  // the scene's own default time
+            }
+            proto.frames = integer(e, "frames", 0, 1, 1000000);
+            const int kinds = int(e.contains("scene")) + int(e.contains("family")) + int(e.contains("vox"));
+            if (kinds != 1) fail(where + " needs exactly one of 'scene', 'family' (+ 'seeds') or 'vox'");
+            auto add = [&](std::string spec) {
+                if (is_vox(spec) && fs::path(spec).is_relative()) spec = (base / spec).lexically_normal().string();
+                DatasetScene d = proto;
+                d.spec = std::move(spec);
+                out.push_back(d);
+            };
+            if (e.contains("scene")) {
+                if (!e["scene"].is_string()) fail("'scene' in " + where + " must be a string");
+                add(e["scene"].get<std::string>());
+            } else if (e.contains("vox")) {
+                if (!e["vox"].is_string()) fail("'vox' in " + where + " must be a string");
+                add(e["vox"].get<std::string>());
+            } else {
+                if (!e["family"].is_string()) fail("'family' in " + where + " must be a string");
+                const std::string fam = e["family"].get<std::string>();
+                if (!e.contains("seeds")) fail(where + " has a 'family' but no 'seeds'");
+                const json& s = e["seeds"];
+                std::vector<std::uint32_t> seeds;
+                if (s.is_array()) {
+                    for (const auto& v : s) {
+                        if (!v.is_number_unsigned()) fail("'seeds' in " + where + " must hold unsigned integers");
+                        seeds.push_back(v.get<std::uint32_t>());
+                    }
+                } else if (s.is_object()) {
+                    keys(s, {"first", "count"}, where + ".seeds");
+                    const int first = integer(s, "first", 0, 0, 2000000000), count = integer(s, "count", 1, 1, 100000);
+                    for (int k = 0; k < count; ++k) seeds.push_back(std::uint32_t(first + k));
+                } else {
+                    fail("'seeds' in " + where + " must be a list or {\"first\": F, \"count\": C}");
+                }
+                for (auto sd : seeds) add(fam + ":seed=" + std::to_string(sd));
+            }
+        }
+        return out;
+    }
+};
+
+json to_json(const DatasetConfig& c) {
+    auto scenes = [](const std::vector<DatasetScene>& v) {
+        json a = json::array();
+        for (const auto& s : v)
+            a.push_back({{"scene", s.spec}, {"time", {s.time_start, s.time_end}}, {"frames", s.frames}});
+        return a;
+    };
+    return {{"n", c.render.n}, {"feature_spp", c.render.feature_spp}, {"reference_spp", c.render.reference_spp},
+            {"max_bounces", c.render.max_bounces}, {"rr_start", c.render.rr_start},
+            {"frames_per_scene", c.frames_per_scene}, {"keyframe_interval", c.keyframe_interval},
+            {"train", scenes(c.train)}, {"test", scenes(c.test)}};
+}
+
+json vec(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
+
+std::string frame_name(int f) {
+    char b[16];
+    std::snprintf(b, sizeof b, "%04d", f);
+    return b;
+}
+
+}  // namespace
+
+DatasetConfig DatasetConfig::load(const std::string& path) {
+    ConfigReader r{path};
+    std::ifstream in(path);
+    if (!in) r.fail("cannot open file");
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::exception& e) {
+        r.fail(std::string("not valid JSON: ") + e.what());
+    }
+    r.keys(j, {"n", "feature_spp", "reference_spp", "max_bounces", "rr_start", "frames_per_scene",
+               "keyframe_interval", "train", "test", "comment"}, "the top level");
+    DatasetConfig c;
+    c.render.n = r.integer(j, "n", c.render.n, 1, 8192);
+    c.render.feature_spp = r.integer(j, "feature_spp", c.render.feature_spp, 1, 1 << 20);
+    c.render.reference_spp = r.integer(j, "reference_spp", c.render.reference_spp, 1, 1 << 20);
+    c.render.max_bounces = r.integer(j, "max_bounces", c.render.max_bounces, 0, 1000);
+    c.render.rr_start = r.integer(j, "rr_start", c.render.rr_start, 0, 1000);
+    c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, 1000000);
+    c.keyframe_interval = r.integer(j, "keyframe_interval", c.keyframe_interval, 1, 100000);
+    if (!j.contains("train")) r.fail("no 'train' scenes");
+    const fs::path base = fs::path(path).parent_path();
+    c.train = r.split(j["train"], "train", base);
+    if (j.contains("test")) c.test = r.split(j["test"], "test", base);
+
+    // Canonical scene names: a scene may appear once, and never in both splits.
+    std::set<std::string> seen;
+    for (auto* split : {&c.train, &c.test})
+        for (auto& s : *split) {
+            s.spec = scene_spec_name(s.spec);
+            const std::string& name = s.spec;
+            if (!seen.insert(dataset_scene_folder(name)).second)
+                r.fail("scene '" + name + "' appears more than once (train and test scenes must be disjoint)");
+        }
+    return c;
+}
+
+CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval) {
+    return make_camera_path(scene, frames, fnv1a(scene.name), interval);
+}
+
+std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame) {
+    return mix32(fnv1a(scene_name) ^ mix32(std::uint32_t(frame) + 0x9e3779b9u));
+}
+
+float dataset_frame_time(const DatasetScene& s, int frame, int frames) {
+    if (frames <= 1) return s.time_start;
+    return s.time_start + (s.time_end - s.time_start) * float(frame) / float(frames - 1);
+}
+
+std::string dataset_scene_folder(const std::string& name) {
+    if (is_vox(name)) return fs::path(name).stem().string();
+    std::string out;
+    for (char c : name) {
+        if (c == ':' || c == ',') out += '_';
+        else if (c != '=') out += c;
+    }
+    return out;
+}
+
+void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
+                    const std::function<void(const DatasetProgress&)>& progress) {
+    const fs::path out(out_dir);
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    if (ec) throw InputError("dataset: cannot create " + out_dir + ": " + ec.message());
+    const std::string cfg = to_json(config).dump(2) + "\n";
+    const fs::path cfg_path = out / "dataset.json";
+    if (fs::exists(cfg_path)) {
+        if (detail::read_file(cfg_path.string()) != cfg)
+            throw InputError("dataset: " + cfg_path.string() +
+                             " was written for a different config; use another output folder (or delete it)");
+    } else {
+        detail::write_file_atomic(cfg_path.string(), cfg);
+    }
+
+    DatasetProgress p;
+    auto frames_of = [&](const DatasetScene& s) { return s.frames > 0 ? s.frames : config.frames_per_scene; };
+    for (const auto* split : {&config.train, &config.test})
+        for (const auto& s : *split) p.frames_total += frames_of(s);
+
+    const std::pair<const char*, const std::vector<DatasetScene>*> splits[] = {{"train", &config.train},
+                                                                                {"test", &config.test}};
+    for (const auto& [split_name, scenes] : splits)
+        for (const DatasetScene& entry : *scenes) {
+            const int frames = frames_of(entry);
+            const fs::path dir = out / split_name / dataset_scene_folder(entry.spec);
+            fs::create_directories(dir, ec);
+            if (ec) throw InputError("dataset: cannot create " + dir.string() + ": " + ec.message());
+            p.scene = dir.filename().string();
+            // Leftovers of a killed run: write_frame's temporary folders never become frames; remove them.
+            for (const auto& e : fs::directory_iterator(dir))
+                if (e.path().filename().string().find(".tmp-") != std::string::npos) fs::remove_all(e.path(), ec);
+            auto done = [&](int f) { return fs::exists(dir / frame_name(f) / "camera.json"); };
+            int missing = 0;
+            for (int f = 0; f < frames; ++f) missing += !done(f);
+            if (missing == 0 && fs::exists(dir / "scene.json")) {
+                p.frames_done += frames;
+                p.frames_skipped += frames;
+                if (progress) progress(p);
+                continue;
+            }
+
+            const VoxelScene scene = make_scene(entry.spec);
+            const CameraPath path = dataset_camera_path(scene, frames, config.keyframe_interval);
+            DatasetScene times = entry;
+            if (times.time_start < 0) times.time_start = times.time_end = scene.default_time;
+            json info = {{"spec", scene.name}, {"split", split_name}, {"frames", frames},
+                         {"size", {scene.size.x, scene.size.y, scene.size.z}}, {"sun_azimuth", scene.sun_azimuth},
+                         {"keyframe_interval", path.interval}};
+            json keys = json::array(), per_frame = json::array();
+            for (const auto& k : path.keys)
+                keys.push_back({{"position", vec(k.position)},
+                                {"orientation_wxyz", {k.orientation.w, k.orientation.x, k.orientation.y, k.orientation.z}}});
+            for (int f = 0; f < frames; ++f) {
+                const CameraPose pose = path.at(float(f));
+                per_frame.push_back({{"frame", f}, {"time", dataset_frame_time(times, f, frames)},
+                                     {"seed", dataset_frame_seed(scene.name, f)}, {"position", vec(pose.position)},
+                                     {"look", vec(pose.look)}, {"up", vec(pose.up)}});
+            }
+            info["keyframes"] = keys;
+            info["frame_info"] = per_frame;
+            detail::write_file_atomic((dir / "scene.json").string(), info.dump(1) + "\n");
+
+            Renderer renderer(device, scene);
+            for (int f = 0; f < frames; ++f) {
+                if (done(f)) {
+                    ++p.frames_done;
+                    ++p.frames_skipped;
+                    if (progress) progress(p);
+                    continue;
+                }
+                const auto t0 = std::chrono::steady_clock::now();
+                RenderSettings rs = config.render;
+                rs.seed = dataset_frame_seed(scene.name, f);
+                rs.reference = true;
+                rs.reference_face = Face::Front;
+                RenderStats stats;
+                const Frame frame = renderer.render(path.at(float(f)),
+                                                    lighting_at(dataset_frame_time(times, f, frames), scene.sun_azimuth),
+                                                    rs, &stats);
+                write_frame((dir / frame_name(f)).string(), frame);
+                ++p.frames_done;
+                ++p.frames_rendered;
+                p.rendered_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                p.last_rel_stderr = stats.reference_rel_stderr;
+                if (progress) progress(p);
+            }
+        }
+}
+
+}  // namespace ngi
