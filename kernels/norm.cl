@@ -1,12 +1,15 @@
 // Per-image batch normalization (pix2pix's default test mode: BatchNorm in training mode, batch 1).
 //
-// channel_stats: one work-group per channel. Each work-item runs Welford's algorithm over a strided subset of
-// the H*W values, then the work-group merges the (count, mean, M2) triples pairwise with Chan et al.'s formula
-// in a tree. Single pass, no catastrophic cancellation (E[x^2] - E[x]^2 is never formed), exact zero variance
-// for constant channels. The data are shifted by K = the channel's first value before accumulating, so a large
-// mean with a small spread (HDR lighting, depth in metres) keeps its precision: mean = K + m, where m is small
-// and exactly representable to fp32 precision, while K + m itself would round to the ulp of K.
+// channel_stats: one work-group per channel. Each work-item computes the exact two-pass statistics of its own
+// part of the channel (sum, then sum of squared deviations from that part's mean: no division per element and
+// no E[x^2] - E[x]^2 cancellation), then the work-group merges the (count, mean, M2) triples pairwise with Chan et
+// al.'s formula in a tree. Constant channels give exactly zero variance. The data are shifted by K = the
+// channel's first value, so a large mean with a small spread (HDR lighting, depth in metres) keeps its
+// precision: mean = K + m with m small, while K + m itself would round to the ulp of K.
 // Writes stats[c] = {K, m, 1/sqrt(var + eps)} with the biased variance, like PyTorch's forward.
+//
+// CHUNKED=1 gives each work-item a contiguous range (cache-friendly on CPUs); CHUNKED=0 interleaves work-items
+// (coalesced on GPUs).
 //
 // channel_affine_act: y = act(((x - K) - m) * (rstd * gamma) + beta), in place.
 //
@@ -14,6 +17,9 @@
 
 #ifndef LOCAL
 #define LOCAL 64
+#endif
+#ifndef CHUNKED
+#define CHUNKED 1
 #endif
 
 __kernel __attribute__((reqd_work_group_size(LOCAL, 1, 1)))
@@ -24,13 +30,20 @@ void channel_stats(__global const float* restrict x, const int x_off, const int 
     const int t = get_local_id(0);
     __global const float* p = x + x_off + (size_t)c * HW;
     const float shift = p[0];
-    float n = 0.0f, mean = 0.0f, m2 = 0.0f;
-    for (int i = t; i < HW; i += LOCAL) {
-        const float v = p[i] - shift;
-        n += 1.0f;
-        const float d = v - mean;
-        mean += d / n;
-        m2 += d * (v - mean);
+#if CHUNKED
+    const int per = (HW + LOCAL - 1) / LOCAL;
+    const int begin = min(t * per, HW), end = min(begin + per, HW), step = 1;
+#else
+    const int begin = t, end = HW, step = LOCAL;
+#endif
+    float sum = 0.0f;
+    for (int i = begin; i < end; i += step) sum += p[i] - shift;
+    const float n = (float)((end - begin + step - 1) / step);
+    const float mean = n > 0.0f ? sum / n : 0.0f;
+    float m2 = 0.0f;
+    for (int i = begin; i < end; i += step) {
+        const float d = (p[i] - shift) - mean;
+        m2 += d * d;
     }
     l_n[t] = n; l_mean[t] = mean; l_m2[t] = m2;
     barrier(CLK_LOCAL_MEM_FENCE);

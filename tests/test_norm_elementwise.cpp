@@ -12,15 +12,24 @@ using namespace ngi::detail;
 
 namespace {
 
-std::vector<float> run_bn(const std::vector<float>& x, int C, int H, int W, const std::vector<float>& g,
-                          const std::vector<float>& b, Act act) {
+// Runs both reductions (contiguous and interleaved work-item ranges) and requires them to agree.
+std::vector<float> run_bn_with(bool chunked, const std::vector<float>& x, int C, int H, int W,
+                               const std::vector<float>& g, const std::vector<float>& b, Act act) {
     auto& c = test::ctx();
-    BatchNormPerImage bn(c, C, g, b, 1e-5f, act);
+    BatchNormPerImage bn(c, C, g, b, 1e-5f, act, chunked);
     Buffer xb = c.alloc((x.size() + 3) * sizeof(float), "x");
     c.write(xb, 3 * sizeof(float), x.size() * sizeof(float), x.data(), "x");
     Buffer sb = c.alloc((3 * C + 9) * sizeof(float), "stats");
     bn.enqueue(c, View{xb.get(), 3, {C, H, W}}, sb.get(), 9);
     return test::download(xb, x.size(), 3);
+}
+
+std::vector<float> run_bn(const std::vector<float>& x, int C, int H, int W, const std::vector<float>& g,
+                          const std::vector<float>& b, Act act) {
+    auto chunked = run_bn_with(true, x, C, H, W, g, b, act);
+    auto interleaved = run_bn_with(false, x, C, H, W, g, b, act);
+    CHECK(test::worst_ratio(chunked, interleaved, 1e-5, 1e-5) <= 1.0);
+    return chunked;
 }
 
 }  // namespace
