@@ -89,7 +89,7 @@ inline float3 cosine_sample(float3 n, float2 u) {
     float3 t, b;
     onb(n, &t, &b);
     const float r = sqrt(u.x), phi = 2.0f * M_PI_F * u.y;
-    return t * (r * cos(phi)) + b * (r * sin(phi)) + n * sqrt(fmax(0.0f, 1.0f - u.x));
+    return t * (r * native_cos(phi)) + b * (r * native_sin(phi)) + n * sqrt(fmax(0.0f, 1.0f - u.x));
 }
 
 inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
@@ -113,10 +113,13 @@ inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
     const int3 step = (int3)(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
     const float3 delta = fabs(inv);
     float3 next = (convert_float3(c + (step > 0 ? (int3)(1) : (int3)(0))) - o) * inv;
+    // Walk the linear block index along with the cell: one add per step instead of a 3D index.
     const int sx = s->dims.x, sxy = s->dims.x * s->dims.y;
+    const int3 dstep = (int3)(step.x, step.y * sx, step.z * sxy);
+    int idx = c.x + sx * c.y + sxy * c.z;
     const int max_steps = s->dims.x + s->dims.y + s->dims.z + 3;
     for (int i = 0; i < max_steps; ++i) {
-        const int m = s->grid[c.x + sx * c.y + sxy * c.z];
+        const int m = s->grid[idx];
         if (m != 0) {
             if (axis < 0) {  // the ray starts inside a block: report the face it would leave backwards through
                 const float3 ad = fabs(d);
@@ -128,13 +131,13 @@ inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
             return h;
         }
         if (next.x < next.y && next.x < next.z) {
-            axis = 0; t = next.x; c.x += step.x; next.x += delta.x;
+            axis = 0; t = next.x; c.x += step.x; idx += dstep.x; next.x += delta.x;
             if ((uint)c.x >= (uint)s->dims.x) break;
         } else if (next.y < next.z) {
-            axis = 1; t = next.y; c.y += step.y; next.y += delta.y;
+            axis = 1; t = next.y; c.y += step.y; idx += dstep.y; next.y += delta.y;
             if ((uint)c.y >= (uint)s->dims.y) break;
         } else {
-            axis = 2; t = next.z; c.z += step.z; next.z += delta.z;
+            axis = 2; t = next.z; c.z += step.z; idx += dstep.z; next.z += delta.z;
             if ((uint)c.z >= (uint)s->dims.z) break;
         }
         if (t > tmax) break;
@@ -176,7 +179,7 @@ inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) 
     const float z = 1.0f - u.x * (1.0f - cmax), sr = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * M_PI_F * u.y;
     float3 t, b;
     onb(sd, &t, &b);
-    const float3 w = t * (sr * cos(phi)) + b * (sr * sin(phi)) + sd * z;
+    const float3 w = t * (sr * native_cos(phi)) + b * (sr * native_sin(phi)) + sd * z;
     const float c = dot(n, w);
     if (c <= 0.0f) return (float3)(0.0f);
     const Hit h = trace(s, p, w, T_INF, rays);
