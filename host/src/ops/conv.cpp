@@ -5,7 +5,7 @@ namespace ngi::detail {
 namespace {
 
 // Fixed work-group shapes: PoCL compiles one work-group function per local size, so never let it vary.
-const std::size_t kIm2colLocal[2] = {16, 1};
+const std::size_t kIm2colLocal[1] = {64};
 const std::size_t kCol2imLocal[3] = {16, 4, 1};
 
 Buffer upload(Context& ctx, const std::vector<float>& v, const char* what) {
@@ -77,8 +77,8 @@ void Conv2d::enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch,
     im2col_.args(x.mem, int(x.offset), x.shape.c, x.shape.h, x.shape.w, spec_.geom.kh, spec_.geom.kw,
                  spec_.geom.stride, spec_.geom.pad, out.h, out.w, kp, scratch, int(scratch_off),
                  int(spec_.in_act.kind), spec_.in_act.alpha);
-    const std::size_t g[2] = {std::size_t(kp), std::size_t((N + p.nr() - 1) / p.nr())};
-    maybe_push(events, ctx.launch(im2col_, 2, g, kIm2colLocal, events != nullptr));
+    const std::size_t g[1] = {round_up(std::size_t(N), std::size_t(p.nr()))};
+    maybe_push(events, ctx.launch(im2col_, 1, g, kIm2colLocal, events != nullptr));
     maybe_push(events, gemm_.enqueue(ctx, spec_.cout, N, K, ap_.get(), scratch, scratch_off, y.mem, y.offset, N,
                                      scale_.get(), shift_.get(), spec_.out_act, events != nullptr));
 }
@@ -90,7 +90,9 @@ ConvTranspose2d::ConvTranspose2d(Context& ctx, const GemmParams& p, const ConvSp
     : spec_(spec),
       gemm_(ctx, p),
       pack_(ctx.kernel("im2col", "im2col_packed", "-DNR=" + std::to_string(p.nr()))),
-      col2im_(ctx.kernel("col2im", "col2im_gather")) {
+      col2im_(ctx.kernel("col2im", "col2im_gather",
+                         "-DKH=" + std::to_string(spec.geom.kh) + " -DKW=" + std::to_string(spec.geom.kw) +
+                             " -DSTRIDE=" + std::to_string(spec.geom.stride) + " -DPAD=" + std::to_string(spec.geom.pad))) {
     check_spec(spec, "conv_transpose2d");
     // GEMM A is W^T: row m = (co, ky, kx), column k = ci; weight[ci][m] in PyTorch's [cin][cout][kh][kw].
     const int M = spec.cout * spec.geom.kh * spec.geom.kw;
@@ -129,12 +131,11 @@ void ConvTranspose2d::enqueue(Context& ctx, const View& x, const View& y, cl_mem
     const std::size_t cols_off = scratch_off + packed_b_floats(spec_.cin, N, p);
     pack_.args(x.mem, int(x.offset), x.shape.c, 1, N, 1, 1, 1, 0, 1, N, kp, scratch, int(scratch_off),
                int(spec_.in_act.kind), spec_.in_act.alpha);
-    const std::size_t gp[2] = {std::size_t(kp), std::size_t((N + p.nr() - 1) / p.nr())};
-    maybe_push(events, ctx.launch(pack_, 2, gp, kIm2colLocal, events != nullptr));
+    const std::size_t gp[1] = {round_up(std::size_t(N), std::size_t(p.nr()))};
+    maybe_push(events, ctx.launch(pack_, 1, gp, kIm2colLocal, events != nullptr));
     maybe_push(events, gemm_.enqueue(ctx, M, N, spec_.cin, ap_.get(), scratch, scratch_off, scratch, cols_off, N,
                                      ones_.get(), zeros_.get(), Act::none(), events != nullptr));
-    col2im_.args(scratch, int(cols_off), N, spec_.cout, x.shape.h, x.shape.w, g.kh, g.kw, g.stride, g.pad, out.h,
-                 out.w, y.mem, int(y.offset), scale_.get(), shift_.get(), int(spec_.out_act.kind),
+    col2im_.args(scratch, int(cols_off), N, spec_.cout, x.shape.h, x.shape.w, out.h, out.w, y.mem, int(y.offset), scale_.get(), shift_.get(), int(spec_.out_act.kind),
                  spec_.out_act.alpha);
     const std::size_t gc[3] = {std::size_t(out.w), std::size_t(out.h), std::size_t(out.c)};
     maybe_push(events, ctx.launch(col2im_, 3, gc, kCol2imLocal, events != nullptr));
