@@ -38,7 +38,22 @@ typedef struct {
     int nlights;
     float inv_total;               // 1 / sum of the luminance of all emissive faces
     __global const float* light;   // L_* parameters
+    // Sky portals (renderer.cpp): region id per block (>= 0: covered air, i.e. a block somewhere above it), and
+    // per region the range of its portal faces in `portals` (covered cell xyz, face id). 0 portals: no portal
+    // sampling anywhere.
+    __global const int* region;
+    __global const int4* portals;
+    __global const int2* portal_range;  // per region: first index, count
+    int use_portals;
 } Scene;
+
+// Where a ray first leaves covered air into open air (or out of the grid): the covered cell and its face.
+typedef struct {
+    int found;
+    int cell;     // linear block index of the covered cell
+    int face;
+    float t;      // distance along the ray to the portal face
+} Crossing;
 
 typedef struct {
     float t;      // distance along the (unit) ray
@@ -95,7 +110,9 @@ inline float3 cosine_sample(float3 n, float2 u) {
 inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 
 // First solid block along o + t d (d unit), t in [0, tmax]. Counts one ray.
-inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
+// With `x` non-null, also reports the first crossing from covered air into open air (Crossing); the ray must
+// start inside the grid.
+inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays, Crossing* x) {
     Hit h;
     h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
     ++*rays;
@@ -117,6 +134,11 @@ inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
     const int sx = s->dims.x, sxy = s->dims.x * s->dims.y;
     const int3 dstep = (int3)(step.x, step.y * sx, step.z * sxy);
     int idx = c.x + sx * c.y + sxy * c.z;
+    int covered = 0;
+    if (x) {
+        x->found = 0;
+        covered = s->region[idx] >= 0;
+    }
     const int max_steps = s->dims.x + s->dims.y + s->dims.z + 3;
     for (int i = 0; i < max_steps; ++i) {
         const int m = s->grid[idx];
@@ -130,16 +152,23 @@ inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
             h.face = 2 * axis + (st > 0 ? 1 : 0);  // entered moving +axis: the face's normal points -axis
             return h;
         }
+        const int from = idx;
+        int out = 0, st;
         if (next.x < next.y && next.x < next.z) {
-            axis = 0; t = next.x; c.x += step.x; idx += dstep.x; next.x += delta.x;
-            if ((uint)c.x >= (uint)s->dims.x) break;
+            axis = 0; st = step.x; t = next.x; c.x += step.x; idx += dstep.x; next.x += delta.x;
+            out = (uint)c.x >= (uint)s->dims.x;
         } else if (next.y < next.z) {
-            axis = 1; t = next.y; c.y += step.y; idx += dstep.y; next.y += delta.y;
-            if ((uint)c.y >= (uint)s->dims.y) break;
+            axis = 1; st = step.y; t = next.y; c.y += step.y; idx += dstep.y; next.y += delta.y;
+            out = (uint)c.y >= (uint)s->dims.y;
         } else {
-            axis = 2; t = next.z; c.z += step.z; idx += dstep.z; next.z += delta.z;
-            if ((uint)c.z >= (uint)s->dims.z) break;
+            axis = 2; st = step.z; t = next.z; c.z += step.z; idx += dstep.z; next.z += delta.z;
+            out = (uint)c.z >= (uint)s->dims.z;
         }
+        if (covered && !x->found && (out || (s->grid[idx] == 0 && s->region[idx] < 0))) {
+            x->found = 1; x->cell = from; x->face = 2 * axis + (st > 0 ? 0 : 1); x->t = t;  // leaves through +axis
+        }
+        if (out) break;
+        if (covered && !x->found) covered = s->region[idx] >= 0;
         if (t > tmax) break;
     }
     return h;
@@ -182,7 +211,7 @@ inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) 
     const float3 w = t * (sr * native_cos(phi)) + b * (sr * native_sin(phi)) + sd * z;
     const float c = dot(n, w);
     if (c <= 0.0f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, T_INF, rays);
+    const Hit h = trace(s, p, w, T_INF, rays, 0);
     return h.mat ? (float3)(0.0f) : E * (c * M_1_PI_F);
 }
 
@@ -220,26 +249,73 @@ inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* ra
     w /= dist;
     const float cos_x = dot(n, w), cos_l = -dot(face_normal(e.w), w);
     if (cos_x <= 0.0f || cos_l <= 1.0e-6f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, dist + 1.0f, rays);
+    const Hit h = trace(s, p, w, dist + 1.0f, rays, 0);
     if (h.mat == 0 || h.face != e.w || any(h.cell != e.xyz)) return (float3)(0.0f);  // occluded
     const float3 Le = s->mats[2 * h.mat + 1].xyz;
     const float pl = emitter_pdf(s, Le, dist, cos_l), pb = cos_x * M_1_PI_F;
     return Le * (power_heuristic(pl, pb) * cos_x * M_1_PI_F / pl);
 }
 
+// Region of the air block a shading point lies in (-1: open air, outside the grid, or portals disabled).
+inline int region_at(const Scene* s, float3 p) {
+    const int3 c = convert_int3(floor(p));
+    if (!s->use_portals || any(c < 0) || any(c >= s->dims)) return -1;
+    return s->region[c.x + s->dims.x * (c.y + s->dims.y * c.z)];
+}
+
+// Solid-angle density with which portal sampling (uniform over the region's `count` unit faces, uniform point)
+// produces a direction crossing the portal plane at distance `dist` with cosine `cos_p`.
+inline float portal_pdf(int count, float dist, float cos_p) { return dist * dist / (cos_p * (float)count); }
+
+// Sky light through the openings of the covered region the point is in (rooms, tunnels): pick one of the region's
+// portal faces, a uniform point on it, and trace toward it. The sample counts only if the ray escapes and that
+// face is the first portal it crosses, so the direction density is portal_pdf of the first crossing - the same
+// density the cosine-sampled continuation ray computes for its MIS weight.
+inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
+    const float2 u = rng2(r), v = rng2(r);
+    const int4 e = s->portals[range.x + min((int)(u.x * (float)range.y), range.y - 1)];
+    const int a = e.w >> 1;
+    const float plane = (e.w & 1) ? 0.0f : 1.0f;
+    float3 q = convert_float3(e.xyz);
+    if (a == 0) q += (float3)(plane, v.x, v.y);
+    else if (a == 1) q += (float3)(v.x, plane, v.y);
+    else q += (float3)(v.x, v.y, plane);
+    float3 w = q - p;
+    const float dist = length(w);
+    w /= dist;
+    const float cos_x = dot(n, w), cos_p = fabs(a == 0 ? w.x : (a == 1 ? w.y : w.z));
+    if (cos_x <= 0.0f || cos_p <= 1.0e-6f) return (float3)(0.0f);
+    Crossing x;
+    const Hit h = trace(s, p, w, T_INF, rays, &x);
+    if (h.mat != 0 || !x.found || x.face != e.w || x.cell != e.x + s->dims.x * (e.y + s->dims.y * e.z))
+        return (float3)(0.0f);
+    const float pp = portal_pdf(range.y, dist, cos_p), pb = cos_x * M_1_PI_F;
+    return sky_radiance(s->light, w) * (power_heuristic(pp, pb) * cos_x * M_1_PI_F / pp);
+}
+
 // One sample of the lighting (irradiance / pi) arriving at surface point p with normal n: direct light from the
 // sun, emissive blocks and the sky (depth 0), plus up to max_bounces indirect bounces. Sun and emitters use
-// next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray (emitters MIS-
-// weighted). Russian roulette after rr_start bounces keeps long paths unbiased.
+// next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray, MIS-weighted
+// against emitter sampling and (inside covered regions) sky-portal sampling. Russian roulette after rr_start
+// bounces keeps long paths unbiased.
 inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
                               uint* rays) {
     float3 sum = (float3)(0.0f), beta = (float3)(1.0f);
     for (int depth = 0;; ++depth) {
+        const int reg = region_at(s, p);
+        const int2 range = reg >= 0 ? s->portal_range[reg] : (int2)(0, 0);
         sum += beta * (sun_light(s, p, n, r, rays) + emitter_light(s, p, n, r, rays));
+        if (range.y > 0) sum += beta * portal_light(s, p, n, range, r, rays);
         const float3 w = cosine_sample(n, rng2(r));
-        const Hit h = trace(s, p, w, T_INF, rays);
+        Crossing x;
+        const Hit h = trace(s, p, w, T_INF, rays, range.y > 0 ? &x : 0);
         if (h.mat == 0) {
-            sum += beta * sky_radiance(s->light, w);
+            float mis = 1.0f;
+            if (range.y > 0 && x.found) {
+                const float cos_p = fabs((x.face >> 1) == 0 ? w.x : ((x.face >> 1) == 1 ? w.y : w.z));
+                mis = power_heuristic(dot(n, w) * M_1_PI_F, portal_pdf(range.y, x.t, cos_p));
+            }
+            sum += beta * sky_radiance(s->light, w) * mis;
             break;
         }
         const float3 Le = s->mats[2 * h.mat + 1].xyz;
@@ -265,12 +341,14 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
 
 #define SCENE_ARGS                                                                                           \
     __global const uchar *grid, int sx, int sy, int sz, __global const float4 *mats, __global const int4 *lights, \
-        __global const float *cdf, int nlights, float inv_total, __global const float *light
+        __global const float *cdf, int nlights, float inv_total, __global const float *light,                    \
+        __global const int *region, __global const int4 *portals, __global const int2 *portal_range, int use_portals
 
 #define MAKE_SCENE(s)                                                                                       \
     Scene s;                                                                                                \
     s.grid = grid; s.dims = (int3)(sx, sy, sz); s.mats = mats; s.lights = lights; s.cdf = cdf;             \
-    s.nlights = nlights; s.inv_total = inv_total; s.light = light
+    s.nlights = nlights; s.inv_total = inv_total; s.light = light; s.region = region; s.portals = portals; \
+    s.portal_range = portal_range; s.use_portals = use_portals
 
 // cam: centre (3), then per face look, right, up (9 each) in camera.hpp's face order.
 // Unit direction through the centre of pixel (col, row) of face f (camera.hpp: face_pixel_direction).
@@ -295,7 +373,7 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
     const float3 o = (float3)(cam[0], cam[1], cam[2]);
     const float3 d = pixel_ray(cam, f, col, row, n, &look);
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays);
+    const Hit h = trace(&s, o, d, T_INF, &rays, 0);
     float3 albedo = (float3)(0.0f), normal = (float3)(0.0f), direct = (float3)(0.0f), emission = (float3)(0.0f),
            env = (float3)(0.0f);
     float depth = SKY_DEPTH;
@@ -337,7 +415,7 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
     const float3 o = (float3)(cam[0], cam[1], cam[2]);
     const float3 d = pixel_ray(cam, face, col, row, n, &look);
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays);
+    const Hit h = trace(&s, o, d, T_INF, &rays, 0);
     float3 mean = (float3)(0.0f), m2 = (float3)(0.0f);
     if (h.mat != 0) {
         const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);

@@ -256,3 +256,35 @@ TEST_CASE("reference with bounces = 0 equals the direct feature in expectation (
     }
     CHECK(outliers <= int(ref.data.size()) / 50);
 }
+
+TEST_CASE("sky portals: same expectation as cosine sampling alone, lower variance", "[render]") {
+    VoxelScene room = closed_box(9, {glm::vec3(0.7f), glm::vec3(0.0f), false});
+    room.fill({0, 0, 0}, {9, 1, 9}, 0);
+    room.fill({0, 0, 0}, {9, 1, 9}, room.add_material({glm::vec3(0.3f), glm::vec3(0.0f), false}));
+    room.fill({3, 2, 0}, {6, 5, 1}, 0);  // window in the -z wall
+    room.fill({8, 2, 5}, {9, 4, 7}, 0);  // a second one in the +x wall
+    room.fill({2, 1, 5}, {4, 3, 7}, room.add_material({{0.8f, 0.3f, 0.1f}, glm::vec3(0.0f), false}));
+    Lighting l = lighting_at(12.0f, 0.5f);
+    l.sun.irradiance = glm::vec3(0.0f);  // the sky alone
+    Renderer r(test::device(), room);
+    RenderSettings rs;
+    rs.n = 16;
+    rs.reference_spp = 128;
+    rs.seed = 11;
+    const CameraPose pose{{4.5f, 3.5f, 5.5f}, {0.2f, -0.3f, 1.0f}, {0, 1, 0}};  // looking away from the window
+    Image var_on, var_off;
+    const Image on = r.render_reference(pose, l, rs, &var_on);
+    rs.sky_portals = false;
+    const Image off = r.render_reference(pose, l, rs, &var_off);
+    double v_on = 0, v_off = 0;
+    for (int c = 0; c < 3; ++c) {
+        const Stats a = pooled(on, var_on, c), b = pooled(off, var_off, c);
+        INFO("channel " << c << ": portals " << a.mean << " +- " << a.stderr_ << ", cosine only " << b.mean << " +- "
+                        << b.stderr_);
+        CHECK(std::abs(a.mean - b.mean) < 4.0 * std::hypot(a.stderr_, b.stderr_));
+        v_on += a.stderr_ * a.stderr_;
+        v_off += b.stderr_ * b.stderr_;
+    }
+    INFO("variance of the mean: portals " << v_on << ", cosine only " << v_off);
+    CHECK(v_on < 0.5 * v_off);
+}

@@ -59,6 +59,7 @@ struct RenderSettings {
     bool reference = true;     // also render the reference of `reference_face`
     Face reference_face = Face::Front;
     std::uint32_t seed = 0;    // per-frame seed of the counter-based RNG: same seed, same image
+    bool sky_portals = true;   // also sample the sky through the openings of rooms (same expectation, less noise)
 };
 
 struct RenderStats {

@@ -26,6 +26,68 @@ struct EmitterFace {
     std::uint8_t material;
 };
 
+// Sky portals: air blocks with a solid block somewhere above them are "covered"; 6-connected covered blocks form
+// regions (rooms, tunnels, the space under a roof). A portal is a face between a covered block and open air or the
+// outside of the grid. Every ray that escapes to the sky from inside a region first crosses one of that region's
+// portals, so sampling points on the portals is a valid (MIS-weighted) sky-sampling strategy there.
+constexpr std::size_t kMaxPortalGrid = std::size_t(1) << 24;  // region ids cost 4 bytes per block
+
+struct Portals {
+    std::vector<std::int32_t> region;  // per block: region id, -1 = solid or open air
+    std::vector<std::int32_t> faces;   // per portal: covered cell x, y, z, face id; grouped by region
+    std::vector<std::int32_t> range;   // per region: first portal, portal count
+};
+
+Portals find_portals(const VoxelScene& s) {
+    Portals p;
+    const std::size_t blocks = s.voxels.size();
+    p.region.assign(blocks, -1);
+    std::vector<std::uint8_t> covered(blocks, 0);
+    for (int z = 0; z < s.size.z; ++z)
+        for (int x = 0; x < s.size.x; ++x) {
+            bool roof = false;
+            for (int y = s.size.y - 1; y >= 0; --y) {
+                const std::size_t i = s.index({x, y, z});
+                if (s.voxels[i]) roof = true;
+                else covered[i] = roof;
+            }
+        }
+    const glm::ivec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    std::vector<glm::ivec3> stack;
+    int regions = 0;
+    for (int z = 0; z < s.size.z; ++z)
+        for (int y = 0; y < s.size.y; ++y)
+            for (int x = 0; x < s.size.x; ++x) {
+                const glm::ivec3 start(x, y, z);
+                if (!covered[s.index(start)] || p.region[s.index(start)] >= 0) continue;
+                const int id = regions++;
+                const std::size_t first = p.faces.size() / 4;
+                p.region[s.index(start)] = id;
+                stack.push_back(start);
+                while (!stack.empty()) {  // flood fill; collect the region's portals on the way
+                    const glm::ivec3 c = stack.back();
+                    stack.pop_back();
+                    for (int f = 0; f < 6; ++f) {
+                        const glm::ivec3 nb = c + dirs[f];
+                        if (!s.inside(nb)) {
+                            p.faces.insert(p.faces.end(), {c.x, c.y, c.z, f});
+                            continue;
+                        }
+                        const std::size_t j = s.index(nb);
+                        if (s.voxels[j]) continue;
+                        if (!covered[j]) {
+                            p.faces.insert(p.faces.end(), {c.x, c.y, c.z, f});
+                        } else if (p.region[j] < 0) {
+                            p.region[j] = id;
+                            stack.push_back(nb);
+                        }
+                    }
+                }
+                p.range.insert(p.range.end(), {std::int32_t(first), std::int32_t(p.faces.size() / 4 - first)});
+            }
+    return p;
+}
+
 void check_settings(const RenderSettings& s) {
     if (s.n < 1 || s.n > 8192) throw InputError("render: face size n must be in 1..8192, got " + std::to_string(s.n));
     if (s.feature_spp < 1 || s.reference_spp < 1) throw InputError("render: samples per pixel must be at least 1");
@@ -39,7 +101,8 @@ struct Renderer::Impl {
     std::vector<Material> palette;
     std::vector<EmitterFace> emitters;
     glm::ivec3 size;
-    detail::Buffer grid, mats, lights, cdf, light, cam;
+    detail::Buffer grid, mats, lights, cdf, light, cam, region, portals, portal_range;
+    bool have_portals = false;
     detail::Buffer features, feature_rays, mean, var, ref_rays;
     int buffers_n = 0;
     int nlights = 0;
@@ -112,8 +175,9 @@ struct Renderer::Impl {
     }
 
     template <class... A>
-    void set_scene_args(detail::Kernel& k, const A&... rest) {
-        k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, cam, rest...);
+    void set_scene_args(detail::Kernel& k, bool sky_portals, const A&... rest) {
+        k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, region, portals,
+               portal_range, int(sky_portals && have_portals), cam, rest...);
     }
 
     std::uint64_t sum_rays(const detail::Buffer& b, std::size_t count) {
@@ -153,6 +217,18 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.mats = m.ctx->alloc(scene.palette.size() * 8 * sizeof(float), "render: materials");
     m.light = m.ctx->alloc(kLightParams * sizeof(float), "render: lighting");
     m.cam = m.ctx->alloc((3 + 9 * kFaceCount) * sizeof(float), "render: camera");
+    auto upload_ints = [&](const std::vector<std::int32_t>& v, const char* what) {
+        const std::vector<std::int32_t> data = v.empty() ? std::vector<std::int32_t>(4, 0) : v;  // never empty
+        detail::Buffer b = m.ctx->alloc(data.size() * 4, what);
+        m.ctx->write(b, 0, data.size() * 4, data.data(), what);
+        return b;
+    };
+    Portals portals;
+    if (blocks <= kMaxPortalGrid) portals = find_portals(scene);
+    m.have_portals = !portals.faces.empty();
+    m.region = upload_ints(m.have_portals ? portals.region : std::vector<std::int32_t>{}, "render: sky regions");
+    m.portals = upload_ints(portals.faces, "render: sky portals");
+    m.portal_range = upload_ints(portals.range, "render: sky portal ranges");
     m.k_features = m.ctx->kernel("pathtrace", "pt_features");
     m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
 }
@@ -168,7 +244,7 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     m.upload_frame(pose, lighting);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_features, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
+    m.set_scene_args(m.k_features, s.sky_portals, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
     const std::size_t global = npix * kFaceCount;
     m.ctx->launch(m.k_features, 1, &global, &kLocal);
     std::vector<float> out(npix * kFaceCount * kFeatureChannels);
@@ -202,7 +278,7 @@ Image Renderer::render_reference(const CameraPose& pose, const Lighting& lightin
     m.upload_frame(pose, lighting);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_reference, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
+    m.set_scene_args(m.k_reference, s.sky_portals, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
                      std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
     m.ctx->launch(m.k_reference, 1, &npix, &kLocal);
     Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
