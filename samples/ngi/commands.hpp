@@ -13,6 +13,8 @@ struct Command {
 int cmd_devices(int argc, char** argv);
 int cmd_generate(int argc, char** argv);
 int cmd_metrics(int argc, char** argv);
+int cmd_merge(int argc, char** argv);
+int cmd_lightmap(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_dataset(int argc, char** argv);
 

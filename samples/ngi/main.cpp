@@ -19,6 +19,12 @@ const ngi_cli::Command kCommands[] = {
                 "                                 MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON; R = data\n"
                 "                                 range (default 1); psnr is null for identical images",
      ngi_cli::cmd_metrics},
+    {"merge", "ngi merge --frame DIR --out DIR [--mode thesis|equirect] [--model M] [--device D]\n"
+              "                                 global view of every feature, coord.exr and the network input.npy",
+     ngi_cli::cmd_merge},
+    {"lightmap", "ngi lightmap --frame DIR --model M.safetensors --out DIR [--size WxH] [--device D]\n"
+                 "                                 lightmap.exr, final.png, and with a reference: compare.png, metrics.json",
+     ngi_cli::cmd_lightmap},
     {"render", "ngi render --scene SPEC --out DIR [--frame K] [--face N] [--spp S] [--time HOURS] [--device D]\n"
                "           [--feature-spp F] [--bounces B] [--path-frames P] [--no-reference] [--preview PNG]\n"
                "                                 path-trace one frame folder; SPEC = room|street|cave|backlit|bleed"
