@@ -90,7 +90,7 @@ void expect_error(const std::string& path, const std::string& fragment) {
 
 }  // namespace
 
-TEST_CASE("a valid tiny model loads and runs; its output is finite", "[model][file]") {
+TEST_CASE("a valid tiny model loads and runs and its output is finite", "[model][file]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("valid", tiny_entries(), tiny_config()));
     ngi::Tensor x({1, 1, 32, 64});
     for (std::size_t i = 0; i < x.size(); ++i) x.data[i] = float(i % 7) - 3.0f;
