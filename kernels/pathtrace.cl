@@ -44,7 +44,17 @@ typedef struct {
     __global const int* region;
     __global const int4* portals;
     __global const int2* portal_range;  // per region: first index, count
-    int use_portals;
+    int use_regions, use_portals;
+    // Sunlit patches (renderer.cpp): block faces bordering covered air, grouped by region; per frame the
+    // probability of picking each within its region (proportional to the sunlight it reflects) and the running
+    // sum. Lookup of a face's index: face_slot[block] >= 0 -> face_index[6 * slot + face].
+    __global const int4* patches;       // cell xyz, face id
+    __global const float* patch_prob;
+    __global const float* patch_cdf;
+    __global const int2* patch_range;   // per region: first index, count (count 0: nothing sunlit)
+    __global const int* face_slot;
+    __global const int* face_index;
+    int use_patches;
 } Scene;
 
 // Where a ray first leaves covered air into open air (or out of the grid): the covered cell and its face.
@@ -259,7 +269,7 @@ inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* ra
 // Region of the air block a shading point lies in (-1: open air, outside the grid, or portals disabled).
 inline int region_at(const Scene* s, float3 p) {
     const int3 c = convert_int3(floor(p));
-    if (!s->use_portals || any(c < 0) || any(c >= s->dims)) return -1;
+    if (!s->use_regions || any(c < 0) || any(c >= s->dims)) return -1;
     return s->region[c.x + s->dims.x * (c.y + s->dims.y * c.z)];
 }
 
@@ -293,6 +303,56 @@ inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* 
     return sky_radiance(s->light, w) * (power_heuristic(pp, pb) * cos_x * M_1_PI_F / pp);
 }
 
+// Probability with which sunlit-patch sampling from a point in `reg` picks the face `f` of block `cell` (0 if the
+// face is not one of the region's patches or reflects no sunlight).
+inline float patch_prob(const Scene* s, int reg, int3 cell, int f) {
+    const int slot = s->face_slot[cell.x + s->dims.x * (cell.y + s->dims.y * cell.z)];
+    if (slot < 0) return 0.0f;
+    const int i = s->face_index[6 * slot + f];
+    const int2 range = s->patch_range[reg];
+    return i >= range.x && i < range.x + range.y ? s->patch_prob[i] : 0.0f;
+}
+
+// Sunlight reflected once off the sunlit patches of the covered region the point is in (the sun patch on a room's
+// floor lights the room): pick a patch face in proportion to the sunlight it reflects, a uniform point y on it,
+// check y is visible, then sun next-event estimation at y. This samples the same paths x -> y -> sun as the
+// cosine-sampled continuation followed by sun NEE at y; both are MIS-weighted (power heuristic) with the densities
+// of the direction x -> y.
+inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
+    const float2 u = rng2(r), v = rng2(r);
+    int lo = range.x, hi = range.x + range.y - 1;
+    while (lo < hi) {
+        const int mid = (lo + hi) >> 1;
+        if (s->patch_cdf[mid] > u.x) hi = mid; else lo = mid + 1;
+    }
+    const int4 e = s->patches[lo];
+    const int a = e.w >> 1;
+    const float plane = (e.w & 1) ? 0.0f : 1.0f;
+    float3 q = convert_float3(e.xyz);
+    if (a == 0) q += (float3)(plane, v.x, v.y);
+    else if (a == 1) q += (float3)(v.x, plane, v.y);
+    else q += (float3)(v.x, v.y, plane);
+    float3 w = q - p;
+    const float dist = length(w);
+    w /= dist;
+    const float3 ny = face_normal(e.w);
+    const float cos_x = dot(n, w), cos_y = -dot(ny, w);
+    const float prob = s->patch_prob[lo];
+    if (cos_x <= 0.0f || cos_y <= 1.0e-6f || prob <= 0.0f) {
+        rng2(r);  // keep the stream position independent of the branch
+        return (float3)(0.0f);
+    }
+    const Hit h = trace(s, p, w, dist + 1.0f, rays, 0);
+    if (h.mat == 0 || h.face != e.w || any(h.cell != e.xyz)) {
+        rng2(r);
+        return (float3)(0.0f);
+    }
+    const float3 y = q + ny * RAY_OFFSET;
+    const float3 sun = sun_light(s, y, ny, r, rays);  // E cos / pi at y, or 0 in shadow
+    const float pp = prob * dist * dist / cos_y, pb = cos_x * M_1_PI_F;
+    return s->mats[2 * h.mat].xyz * sun * (power_heuristic(pp, pb) * cos_x * M_1_PI_F / pp);
+}
+
 // One sample of the lighting (irradiance / pi) arriving at surface point p with normal n: direct light from the
 // sun, emissive blocks and the sky (depth 0), plus up to max_bounces indirect bounces. Sun and emitters use
 // next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray, MIS-weighted
@@ -301,11 +361,15 @@ inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* 
 inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
                               uint* rays) {
     float3 sum = (float3)(0.0f), beta = (float3)(1.0f);
+    float sun_mis = 1.0f;  // MIS weight of sun NEE here against patch sampling at the previous vertex
     for (int depth = 0;; ++depth) {
         const int reg = region_at(s, p);
-        const int2 range = reg >= 0 ? s->portal_range[reg] : (int2)(0, 0);
-        sum += beta * (sun_light(s, p, n, r, rays) + emitter_light(s, p, n, r, rays));
+        const int2 range = reg >= 0 && s->use_portals ? s->portal_range[reg] : (int2)(0, 0);
+        // Patch sampling covers x -> y -> sun, so only where the continuation would still do sun NEE at y.
+        const int2 prange = reg >= 0 && s->use_patches && depth < max_bounces ? s->patch_range[reg] : (int2)(0, 0);
+        sum += beta * (sun_mis * sun_light(s, p, n, r, rays) + emitter_light(s, p, n, r, rays));
         if (range.y > 0) sum += beta * portal_light(s, p, n, range, r, rays);
+        if (prange.y > 0) sum += beta * patch_light(s, p, n, prange, r, rays);
         const float3 w = cosine_sample(n, rng2(r));
         Crossing x;
         const Hit h = trace(s, p, w, T_INF, rays, range.y > 0 ? &x : 0);
@@ -325,6 +389,14 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
             sum += beta * Le * power_heuristic(pb, pl);
         }
         if (depth >= max_bounces) break;
+        sun_mis = 1.0f;
+        if (prange.y > 0) {
+            const float prob = patch_prob(s, reg, h.cell, h.face);
+            if (prob > 0.0f) {
+                const float cos_y = fabs(dot(face_normal(h.face), w));
+                sun_mis = power_heuristic(dot(n, w) * M_1_PI_F, prob * h.t * h.t / cos_y);
+            }
+        }
         beta *= s->mats[2 * h.mat].xyz;
         if (depth + 1 >= rr_start) {
             const float q = fmin(0.95f, fmax(beta.x, fmax(beta.y, beta.z)));
@@ -342,13 +414,18 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
 #define SCENE_ARGS                                                                                           \
     __global const uchar *grid, int sx, int sy, int sz, __global const float4 *mats, __global const int4 *lights, \
         __global const float *cdf, int nlights, float inv_total, __global const float *light,                    \
-        __global const int *region, __global const int4 *portals, __global const int2 *portal_range, int use_portals
+        __global const int *region, __global const int4 *portals, __global const int2 *portal_range,            \
+        int use_regions, int use_portals, __global const int4 *patches, __global const float *patch_prob,         \
+        __global const float *patch_cdf, __global const int2 *patch_range, __global const int *face_slot,        \
+        __global const int *face_index, int use_patches
 
 #define MAKE_SCENE(s)                                                                                       \
     Scene s;                                                                                                \
     s.grid = grid; s.dims = (int3)(sx, sy, sz); s.mats = mats; s.lights = lights; s.cdf = cdf;             \
     s.nlights = nlights; s.inv_total = inv_total; s.light = light; s.region = region; s.portals = portals; \
-    s.portal_range = portal_range; s.use_portals = use_portals
+    s.portal_range = portal_range; s.use_regions = use_regions; s.use_portals = use_portals;                   \
+    s.patches = patches; s.patch_prob = patch_prob; s.patch_cdf = patch_cdf; s.patch_range = patch_range;     \
+    s.face_slot = face_slot; s.face_index = face_index; s.use_patches = use_patches
 
 // cam: centre (3), then per face look, right, up (9 each) in camera.hpp's face order.
 // Unit direction through the centre of pixel (col, row) of face f (camera.hpp: face_pixel_direction).
@@ -433,4 +510,32 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
     mean_out[pix] = mean.x; mean_out[npix + pix] = mean.y; mean_out[2 * npix + pix] = mean.z;
     var_out[pix] = var.x; var_out[npix + pix] = var.y; var_out[2 * npix + pix] = var.z;
     rays_out[pix] = rays;
+}
+
+// Sunlight reflected by each patch face (albedo luminance x sun irradiance luminance x cosine x the visible
+// fraction of 4 points on the face), for the per-frame patch CDF. global size: number of patches.
+__kernel void pt_patch_weights(SCENE_ARGS, int count, __global float* weight_out) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    MAKE_SCENE(s);
+    const int4 e = patches[i];
+    const float3 ny = face_normal(e.w), sd = lv(light, L_SUN_DIR), E = lv(light, L_SUN_E);
+    const float c = dot(ny, sd);
+    float w = 0.0f;
+    if (c > 0.0f && luminance(E) > 0.0f) {
+        const int a = e.w >> 1;
+        const float plane = (e.w & 1) ? 0.0f : 1.0f;
+        uint rays = 0;
+        int visible = 0;
+        for (int k = 0; k < 4; ++k) {
+            const float2 v = (float2)((k & 1) ? 0.75f : 0.25f, (k & 2) ? 0.75f : 0.25f);
+            float3 q = convert_float3(e.xyz);
+            if (a == 0) q += (float3)(plane, v.x, v.y);
+            else if (a == 1) q += (float3)(v.x, plane, v.y);
+            else q += (float3)(v.x, v.y, plane);
+            visible += trace(&s, q + ny * RAY_OFFSET, sd, T_INF, &rays, 0).mat == 0;
+        }
+        w = luminance(mats[2 * s.grid[e.x + sx * (e.y + sy * e.z)]].xyz) * luminance(E) * c * (float)visible * 0.25f;
+    }
+    weight_out[i] = w;
 }

@@ -288,3 +288,35 @@ TEST_CASE("sky portals: same expectation as cosine sampling alone, lower varianc
     INFO("variance of the mean: portals " << v_on << ", cosine only " << v_off);
     CHECK(v_on < 0.5 * v_off);
 }
+
+TEST_CASE("sunlit patches: same expectation as cosine sampling alone, lower variance", "[render]") {
+    VoxelScene room = closed_box(10, {glm::vec3(0.6f), glm::vec3(0.0f), false});
+    room.fill({0, 3, 3}, {1, 7, 7}, 0);  // a window in the -x wall; the sun shines in onto the floor
+    room.fill({6, 1, 2}, {8, 3, 4}, room.add_material({{0.2f, 0.7f, 0.2f}, glm::vec3(0.0f), false}));
+    Lighting l;  // the sun alone, low in the -x direction
+    l.sun.direction = glm::normalize(glm::vec3(-1.0f, 0.8f, 0.1f));
+    l.sun.irradiance = {3.0f, 2.8f, 2.5f};
+    l.sun.angular_radius = 0.01f;
+    Renderer r(test::device(), room);
+    RenderSettings rs;
+    rs.n = 16;
+    rs.reference_spp = 128;
+    rs.seed = 21;
+    const CameraPose pose{{4.5f, 5.0f, 5.0f}, {1.0f, -0.2f, 0.3f}, {0, 1, 0}};  // the lit patch is behind
+    Image var_on, var_off;
+    const Image on = r.render_reference(pose, l, rs, &var_on);
+    rs.sunlit_patches = false;
+    const Image off = r.render_reference(pose, l, rs, &var_off);
+    double v_on = 0, v_off = 0;
+    for (int c = 0; c < 3; ++c) {
+        const Stats a = pooled(on, var_on, c), b = pooled(off, var_off, c);
+        INFO("channel " << c << ": patches " << a.mean << " +- " << a.stderr_ << ", cosine only " << b.mean << " +- "
+                        << b.stderr_);
+        CHECK(a.mean > 0.01);
+        CHECK(std::abs(a.mean - b.mean) < 4.0 * std::hypot(a.stderr_, b.stderr_));
+        v_on += a.stderr_ * a.stderr_;
+        v_off += b.stderr_ * b.stderr_;
+    }
+    INFO("variance of the mean: patches " << v_on << ", cosine only " << v_off);
+    CHECK(v_on < 0.5 * v_off);
+}

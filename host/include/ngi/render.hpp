@@ -60,6 +60,7 @@ struct RenderSettings {
     Face reference_face = Face::Front;
     std::uint32_t seed = 0;    // per-frame seed of the counter-based RNG: same seed, same image
     bool sky_portals = true;   // also sample the sky through the openings of rooms (same expectation, less noise)
+    bool sunlit_patches = true;  // also sample sunlight reflected off sunlit faces in rooms (same, less noise)
 };
 
 struct RenderStats {

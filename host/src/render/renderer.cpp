@@ -88,6 +88,47 @@ Portals find_portals(const VoxelScene& s) {
     return p;
 }
 
+// Sunlit patches: faces of blocks that border covered air, grouped by that air's region. Per frame they are
+// weighted by the sunlight they reflect (kernel pt_patch_weights), and points in the region sample them as
+// secondary lights (pathtrace.cl: patch_light).
+struct Patches {
+    std::vector<std::int32_t> faces;  // per patch: cell x, y, z, face id; grouped by region
+    std::vector<std::int32_t> range;  // per region: first patch, patch count
+    std::vector<std::int32_t> slot;   // per block: slot in `index` (-1: no patch faces)
+    std::vector<std::int32_t> index;  // per slot, 6 faces: patch index (-1: not a patch)
+};
+
+Patches find_patches(const VoxelScene& s, const std::vector<std::int32_t>& region, int regions) {
+    const glm::ivec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    std::vector<std::vector<glm::ivec4>> per(static_cast<std::size_t>(regions));
+    for (int z = 0; z < s.size.z; ++z)
+        for (int y = 0; y < s.size.y; ++y)
+            for (int x = 0; x < s.size.x; ++x) {
+                const glm::ivec3 c(x, y, z);
+                if (!s.solid(c)) continue;
+                for (int f = 0; f < 6; ++f) {
+                    const glm::ivec3 nb = c + dirs[f];
+                    if (s.inside(nb) && !s.solid(nb) && region[s.index(nb)] >= 0)
+                        per[std::size_t(region[s.index(nb)])].push_back({c, f});
+                }
+            }
+    Patches p;
+    p.slot.assign(s.voxels.size(), -1);
+    for (const auto& list : per) {
+        p.range.insert(p.range.end(), {std::int32_t(p.faces.size() / 4), std::int32_t(list.size())});
+        for (const auto& e : list) {
+            const std::size_t b = s.index(glm::ivec3(e));
+            if (p.slot[b] < 0) {
+                p.slot[b] = std::int32_t(p.index.size() / 6);
+                p.index.insert(p.index.end(), 6, -1);
+            }
+            p.index[std::size_t(p.slot[b]) * 6 + std::size_t(e.w)] = std::int32_t(p.faces.size() / 4);
+            p.faces.insert(p.faces.end(), {e.x, e.y, e.z, e.w});
+        }
+    }
+    return p;
+}
+
 void check_settings(const RenderSettings& s) {
     if (s.n < 1 || s.n > 8192) throw InputError("render: face size n must be in 1..8192, got " + std::to_string(s.n));
     if (s.feature_spp < 1 || s.reference_spp < 1) throw InputError("render: samples per pixel must be at least 1");
@@ -102,7 +143,13 @@ struct Renderer::Impl {
     std::vector<EmitterFace> emitters;
     glm::ivec3 size;
     detail::Buffer grid, mats, lights, cdf, light, cam, region, portals, portal_range;
-    bool have_portals = false;
+    detail::Buffer patches, patch_prob, patch_cdf, patch_range, face_slot, face_index, patch_weight;
+    bool have_regions = false, have_portals = false;
+    int npatches = 0;
+    std::vector<std::int32_t> patch_static_range;  // per region: first, count
+    bool patches_lit = false;                        // any region has sunlit patches this frame
+    std::vector<float> patch_light_key;              // light parameters the patch weights were computed for
+    detail::Kernel k_patch;
     detail::Buffer features, feature_rays, mean, var, ref_rays;
     int buffers_n = 0;
     int nlights = 0;
@@ -110,7 +157,7 @@ struct Renderer::Impl {
     detail::Kernel k_features, k_reference;
 
     // Per frame: lamp level into the material table, the emitter list and its CDF, sun/sky, camera.
-    void upload_frame(const CameraPose& pose, const Lighting& l) {
+    void upload_frame(const CameraPose& pose, const Lighting& l, const RenderSettings& rs) {
         std::vector<float> m(palette.size() * 8, 0.0f);
         for (std::size_t i = 0; i < palette.size(); ++i) {
             const Material& p = palette[i];
@@ -151,6 +198,7 @@ struct Renderer::Impl {
             l.sky.ground.r, l.sky.ground.g, l.sky.ground.b,
             l.sky.glow.r, l.sky.glow.g, l.sky.glow.b};
         ctx->write(light, 0, sizeof(L), L, "render: upload lighting");
+        update_patches(L, m, rs);
 
         const CameraCluster cluster = CameraCluster::from_look_up(pose.look, pose.up);
         float cb[3 + 9 * kFaceCount] = {pose.position.x, pose.position.y, pose.position.z};
@@ -175,9 +223,47 @@ struct Renderer::Impl {
     }
 
     template <class... A>
-    void set_scene_args(detail::Kernel& k, bool sky_portals, const A&... rest) {
+    void set_scene_args(detail::Kernel& k, const RenderSettings& rs, const A&... rest) {
         k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, region, portals,
-               portal_range, int(sky_portals && have_portals), cam, rest...);
+               portal_range, int(have_regions), int(rs.sky_portals && have_portals), patches, patch_prob, patch_cdf,
+               patch_range, face_slot, face_index, int(rs.sunlit_patches && patches_lit), rest...);
+    }
+
+    // Per-frame patch probabilities (only when the sun or the materials changed): weights on the device, then
+    // normalized per region on the host.
+    void update_patches(const float* L, const std::vector<float>& m, const RenderSettings& rs) {
+        if (npatches == 0) return;
+        std::vector<float> key(L, L + kLightParams);
+        key.insert(key.end(), m.begin(), m.end());
+        if (key == patch_light_key) return;
+        patch_light_key = key;
+        std::vector<float> w(static_cast<std::size_t>(npatches));
+        set_scene_args(k_patch, rs, npatches, patch_weight);
+        const std::size_t global = std::size_t(npatches);
+        ctx->launch(k_patch, 1, &global, &kLocal);
+        ctx->read(patch_weight, 0, w.size() * 4, w.data(), "render: read patch weights");
+        std::vector<float> prob(w.size(), 0.0f), cum(w.size(), 1.0f);
+        std::vector<std::int32_t> range = patch_static_range;
+        patches_lit = false;
+        for (std::size_t r = 0; r < range.size() / 2; ++r) {
+            const std::size_t first = std::size_t(range[2 * r]), count = std::size_t(range[2 * r + 1]);
+            double total = 0;
+            for (std::size_t i = first; i < first + count; ++i) total += w[i];
+            if (!(total > 0)) {
+                range[2 * r + 1] = 0;  // nothing sunlit in this region
+                continue;
+            }
+            patches_lit = true;
+            double acc = 0;
+            for (std::size_t i = first; i < first + count; ++i) {
+                prob[i] = float(w[i] / total);
+                cum[i] = float((acc += w[i]) / total);
+            }
+            cum[first + count - 1] = 1.0f;
+        }
+        ctx->write(patch_prob, 0, prob.size() * 4, prob.data(), "render: upload patch probabilities");
+        ctx->write(patch_cdf, 0, cum.size() * 4, cum.data(), "render: upload patch CDF");
+        ctx->write(patch_range, 0, range.size() * 4, range.data(), "render: upload patch ranges");
     }
 
     std::uint64_t sum_rays(const detail::Buffer& b, std::size_t count) {
@@ -225,10 +311,24 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     };
     Portals portals;
     if (blocks <= kMaxPortalGrid) portals = find_portals(scene);
+    m.have_regions = !portals.range.empty();
     m.have_portals = !portals.faces.empty();
-    m.region = upload_ints(m.have_portals ? portals.region : std::vector<std::int32_t>{}, "render: sky regions");
+    m.region = upload_ints(m.have_regions ? portals.region : std::vector<std::int32_t>{}, "render: sky regions");
     m.portals = upload_ints(portals.faces, "render: sky portals");
     m.portal_range = upload_ints(portals.range, "render: sky portal ranges");
+    Patches patches;
+    if (m.have_regions) patches = find_patches(scene, portals.region, int(portals.range.size() / 2));
+    m.npatches = int(patches.faces.size() / 4);
+    m.patch_static_range = patches.range;
+    m.patches = upload_ints(patches.faces, "render: sunlit patches");
+    m.patch_range = upload_ints(patches.range, "render: sunlit patch ranges");
+    m.face_slot = upload_ints(m.npatches ? patches.slot : std::vector<std::int32_t>{}, "render: patch lookup");
+    m.face_index = upload_ints(patches.index, "render: patch lookup");
+    const std::size_t np = std::max<std::size_t>(std::size_t(m.npatches), 1) * 4;
+    m.patch_prob = m.ctx->alloc(np, "render: patch probabilities");
+    m.patch_cdf = m.ctx->alloc(np, "render: patch CDF");
+    m.patch_weight = m.ctx->alloc(np, "render: patch weights");
+    m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights");
     m.k_features = m.ctx->kernel("pathtrace", "pt_features");
     m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
 }
@@ -241,10 +341,10 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     check_settings(s);
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
-    m.upload_frame(pose, lighting);
+    m.upload_frame(pose, lighting, s);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_features, s.sky_portals, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
+    m.set_scene_args(m.k_features, s, m.cam, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
     const std::size_t global = npix * kFaceCount;
     m.ctx->launch(m.k_features, 1, &global, &kLocal);
     std::vector<float> out(npix * kFaceCount * kFeatureChannels);
@@ -275,10 +375,10 @@ Image Renderer::render_reference(const CameraPose& pose, const Lighting& lightin
     check_settings(s);
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
-    m.upload_frame(pose, lighting);
+    m.upload_frame(pose, lighting, s);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_reference, s.sky_portals, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
+    m.set_scene_args(m.k_reference, s, m.cam, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
                      std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
     m.ctx->launch(m.k_reference, 1, &npix, &kLocal);
     Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
