@@ -86,7 +86,7 @@ TEST_CASE("white furnace: closed box of albedo a and emission E has lighting E /
     CHECK(emission / cnt == Approx(E).epsilon(1e-6));
 }
 
-TEST_CASE("sun-lit plane: direct = E cos(theta) / pi, zero in the shadow of a pillar; sky matches the host model",
+TEST_CASE("sun-lit plane: direct = E cos(theta) / pi, zero in the shadow of a pillar, and the sky matches the host model",
           "[render]") {
     VoxelScene s({12, 6, 12}, "plane");
     s.fill({0, 0, 0}, {12, 1, 12}, s.add_material({glm::vec3(0.5f), glm::vec3(0.0f), false}));
@@ -168,7 +168,7 @@ TEST_CASE("sun-lit plane: direct = E cos(theta) / pi, zero in the shadow of a pi
     CHECK(sky_pixels > 1000);
 }
 
-TEST_CASE("reference error falls like 1/sqrt(spp); same seed gives identical frames", "[render]") {
+TEST_CASE("reference error falls like 1/sqrt(spp) and the same seed gives identical frames", "[render]") {
     const float a = 0.6f, E = 0.5f;
     VoxelScene box = closed_box(6, {glm::vec3(a), glm::vec3(E), false});
     box.set({0, 3, 3}, 0);  // a window: sun and sky come in, and the furnace no longer has a closed form
