@@ -95,6 +95,27 @@ TEST_CASE("frame folder: a colour value beyond the half range is written as floa
     CHECK_FALSE(r.reference);
 }
 
+TEST_CASE("frame folder: emission and env are optional, on all faces or none", "[io][frame]") {
+    TempDir root("frame-optional");
+    std::mt19937 rng(6);
+    ngi::Frame f = make_frame(8, rng, false);
+    for (auto& img : f.faces[int(ngi::Feature::Env)]) img = ngi::Image();
+    ngi::write_frame(root / "f", f);
+    CHECK_FALSE(fs::exists(root / "f/front_env.exr"));
+    CHECK(fs::exists(root / "f/front_emission.exr"));
+    const ngi::Frame r = ngi::read_frame(root / "f");
+    for (int k = 0; k < ngi::kFaceCount; ++k) {
+        CHECK(r.get(ngi::Feature::Env, ngi::Face(k)).width == 0);
+        CHECK(r.get(ngi::Feature::Env, ngi::Face(k)).data.empty());
+        CHECK(r.get(ngi::Feature::Emission, ngi::Face(k)).width == 8);
+    }
+    // Present on some faces only: refused on write, and on read the missing file is named.
+    f.get(ngi::Feature::Env, ngi::Face::Up) = ngi::Image(8, 8, 3);
+    CHECK_THROWS_WITH(ngi::write_frame(root / "g", f), Contains("front env"));
+    fs::remove(root / "f/down_emission.exr");
+    CHECK_THROWS_WITH(ngi::read_frame(root / "f"), Contains("down_emission.exr") && Contains("optional"));
+}
+
 TEST_CASE("frame folder: replacing, refusing, and never leaving a partial folder", "[io][frame]") {
     TempDir root("frame-safe");
     std::mt19937 rng(3);

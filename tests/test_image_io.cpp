@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -147,6 +148,33 @@ TEST_CASE("EXR channel order of foreign files: R, G, B, others in natural order,
                       Contains("d.exr") && Contains("distinct"));
     CHECK_THROWS_WITH(ngi::write_exr(dir / "d.exr", ngi::Image(2, 2, 2), ngi::ExrPixelType::Half, {"R"}),
                       Contains("2 distinct"));
+}
+
+TEST_CASE("EXR: the image is the display window; pixels outside the data window are 0", "[io]") {
+    TempDir dir("exr-window");
+    std::mt19937 rng(6);
+    const ngi::Image img = random_image(5, 4, 3, rng, 1.0f, 2.0f);
+    ngi::write_exr(dir / "w.exr", img, ngi::ExrPixelType::Float);
+    // Patch the header's displayWindow (box2i: xMin, yMin, xMax, yMax, little-endian int32) to (-1, -2)..(3, 3):
+    // the data window (0, 0)..(4, 3) now sits 1 column right and 2 rows down in a 5x6 image, and its last column
+    // falls outside. Same byte count, so the chunk offsets stay valid.
+    std::string bytes = ngi::test::slurp(dir / "w.exr");
+    const std::string key = std::string("displayWindow\0box2i\0", 20);
+    const std::size_t at = bytes.find(key);
+    REQUIRE(at != std::string::npos);
+    const std::int32_t box[4] = {-1, -2, 3, 3};
+    std::memcpy(&bytes[at + key.size() + 4], box, sizeof box);
+    ngi::test::spit(dir / "w.exr", bytes);
+    const ngi::Image r = ngi::read_exr(dir / "w.exr");
+    REQUIRE(r.width == 5);
+    REQUIRE(r.height == 6);
+    for (int c = 0; c < 3; ++c)
+        for (int y = 0; y < 6; ++y)
+            for (int x = 0; x < 5; ++x) {
+                const int sx = x - 1, sy = y - 2;  // data-window pixel shown at (x, y)
+                const bool inside = sx >= 0 && sx < 5 && sy >= 0 && sy < 4;
+                CHECK(r.at(c, y, x) == (inside ? img.at(c, sy, sx) : 0.0f));
+            }
 }
 
 TEST_CASE("EXR half: finite values beyond the half range clamp, NaN and Inf are kept", "[io]") {

@@ -63,12 +63,14 @@ void write_image(const std::string& path, const Image& image);
 // <dir>/<face>_<feature>.exr   face in {front, back, left, right, up, down},
 //                              feature in {albedo, normal, depth, direct, emission, env};
 //                              albedo, direct, emission and env may instead be 8/16-bit <face>_<feature>.png,
-//                              read linearly (value / 255, no sRGB decode): such files are LDR and reported in
-//                              FrameReadStats::ldr_files. Having both the .exr and the .png is an error.
+//                              read linearly (value / (2^bits - 1), no sRGB decode): such files are LDR and
+//                              reported in FrameReadStats::ldr_files. Having both the .exr and the .png is an error.
+//                              emission and env are optional (docs/CONVENTIONS.md: they then count as 0), but
+//                              only as a whole: on all six faces or on none; absent ones stay empty (0x0) Images.
 // <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera (other keys ignored)
 // <dir>/reference.exr          optional: front-view reference lighting, 3 channels, any size
 //
-// All 36 face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
+// All face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
 // feature may carry a 4th channel named A / a PNG alpha channel, which is dropped).
 //
 // Sanitizing (not fatal, counted per file in FrameReadStats): NaN -> 0 everywhere; +-Inf -> 0 in colour and
@@ -91,7 +93,8 @@ struct FrameReadStats {
 
 Frame read_frame(const std::string& dir, FrameReadStats* stats = nullptr);
 
-// Writes every face image, camera.json and (if present) reference.exr. Pixel types: albedo, direct, emission and
+// Writes every face image (emission / env only when given for all faces; all six empty = absent), camera.json and
+// (if present) reference.exr. Pixel types: albedo, direct, emission and
 // env as half (11-bit mantissa, more than enough for colours; a file with a finite value beyond the half range
 // is written as float instead, so nothing is clamped); normal, depth and reference as float (depth >> 1000 m
 // needs float's precision; the reference is what metrics are measured against). Depth is one channel named Y.

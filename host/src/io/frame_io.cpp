@@ -1,5 +1,6 @@
 // The frame folder (layout, sanitizing and pixel types are documented in ngi/image_io.hpp).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -15,6 +16,8 @@ namespace ngi {
 namespace {
 
 bool png_allowed(Feature f) { return f != Feature::Normal && f != Feature::Depth; }
+bool optional_feature(Feature f) { return f == Feature::Emission || f == Feature::Env; }
+bool is_empty(const Image& img) { return img.width == 0 && img.height == 0; }
 
 std::string size_string(const Image& img) { return std::to_string(img.width) + "x" + std::to_string(img.height); }
 
@@ -112,13 +115,23 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
     std::string first;  // the first face file read: the size every other face must have
     for (int fi = 0; fi < kFeatureCount; ++fi) {
         const Feature feature = Feature(fi);
+        auto file_base = [&](int k) { return root / (std::string(face_name(Face(k))) + "_" + feature_name(feature)); };
+        auto present = [&](int k) {
+            return fs::exists(file_base(k).string() + ".exr", ec) ||
+                   (png_allowed(feature) && fs::exists(file_base(k).string() + ".png", ec));
+        };
+        int faces_present = 0;
+        for (int k = 0; k < kFaceCount; ++k) faces_present += present(k);
+        if (optional_feature(feature) && faces_present == 0) continue;  // absent as a whole: allowed
         for (int k = 0; k < kFaceCount; ++k) {
-            const std::string name = std::string(face_name(Face(k))) + "_" + feature_name(feature);
-            const fs::path exr = root / (name + ".exr"), png = root / (name + ".png");
+            const fs::path exr = file_base(k).string() + ".exr", png = file_base(k).string() + ".png";
             const bool has_exr = fs::exists(exr, ec), has_png = png_allowed(feature) && fs::exists(png, ec);
             if (!has_exr && !has_png)
                 throw InputError("read frame " + dir + ": missing " + exr.string() +
-                                 (png_allowed(feature) ? " (or .png)" : ""));
+                                 (png_allowed(feature) ? " (or .png)" : "") +
+                                 (optional_feature(feature) ? std::string("; ") + feature_name(feature) +
+                                                                  " is optional, but then absent on every face"
+                                                            : ""));
             if (has_exr && has_png)
                 throw InputError("read frame " + dir + ": both " + exr.string() + " and " + png.string() +
                                  " exist; keep one");
@@ -158,10 +171,14 @@ void write_frame(const std::string& dir, const Frame& frame) {
     const std::string what = "write frame " + dir + ": ";
     // Validate everything before touching the disk.
     if (frame.n <= 0) throw InputError(what + "frame.n is " + std::to_string(frame.n));
-    for (int fi = 0; fi < kFeatureCount; ++fi)
-        for (int k = 0; k < kFaceCount; ++k)
+    std::array<bool, kFeatureCount> absent{};
+    for (int fi = 0; fi < kFeatureCount; ++fi) {
+        absent[fi] = optional_feature(Feature(fi)) &&
+                     std::all_of(frame.faces[fi].begin(), frame.faces[fi].end(), [](const Image& i) { return is_empty(i); });
+        for (int k = 0; k < kFaceCount && !absent[fi]; ++k)
             check_image(frame.get(Feature(fi), Face(k)), feature_channels(Feature(fi)), frame.n,
                         what + face_name(Face(k)) + " " + feature_name(Feature(fi)));
+    }
     if (frame.reference) check_image(*frame.reference, 3, -1, what + "reference");
     try {
         CameraCluster::from_look_up(frame.look, frame.up);
@@ -185,7 +202,7 @@ void write_frame(const std::string& dir, const Frame& frame) {
     try {
         for (int fi = 0; fi < kFeatureCount; ++fi) {
             const Feature f = Feature(fi);
-            for (int k = 0; k < kFaceCount; ++k) {
+            for (int k = 0; k < kFaceCount && !absent[fi]; ++k) {
                 const Image& img = frame.get(f, Face(k));
                 ExrPixelType type = ExrPixelType::Float;
                 if (f != Feature::Normal && f != Feature::Depth) {
