@@ -23,6 +23,21 @@ __kernel void decode_lightmap(__global float* restrict x, const int count, const
     x[i] = y;
 }
 
+// The inverse of decode_lightmap, for training targets: linear light x -> [0, 1] through the lumination transfer
+// -> lo + y (hi - lo). Light is sanitized like the input's lumination (NaN and negative -> 0, +Inf -> FLT_MAX)
+// and encoded exactly as gbuffer.cl's lum_encode does it, so a lightmap equal to the front face's lumination
+// encodes bit for bit like the network input's lumination channels.
+__kernel void encode_lightmap(__global const float* restrict src, __global float* restrict dst, const int count,
+                              const float lo, const float hi, const int transfer) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    const float v = src[i];
+    const float x = isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX);
+    const float y = transfer == TRANSFER_CLAMP ? fmin(x, 1.0f) : fmin(x / (1.0f + x), 1.0f);
+    const float scale = hi - lo;
+    dst[i] = lo + y * scale;
+}
+
 // Bilinear resize of a planar image, pixel centres at +0.5 (PyTorch align_corners=False), edges clamped.
 // Launch: 2-D (dst_w, dst_h), local 8 x 8.
 __kernel void resize_bilinear(__global const float* restrict src, const int src_w, const int src_h,

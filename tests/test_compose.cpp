@@ -182,3 +182,52 @@ TEST_CASE("output side rejects tensors and images that do not fit", "[pipeline]"
     REQUIRE_THROWS_AS(pl.upscale(Image(), 4, 4), InputError);
     REQUIRE_THROWS_AS(pl.upscale(Image(3, 3, 1), 0, 4), InputError);
 }
+
+TEST_CASE("encode lightmap: the inverse of the decoding, the same encoding as the input's lumination", "[pipeline]") {
+    using Catch::Matchers::Contains;
+    std::mt19937 rng(53);
+    const int n = 6;
+    for (LuminationTransfer tr : {LuminationTransfer::Reinhard, LuminationTransfer::Clamp})
+        for (auto [lo, hi] : {std::pair{-1.0f, 1.0f}, std::pair{0.0f, 1.0f}}) {
+            INFO(lumination_transfer_name(tr) << " [" << lo << ", " << hi << "]");
+            SurroundPipeline pl(test::device(), n, GlobalViewMode::Thesis, tr);
+            ModelConfig cfg;
+            cfg.input_nc = 10;
+            cfg.input_range[0] = cfg.output_range[0] = lo;
+            cfg.input_range[1] = cfg.output_range[1] = hi;
+            Frame fr;
+            fr.n = n;
+            fr.get(Feature::Albedo, Face::Front) = Image(n, n, 3, 0.5f);
+            fr.get(Feature::Normal, Face::Front) = Image(n, n, 3, 0.0f);
+            fr.get(Feature::Depth, Face::Front) = Image(n, n, 1, 1.0f);
+            Image light(n, n, 3);
+            light.data = test::random_vector(light.data.size(), rng, 0.0f, tr == LuminationTransfer::Clamp ? 1.0f : 200.0f);
+            light.data[0] = 0.0f;
+            fr.get(Feature::Direct, Face::Front) = light;
+            const Tensor t = pl.encode_lightmap(light, cfg);
+            REQUIRE(t.shape == std::vector<int>{1, 3, n, n});
+            // Bit for bit the front view's lumination channels (7..9) of the network input.
+            const Tensor x = pl.network_input(fr, cfg);
+            REQUIRE(std::memcmp(t.data.data(), &x.data[7 * t.data.size() / 3], t.data.size() * sizeof(float)) == 0);
+            // Decoding gives the light back (float rounding of 1 - y aside).
+            const Image back = pl.front_lightmap(t, cfg);
+            for (std::size_t i = 0; i < back.data.size(); ++i)
+                REQUIRE(back.data[i] == Approx(light.data[i]).epsilon(5e-5).margin(1e-6));
+            // Hostile light is sanitized like lumination: NaN and negative -> 0 (lo), +Inf -> the top (hi).
+            Image bad(3, 1, 3, 0.0f);
+            bad.data = {kNaN, -5.0f, kInf, -kInf, 0.0f, FLT_MAX, 1.0f, 2.0f, 3.0f};
+            const Tensor e = pl.encode_lightmap(bad, cfg);
+            REQUIRE(e.shape == std::vector<int>{1, 3, 1, 3});
+            REQUIRE(e.data[0] == lo);
+            REQUIRE(e.data[1] == lo);
+            REQUIRE(e.data[2] == hi);
+            REQUIRE(e.data[3] == lo);
+            REQUIRE(e.data[5] == hi);
+        }
+    SurroundPipeline pl(test::device(), n);
+    ModelConfig cfg;
+    REQUIRE_THROWS_WITH(pl.encode_lightmap(Image(n, n, 1), cfg), Contains("channels"));
+    REQUIRE_THROWS_AS(pl.encode_lightmap(Image(), cfg), InputError);
+    cfg.output_range[1] = cfg.output_range[0];
+    REQUIRE_THROWS_WITH(pl.encode_lightmap(Image(n, n, 3), cfg), Contains("output_range"));
+}

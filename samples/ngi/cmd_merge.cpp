@@ -1,4 +1,5 @@
-// ngi merge: a frame folder -> the global view of every feature, the coordinate map and the network input.
+// ngi merge: a frame folder -> the global view of every feature, the coordinate map and the network input; with
+// a reference, the training target (the reference encoded as the generator should output it).
 #include <cstdio>
 #include <filesystem>
 
@@ -10,7 +11,7 @@
 namespace ngi_cli {
 
 int cmd_merge(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {"single-view", "npy-only"});
     const std::string frame_dir = args.require("frame"), out_dir = args.require("out");
     ngi::Device device = ngi::Device::open(args.get("device"));
     ngi::FrameReadStats read_stats;
@@ -18,17 +19,23 @@ int cmd_merge(int argc, char** argv) {
     const auto mode = ngi::global_view_mode_from_name(args.get("mode", "thesis"));
     ngi::SurroundPipeline pipeline(device, frame.n, mode);
 
-    // The network input follows a model's config when one is given, else the default surround layout.
+    // The network input follows a model's config when one is given, else the default surround layout (or the
+    // front view only with --single-view).
     ngi::ModelConfig config;
     if (args.has("model")) {
+        if (args.has("single-view")) throw UsageError("--single-view and --model exclude each other");
         config = ngi::Model::load(device, args.get("model")).config();
+    } else if (args.has("single-view")) {
+        config.input_nc = 10;
+        config.input_layout = ngi::single_view_input_channels();
     } else {
         config.input_nc = 12;
         config.input_layout = ngi::surround_input_channels();
     }
+    const bool views_wanted = !args.has("npy-only");
     // Compute everything before writing anything: a bad frame leaves no partial output.
     std::vector<std::pair<std::string, ngi::Image>> views;
-    for (int f = 0; f < ngi::kFeatureCount; ++f) {
+    for (int f = 0; views_wanted && f < ngi::kFeatureCount; ++f) {
         const auto feature = ngi::Feature(f);
         if (frame.get(feature, ngi::Face::Front).data.empty()) continue;  // optional emission / env absent
         views.emplace_back(std::string("globalview_") + ngi::feature_name(feature) + ".exr",
@@ -36,19 +43,28 @@ int cmd_merge(int argc, char** argv) {
     }
     ngi::PreprocessStats stats;
     const ngi::Tensor input = pipeline.network_input(frame, config, &stats);
+    // The target: the front view's reference lightmap, [1, 3, N, N], encoded as the inverse of front_lightmap.
+    ngi::Tensor target;
+    if (frame.reference) target = pipeline.encode_lightmap(*frame.reference, config);
 
     std::filesystem::create_directories(out_dir);
     for (const auto& [name, image] : views) ngi::write_exr(out_dir + "/" + name, image, ngi::ExrPixelType::Float);
-    ngi::write_exr(out_dir + "/coord.exr", pipeline.coord_map(), ngi::ExrPixelType::Float);
+    if (views_wanted) ngi::write_exr(out_dir + "/coord.exr", pipeline.coord_map(), ngi::ExrPixelType::Float);
     ngi::write_npy(out_dir + "/input.npy", input);
+    if (frame.reference) ngi::write_npy(out_dir + "/target.npy", target);
 
     std::printf("frame      %s: N = %d, %zu NaN/Inf values sanitized on read\n", frame_dir.c_str(), frame.n,
                 read_stats.total_sanitized());
-    std::printf("global     %d x %d (%s layout): %zu features + coord.exr -> %s\n", pipeline.width(),
-                pipeline.height(), ngi::global_view_mode_name(mode), views.size(), out_dir.c_str());
+    if (views_wanted)
+        std::printf("global     %d x %d (%s layout): %zu features + coord.exr -> %s\n", pipeline.width(),
+                    pipeline.height(), ngi::global_view_mode_name(mode), views.size(), out_dir.c_str());
     std::printf("input.npy  %s, channels:", ngi::shape_string(input.shape).c_str());
     for (const auto& c : config.input_layout) std::printf(" %s", c.c_str());
     std::printf("\n");
+    if (frame.reference)
+        std::printf("target.npy %s: reference.exr through the %s transfer into [%g, %g]\n",
+                    ngi::shape_string(target.shape).c_str(), ngi::lumination_transfer_name(pipeline.transfer()),
+                    config.output_range[0], config.output_range[1]);
     return 0;
 }
 

@@ -19,8 +19,10 @@ const ngi_cli::Command kCommands[] = {
                 "                                 MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON; R = data\n"
                 "                                 range (default 1); psnr is null for identical images",
      ngi_cli::cmd_metrics},
-    {"merge", "ngi merge --frame DIR --out DIR [--mode thesis|equirect] [--model M] [--device D]\n"
-              "                                 global view of every feature, coord.exr and the network input.npy",
+    {"merge", "ngi merge --frame DIR --out DIR [--mode thesis|equirect] [--model M | --single-view] [--npy-only]\n"
+              "          [--device D]\n"
+              "                                 global view of every feature, coord.exr, the network input.npy and,\n"
+              "                                 with a reference, the training target.npy (--npy-only: only the .npy)",
      ngi_cli::cmd_merge},
     {"lightmap", "ngi lightmap --frame DIR --model M.safetensors --out DIR [--size WxH] [--device D]\n"
                  "                                 lightmap.exr, final.png, and with a reference: compare.png, metrics.json",

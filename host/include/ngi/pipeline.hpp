@@ -99,6 +99,11 @@ public:
     // through the inverse lumination transfer.
     Image front_lightmap(const Tensor& model_output, const ModelConfig& config);
 
+    // The inverse of front_lightmap's decoding, for training targets: a linear lightmap (any size, 3 channels)
+    // -> [1, 3, H, W] in config.output_range through this pipeline's lumination transfer. Light is sanitized
+    // like the input's lumination and encoded by the same formula (docs/CONVENTIONS.md, section 8).
+    Tensor encode_lightmap(const Image& lightmap, const ModelConfig& config);
+
     // final = lightmap x albedo + emission + env of the front face (the terms the frame has). The lightmap
     // must be N x N x 3; with frame.reference as the lightmap this gives the reference final image.
     Image compose(const Image& lightmap, const Frame& frame);

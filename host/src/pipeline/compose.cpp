@@ -72,6 +72,28 @@ Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& confi
     return out;
 }
 
+Tensor SurroundPipeline::encode_lightmap(const Image& lightmap, const ModelConfig& config) {
+    Impl& im = *impl_;
+    check_image(lightmap, "encode lightmap");
+    if (lightmap.channels != 3)
+        throw InputError("encode lightmap: the lightmap has " + std::to_string(lightmap.channels) +
+                         " channels, expected 3");
+    const float lo = config.output_range[0], hi = config.output_range[1];
+    if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi))
+        throw InputError("encode lightmap: the model's output_range [" + std::to_string(lo) + ", " +
+                         std::to_string(hi) + "] is not a finite increasing range");
+    upload_image(im.ctx, im.aux[0], lightmap, "encode lightmap");
+    Tensor out({1, 3, lightmap.height, lightmap.width});
+    const std::size_t bytes = out.data.size() * sizeof(float);
+    detail::ensure_buffer(im.ctx, im.out, bytes, "encoded lightmap");
+    const int count = int(out.data.size());
+    im.encode.args(im.aux[0], im.out, count, lo, hi, int(im.transfer));
+    const std::size_t g[1] = {std::size_t(count)};
+    im.ctx.launch(im.encode, 1, g, kLocal1);
+    im.ctx.read(im.out, 0, bytes, out.data.data(), "encoded lightmap");
+    return out;
+}
+
 Image SurroundPipeline::compose(const Image& lightmap, const Frame& frame) {
     Impl& im = *impl_;
     const int n = im.n;

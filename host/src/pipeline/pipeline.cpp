@@ -119,6 +119,7 @@ SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, Lumi
       gather(ctx.kernel("globalview", "lut_gather")),
       preprocess(ctx.kernel("gbuffer", "preprocess_gbuffer")),
       decode(ctx.kernel("compose", "decode_lightmap")),
+      encode(ctx.kernel("compose", "encode_lightmap")),
       resize(ctx.kernel("compose", "resize_bilinear")),
       compose(ctx.kernel("compose", "compose_final")),
       tonemap(ctx.kernel("compose", "tonemap")) {}

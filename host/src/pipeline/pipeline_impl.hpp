@@ -42,7 +42,7 @@ struct SurroundPipeline::Impl {
     GlobalViewMode mode;
     LuminationTransfer transfer;
 
-    detail::Kernel gather, preprocess, decode, resize, compose, tonemap;
+    detail::Kernel gather, preprocess, decode, encode, resize, compose, tonemap;
     detail::Buffer merge_idx, merge_w;      // 8 N^2 entries
     detail::Buffer extract_idx, extract_w;  // N^2 entries
     Image coords;                           // 4N x 2N x 2, phi and theta in [0, 1]
