@@ -1,0 +1,293 @@
+"""Training data: frame folders -> exactly the tensors the C++ pipeline feeds the generator, and the targets.
+
+The C++ pipeline is the only implementation of the preprocessing: every frame goes once through
+
+    ngi merge --frame FRAME --out DIR --npy-only [--single-view]
+
+which writes input.npy (SurroundPipeline::network_input: [1, 12, 2N, 4N] surround or [1, 10, N, N] front
+view only, values in [-1, 1]) and target.npy (SurroundPipeline::encode_lightmap of the frame's reference.exr:
+[1, 3, N, N], the front view's linear lighting through the Reinhard transfer into [-1, 1], i.e. the exact
+inverse of the decoding `ngi lightmap` applies to the generator's output). Nothing here re-implements the
+merge or the encoding; the loader only reads those files back.
+
+Cache layout (reused on rerun, one `ngi merge` per new or changed frame):
+
+    CACHE/cache.json                      layout, channel names, format version
+    CACHE/<split>/<scene>/<frame>/        input.npy, target.npy, manifest.json
+                                          (manifest: frame folder, a stamp of its files, shapes, channels)
+
+A frame's entry is reused while its manifest's stamp (names, sizes and mtimes of the frame folder's files)
+still matches. Each entry is written into a temporary folder and renamed into place, so an interrupted run
+leaves no half-written entry. Every prepare() re-merges one cached frame and compares it bit for bit with the
+cache; a difference (a changed ngi build) invalidates the whole cache.
+"""
+
+import concurrent.futures
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+import ngi_paths
+
+CACHE_FORMAT = 1
+LAYOUTS = ("surround", "single_view")
+
+# docs/CONVENTIONS.md section 7 (surround_input_channels / single_view_input_channels in pipeline.hpp). Checked
+# against what `ngi merge` prints for every frame it merges.
+SURROUND_CHANNELS = ["albedo.r", "albedo.g", "albedo.b", "normal.x", "normal.y", "normal.z", "depth",
+                     "lumination.r", "lumination.g", "lumination.b", "coord.phi", "coord.theta"]
+SINGLE_VIEW_CHANNELS = SURROUND_CHANNELS[:10]
+
+
+def check_layout(layout):
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
+
+
+def channels(layout):
+    check_layout(layout)
+    return list(SURROUND_CHANNELS if layout == "surround" else SINGLE_VIEW_CHANNELS)
+
+
+def input_nc(layout):
+    return len(channels(layout))
+
+
+def front_region(n):
+    """(rows, cols) of the front face inside the thesis global view (docs/CONVENTIONS.md 4.1): an exact copy."""
+    return slice(n // 2, 3 * n // 2), slice(3 * n // 2, 5 * n // 2)
+
+
+def crop_front(t, n, layout):
+    """The front view of an NCHW tensor in `layout`'s spatial layout: a crop for surround, all of it otherwise."""
+    if layout == "single_view":
+        return t
+    rows, cols = front_region(n)
+    return t[..., rows, cols]
+
+
+def input_hw(n, layout):
+    return (2 * n, 4 * n) if layout == "surround" else (n, n)
+
+
+# --------------------------------------------------------------------------
+# Dataset folders (ngi dataset: DIR/dataset.json, DIR/<split>/<scene>/<frame:04d>/)
+# --------------------------------------------------------------------------
+
+def read_dataset_config(dataset_dir):
+    """The dataset's dataset.json (what `ngi dataset` rendered), or None for a plain folder of frames."""
+    path = Path(dataset_dir) / "dataset.json"
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def list_frames(dataset_dir, split):
+    """Frame folders (paths relative to dataset_dir, sorted) under dataset_dir/split (or dataset_dir when split
+    is empty): every folder holding a camera.json. All must have a reference.exr (the training target)."""
+    dataset_dir = Path(dataset_dir)
+    root = dataset_dir / split if split else dataset_dir
+    if not root.is_dir():
+        raise FileNotFoundError(f"{root}: no such folder (render the dataset with `ngi dataset` first)")
+    frames = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = sorted(d for d in dirnames if ".tmp-" not in d and not d.startswith("."))
+        if "camera.json" in filenames:
+            frames.append(Path(dirpath).relative_to(dataset_dir).as_posix())
+    frames.sort()
+    if not frames:
+        raise FileNotFoundError(f"{root}: no frame folders (folders with a camera.json)")
+    missing = [f for f in frames if not (dataset_dir / f / "reference.exr").is_file()]
+    if missing:
+        raise FileNotFoundError(f"{len(missing)} frames have no reference.exr (the training target), e.g. "
+                                f"{dataset_dir / missing[0]}")
+    return frames
+
+
+def frame_list_digest(frames):
+    return hashlib.sha1("\n".join(frames).encode()).hexdigest()
+
+
+def frame_stamp(frame_dir):
+    """Names, sizes and modification times of a frame folder's files: changes when the frame is re-rendered."""
+    h = hashlib.sha1()
+    for entry in sorted(os.scandir(frame_dir), key=lambda e: e.name):
+        if entry.is_file():
+            st = entry.stat()
+            h.update(f"{entry.name}\0{st.st_size}\0{st.st_mtime_ns}\n".encode())
+    return h.hexdigest()
+
+
+# --------------------------------------------------------------------------
+# The merge cache
+# --------------------------------------------------------------------------
+
+def run_merge(ngi, frame_dir, out_dir, layout, device=None):
+    """`ngi merge --npy-only` of one frame into out_dir; returns the channel names it reported."""
+    cmd = [ngi, "merge", "--frame", str(frame_dir), "--out", str(out_dir), "--npy-only"]
+    if layout == "single_view":
+        cmd.append("--single-view")
+    if device:
+        cmd += ["--device", device]
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
+    names = None
+    for line in proc.stdout.splitlines():
+        if line.startswith("input.npy") and "channels:" in line:
+            names = line.split("channels:", 1)[1].split()
+    if names is None:
+        raise RuntimeError(f"{' '.join(cmd)}: no channel list in its output:\n{proc.stdout}")
+    if names != channels(layout):
+        raise RuntimeError(f"ngi merge reports the channels {names}, the training code expects {channels(layout)} "
+                           "(docs/CONVENTIONS.md section 7 changed? update training/data.py)")
+    return names
+
+
+class MergeCache:
+    """input.npy / target.npy of every frame, made by `ngi merge`, cached under cache_dir."""
+
+    def __init__(self, ngi, cache_dir, layout, device=None, jobs=1, log=sys.stderr):
+        check_layout(layout)
+        self.ngi = ngi
+        self.dir = Path(cache_dir)
+        self.layout = layout
+        self.device = device
+        self.jobs = max(1, int(jobs))
+        self.log = log
+        self.dir.mkdir(parents=True, exist_ok=True)
+        info = {"format": CACHE_FORMAT, "layout": layout, "channels": channels(layout)}
+        info_path = self.dir / "cache.json"
+        if info_path.is_file():
+            old = json.loads(info_path.read_text())
+            if old != info:
+                raise RuntimeError(f"{info_path} describes another cache ({old}); use another cache folder")
+        else:
+            write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
+
+    def entry(self, rel):
+        return self.dir / rel
+
+    def _fresh(self, frame_dir, rel):
+        manifest = self.entry(rel) / "manifest.json"
+        if not manifest.is_file():
+            return False
+        try:
+            m = json.loads(manifest.read_text())
+        except ValueError:
+            return False
+        return (m.get("stamp") == frame_stamp(frame_dir) and m.get("layout") == self.layout
+                and (self.entry(rel) / "input.npy").is_file() and (self.entry(rel) / "target.npy").is_file())
+
+    def _merge(self, frame_dir, rel):
+        dest = self.entry(rel)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        stamp = frame_stamp(frame_dir)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.tmp-", dir=dest.parent))
+        try:
+            names = run_merge(self.ngi, frame_dir, tmp, self.layout, self.device)
+            x = np.load(tmp / "input.npy", mmap_mode="r")
+            y = np.load(tmp / "target.npy", mmap_mode="r")
+            manifest = {"frame": str(Path(frame_dir).resolve()), "stamp": stamp, "layout": self.layout,
+                        "channels": names, "input_shape": list(x.shape), "target_shape": list(y.shape)}
+            (tmp / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
+            del x, y
+            if dest.exists():
+                shutil.rmtree(dest)
+            os.rename(tmp, dest)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+
+    def _verify_one(self, dataset_dir, rel):
+        """Re-merge one cached frame and compare it with the cache bit for bit."""
+        with tempfile.TemporaryDirectory(dir=self.dir) as tmp:
+            run_merge(self.ngi, Path(dataset_dir) / rel, tmp, self.layout, self.device)
+            for name in ("input.npy", "target.npy"):
+                if not np.array_equal(np.load(Path(tmp) / name), np.load(self.entry(rel) / name)):
+                    return False
+        return True
+
+    def prepare(self, dataset_dir, frames):
+        """Makes sure every frame (relative to dataset_dir) has a fresh entry. Returns {"merged", "reused"}."""
+        dataset_dir = Path(dataset_dir)
+        todo = [rel for rel in frames if not self._fresh(dataset_dir / rel, rel)]
+        todo_set = set(todo)
+        cached = [rel for rel in frames if rel not in todo_set]
+        if cached and not self._verify_one(dataset_dir, cached[0]):
+            print(f"merge cache {self.dir}: {cached[0]} differs from what this ngi makes now; "
+                  "re-merging every frame", file=self.log)
+            todo, cached = list(frames), []
+        if todo:
+            t0 = time.monotonic()
+            last = 0.0
+            done = 0
+            with concurrent.futures.ThreadPoolExecutor(self.jobs) as pool:
+                futures = [pool.submit(self._merge, dataset_dir / rel, rel) for rel in todo]
+                for f in concurrent.futures.as_completed(futures):
+                    f.result()
+                    done += 1
+                    now = time.monotonic()
+                    if now - last > 5 or done == len(todo):
+                        last = now
+                        rate = (now - t0) / done
+                        print(f"merge {done}/{len(todo)} frames ({len(cached)} cached)  {rate:.2f} s/frame  "
+                              f"ETA {rate * (len(todo) - done):.0f} s", file=self.log, flush=True)
+        return {"merged": len(todo), "reused": len(cached)}
+
+
+class FrameDataset(torch.utils.data.Dataset):
+    """(input [C, H, W], target [3, N, N], name) per frame, read from the merge cache (float32, as ngi wrote)."""
+
+    def __init__(self, cache, frames):
+        self.cache = cache
+        self.frames = list(frames)
+
+    def __len__(self):
+        return len(self.frames)
+
+    def arrays(self, i):
+        e = self.cache.entry(self.frames[i])
+        return np.load(e / "input.npy")[0], np.load(e / "target.npy")[0]
+
+    def __getitem__(self, i):
+        x, y = self.arrays(i)
+        return torch.from_numpy(x), torch.from_numpy(y), self.frames[i]
+
+
+def load_split(ngi, dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr):
+    """The FrameDataset of one split, merged (or reused) through the cache; returns (dataset, n, merge stats)."""
+    frames = list_frames(dataset_dir, split)
+    if max_frames:
+        frames = frames[:max_frames]
+    cache = MergeCache(ngi, cache_dir, layout, device=device, jobs=jobs, log=log)
+    stats = cache.prepare(dataset_dir, frames)
+    ds = FrameDataset(cache, frames)
+    _, y = ds.arrays(0)
+    return ds, int(y.shape[-1]), stats
+
+
+def default_cache_dir(dataset_dir, layout):
+    return Path(dataset_dir) / "merge_cache" / layout
+
+
+def write_text_atomic(path, text):
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

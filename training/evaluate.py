@@ -1,0 +1,121 @@
+#!/usr/bin/python3
+"""Held-out evaluation: in PyTorch (during training and for export's bn_mode choice) and with ngi itself.
+
+heldout_scores() runs the generator as ngi will (reference_models.UnetGenerator, bn_mode running or per_image,
+dropout off or seeded) over held-out frames and scores its front view against the target:
+  l1          mean |G(x)_front - y| in the model's [-1, 1] output encoding (the L1 term of the training loss)
+  psnr_enc    PSNR of the same, on the [0, 1] Reinhard-encoded scale (data range 1)
+  mse_linear  mean squared error of the decoded linear lightmaps (x = e / (1 - e)), capped at 65504 like ngi
+
+As a command, it evaluates an exported model with the C++ pipeline end to end: `ngi lightmap` on every frame
+of a split, and a summary of the per-frame metrics.json files (tone-mapped final images and linear lightmaps,
+the network against the direct-only baseline):
+
+    /usr/bin/python3 training/evaluate.py --model M.safetensors --dataset DATA --split test --out DIR
+"""
+
+import argparse
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+import data
+import networks
+import ngi_paths
+import reference_models
+
+LIGHT_MAX = 65504.0
+
+
+def decode(v):
+    """front_lightmap's decoding (kernels/compose.cl decode_lightmap) in float64, output range [-1, 1]."""
+    e = np.clip((np.asarray(v, np.float64) + 1.0) / 2.0, 0.0, 1.0)
+    with np.errstate(divide="ignore"):
+        return np.where(e < 1.0, np.minimum(e / np.maximum(1.0 - e, 1e-300), LIGHT_MAX), LIGHT_MAX)
+
+
+def heldout_scores(state_dict, cfg, dataset, n, bn_mode, dropout="off", dropout_seed=0, max_frames=0):
+    """Scores (see the module doc) of generator weights `state_dict` on a FrameDataset, averaged over frames."""
+    g = networks.inference_generator(state_dict, data.input_nc(cfg["layout"]), 3, cfg["ngf"], cfg["num_downs"],
+                                     dropout=dropout, dropout_seed=dropout_seed)
+    reference_models.set_bn_mode(g, bn_mode)
+    count = len(dataset) if not max_frames else min(max_frames, len(dataset))
+    l1 = mse_enc = mse_lin = 0.0
+    with torch.no_grad():
+        for i in range(count):
+            x, y, _ = dataset[i]
+            out = data.crop_front(g(x[None]), n, cfg["layout"])[0].numpy().astype(np.float64)
+            y = y.numpy().astype(np.float64)
+            l1 += np.abs(out - y).mean()
+            mse_enc += (((out - y) / 2.0) ** 2).mean()
+            mse_lin += ((decode(out) - decode(y)) ** 2).mean()
+    l1, mse_enc, mse_lin = l1 / count, mse_enc / count, mse_lin / count
+    return {"frames": count, "l1": l1, "psnr_enc": 10 * math.log10(1.0 / mse_enc) if mse_enc > 0 else None,
+            "mse_linear": mse_lin}
+
+
+# --------------------------------------------------------------------------
+# End to end with ngi lightmap
+# --------------------------------------------------------------------------
+
+def _mean(values):
+    values = [v for v in values if v is not None]
+    return sum(values) / len(values) if values else None
+
+
+def evaluate_with_ngi(ngi, model, dataset_dir, split, out_dir, max_frames=0, device=None, log=sys.stderr):
+    frames = data.list_frames(dataset_dir, split)
+    if max_frames:
+        frames = frames[:max_frames]
+    out_dir = Path(out_dir)
+    per_frame = {}
+    for k, rel in enumerate(frames):
+        dest = out_dir / rel
+        cmd = [ngi, "lightmap", "--frame", str(Path(dataset_dir) / rel), "--model", str(model), "--out", str(dest)]
+        if device:
+            cmd += ["--device", device]
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
+        if proc.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stdout}{proc.stderr}")
+        per_frame[rel] = json.loads((dest / "metrics.json").read_text())
+        print(f"lightmap {k + 1}/{len(frames)} {rel}", file=log, flush=True)
+    summary = {"model": str(model), "dataset": str(dataset_dir), "split": split, "frames": len(frames)}
+    for who in ("network", "direct_only"):
+        summary[who] = {}
+        for space in ("final_ldr", "lightmap_linear"):
+            summary[who][space] = {m: _mean([f[who][space][m] for f in per_frame.values()])
+                                   for m in ("mse", "psnr", "ssim")}
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (out_dir / "per_frame.json").write_text(json.dumps(per_frame, indent=1) + "\n")
+    return summary
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--model", required=True, help="exported .safetensors model")
+    ap.add_argument("--dataset", required=True, help="dataset folder (ngi dataset --out)")
+    ap.add_argument("--split", default="test")
+    ap.add_argument("--out", required=True, help="folder for per-frame outputs, summary.json, per_frame.json")
+    ap.add_argument("--max-frames", type=int, default=0, help="first K frames only (0 = all)")
+    ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
+    ap.add_argument("--device", help="ngi --device")
+    args = ap.parse_args()
+    summary = evaluate_with_ngi(ngi_paths.find_ngi(args.ngi), args.model, args.dataset, args.split, args.out,
+                                args.max_frames, args.device)
+    print(f"{'':12s} {'final_ldr (SSIM / MSE / PSNR)':>36s}   {'lightmap_linear (SSIM / PSNR)':>30s}")
+    for who in ("network", "direct_only"):
+        f, l = summary[who]["final_ldr"], summary[who]["lightmap_linear"]
+        fmt = lambda v, spec: "-" if v is None else format(v, spec)  # noqa: E731
+        print(f"{who:12s} {fmt(f['ssim'], '.5f'):>12s} {fmt(f['mse'], '.5f'):>10s} {fmt(f['psnr'], '.3f'):>10s}   "
+              f"{fmt(l['ssim'], '.5f'):>14s} {fmt(l['psnr'], '.3f'):>14s}")
+    print(f"summary: {Path(args.out) / 'summary.json'}")
+
+
+if __name__ == "__main__":
+    main()
