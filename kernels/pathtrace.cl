@@ -305,7 +305,7 @@ inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* 
 
 // Probability with which sunlit-patch sampling from a point in `reg` picks the face `f` of block `cell` (0 if the
 // face is not one of the region's patches or reflects no sunlight).
-inline float patch_prob(const Scene* s, int reg, int3 cell, int f) {
+inline float patch_probability(const Scene* s, int reg, int3 cell, int f) {
     const int slot = s->face_slot[cell.x + s->dims.x * (cell.y + s->dims.y * cell.z)];
     if (slot < 0) return 0.0f;
     const int i = s->face_index[6 * slot + f];
@@ -391,7 +391,7 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
         if (depth >= max_bounces) break;
         sun_mis = 1.0f;
         if (prange.y > 0) {
-            const float prob = patch_prob(s, reg, h.cell, h.face);
+            const float prob = patch_probability(s, reg, h.cell, h.face);
             if (prob > 0.0f) {
                 const float cos_y = fabs(dot(face_normal(h.face), w));
                 sun_mis = power_heuristic(dot(n, w) * M_1_PI_F, prob * h.t * h.t / cos_y);

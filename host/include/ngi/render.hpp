@@ -52,8 +52,8 @@ struct CameraPose {
 
 struct RenderSettings {
     int n = 128;               // face size in pixels
-    int feature_spp = 4;       // samples per pixel of the "direct" feature (the other features are exact)
-    int reference_spp = 32;    // samples per pixel of the reference lighting
+    int feature_spp = 8;       // samples per pixel of the "direct" feature (the other features are exact)
+    int reference_spp = 64;    // samples per pixel of the reference lighting
     int max_bounces = 8;       // indirect bounces of the reference (0 = direct light only); Russian roulette
     int rr_start = 2;          // bounces before Russian roulette starts
     bool reference = true;     // also render the reference of `reference_face`
