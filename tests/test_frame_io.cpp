@@ -1,6 +1,7 @@
 // The frame folder: write_frame -> read_frame round trip, safe replacement, no partial folder after a failing
 // write, and every kind of bad input read_frame must name: missing files, sizes, channels, NaN/Inf, depth.
 #include <catch2/catch.hpp>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -229,21 +230,30 @@ TEST_CASE("frame folder: bad input is an InputError naming the file", "[io][fram
     CHECK_THROWS_WITH(ngi::read_frame(dir), Contains("missing") && Contains("front_normal.exr"));
 }
 
-TEST_CASE("frame folder: NaN/Inf are sanitized and counted per file; PNG and RGBA features", "[io][frame]") {
+TEST_CASE("frame folder: NaN/Inf are sanitized by feature and counted per file; PNG and RGBA features", "[io][frame]") {
     TempDir root("frame-nan");
     std::mt19937 rng(5);
     ngi::Frame f = make_frame(8, rng);
     const std::string dir = root / "f";
     ngi::write_frame(dir, f);
     const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const float fmax = std::numeric_limits<float>::max();
+    const std::size_t plane = 64;
 
-    ngi::Image direct = f.get(ngi::Feature::Direct, ngi::Face::Left);
-    direct.data[1] = nan; direct.data[2] = nan; direct.data[3] = nan; direct.data[10] = inf; direct.data[11] = -inf;
-    ngi::write_exr(dir + "/left_direct.exr", direct, ngi::ExrPixelType::Half);
+    ngi::Image albedo_f = f.get(ngi::Feature::Albedo, ngi::Face::Front);
+    albedo_f.data[0] = inf; albedo_f.data[1] = -inf; albedo_f.data[2] = nan;
+    ngi::write_exr(dir + "/front_albedo.exr", albedo_f, ngi::ExrPixelType::Half);
+    ngi::Image normal = f.get(ngi::Feature::Normal, ngi::Face::Front);
+    normal.data[plane + 4] = nan;           // y of pixel 4
+    normal.data[2 * plane + 9] = -inf;      // z of pixel 9
+    ngi::write_exr(dir + "/front_normal.exr", normal, ngi::ExrPixelType::Float);
     ngi::Image depth = f.get(ngi::Feature::Depth, ngi::Face::Up);
     depth.data[0] = inf;
     depth.data[1] = nan;
     ngi::write_exr(dir + "/up_depth.exr", depth, ngi::ExrPixelType::Float);
+    ngi::Image direct = f.get(ngi::Feature::Direct, ngi::Face::Left);
+    direct.data[1] = nan; direct.data[2] = nan; direct.data[3] = nan; direct.data[10] = inf; direct.data[11] = -inf;
+    ngi::write_exr(dir + "/left_direct.exr", direct, ngi::ExrPixelType::Half);
     ngi::Image ref = *f.reference;
     ref.data[7] = nan;
     ngi::write_exr(dir + "/reference.exr", ref, ngi::ExrPixelType::Float);
@@ -258,26 +268,40 @@ TEST_CASE("frame folder: NaN/Inf are sanitized and counted per file; PNG and RGB
 
     ngi::FrameReadStats stats;
     const ngi::Frame r = ngi::read_frame(dir, &stats);
-    REQUIRE(stats.sanitized.size() == 3);
-    CHECK(stats.sanitized[0].file == "up_depth.exr");  // read order: features, then faces, then the reference
-    CHECK(stats.sanitized[0].nan == 1);
-    CHECK(stats.sanitized[0].inf == 1);
-    CHECK(stats.sanitized[1].file == "left_direct.exr");
-    CHECK(stats.sanitized[1].nan == 3);
-    CHECK(stats.sanitized[1].inf == 2);
-    CHECK(stats.sanitized[2].file == "reference.exr");
-    CHECK(stats.total_sanitized() == 8);
+    // Read order: features (albedo, normal, depth, direct, ...), faces within a feature, then the reference.
+    REQUIRE(stats.sanitized.size() == 5);
+    const std::pair<const char*, std::array<std::size_t, 2>> expected[] = {
+        {"front_albedo.exr", {1, 2}}, {"front_normal.exr", {1, 1}}, {"up_depth.exr", {1, 1}},
+        {"left_direct.exr", {3, 2}}, {"reference.exr", {1, 0}}};
+    for (int i = 0; i < 5; ++i) {
+        CHECK(stats.sanitized[i].file == expected[i].first);
+        CHECK(stats.sanitized[i].nan == expected[i].second[0]);
+        CHECK(stats.sanitized[i].inf == expected[i].second[1]);
+    }
+    CHECK(stats.total_sanitized() == 13);
     CHECK(stats.ldr_files == std::vector<std::string>{"back_albedo.png"});
 
+    const auto& ra = r.get(ngi::Feature::Albedo, ngi::Face::Front).data;
+    CHECK(ra[0] == 1.0f);
+    CHECK(ra[1] == 0.0f);
+    CHECK(ra[2] == 0.0f);
+    const auto& rn = r.get(ngi::Feature::Normal, ngi::Face::Front).data;
+    for (int p : {4, 9}) {  // the whole vector is zeroed, not just the bad component
+        CHECK(rn[p] == 0.0f);
+        CHECK(rn[plane + p] == 0.0f);
+        CHECK(rn[2 * plane + p] == 0.0f);
+    }
+    CHECK(rn[5] == normal.data[5]);
+    const auto& dd = r.get(ngi::Feature::Depth, ngi::Face::Up).data;
+    CHECK(dd[0] == fmax);
+    CHECK(dd[1] == fmax);
     const auto& rd = r.get(ngi::Feature::Direct, ngi::Face::Left).data;
     CHECK(rd[1] == 0.0f);
-    CHECK(rd[10] == 0.0f);
+    CHECK(rd[10] == fmax);
     CHECK(rd[11] == 0.0f);
-    CHECK(ngi::test::all_finite(rd));
-    const auto& dd = r.get(ngi::Feature::Depth, ngi::Face::Up).data;
-    CHECK(dd[0] == *std::max_element(depth.data.begin() + 2, depth.data.end()));  // +Inf -> farthest finite depth
-    CHECK(dd[1] == 0.0f);
     CHECK(r.reference->data[7] == 0.0f);
+    for (int fi = 0; fi < ngi::kFeatureCount; ++fi)
+        for (int k = 0; k < ngi::kFaceCount; ++k) CHECK(ngi::test::all_finite(r.get(ngi::Feature(fi), ngi::Face(k)).data));
     CHECK(ngi::test::max_abs_diff(r.get(ngi::Feature::Albedo, ngi::Face::Back).data, albedo.data) <= 0.5 / 255 + 1e-7);
     CHECK(r.get(ngi::Feature::Env, ngi::Face::Right).data == env.data);  // alpha dropped
 }

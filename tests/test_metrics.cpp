@@ -166,6 +166,9 @@ TEST_CASE("metrics: bad input is an InputError that says what is wrong", "[metri
     nan.data[5] = std::numeric_limits<float>::quiet_NaN();
     nan.data[9] = std::numeric_limits<float>::infinity();
     CHECK_THROWS_WITH(ngi::compare_images(dev, a, nan), Contains("second image has 2 NaN/Inf"));
+    ngi::Image huge = a;
+    huge.data[0] = std::numeric_limits<float>::max();  // read_frame's saturated light
+    CHECK_THROWS_WITH(ngi::compare_images(dev, huge, a), Contains("first image has 1 values beyond"));
     CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, 0.0), Contains("data_range"));
     CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, -1.0), Contains("data_range"));
     CHECK_THROWS_AS(ngi::compare_images(dev, a, a, std::nan("")), ngi::InputError);

@@ -33,9 +33,8 @@ int cmd_metrics(int argc, char** argv) {
                               dims(b) + " (width x height x channels); the images must match");
     ngi::Device device = ngi::Device::open(args.get("device"));
     const ngi::ImageMetrics m = ngi::compare_images(device, a, b, range);
-    char psnr[32];
-    if (std::isinf(m.psnr)) std::snprintf(psnr, sizeof psnr, "null");
-    else std::snprintf(psnr, sizeof psnr, "%.17g", m.psnr);
+    char psnr[32] = "null";  // JSON has no infinity: null stands for the +inf PSNR of identical images
+    if (std::isfinite(m.psnr)) std::snprintf(psnr, sizeof psnr, "%.17g", m.psnr);
     std::printf("{\"mse\": %.17g, \"psnr\": %s, \"ssim\": %.17g}\n", m.mse, psnr, m.ssim);
     return 0;
 }

@@ -73,11 +73,14 @@ void write_image(const std::string& path, const Image& image);
 // All face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
 // feature may carry a 4th channel named A / a PNG alpha channel, which is dropped).
 //
-// Sanitizing (not fatal, counted per file in FrameReadStats): NaN -> 0 everywhere; +-Inf -> 0 in colour and
-// normal buffers (an infinite radiance or normal is a renderer fault, and 0 is the neutral value for the merge
-// and the network); +Inf depth (a ray that hit nothing) -> the largest finite depth of that file, so the
-// background stays the farthest thing in view. Negative depth values (including -Inf) are an InputError naming
-// the file and the number of such pixels.
+// Sanitizing (not fatal; every NaN/Inf value is counted per file in FrameReadStats) follows the preprocessing rules
+// of docs/CONVENTIONS.md, so a frame read from disk and the same frame passed in memory give the same network input:
+//   albedo                              NaN -> 0, +Inf -> 1, -Inf -> 0
+//   normal                              a pixel with any non-finite component -> the zero vector (no surface)
+//   depth                               NaN, +Inf -> FLT_MAX (no hit: farther than anything; preprocessing maps
+//                                       it to its far plane); negative values (-Inf included) are an InputError
+//                                       naming the file and the number of such pixels
+//   direct, emission, env, reference    NaN -> 0, -Inf -> 0, +Inf -> FLT_MAX (saturated light)
 
 struct SanitizedFile {
     std::string file;          // file name within the frame folder

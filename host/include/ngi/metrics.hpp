@@ -9,8 +9,9 @@
 // for HDR images the range the comparison is meant over (e.g. the reference's maximum). It sets PSNR's peak and
 // SSIM's stabilizing constants C1 = (K1 R)^2, C2 = (K2 R)^2.
 //
-// Inputs must have the same width, height and channel count and hold only finite values (InputError otherwise;
-// NaN would silently poison every sum). SSIM needs at least 11x11 pixels, like skimage.
+// Inputs must have the same width, height and channel count and hold only finite values within +-1e15
+// (InputError otherwise: NaN would silently poison every sum, and larger values overflow float32 squares).
+// SSIM needs at least 11x11 pixels, like skimage.
 #pragma once
 #include "ngi/device.hpp"
 #include "ngi/image.hpp"

@@ -33,23 +33,36 @@ Image fit_channels(Image img, int want, bool extra_is_alpha, const std::string& 
                      std::to_string(want) + (want == 3 ? " (R, G, B; an extra alpha channel A is allowed)" : ""));
 }
 
-// NaN -> 0; +-Inf -> 0, except +Inf depth -> the file's largest finite depth. Negative depth is an error.
-void sanitize(Image& img, bool depth, const std::string& file, const std::string& path, FrameReadStats& stats) {
+// The non-finite rules of docs/CONVENTIONS.md section 6 (preprocessing), applied at load time so that a frame read
+// from disk and the same frame handed over in memory give the same network input. `kind` is the face feature;
+// the reference follows the lighting rule (Feature::Direct). Negative depth is an error.
+void sanitize(Image& img, Feature kind, const std::string& file, const std::string& path, FrameReadStats& stats) {
+    constexpr float kMax = std::numeric_limits<float>::max();
     SanitizedFile s{file, 0, 0};
-    float far = 0.0f;
-    if (depth) {
-        std::size_t negative = 0;
-        for (float v : img.data) {
-            if (v < 0.0f) ++negative;  // includes -Inf; NaN compares false
-            else if (std::isfinite(v)) far = std::max(far, v);
-        }
-        if (negative)
+    auto count = [&](float v) { s.nan += std::isnan(v); s.inf += std::isinf(v); };
+    if (kind == Feature::Depth) {
+        const std::size_t negative = std::count_if(img.data.begin(), img.data.end(), [](float v) { return v < 0.0f; });
+        if (negative)  // -Inf included; NaN compares false
             throw InputError("read " + path + ": " + std::to_string(negative) + " of " +
                              std::to_string(img.data.size()) + " pixels have a negative depth (depth is a distance)");
     }
-    for (float& v : img.data) {
-        if (std::isnan(v)) { v = 0.0f; ++s.nan; }
-        else if (std::isinf(v)) { v = depth ? far : 0.0f; ++s.inf; }
+    if (kind == Feature::Normal) {
+        // A normal with a non-finite component has no direction: the whole vector becomes 0 (no surface), rather
+        // than renormalizing what is left of it into a wrong direction.
+        const std::size_t plane = img.plane();
+        for (std::size_t p = 0; p < plane; ++p) {
+            float* c[3] = {&img.data[p], &img.data[plane + p], &img.data[2 * plane + p]};
+            if (std::isfinite(*c[0]) && std::isfinite(*c[1]) && std::isfinite(*c[2])) continue;
+            for (float* v : c) { count(*v); *v = 0.0f; }
+        }
+    } else {
+        for (float& v : img.data) {
+            if (std::isfinite(v)) continue;
+            count(v);
+            if (kind == Feature::Depth) v = kMax;                                  // no hit: farther than anything
+            else if (kind == Feature::Albedo) v = v > 0.0f ? 1.0f : 0.0f;          // NaN, -Inf -> 0; +Inf -> 1
+            else v = v > 0.0f ? kMax : 0.0f;                                       // light: +Inf saturates
+        }
     }
     if (s.nan || s.inf) stats.sanitized.push_back(std::move(s));
 }
@@ -151,7 +164,7 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
                                  std::to_string(frame.n) + "x" + std::to_string(frame.n) +
                                  "; all faces of a frame have one size");
             }
-            sanitize(img, feature == Feature::Depth, file.filename().string(), path, st);
+            sanitize(img, feature, file.filename().string(), path, st);
             frame.get(feature, Face(k)) = std::move(img);
         }
     }
@@ -161,7 +174,7 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
         std::vector<std::string> names;
         Image img = read_exr(ref.string(), &names);
         img = fit_channels(std::move(img), 3, names.back() == "A", ref.string());
-        sanitize(img, false, "reference.exr", ref.string(), st);
+        sanitize(img, Feature::Direct, "reference.exr", ref.string(), st);
         frame.reference = std::move(img);
     }
     return frame;

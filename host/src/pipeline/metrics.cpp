@@ -16,6 +16,8 @@ constexpr double kSigma = 1.5, kTruncate = 3.5, kK1 = 0.01, kK2 = 0.03;
 constexpr int kRadius = int(kTruncate * kSigma + 0.5);  // scipy.ndimage's radius: 5, i.e. 11 taps (SSIM_R)
 constexpr int kTile = 16;                               // TILE in kernels/metrics.cl
 constexpr std::size_t kSeLocal = 256, kSeMaxGroups = 1024;
+// Squares of 1e15 are 1e30; a work-group adds at most a few hundred of them: far below FLT_MAX (3.4e38).
+constexpr float kMaxMagnitude = 1e15f;
 
 std::string dims(const Image& i) {
     return std::to_string(i.width) + "x" + std::to_string(i.height) + "x" + std::to_string(i.channels);
@@ -33,10 +35,16 @@ void check_inputs(const Image& a, const Image& b, const char* op) {
     const char* names[] = {"first", "second"};
     int k = 0;
     for (const Image* i : {&a, &b}) {
-        std::size_t bad = 0;
-        for (float v : i->data) bad += !std::isfinite(v);
+        std::size_t bad = 0, huge = 0;
+        for (float v : i->data) {
+            bad += !std::isfinite(v);
+            huge += std::isfinite(v) && std::abs(v) > kMaxMagnitude;
+        }
         if (bad)
             throw InputError(what + "the " + names[k] + " image has " + std::to_string(bad) + " NaN/Inf values");
+        if (huge)
+            throw InputError(what + "the " + names[k] + " image has " + std::to_string(huge) +
+                             " values beyond +-1e15, whose squares would overflow the float32 sums");
         ++k;
     }
 }
