@@ -50,7 +50,8 @@ TEST_CASE("dataset config: entries, times, and disjoint splits", "[render]") {
     CHECK(c.train[5].spec == "street:seed=0");
     CHECK(c.train[5].frames == 4);
     REQUIRE(c.test.size() == 2);
-    CHECK(c.test[1].spec == (fs::path(p).parent_path() / "model.vox").string());
+    CHECK(c.test[1].spec == fs::absolute(fs::path(p).parent_path() / "model.vox").lexically_normal().string());
+    CHECK(c.train[2].time_start < 0.0f);  // no "time": the scene's default
     CHECK(dataset_frame_time(c.train[0], 0, 10) == 12.0f);
     CHECK(dataset_frame_time(c.train[0], 9, 10) == 20.0f);
     CHECK(dataset_scene_folder("room:seed=12") == "room_seed12");

@@ -16,7 +16,8 @@ namespace ngi {
 
 struct DatasetScene {
     std::string spec;                       // make_scene() spec: "room:seed=3" or a .vox path
-    float time_start = 13.0f, time_end = 13.0f;  // hours at the first / last frame (linear in between)
+    float time_start = -1.0f, time_end = -1.0f;  // hours at the first / last frame (linear in between);
+                                                 // negative: the scene's default_time throughout
     int frames = 0;                         // frames of this scene (0 = the config's frames_per_scene)
 };
 
@@ -29,7 +30,8 @@ struct DatasetConfig {
     // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "max_bounces", "frames_per_scene",
     // "keyframe_interval", "train": [entry...], "test": [entry...]}, entry = {"scene": "room:seed=3"} or
     // {"family": "room", "seeds": [1, 2] | {"first": 1, "count": 4}} or {"vox": "file.vox"}, plus optional
-    // "time": hours | [start, end] and "frames". Relative .vox paths are relative to the config file.
+    // "time": hours | [start, end] and "frames". Relative .vox paths are relative to the config file (and are
+    // stored as absolute paths, so a resumed run from another directory sees the same config).
     // Throws InputError naming the file for bad JSON, unknown keys, bad values, and scenes in both splits.
     static DatasetConfig load(const std::string& path);
 };

@@ -73,14 +73,12 @@ struct ConfigReader {
                 } else {
                     proto.time_start = proto.time_end = hours(t, where);
                 }
-            } else {
-                proto.time_start = proto.time_end = -1.0f;  // the scene's own default time
-            }
+            }  // else: negative, the scene's own default time
             proto.frames = integer(e, "frames", 0, 1, 1000000);
             const int kinds = int(e.contains("scene")) + int(e.contains("family")) + int(e.contains("vox"));
             if (kinds != 1) fail(where + " needs exactly one of 'scene', 'family' (+ 'seeds') or 'vox'");
             auto add = [&](std::string spec) {
-                if (is_vox(spec) && fs::path(spec).is_relative()) spec = (base / spec).lexically_normal().string();
+                if (is_vox(spec)) spec = fs::absolute(base / spec).lexically_normal().string();
                 DatasetScene d = proto;
                 d.spec = std::move(spec);
                 out.push_back(d);
