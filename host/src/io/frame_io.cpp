@@ -133,9 +133,11 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
             return fs::exists(file_base(k).string() + ".exr", ec) ||
                    (png_allowed(feature) && fs::exists(file_base(k).string() + ".png", ec));
         };
-        int faces_present = 0;
-        for (int k = 0; k < kFaceCount; ++k) faces_present += present(k);
-        if (optional_feature(feature) && faces_present == 0) continue;  // absent as a whole: allowed
+        if (optional_feature(feature)) {
+            int faces_present = 0;
+            for (int k = 0; k < kFaceCount; ++k) faces_present += present(k);
+            if (faces_present == 0) continue;  // absent as a whole: allowed
+        }
         for (int k = 0; k < kFaceCount; ++k) {
             const fs::path exr = file_base(k).string() + ".exr", png = file_base(k).string() + ".png";
             const bool has_exr = fs::exists(exr, ec), has_png = png_allowed(feature) && fs::exists(png, ec);
