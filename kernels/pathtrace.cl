@@ -99,6 +99,14 @@ inline float3 face_normal(int f) {
     return (float3)(a == 0 ? s : 0.0f, a == 1 ? s : 0.0f, a == 2 ? s : 0.0f);
 }
 
+// The point (v.x, v.y) in [0, 1]^2 of face f of block `cell` (faces are unit squares).
+inline float3 face_point(int3 cell, int f, float2 v) {
+    const int a = f >> 1;
+    const float plane = (f & 1) ? 0.0f : 1.0f;
+    const float3 c = convert_float3(cell);
+    return c + (a == 0 ? (float3)(plane, v.x, v.y) : (a == 1 ? (float3)(v.x, plane, v.y) : (float3)(v.x, v.y, plane)));
+}
+
 inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 // Orthonormal basis around a unit vector (Duff et al. 2017, branchless).
@@ -248,12 +256,7 @@ inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* ra
         if (s->cdf[mid] > u.x) hi = mid; else lo = mid + 1;
     }
     const int4 e = s->lights[lo];
-    const int a = e.w >> 1;
-    const float plane = (e.w & 1) ? 0.0f : 1.0f;
-    float3 q = convert_float3(e.xyz);
-    if (a == 0) q += (float3)(plane, v.x, v.y);
-    else if (a == 1) q += (float3)(v.x, plane, v.y);
-    else q += (float3)(v.x, v.y, plane);
+    const float3 q = face_point(e.xyz, e.w, v);
     float3 w = q - p;
     const float dist = length(w);
     w /= dist;
@@ -284,16 +287,11 @@ inline float portal_pdf(int count, float dist, float cos_p) { return dist * dist
 inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
     const float2 u = rng2(r), v = rng2(r);
     const int4 e = s->portals[range.x + min((int)(u.x * (float)range.y), range.y - 1)];
-    const int a = e.w >> 1;
-    const float plane = (e.w & 1) ? 0.0f : 1.0f;
-    float3 q = convert_float3(e.xyz);
-    if (a == 0) q += (float3)(plane, v.x, v.y);
-    else if (a == 1) q += (float3)(v.x, plane, v.y);
-    else q += (float3)(v.x, v.y, plane);
+    const float3 q = face_point(e.xyz, e.w, v);
     float3 w = q - p;
     const float dist = length(w);
     w /= dist;
-    const float cos_x = dot(n, w), cos_p = fabs(a == 0 ? w.x : (a == 1 ? w.y : w.z));
+    const float cos_x = dot(n, w), cos_p = fabs(dot(face_normal(e.w), w));
     if (cos_x <= 0.0f || cos_p <= 1.0e-6f) return (float3)(0.0f);
     Crossing x;
     const Hit h = trace(s, p, w, T_INF, rays, &x);
@@ -326,12 +324,7 @@ inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r
         if (s->patch_cdf[mid] > u.x) hi = mid; else lo = mid + 1;
     }
     const int4 e = s->patches[lo];
-    const int a = e.w >> 1;
-    const float plane = (e.w & 1) ? 0.0f : 1.0f;
-    float3 q = convert_float3(e.xyz);
-    if (a == 0) q += (float3)(plane, v.x, v.y);
-    else if (a == 1) q += (float3)(v.x, plane, v.y);
-    else q += (float3)(v.x, v.y, plane);
+    const float3 q = face_point(e.xyz, e.w, v);
     float3 w = q - p;
     const float dist = length(w);
     w /= dist;
@@ -376,7 +369,7 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
         if (h.mat == 0) {
             float mis = 1.0f;
             if (range.y > 0 && x.found) {
-                const float cos_p = fabs((x.face >> 1) == 0 ? w.x : ((x.face >> 1) == 1 ? w.y : w.z));
+                const float cos_p = fabs(dot(face_normal(x.face), w));
                 mis = power_heuristic(dot(n, w) * M_1_PI_F, portal_pdf(range.y, x.t, cos_p));
             }
             sum += beta * sky_radiance(s->light, w) * mis;
@@ -437,6 +430,12 @@ inline float3 pixel_ray(__global const float* cam, int f, int col, int row, int 
     return normalize(*look + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]));
 }
 
+inline void store3(__global float* q, int plane, int npix, float3 v) {
+    q[(size_t)plane * npix] = v.x;
+    q[(size_t)(plane + 1) * npix] = v.y;
+    q[(size_t)(plane + 2) * npix] = v.z;
+}
+
 // Feature buffers of all six faces: out[(face * F_CHANNELS + channel) * n * n + row * n + col].
 // global size: 6 n^2 (one work-item per pixel).
 __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp, uint seed, __global float* out,
@@ -471,10 +470,12 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
         direct /= (float)max(spp, 1);
     }
     __global float* q = out + (size_t)f * F_CHANNELS * npix + pix;
-    const float v[F_CHANNELS] = {albedo.x, albedo.y, albedo.z, normal.x, normal.y, normal.z, depth,
-                                 direct.x, direct.y, direct.z, emission.x, emission.y, emission.z,
-                                 env.x, env.y, env.z};
-    for (int c = 0; c < F_CHANNELS; ++c) q[(size_t)c * npix] = v[c];
+    store3(q, F_ALBEDO, npix, albedo);
+    store3(q, F_NORMAL, npix, normal);
+    q[(size_t)F_DEPTH * npix] = depth;
+    store3(q, F_DIRECT, npix, direct);
+    store3(q, F_EMISSION, npix, emission);
+    store3(q, F_ENV, npix, env);
     rays_out[gid] = rays;
 }
 
@@ -523,16 +524,10 @@ __kernel void pt_patch_weights(SCENE_ARGS, int count, __global float* weight_out
     const float c = dot(ny, sd);
     float w = 0.0f;
     if (c > 0.0f && luminance(E) > 0.0f) {
-        const int a = e.w >> 1;
-        const float plane = (e.w & 1) ? 0.0f : 1.0f;
         uint rays = 0;
         int visible = 0;
         for (int k = 0; k < 4; ++k) {
-            const float2 v = (float2)((k & 1) ? 0.75f : 0.25f, (k & 2) ? 0.75f : 0.25f);
-            float3 q = convert_float3(e.xyz);
-            if (a == 0) q += (float3)(plane, v.x, v.y);
-            else if (a == 1) q += (float3)(v.x, plane, v.y);
-            else q += (float3)(v.x, v.y, plane);
+            const float3 q = face_point(e.xyz, e.w, (float2)((k & 1) ? 0.75f : 0.25f, (k & 2) ? 0.75f : 0.25f));
             visible += trace(&s, q + ny * RAY_OFFSET, sd, T_INF, &rays, 0).mat == 0;
         }
         w = luminance(mats[2 * s.grid[e.x + sx * (e.y + sy * e.z)]].xyz) * luminance(E) * c * (float)visible * 0.25f;
