@@ -23,7 +23,7 @@ public:
                 if (auto eq = name.find('='); eq != std::string::npos) {
                     options_[name.substr(0, eq)] = name.substr(eq + 1);
                 } else if (flags.count(name)) {
-                    options_[name] = "1";
+                    options_[name] = std::string(1, '1');  // not = "1": GCC 12 -Wrestrict false positive (PR105329)
                 } else {
                     if (i + 1 >= argc) throw UsageError("option --" + name + " needs a value");
                     options_[name] = argv[++i];
