@@ -23,7 +23,7 @@ struct Tensor {
 std::string shape_string(const std::vector<int>& shape);  // "[1, 12, 512, 1024]"
 
 // NumPy .npy (format 1.0/2.0/3.0): float32 (and float64 / float16, converted) little-endian, C order.
-// Writes float32 to a temporary file renamed into place, so a failed write leaves nothing behind.
+// Writes float32 to a uniquely named temporary file renamed into place, so a failed write leaves nothing behind.
 Tensor read_npy(const std::string& path);
 void write_npy(const std::string& path, const Tensor& t);
 

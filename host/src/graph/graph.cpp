@@ -8,7 +8,7 @@ namespace ngi::detail {
 TensorId Graph::input(const Shape& shape, const std::string& name) {
     if (input_ != -1) throw Error("graph: only one input is supported");
     if (shape.size() == 0) throw InputError("graph input " + name + ": empty shape " + to_string(shape));
-    tensors_.push_back({shape, name});
+    tensors_.emplace_back(shape, name);
     input_ = TensorId(tensors_.size() - 1);
     return input_;
 }
@@ -48,7 +48,7 @@ TensorId Graph::concat(const std::vector<TensorId>& inputs, const std::string& n
                              ", expected spatial size " + std::to_string(s.h) + "x" + std::to_string(s.w));
         s.c += x.c;
     }
-    tensors_.push_back({s, name});
+    tensors_.emplace_back(s, name);
     const TensorId cat = TensorId(tensors_.size() - 1);
     tensors_[cat].is_concat = true;
     std::size_t offset = 0;

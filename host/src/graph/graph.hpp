@@ -63,6 +63,7 @@ public:
 
 private:
     struct Tensor {
+        Tensor(const Shape& s, std::string n, int p = -1) : shape(s), name(std::move(n)), producer(p) {}
         Shape shape;
         std::string name;
         int producer = -1;           // node index; -1 for the input and concats

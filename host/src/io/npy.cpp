@@ -1,9 +1,8 @@
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <regex>
 
+#include "io/file_util.hpp"
 #include "io/half.hpp"
 #include "ngi/error.hpp"
 #include "ngi/tensor.hpp"
@@ -17,9 +16,7 @@ std::string shape_string(const std::vector<int>& shape) {
 }
 
 Tensor read_npy(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError("read " + path + ": cannot open file");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = detail::read_file(path);
     const std::string what = "read " + path + ": ";
     if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) throw InputError(what + "not a .npy file");
     const int major = static_cast<unsigned char>(bytes[6]);
@@ -85,23 +82,12 @@ void write_npy(const std::string& path, const Tensor& t) {
     const std::size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
     header.append(total - 10 - header.size() - 1, ' ');
     header += '\n';
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary);
-        if (!out) throw InputError("write " + path + ": cannot create file");
-        const unsigned char lo = header.size() & 0xff, hi = (header.size() >> 8) & 0xff;
-        out.write("\x93NUMPY\x01\x00", 8);
-        out.put(char(lo));
-        out.put(char(hi));
-        out << header;
-        out.write(reinterpret_cast<const char*>(t.data.data()), std::streamsize(t.data.size() * sizeof(float)));
-        if (!out) {
-            out.close();
-            std::filesystem::remove(tmp);
-            throw InputError("write " + path + ": write failed (disk full?)");
-        }
-    }
-    std::filesystem::rename(tmp, path);
+    std::string bytes("\x93NUMPY\x01\x00", 8);  // magic + version 1.0 (explicit length: it contains a NUL)
+    bytes += char(header.size() & 0xff);
+    bytes += char((header.size() >> 8) & 0xff);
+    bytes += header;
+    bytes.append(reinterpret_cast<const char*>(t.data.data()), t.data.size() * sizeof(float));
+    detail::write_file_atomic(path, bytes);  // unique temporary + rename: no partial file, no writer collisions
 }
 
 }  // namespace ngi
