@@ -18,18 +18,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Generates the reference data once per build tree (well under a second) with Debian's python3-skimage.
-fs::path reference_dir() {
-    const fs::path dir = fs::path(NGI_BINARY_DIR) / "metrics_ref";
-    if (!fs::exists(dir / "cases.json")) {
-        const std::string cmd = "/usr/bin/python3 " + std::string(NGI_SOURCE_DIR) +
-                                "/tests/parity/ssim_reference.py --out " + dir.string() + " > " +
-                                (fs::path(NGI_BINARY_DIR) / "metrics_ref.log").string() + " 2>&1";
-        INFO("running: " << cmd);
-        REQUIRE(std::system(cmd.c_str()) == 0);
-    }
-    return dir;
-}
+// scikit-image's results, generated once per build tree.
+fs::path reference_dir() { return ngi::test::python_oracle_data("ssim_reference.py", "metrics_ref"); }
 
 // scipy.ndimage mode 'reflect' (d c b a | a b c d | d c b a), valid for any offset.
 int reflect(int i, int n) {

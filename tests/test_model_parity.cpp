@@ -15,18 +15,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Generates the parity data once per build tree (about a second) with Debian's python3-torch.
-fs::path parity_dir() {
-    const fs::path dir = fs::path(NGI_BINARY_DIR) / "parity";
-    if (!fs::exists(dir / "cases.json")) {
-        const std::string cmd = "/usr/bin/python3 " + std::string(NGI_SOURCE_DIR) +
-                                "/tests/parity/make_parity.py --out " + dir.string() + " > " +
-                                (fs::path(NGI_BINARY_DIR) / "parity.log").string() + " 2>&1";
-        INFO("running: " << cmd);
-        REQUIRE(std::system(cmd.c_str()) == 0);
-    }
-    return dir;
-}
+// PyTorch's results, generated once per build tree (about a second).
+fs::path parity_dir() { return ngi::test::python_oracle_data("make_parity.py", "parity"); }
 
 }  // namespace
 

@@ -1,7 +1,9 @@
 // Shared helpers for the Catch2 suite: the device under test, random data, comparisons, naive references.
 #pragma once
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -62,6 +64,20 @@ inline double max_abs_diff(const std::vector<float>& a, const std::vector<float>
 inline bool all_finite(const std::vector<float>& v) {
     for (float x : v) if (!std::isfinite(x)) return false;
     return true;
+}
+
+// Runs tests/parity/<script> --out <build>/<name> once per build tree (Debian's /usr/bin/python3, which has
+// torch / numpy / skimage) unless <build>/<name>/cases.json exists, and returns that folder. The script's
+// output goes to <build>/<name>.log.
+inline std::filesystem::path python_oracle_data(const std::string& script, const std::string& name) {
+    const std::filesystem::path dir = std::filesystem::path(NGI_BINARY_DIR) / name;
+    if (!std::filesystem::exists(dir / "cases.json")) {
+        const std::string cmd = "/usr/bin/python3 " + std::string(NGI_SOURCE_DIR) + "/tests/parity/" + script +
+                                " --out " + dir.string() + " > " + dir.string() + ".log 2>&1";
+        INFO("running: " << cmd);
+        REQUIRE(std::system(cmd.c_str()) == 0);
+    }
+    return dir;
 }
 
 }  // namespace ngi::test
