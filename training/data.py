@@ -111,6 +111,16 @@ def list_frames(dataset_dir, split):
     return frames
 
 
+def select_frames(frames, count):
+    """`count` frames spread evenly over the list (all of them when count is 0 or >= len): a held-out subset
+    that covers every scene instead of the first scene's first frames."""
+    if not count or count >= len(frames):
+        return list(frames)
+    if count == 1:
+        return [frames[0]]
+    return [frames[round(i * (len(frames) - 1) / (count - 1))] for i in range(count)]
+
+
 def frame_list_digest(frames):
     return hashlib.sha1("\n".join(frames).encode()).hexdigest()
 
@@ -263,10 +273,9 @@ class FrameDataset(torch.utils.data.Dataset):
 
 
 def load_split(ngi, dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr):
-    """The FrameDataset of one split, merged (or reused) through the cache; returns (dataset, n, merge stats)."""
-    frames = list_frames(dataset_dir, split)
-    if max_frames:
-        frames = frames[:max_frames]
+    """The FrameDataset of one split (max_frames: an evenly spread subset), merged (or reused) through the cache;
+    returns (dataset, n, merge stats)."""
+    frames = select_frames(list_frames(dataset_dir, split), max_frames)
     cache = MergeCache(ngi, cache_dir, layout, device=device, jobs=jobs, log=log)
     stats = cache.prepare(dataset_dir, frames)
     ds = FrameDataset(cache, frames)

@@ -69,9 +69,7 @@ def _mean(values):
 
 
 def evaluate_with_ngi(ngi, model, dataset_dir, split, out_dir, max_frames=0, device=None, log=sys.stderr):
-    frames = data.list_frames(dataset_dir, split)
-    if max_frames:
-        frames = frames[:max_frames]
+    frames = data.select_frames(data.list_frames(dataset_dir, split), max_frames)
     out_dir = Path(out_dir)
     per_frame = {}
     for k, rel in enumerate(frames):
@@ -102,7 +100,7 @@ def main():
     ap.add_argument("--dataset", required=True, help="dataset folder (ngi dataset --out)")
     ap.add_argument("--split", default="test")
     ap.add_argument("--out", required=True, help="folder for per-frame outputs, summary.json, per_frame.json")
-    ap.add_argument("--max-frames", type=int, default=0, help="first K frames only (0 = all)")
+    ap.add_argument("--max-frames", type=int, default=0, help="K frames spread evenly over the split (0 = all)")
     ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
     ap.add_argument("--device", help="ngi --device")
     args = ap.parse_args()

@@ -205,7 +205,7 @@ def main():
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
-        if (run_b / "log.jsonl").is_file() and len(read_log(run_b)) >= 3:
+        if (run_b / "log.jsonl").is_file() and (run_b / "log.jsonl").read_text().count("\n") >= 3:
             break
         time.sleep(0.01)
     proc.send_signal(signal.SIGINT)

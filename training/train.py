@@ -103,8 +103,13 @@ def rewrite_log(path, max_step):
     """Keep the log lines of steps <= max_step (a resumed run repeats the steps after its checkpoint)."""
     if not path.is_file():
         return
-    kept = [line for line in path.read_text().splitlines()
-            if line.strip() and json.loads(line).get("step", 0) <= max_step]
+    kept = []
+    for line in path.read_text().splitlines():
+        try:
+            if json.loads(line).get("step", 0) <= max_step:
+                kept.append(line)
+        except ValueError:
+            pass  # a line cut short by a hard kill
     data.write_text_atomic(path, "".join(line + "\n" for line in kept))
 
 
