@@ -32,8 +32,9 @@ GemmParams gemm_params_for(const DeviceInfo& info) {
     if (const char* e = std::getenv("NGI_GEMM"); e && *e) return parse_gemm_params(e);
     GemmParams p;
     if (info.is_cpu) {
-        // PoCL on x86: one work-item per work-group, explicit 16-wide vectors (AVX-512/AVX2 registers).
-        p = {6, 16, 2, 1, 1, 1};
+        // PoCL on x86: 6x32 tiles in 12 explicit 16-wide vectors (AVX-512 registers); 4 tiles per work-group
+        // amortize PoCL's per-work-group cost on skinny layers (measured in docs/PERFORMANCE.md).
+        p = {6, 16, 2, 1, 1, 4};
     } else {
         // GPUs: many small tiles per work-group so a warp/wavefront is full. Not tuned on real hardware yet.
         p = {4, 4, 1, 1, 16, 16};
