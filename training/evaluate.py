@@ -19,6 +19,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -68,26 +69,51 @@ def _mean(values):
     return sum(values) / len(values) if values else None
 
 
-def evaluate_with_ngi(ngi, model, dataset_dir, split, out_dir, max_frames=0, device=None, log=sys.stderr):
+WHO = ("network", "direct_only")
+SPACES = ("final_ldr", "lightmap_linear")
+METRICS = ("mse", "psnr", "ssim")
+
+
+def summarize(metrics_list):
+    """Mean of every metric over a list of `ngi lightmap` metrics.json dicts: {who: {space: {metric: mean}}}.
+    PSNR is averaged per frame (None, i.e. identical images, is left out), like the thesis's per-frame means."""
+    return {who: {space: {m: _mean([f[who][space][m] for f in metrics_list]) for m in METRICS} for space in SPACES}
+            for who in WHO}
+
+
+def run_lightmap(ngi, frame_dir, model, dest, device=None, resume=False):
+    """`ngi lightmap` of one frame into `dest`; returns (its metrics.json as a dict, wall seconds or None when
+    resume found the frame done: dest/metrics.json exists, written last by ngi lightmap)."""
+    dest = Path(dest)
+    if resume and (dest / "metrics.json").is_file():
+        return json.loads((dest / "metrics.json").read_text()), None
+    cmd = [ngi, "lightmap", "--frame", str(frame_dir), "--model", str(model), "--out", str(dest)]
+    if device:
+        cmd += ["--device", device]
+    t0 = time.monotonic()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
+    seconds = time.monotonic() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stdout}{proc.stderr}")
+    return json.loads((dest / "metrics.json").read_text()), seconds
+
+
+def evaluate_with_ngi(ngi, model, dataset_dir, split, out_dir, max_frames=0, device=None, log=sys.stderr,
+                      resume=False, on_frame=None):
+    """`ngi lightmap` on every frame of a split (or max_frames spread evenly over it) into out_dir/<frame>/, then
+    out_dir/summary.json and per_frame.json. resume: frames whose metrics.json exists are not run again.
+    on_frame(k, total, rel, seconds) replaces the per-frame log line (seconds is None for a resumed frame)."""
     frames = data.select_frames(data.list_frames(dataset_dir, split), max_frames)
     out_dir = Path(out_dir)
     per_frame = {}
     for k, rel in enumerate(frames):
-        dest = out_dir / rel
-        cmd = [ngi, "lightmap", "--frame", str(Path(dataset_dir) / rel), "--model", str(model), "--out", str(dest)]
-        if device:
-            cmd += ["--device", device]
-        proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
-        if proc.returncode != 0:
-            raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stdout}{proc.stderr}")
-        per_frame[rel] = json.loads((dest / "metrics.json").read_text())
-        print(f"lightmap {k + 1}/{len(frames)} {rel}", file=log, flush=True)
+        per_frame[rel], seconds = run_lightmap(ngi, Path(dataset_dir) / rel, model, out_dir / rel, device, resume)
+        if on_frame:
+            on_frame(k + 1, len(frames), rel, seconds)
+        else:
+            print(f"lightmap {k + 1}/{len(frames)} {rel}", file=log, flush=True)
     summary = {"model": str(model), "dataset": str(dataset_dir), "split": split, "frames": len(frames)}
-    for who in ("network", "direct_only"):
-        summary[who] = {}
-        for space in ("final_ldr", "lightmap_linear"):
-            summary[who][space] = {m: _mean([f[who][space][m] for f in per_frame.values()])
-                                   for m in ("mse", "psnr", "ssim")}
+    summary.update(summarize(list(per_frame.values())))
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     (out_dir / "per_frame.json").write_text(json.dumps(per_frame, indent=1) + "\n")
@@ -103,9 +129,10 @@ def main():
     ap.add_argument("--max-frames", type=int, default=0, help="K frames spread evenly over the split (0 = all)")
     ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
     ap.add_argument("--device", help="ngi --device")
+    ap.add_argument("--resume", action="store_true", help="keep frames whose OUT/<frame>/metrics.json exists")
     args = ap.parse_args()
     summary = evaluate_with_ngi(ngi_paths.find_ngi(args.ngi), args.model, args.dataset, args.split, args.out,
-                                args.max_frames, args.device)
+                                args.max_frames, args.device, resume=args.resume)
     print(f"{'':12s} {'final_ldr (SSIM / MSE / PSNR)':>36s}   {'lightmap_linear (SSIM / PSNR)':>30s}")
     for who in ("network", "direct_only"):
         f, l = summary[who]["final_ldr"], summary[who]["lightmap_linear"]

@@ -12,8 +12,9 @@ def hms(seconds):
 
 
 class Progress:
-    def __init__(self, total, start, stream=sys.stderr, width=24):
+    def __init__(self, total, start, stream=sys.stderr, width=24, label="", unit="step"):
         self.total, self.start = total, start
+        self.label, self.unit = label, unit
         self.stream = stream
         self.tty = stream.isatty()
         self.width = width
@@ -36,7 +37,8 @@ class Progress:
         bar = "#" * filled + "." * (self.width - filled)
         loss_text = "  ".join(f"{k} {self.avg[k]:.4g}" for k in ("G_GAN", "G_L1", "D_real", "D_fake")
                               if k in self.avg)
-        line = (f"[{bar}] {step}/{self.total}  {loss_text}  {per:.3f} s/step  ETA {hms(eta)}  "
+        line = (f"{self.label + ' ' if self.label else ''}[{bar}] {step}/{self.total}  "
+                f"{loss_text + '  ' if loss_text else ''}{per:.3f} s/{self.unit}  ETA {hms(eta)}  "
                 f"elapsed {hms(now - self.t0)}")
         if self.tty:
             self.stream.write("\r" + line + "\x1b[K" + ("\n" if step >= self.total else ""))
