@@ -111,7 +111,7 @@ def main(argv=None):
         "lumination_transfer": "reinhard",
         "global_view_mode": "thesis",
         "target": "reference.exr encoded by SurroundPipeline::encode_lightmap (ngi merge target.npy)",
-        "checkpoint": str(ckpt_path.resolve()),
+        "checkpoint": str(ckpt_path),  # as given (relative to the working directory): no machine paths in shipped files
         "exported": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "torch": torch.__version__,
     }
