@@ -109,6 +109,18 @@ def write_json(path, obj):
     tmp.replace(path)
 
 
+def repo_relative(obj, root=Path(__file__).resolve().parent.parent):
+    """obj with every absolute path string made relative to the repository: results.json is committed, and
+    machine paths in it would mean nothing elsewhere."""
+    if isinstance(obj, dict):
+        return {k: repo_relative(v, root) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [repo_relative(v, root) for v in obj]
+    if isinstance(obj, str) and os.path.isabs(obj):
+        return os.path.relpath(obj, root)
+    return obj
+
+
 class Stage:
     """Progress with ETA for `total` pieces of work of which `todo` still have to be done (resumed ones are
     reported as skipped and do not count in the rate)."""
@@ -824,7 +836,7 @@ def main(argv=None):
 
     md = markdown(res, link)
     (out / "tables.md").write_text(md + "\n")
-    write_json(out / "results.json", res)
+    write_json(out / "results.json", repo_relative(res))
     print(md)
     log(f"report: done in {hms(time.monotonic() - t_start)}: {out}/tables.md, results.json, "
         f"{len(list(out.glob('*.png')))} PNGs")
