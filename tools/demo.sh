@@ -10,13 +10,14 @@ bash tools/build.sh
 export POCL_CACHE_DIR="$PWD/build/.cache/pocl" NGI_CACHE_DIR="$PWD/build/.cache/ngi"
 mkdir -p "$POCL_CACHE_DIR" "$NGI_CACHE_DIR" out/demo
 ngi=build/ngi
-scene=${NGI_DEMO_SCENE:-backlit:seed=101}   # a held-out test scene of configs/dataset_n64.json
+scene=${NGI_DEMO_SCENE:-room:seed=204}   # not in the training set (docs/RESULTS.md's moving-camera scene)
+frame=${NGI_DEMO_FRAME:-45}              # walking towards a sunlit opening: bounce light on the walls
 
 echo "== OpenCL devices"
 $ngi devices
 
 echo "== Path-tracing a frame of $scene (six faces of feature buffers + the front view's reference lighting)"
-$ngi render --scene "$scene" --frame 12 --path-frames 30 --face 64 --spp 256 --out out/demo/frame \
+$ngi render --scene "$scene" --frame "$frame" --path-frames 100 --face 64 --spp 256 --out out/demo/frame \
      --preview out/demo/reference.png
 
 for model in surround single_view; do

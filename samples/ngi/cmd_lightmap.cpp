@@ -75,8 +75,11 @@ int cmd_lightmap(int argc, char** argv) {
         const ngi::Image reference_final = pipeline.compose(*frame.reference, frame);
         const ngi::Image d = pipeline.tonemap(direct_final), n = pipeline.tonemap(final_image),
                          r = pipeline.tonemap(reference_final);
-        pngs.emplace_back("compare.png", hconcat({&d, &n, &r}));
-        // Metrics on the tone-mapped final images (display-referred [0, 1], data_range 1), like the thesis's
+        const ngi::Image dp = pipeline.tonemap(present(direct_final)), np = pipeline.tonemap(present(final_image)),
+                         rp = pipeline.tonemap(present(reference_final));
+        pngs.emplace_back("compare.png", hconcat({&dp, &np, &rp}));  // at the presentation size
+        // Metrics at the frame's own resolution, on the tone-mapped final images (display-referred [0, 1],
+        // data_range 1), like the thesis's
         // evaluation of 8-bit renders, and on the linear lightmaps (data_range = the reference's maximum).
         double peak = 0;
         for (float v : frame.reference->data) peak = std::max(peak, double(v));
