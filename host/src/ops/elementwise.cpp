@@ -28,13 +28,15 @@ cl_event Elementwise::dropout(Context& ctx, const View& x, std::uint32_t seed, s
     return ctx.launch(dropout_, 1, g, kLocal, want_event);
 }
 
-int Elementwise::sanitize(Context& ctx, const View& x, float lo, float hi) {
+void Elementwise::sanitize(Context& ctx, const View& x, float lo, float hi) {
     const int n = int(x.shape.size());
-    int zero = 0;
-    ctx.write(counter_, 0, sizeof zero, &zero, "sanitize counter");
+    ctx.fill_zero(counter_, 0, sizeof(int), "sanitize counter");  // enqueued; the pattern is copied at once
     sanitize_.args(x.mem, int(x.offset), n, lo, hi, counter_);
     const std::size_t g[1] = {std::size_t(n)};
     ctx.launch(sanitize_, 1, g, kLocal);
+}
+
+int Elementwise::sanitized_count(Context& ctx) {
     int bad = 0;
     ctx.read(counter_, 0, sizeof bad, &bad, "sanitize counter");
     return bad;
