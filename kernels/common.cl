@@ -12,7 +12,7 @@
 #define ACT_SIGMOID 4
 
 // Branches on a uniform argument: cheap, and keeps one compiled kernel for every activation.
-inline float ngi_activate(float x, int act, float alpha) {
+static inline float ngi_activate(float x, int act, float alpha) {
     switch (act) {
         case ACT_RELU: return fmax(x, 0.0f);
         case ACT_LEAKY_RELU: return x >= 0.0f ? x : alpha * x;

@@ -58,7 +58,7 @@ __kernel void resize_bilinear(__global const float* restrict src, const int src_
 }
 
 // Light terms: NaN -> 0, negative -> 0, +Inf -> FLT_MAX.
-inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
+static inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
 
 // final = lightmap * albedo + emission + env, elementwise over `count` values of planar RGB images of one size.
 // Albedo is sanitized as in preprocessing (NaN -> 0, clamped to [0, 1]); the sum saturates at FLT_MAX.

@@ -9,7 +9,7 @@ __kernel void activate_inplace(__global float* restrict x, const int x_off, cons
 
 // Counter-based hash (a 32-bit integer finalizer): the dropout mask depends only on (seed, site, index),
 // never on launch order, so a PyTorch script can reproduce it exactly (docs/MODEL_FORMAT.md).
-inline uint ngi_mix(uint x) {
+static inline uint ngi_mix(uint x) {
     x ^= x >> 16; x *= 0x7feb352du;
     x ^= x >> 15; x *= 0x846ca68bu;
     x ^= x >> 16;

@@ -22,7 +22,7 @@
 #define SKY_NORMAL_EPS 1e-6f
 
 // Replaces a non-finite value (NaN -> nan_to, -Inf -> neg_to, +Inf -> pos_to) and counts it.
-inline float clean(float v, float nan_to, float neg_to, float pos_to, int* bad) {
+static inline float clean(float v, float nan_to, float neg_to, float pos_to, int* bad) {
     if (isnan(v)) { ++*bad; return nan_to; }
     if (isinf(v)) { ++*bad; return v > 0.0f ? pos_to : neg_to; }
     return v;
@@ -31,7 +31,7 @@ inline float clean(float v, float nan_to, float neg_to, float pos_to, int* bad) 
 // Linear lumination x in [0, FLT_MAX] to [0, 1]. Reinhard x / (1 + x): 1 + FLT_MAX rounds to FLT_MAX, so the
 // largest value gives exactly 1 and nothing overflows; the fmin guards a division that is not correctly
 // rounded on some devices.
-inline float lum_encode(float x, int transfer) {
+static inline float lum_encode(float x, int transfer) {
     if (transfer == TRANSFER_CLAMP) return fmin(x, 1.0f);
     return fmin(x / (1.0f + x), 1.0f);
 }

@@ -78,7 +78,7 @@ typedef struct {
     uint a, b, c, n;
 } Rng;
 
-inline uint4 pcg4d(uint4 v) {
+static inline uint4 pcg4d(uint4 v) {
     v = v * 1664525u + 1013904223u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
     v ^= v >> 16u;
@@ -86,31 +86,31 @@ inline uint4 pcg4d(uint4 v) {
     return v;
 }
 
-inline float2 rng2(Rng* r) {
+static inline float2 rng2(Rng* r) {
     uint4 v = pcg4d((uint4)(r->a, r->b, r->c, r->n++));
     return convert_float2(v.xy >> 8) * (1.0f / 16777216.0f);  // 24 bits: uniform in [0, 1)
 }
 
 // ---- geometry --------------------------------------------------------------------------------------------------
 
-inline float3 face_normal(int f) {
+static inline float3 face_normal(int f) {
     const float s = (f & 1) ? -1.0f : 1.0f;
     const int a = f >> 1;
     return (float3)(a == 0 ? s : 0.0f, a == 1 ? s : 0.0f, a == 2 ? s : 0.0f);
 }
 
 // The point (v.x, v.y) in [0, 1]^2 of face f of block `cell` (faces are unit squares).
-inline float3 face_point(int3 cell, int f, float2 v) {
+static inline float3 face_point(int3 cell, int f, float2 v) {
     const int a = f >> 1;
     const float plane = (f & 1) ? 0.0f : 1.0f;
     const float3 c = convert_float3(cell);
     return c + (a == 0 ? (float3)(plane, v.x, v.y) : (a == 1 ? (float3)(v.x, plane, v.y) : (float3)(v.x, v.y, plane)));
 }
 
-inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+static inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 // Orthonormal basis around a unit vector (Duff et al. 2017, branchless).
-inline void onb(float3 n, float3* t, float3* b) {
+static inline void onb(float3 n, float3* t, float3* b) {
     const float s = n.z >= 0.0f ? 1.0f : -1.0f;
     const float a = -1.0f / (s + n.z);
     const float c = n.x * n.y * a;
@@ -118,19 +118,19 @@ inline void onb(float3 n, float3* t, float3* b) {
     *b = (float3)(c, s + n.y * n.y * a, -n.y);
 }
 
-inline float3 cosine_sample(float3 n, float2 u) {
+static inline float3 cosine_sample(float3 n, float2 u) {
     float3 t, b;
     onb(n, &t, &b);
     const float r = sqrt(u.x), phi = 2.0f * M_PI_F * u.y;
     return t * (r * native_cos(phi)) + b * (r * native_sin(phi)) + n * sqrt(fmax(0.0f, 1.0f - u.x));
 }
 
-inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
+static inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 
 // First solid block along o + t d (d unit), t in [0, tmax]. Counts one ray.
 // With `x` non-null, also reports the first crossing from covered air into open air (Crossing); the ray must
 // start inside the grid.
-inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays, Crossing* x) {
+static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays, Crossing* x) {
     Hit h;
     h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
     ++*rays;
@@ -194,7 +194,7 @@ inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays, Cro
 
 // The hit point, snapped onto the face's plane (removes the DDA's rounding along the normal), then lifted off
 // the surface so that a ray leaving it starts in the air cell in front of the face.
-inline float3 hit_origin(float3 o, float3 d, const Hit* h) {
+static inline float3 hit_origin(float3 o, float3 d, const Hit* h) {
     float3 p = o + d * h->t;
     const int a = h->face >> 1;
     const float plane = (a == 0 ? (float)h->cell.x : (a == 1 ? (float)h->cell.y : (float)h->cell.z)) +
@@ -205,10 +205,10 @@ inline float3 hit_origin(float3 o, float3 d, const Hit* h) {
 
 // ---- lights -------------------------------------------------------------------------------------------------
 
-inline float3 lv(__global const float* L, int i) { return (float3)(L[i], L[i + 1], L[i + 2]); }
+static inline float3 lv(__global const float* L, int i) { return (float3)(L[i], L[i + 1], L[i + 2]); }
 
 // Sky radiance toward unit direction d (the sun disc excluded: the sun is sampled as a light).
-inline float3 sky_radiance(__global const float* L, float3 d) {
+static inline float3 sky_radiance(__global const float* L, float3 d) {
     if (d.y < 0.0f) return lv(L, L_GROUND);
     float g = 0.5f * (1.0f + dot(d, lv(L, L_SUN_DIR)));
     g *= g; g *= g; g *= g;  // ^8: a broad glow around the sun
@@ -217,7 +217,7 @@ inline float3 sky_radiance(__global const float* L, float3 d) {
 
 // Sun: one shadow ray toward a uniform point of the sun's cone. Irradiance E of a disc of small solid angle gives
 // lighting E cos / pi.
-inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
+static inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
     const float3 E = lv(s->light, L_SUN_E);
     const float2 u = rng2(r);
     if (E.x + E.y + E.z <= 0.0f) return (float3)(0.0f);
@@ -235,19 +235,19 @@ inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) 
 
 // Solid-angle density with which emitter sampling picks the direction toward a point on an emissive face at
 // distance `dist` whose normal makes cosine `cos_l` with the direction back to the shading point.
-inline float emitter_pdf(const Scene* s, float3 Le, float dist, float cos_l) {
+static inline float emitter_pdf(const Scene* s, float3 Le, float dist, float cos_l) {
     return luminance(Le) * s->inv_total * dist * dist / cos_l;
 }
 
 // Power heuristic (beta = 2) weight of a sample drawn with density pa, the other strategy having density pb.
-inline float power_heuristic(float pa, float pb) {
+static inline float power_heuristic(float pa, float pb) {
     const float a2 = pa * pa;
     return a2 / (a2 + pb * pb);
 }
 
 // Emissive blocks: pick a face in proportion to its luminance (every face has area 1 m^2), a uniform point on
 // it, one shadow ray; MIS-weighted against the cosine-sampled bounce ray that can hit the same face.
-inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
+static inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
     const float2 u = rng2(r), v = rng2(r);
     if (s->nlights == 0) return (float3)(0.0f);
     int lo = 0, hi = s->nlights - 1;
@@ -270,7 +270,7 @@ inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, uint* ra
 }
 
 // Region of the air block a shading point lies in (-1: open air, outside the grid, or portals disabled).
-inline int region_at(const Scene* s, float3 p) {
+static inline int region_at(const Scene* s, float3 p) {
     const int3 c = convert_int3(floor(p));
     if (!s->use_regions || any(c < 0) || any(c >= s->dims)) return -1;
     return s->region[c.x + s->dims.x * (c.y + s->dims.y * c.z)];
@@ -278,13 +278,13 @@ inline int region_at(const Scene* s, float3 p) {
 
 // Solid-angle density with which portal sampling (uniform over the region's `count` unit faces, uniform point)
 // produces a direction crossing the portal plane at distance `dist` with cosine `cos_p`.
-inline float portal_pdf(int count, float dist, float cos_p) { return dist * dist / (cos_p * (float)count); }
+static inline float portal_pdf(int count, float dist, float cos_p) { return dist * dist / (cos_p * (float)count); }
 
 // Sky light through the openings of the covered region the point is in (rooms, tunnels): pick one of the region's
 // portal faces, a uniform point on it, and trace toward it. The sample counts only if the ray escapes and that
 // face is the first portal it crosses, so the direction density is portal_pdf of the first crossing - the same
 // density the cosine-sampled continuation ray computes for its MIS weight.
-inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
+static inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
     const float2 u = rng2(r), v = rng2(r);
     const int4 e = s->portals[range.x + min((int)(u.x * (float)range.y), range.y - 1)];
     const float3 q = face_point(e.xyz, e.w, v);
@@ -303,7 +303,7 @@ inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range, Rng* 
 
 // Probability with which sunlit-patch sampling from a point in `reg` picks the face `f` of block `cell` (0 if the
 // face is not one of the region's patches or reflects no sunlight).
-inline float patch_probability(const Scene* s, int reg, int3 cell, int f) {
+static inline float patch_probability(const Scene* s, int reg, int3 cell, int f) {
     const int slot = s->face_slot[cell.x + s->dims.x * (cell.y + s->dims.y * cell.z)];
     if (slot < 0) return 0.0f;
     const int i = s->face_index[6 * slot + f];
@@ -316,7 +316,7 @@ inline float patch_probability(const Scene* s, int reg, int3 cell, int f) {
 // check y is visible, then sun next-event estimation at y. This samples the same paths x -> y -> sun as the
 // cosine-sampled continuation followed by sun NEE at y; both are MIS-weighted (power heuristic) with the densities
 // of the direction x -> y.
-inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
+static inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r, uint* rays) {
     const float2 u = rng2(r), v = rng2(r);
     int lo = range.x, hi = range.x + range.y - 1;
     while (lo < hi) {
@@ -351,7 +351,7 @@ inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range, Rng* r
 // next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray, MIS-weighted
 // against emitter sampling and (inside covered regions) sky-portal sampling. Russian roulette after rr_start
 // bounces keeps long paths unbiased.
-inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
+static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
                               uint* rays) {
     float3 sum = (float3)(0.0f), beta = (float3)(1.0f);
     float sun_mis = 1.0f;  // MIS weight of sun NEE here against patch sampling at the previous vertex
@@ -422,7 +422,7 @@ inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounce
 
 // cam: centre (3), then per face look, right, up (9 each) in camera.hpp's face order.
 // Unit direction through the centre of pixel (col, row) of face f (camera.hpp: face_pixel_direction).
-inline float3 pixel_ray(__global const float* cam, int f, int col, int row, int n, float3* look) {
+static inline float3 pixel_ray(__global const float* cam, int f, int col, int row, int n, float3* look) {
     __global const float* b = cam + 3 + 9 * f;
     *look = (float3)(b[0], b[1], b[2]);
     const float u = 2.0f * ((float)col + 0.5f) / (float)n - 1.0f;
@@ -430,7 +430,7 @@ inline float3 pixel_ray(__global const float* cam, int f, int col, int row, int 
     return normalize(*look + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]));
 }
 
-inline void store3(__global float* q, int plane, int npix, float3 v) {
+static inline void store3(__global float* q, int plane, int npix, float3 v) {
     q[(size_t)plane * npix] = v.x;
     q[(size_t)(plane + 1) * npix] = v.y;
     q[(size_t)(plane + 2) * npix] = v.z;
