@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,14 +14,22 @@
 
 namespace ngi::test {
 
-// The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu").
-inline Device& device() {
-    static Device d = [] {
-        const char* e = std::getenv("NGI_TEST_DEVICE");
-        return Device::open(e && *e ? e : "cpu");
-    }();
+// The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu"). Held in a slot that
+// tests/main.cpp empties before main returns: a static Device would be destroyed after the OpenCL runtime's own
+// thread-local state (a use-after-free inside oclgrind's runtime at exit).
+inline std::unique_ptr<Device>& device_slot() {
+    static std::unique_ptr<Device> d;
     return d;
 }
+inline Device& device() {
+    auto& d = device_slot();
+    if (!d) {
+        const char* e = std::getenv("NGI_TEST_DEVICE");
+        d = std::make_unique<Device>(Device::open(e && *e ? e : "cpu"));
+    }
+    return *d;
+}
+inline void release_device() { device_slot().reset(); }
 inline detail::Context& ctx() { return device().context(); }
 
 inline std::vector<float> random_vector(std::size_t n, std::mt19937& rng, float lo = -1.0f, float hi = 1.0f) {

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Configures and builds ngi into ./build (Release). Extra arguments go to cmake, e.g. -DNGI_SANITIZE=ON.
+# Configures and builds ngi into ./build (Release), or into $NGI_BUILD_DIR. Extra arguments go to cmake, e.g.
+# NGI_BUILD_DIR=build-sanitize bash tools/build.sh -DNGI_SANITIZE=ON.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >&2
-cmake --build build -j "$(nproc)" >&2
+dir=${NGI_BUILD_DIR:-build}
+cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >&2
+cmake --build "$dir" -j "$(nproc)" >&2

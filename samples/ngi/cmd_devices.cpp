@@ -2,16 +2,21 @@
 
 #include "commands.hpp"
 #include "ngi/device.hpp"
+#include "ngi/error.hpp"
+#include "ngi/self_check.hpp"
 
 namespace ngi_cli {
 
+// Lists every OpenCL device, and (unless --no-check) opens each one and runs ngi's self-check on it: which GEMM
+// variant passed against the host reference, which were refused and why, and the driver's loop limit.
 int cmd_devices(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {"no-check"});
     const auto devices = ngi::list_devices();
     if (devices.empty()) {
         std::printf("no OpenCL devices found (install an ICD, e.g. pocl-opencl-icd)\n");
         return 1;
     }
+    int failed = 0;
     for (const auto& d : devices) {
         std::printf("%d:%d  %s  [%s]\n", d.platform_index, d.device_index, d.name.c_str(),
                     d.is_gpu ? "gpu" : d.is_cpu ? "cpu" : "other");
@@ -22,8 +27,24 @@ int cmd_devices(int argc, char** argv) {
                     d.compute_units, d.max_work_group_size, d.local_mem_bytes / 1024,
                     d.local_mem_is_dedicated ? "dedicated" : "global", d.global_mem_bytes >> 20,
                     d.max_alloc_bytes >> 20, d.fp16 ? "yes" : "no");
+        if (args.has("no-check")) continue;
+        try {
+            const ngi::Device dev =
+                ngi::Device::open(std::to_string(d.platform_index) + ":" + std::to_string(d.device_index));
+            const ngi::SelfCheckReport r = ngi::self_check(dev);
+            std::printf("      self-check: GEMM %s passed", r.gemm_variant.c_str());
+            if (r.rejected.empty()) std::printf(" (the table's choice)\n");
+            else std::printf(" after rejecting:\n");
+            for (const auto& why : r.rejected) std::printf("        %s\n", why.c_str());
+            if (r.loop_limit > 0)
+                std::printf("      loop limit: the driver ends every loop after %ld iterations per work-item "
+                            "(docs/RELIABILITY.md)\n", r.loop_limit);
+        } catch (const ngi::Error& e) {
+            std::printf("      self-check FAILED: %s\n", e.what());
+            ++failed;
+        }
     }
-    return 0;
+    return failed ? 1 : 0;
 }
 
 }  // namespace ngi_cli

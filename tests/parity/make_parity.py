@@ -32,6 +32,10 @@ import reference_models  # noqa: E402
 ARCHITECTURES = {
     "pix2pix_unet": {"input_nc": 12, "output_nc": 3, "ngf": 8, "num_downs": 6, "height": 64, "width": 128},
     "deepillumination": {"input_nc": 12, "output_nc": 3, "ngf": 8, "num_downs": 8, "height": 256, "width": 256},
+    # The shipped surround model's architecture at its real size: channel counts (K up to 4096) where a driver
+    # bug hidden by ngf 8 shows (issue 13: rusticl was off by 0.25 here while every ngf 8 case agreed).
+    "pix2pix_ngf32": {"family": "pix2pix_unet", "input_nc": 12, "output_nc": 3, "ngf": 32, "num_downs": 7,
+                      "height": 128, "width": 256},
 }
 
 CASES = [
@@ -47,7 +51,16 @@ CASES = [
      "dropout_seed": 0, "half": False, "seed": 5},
     {"name": "deepillumination_per_image", "family": "deepillumination", "bn_mode": "per_image",
      "dropout": "seeded", "dropout_seed": 7, "half": False, "seed": 6},
+    {"name": "pix2pix_ngf32_per_image", "family": "pix2pix_unet", "arch": "pix2pix_ngf32", "bn_mode": "per_image",
+     "dropout": "off", "dropout_seed": 0, "half": True, "seed": 8},
 ]
+
+# The shipped models themselves (models/*.safetensors, trained weights): PyTorch runs the file's weights.
+SHIPPED = [
+    {"name": "shipped_surround", "file": "models/surround.safetensors", "height": 128, "width": 256, "seed": 9},
+    {"name": "shipped_single_view", "file": "models/single_view.safetensors", "height": 64, "width": 64, "seed": 10},
+]
+REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 
 
 def randomize_weights(model, generator):
@@ -123,7 +136,8 @@ def check_converted(path, model, case, arch):
 
 
 def make_case(case, out_dir, work_dir):
-    arch = ARCHITECTURES[case["family"]]
+    arch = dict(ARCHITECTURES[case.get("arch", case["family"])])
+    arch.pop("family", None)
     generator = torch.Generator().manual_seed(case["seed"])
     model = reference_models.build_generator(case["family"], arch["input_nc"], arch["output_nc"], arch["ngf"],
                                              arch["num_downs"], case["dropout"], case["dropout_seed"])
@@ -164,6 +178,28 @@ def make_case(case, out_dir, work_dir):
             "dtype": "F16" if case["half"] else "F32"}
 
 
+def make_shipped_case(case, out_dir):
+    """PyTorch's float64 output of a shipped model file on a random input of the size it was trained at."""
+    path = os.path.join(REPO, case["file"])
+    tensors, config = ngi_convert.read_model(path)
+    model = reference_models.build_generator(config["family"], config["input_nc"], config["output_nc"],
+                                             config["ngf"], config["num_downs"], config["dropout"],
+                                             config["dropout_seed"])
+    state = {name: torch.from_numpy(array.astype(np.float32)) for name, array in tensors.items()}
+    missing, unexpected = model.load_state_dict(state, strict=False)
+    if unexpected or any(not name.endswith("num_batches_tracked") for name in missing):
+        raise AssertionError(f"{case['name']}: state_dict mismatch: missing {missing}, unexpected {unexpected}")
+    generator = torch.Generator().manual_seed(case["seed"])
+    x = torch.rand((1, config["input_nc"], case["height"], case["width"]), generator=generator) * 2 - 1
+    y = reference_models.run_reference(model, x, config["bn_mode"]).to(torch.float32)
+    input_file, expected_file = f"{case['name']}_input.npy", f"{case['name']}_expected.npy"
+    np.save(os.path.join(out_dir, input_file), x.numpy())
+    np.save(os.path.join(out_dir, expected_file), y.numpy())
+    print(f"{case['name']:28s} output {tuple(y.shape)}  max|y| {y.abs().max().item():.4f}")
+    return {"name": case["name"], "model": path, "input": input_file, "expected": expected_file,
+            "family": config["family"], "bn_mode": config["bn_mode"], "dropout": config["dropout"], "dtype": "F16"}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="directory to write the parity data into")
@@ -173,6 +209,7 @@ def main():
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as work_dir:
         cases = [make_case(case, args.out, work_dir) for case in CASES]
+    cases += [make_shipped_case(case, args.out) for case in SHIPPED]
     with open(os.path.join(args.out, "cases.json"), "w") as f:
         json.dump(cases, f, indent=2)
         f.write("\n")

@@ -39,7 +39,8 @@ struct DeviceOptions {
 
 class Device {
 public:
-    // spec: "cpu", "gpu", "P:D" (platform and device index) or "" = $NGI_DEVICE, else first GPU, else first CPU.
+    // spec: "cpu", "gpu", "P:D" (platform and device index), a platform name or part of it ("pocl", "rusticl"),
+    // or "" = $NGI_DEVICE, else first GPU, else first CPU.
     static Device open(const std::string& spec = "", DeviceOptions options = {});
 
     const DeviceInfo& info() const;

@@ -4,6 +4,7 @@
 
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
+#include "ops/gemm_selfcheck.hpp"
 
 namespace ngi {
 
@@ -31,7 +32,7 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}});
     try {
         impl->ops = detail::build_unet_ops(device.context(), cfg, file,
-                                           detail::gemm_params_for(device.info()));
+                                           detail::gemm_selection(device.context()).params);
     } catch (const InputError& e) {
         throw InputError(std::string(e.what()) + " (file " + path + ")");
     }

@@ -3,26 +3,34 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "ngi/error.hpp"
+
 namespace ngi::detail {
 
 std::string GemmParams::defines() const {
     return "-DMR=" + std::to_string(mr) + " -DVW=" + std::to_string(vw) + " -DNV=" + std::to_string(nv) +
-           " -DKU=" + std::to_string(ku);
+           " -DKU=" + std::to_string(ku) + " -DUNROLL=" + std::to_string(unroll);
 }
 
 std::string GemmParams::to_string() const {
     return std::to_string(mr) + "," + std::to_string(vw) + "," + std::to_string(nv) + "," + std::to_string(ku) +
-           "," + std::to_string(local0) + "," + std::to_string(local1);
+           "," + std::to_string(local0) + "," + std::to_string(local1) + "," + std::to_string(unroll);
 }
+
+bool operator==(const GemmParams& a, const GemmParams& b) { return a.to_string() == b.to_string(); }
 
 GemmParams parse_gemm_params(const std::string& s) {
     GemmParams p;
     char tail = 0;
-    if (std::sscanf(s.c_str(), "%d,%d,%d,%d,%d,%d%c", &p.mr, &p.vw, &p.nv, &p.ku, &p.local0, &p.local1, &tail) != 6 ||
-        p.mr < 1 || p.mr > 16 || !(p.vw == 1 || p.vw == 2 || p.vw == 4 || p.vw == 8 || p.vw == 16) || p.nv < 1 ||
-        p.nv > 8 || p.ku < 1 || p.ku > 16 || p.local0 < 1 || p.local1 < 1)
-        throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1 with MR 1..16, VW in {1,2,4,8,16}, "
-                         "NV 1..8, KU 1..16, L0,L1 >= 1");
+    const int n = std::sscanf(s.c_str(), "%d,%d,%d,%d,%d,%d,%d%c", &p.mr, &p.vw, &p.nv, &p.ku, &p.local0, &p.local1,
+                              &p.unroll, &tail);
+    if ((n != 6 && n != 7) || p.mr < 1 || p.mr > 16 ||
+        !(p.vw == 1 || p.vw == 2 || p.vw == 4 || p.vw == 8 || p.vw == 16) || p.nv < 1 || p.nv > 8 || p.ku < 1 ||
+        p.ku > 16 || p.local0 < 1 || p.local1 < 1 || p.local0 > 1024 || p.local1 > 1024 ||
+        !(p.unroll == 0 || p.unroll == 1))
+        throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1[,UNROLL] with MR 1..16, VW in "
+                         "{1,2,4,8,16}, NV 1..8, KU 1..16, L0,L1 1..1024, UNROLL 0 or 1");
+    if (n == 6) p.unroll = 1;
     return p;
 }
 
@@ -52,7 +60,26 @@ std::vector<float> pack_a(const float* a, int M, int K, int ld, const GemmParams
     return out;
 }
 
-Gemm::Gemm(Context& ctx, const GemmParams& p) : p_(p), kernel_(ctx.kernel("gemm", "gemm_packed", p.defines())) {}
+std::vector<float> pack_b(const float* b, int K, int N, int ld, const GemmParams& p) {
+    const int nr = p.nr(), kp = padded_k(K, p);
+    std::vector<float> out(packed_b_floats(K, N, p), 0.0f);
+    for (int k = 0; k < K; ++k)
+        for (int n = 0; n < N; ++n) out[(std::size_t(n / nr) * kp + k) * nr + n % nr] = b[std::size_t(k) * ld + n];
+    return out;
+}
+
+Gemm::Gemm(Context& ctx, const GemmParams& p) : p_(p), kernel_(ctx.kernel("gemm", "gemm_packed", p.defines())) {
+    // A fixed local size the compiled kernel cannot run (registers, driver limits) would fail at every launch:
+    // refuse it here, naming the knobs, so the self-check falls back to another variant.
+    std::size_t max_wg = 0;
+    check(clGetKernelWorkGroupInfo(kernel_.get(), ctx.device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof max_wg, &max_wg,
+                                   nullptr),
+          "query the GEMM work-group limit", "clGetKernelWorkGroupInfo");
+    if (std::size_t(p.local0) * std::size_t(p.local1) > max_wg)
+        throw Error("GEMM variant " + p.to_string() + ": work-group " + std::to_string(p.local0) + "x" +
+                    std::to_string(p.local1) + " exceeds the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE of " +
+                    std::to_string(max_wg) + " on " + ctx.info().name);
+}
 
 cl_event Gemm::enqueue(Context& ctx, int M, int N, int K, cl_mem ap, cl_mem bp, std::size_t b_off, cl_mem c, std::size_t c_off, int ldc,
                        cl_mem scale, cl_mem shift, Act act, bool want_event) {

@@ -8,24 +8,30 @@
 
 namespace ngi::detail {
 
-// Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for(), overridable with
-// NGI_GEMM="MR,VW,NV,KU,L0,L1" for tuning.
+// Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for() (the table), overridable with
+// NGI_GEMM="MR,VW,NV,KU,L0,L1[,UNROLL]" for tuning, and checked on the device before use (ops/gemm_selfcheck.hpp).
 struct GemmParams {
     int mr = 8, vw = 16, nv = 2, ku = 1;
     int local0 = 1, local1 = 1;  // work-group shape (tiles per work-group along m, n)
+    int unroll = 1;              // 1: micro-kernel unrolled by the preprocessor; 0: loops + #pragma unroll
     int nr() const { return vw * nv; }
     std::string defines() const;
     std::string to_string() const;
 };
 
 GemmParams gemm_params_for(const DeviceInfo& info);
-GemmParams parse_gemm_params(const std::string& s);  // "MR,VW,NV,KU,L0,L1"; throws InputError
+GemmParams parse_gemm_params(const std::string& s);  // "MR,VW,NV,KU,L0,L1[,UNROLL]"; throws InputError
+bool operator==(const GemmParams& a, const GemmParams& b);
 
 // K rounded up so every packed panel has whole unroll steps.
 inline int padded_k(int k, const GemmParams& p) { return int(round_up(std::size_t(k), std::size_t(p.ku))); }
 
 // Host-side packing of a row-major M x K matrix (ld = row stride) into Ap panels of MR rows (zero padded).
 std::vector<float> pack_a(const float* a, int M, int K, int ld, const GemmParams& p);
+
+// Host-side packing of a row-major K x N matrix (ld = row stride) into Bp panels of NR columns (zero padded), the
+// layout im2col_packed writes on the device. For tests, the self-check and benchmarks.
+std::vector<float> pack_b(const float* b, int K, int N, int ld, const GemmParams& p);
 
 // Size in floats of a packed B for K x N.
 inline std::size_t packed_b_floats(int K, int N, const GemmParams& p) {

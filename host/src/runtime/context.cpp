@@ -1,6 +1,9 @@
 #include "runtime/context.hpp"
 
+#include <atomic>
+#include <cctype>
 #include <cstdlib>
+#include <unistd.h>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -88,13 +91,6 @@ std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603u
     return h;
 }
 
-std::filesystem::path cache_dir() {
-    if (const char* d = std::getenv("NGI_CACHE_DIR"); d && *d) return d;
-    if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return std::filesystem::path(d) / "ngi";
-    if (const char* d = std::getenv("HOME"); d && *d) return std::filesystem::path(d) / ".cache" / "ngi";
-    return std::filesystem::temp_directory_path() / "ngi-cache";
-}
-
 const EmbeddedKernel& embedded(const std::string& file) {
     for (std::size_t i = 0; i < kEmbeddedKernelCount; ++i)
         if (file == kEmbeddedKernels[i].name) return kEmbeddedKernels[i];
@@ -111,6 +107,25 @@ std::string build_log(cl_program prog, cl_device_id dev) {
 }
 
 }  // namespace
+
+std::filesystem::path cache_dir() {
+    if (const char* d = std::getenv("NGI_CACHE_DIR"); d && *d) return d;
+    if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return std::filesystem::path(d) / "ngi";
+    if (const char* d = std::getenv("HOME"); d && *d) return std::filesystem::path(d) / ".cache" / "ngi";
+    return std::filesystem::temp_directory_path() / "ngi-cache";
+}
+
+void write_cache_file(const std::filesystem::path& path, const std::string& bytes) {
+    static std::atomic<unsigned> counter{0};
+    std::error_code ec;
+    std::filesystem::create_directories(path.parent_path(), ec);
+    const auto tmp = path.string() + ".tmp" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    if (std::ofstream out{tmp, std::ios::binary}; out.write(bytes.data(), std::streamsize(bytes.size()))) {
+        out.close();
+        if (out) std::filesystem::rename(tmp, path, ec);
+    }
+    std::filesystem::remove(tmp, ec);
+}
 
 Context::Context(cl_platform_id platform, cl_device_id device, DeviceInfo info, DeviceOptions options)
     : platform_(platform), device_(device), info_(std::move(info)), options_(options) {
@@ -144,12 +159,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
     const std::string options = "-cl-std=CL1.2 " + defines;
     const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
-    const std::uint64_t h = fnv1a(source,
-                                  fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
-                                        '\n' + info_.device_version + '\n' + options));
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-    const std::filesystem::path cached = cache_dir() / (file + "-" + hex + ".bin");
+    const std::filesystem::path cached = cache_dir() / (file + "-" + variant_key(file, defines) + ".bin");
 
     cl_int err = CL_SUCCESS;
     cl_program prog = nullptr;
@@ -184,20 +194,39 @@ cl_program Context::program(const std::string& file, const std::string& defines)
             bin_size > 0) {
             std::string bin(bin_size, '\0');
             unsigned char* ptr = reinterpret_cast<unsigned char*>(bin.data());
-            if (clGetProgramInfo(prog, CL_PROGRAM_BINARIES, sizeof ptr, &ptr, nullptr) == CL_SUCCESS) {
-                std::error_code ec;
-                std::filesystem::create_directories(cached.parent_path(), ec);
-                const auto tmp = cached.string() + ".tmp" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
-                if (std::ofstream out{tmp, std::ios::binary}; out.write(bin.data(), bin.size())) {
-                    out.close();
-                    std::filesystem::rename(tmp, cached, ec);
-                }
-                std::filesystem::remove(tmp, ec);
-            }
+            if (clGetProgramInfo(prog, CL_PROGRAM_BINARIES, sizeof ptr, &ptr, nullptr) == CL_SUCCESS)
+                write_cache_file(cached, bin);
         }
     }
     programs_.emplace(key, prog);
     return prog;
+}
+
+std::string Context::variant_key(const std::string& file, const std::string& defines) const {
+    const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
+    const std::uint64_t h = fnv1a(source, fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
+                                                 '\n' + info_.device_version + '\n' + "-cl-std=CL1.2 " + defines));
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    return hex;
+}
+
+long Context::loop_limit() {
+    std::lock_guard<std::mutex> lock(attached_mutex_);
+    if (loop_limit_ >= 0) return loop_limit_;
+    // 2^20 iterations, each reading memory so no compiler can fold the loop into a closed form.
+    const int n = 1 << 20;
+    Kernel k = kernel("probe", "count_loop_iterations");
+    const int ones[8] = {1, 1, 1, 1, 1, 1, 1, 1};
+    Buffer in = alloc(sizeof ones, "loop probe input"), out = alloc(sizeof(int), "loop probe output");
+    write(in, 0, sizeof ones, ones, "loop probe input");
+    k.args(n, in, out);
+    const std::size_t one = 1;
+    launch(k, 1, &one, &one);
+    int count = 0;
+    read(out, 0, sizeof count, &count, "loop probe output");
+    loop_limit_ = count >= n ? 0 : count;
+    return loop_limit_;
 }
 
 Kernel Context::kernel(const std::string& file, const std::string& name, const std::string& defines) {
@@ -293,9 +322,22 @@ Device Device::open(const std::string& spec_in, DeviceOptions options) {
     } else {
         int p = -1, d = -1;
         char tail = 0;
-        if (std::sscanf(spec.c_str(), "%d:%d%c", &p, &d, &tail) != 2)
-            throw InputError("open device: '" + spec + "' is not a device spec (use cpu, gpu or P:D, e.g. 0:0)");
-        for (auto& c : all) if (c.info.platform_index == p && c.info.device_index == d) pick = &c;
+        if (std::sscanf(spec.c_str(), "%d:%d%c", &p, &d, &tail) == 2) {
+            for (auto& c : all) if (c.info.platform_index == p && c.info.device_index == d) pick = &c;
+        } else {
+            // A platform name, or part of it, case-insensitive ("pocl", "rusticl", "nvidia"): its first device.
+            // Indices depend on the ICD enumeration order of each machine; names do not.
+            auto lower = [](std::string x) {
+                for (auto& ch : x) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+                return x;
+            };
+            for (auto& c : all)
+                if (lower(c.info.platform_name).find(lower(spec)) != std::string::npos ||
+                    (lower(spec) == "pocl" && c.info.platform_name == "Portable Computing Language")) {
+                    pick = &c;
+                    break;
+                }
+        }
     }
     if (!pick) {
         std::string have;

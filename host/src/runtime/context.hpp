@@ -4,8 +4,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -99,6 +102,25 @@ public:
     // new kernel object for `kernel`. Kernel objects are cheap; keep them in the op that uses them.
     Kernel kernel(const std::string& file, const std::string& kernel, const std::string& defines = "");
 
+    // Hex key of (platform, device, driver, options, source) for kernels/<file>.cl built with `defines`: the key of
+    // the program cache, reused by anything cached per compiled variant (e.g. the GEMM self-check verdicts).
+    std::string variant_key(const std::string& file, const std::string& defines) const;
+
+    // Per-device state computed once and shared by every user of this context (e.g. the GEMM self-check): the
+    // first call for `key` runs make(), later calls return the same object.
+    template <class T>
+    T& attached(const std::string& key, const std::function<T()>& make) {
+        std::lock_guard<std::mutex> lock(attached_mutex_);
+        auto it = attached_.find(key);
+        if (it == attached_.end()) it = attached_.emplace(key, std::make_shared<T>(make())).first;
+        return *static_cast<T*>(it->second.get());
+    }
+
+    // Loop iterations one work-item may run before the driver silently ends every loop of the kernel, measured
+    // once per context by a probe kernel: 0 = no limit seen (PoCL, GPUs); 65535 on Mesa llvmpipe (gallivm's
+    // LP_MAX_TGSI_LOOP_ITERATIONS). Ops whose loops grow with the problem split work to stay below it.
+    long loop_limit();
+
     Buffer alloc(std::size_t bytes, const char* what);
     void write(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const void* src, const char* what);
     void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
@@ -120,7 +142,17 @@ private:
     cl_context context_ = nullptr;
     cl_command_queue queue_ = nullptr;
     std::map<std::string, cl_program> programs_;  // key: file + '\n' + defines
+    std::mutex attached_mutex_;
+    std::map<std::string, std::shared_ptr<void>> attached_;
+    long loop_limit_ = -1;  // -1 = not probed yet
 };
+
+// Where compiled programs and per-device verdicts are cached: $NGI_CACHE_DIR, else $XDG_CACHE_HOME/ngi, else
+// ~/.cache/ngi, else a temporary folder.
+std::filesystem::path cache_dir();
+
+// Writes `bytes` to `path` through a unique temporary and a rename; a cache that cannot be written is not an error.
+void write_cache_file(const std::filesystem::path& path, const std::string& bytes);
 
 inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
 
