@@ -3,12 +3,15 @@
 # Build: cmake, ninja, g++, OpenCL headers + ICD loader, PoCL (the CPU OpenCL device every test runs on),
 # Catch2, nlohmann-json, OpenEXR, libpng, GLM. Python side (parity oracle, training, perf baseline):
 # Debian's python3-torch/numpy/skimage/matplotlib, and OpenBLAS so PyTorch's BLAS is not the reference one.
+# Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
+# simulator), clang-15 + libFuzzer (fuzz targets).
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
   catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev
   python3-torch python3-numpy python3-skimage python3-matplotlib libopenblas0-pthread
+  mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
 )
 missing=()
 for p in "${packages[@]}"; do

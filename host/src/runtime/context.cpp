@@ -234,7 +234,15 @@ Kernel Context::kernel(const std::string& file, const std::string& name, const s
     cl_int err = CL_SUCCESS;
     cl_kernel k = clCreateKernel(prog, name.c_str(), &err);
     check(err, ("create kernel " + name + " from kernels/" + file + ".cl").c_str(), "clCreateKernel");
-    return Kernel(k, name);
+    std::size_t max_wg = 0, reqd[3] = {0, 0, 0};
+    cl_ulong local_mem = 0;
+    const cl_int errs[3] = {
+        clGetKernelWorkGroupInfo(k, device_, CL_KERNEL_WORK_GROUP_SIZE, sizeof max_wg, &max_wg, nullptr),
+        clGetKernelWorkGroupInfo(k, device_, CL_KERNEL_COMPILE_WORK_GROUP_SIZE, sizeof reqd, reqd, nullptr),
+        clGetKernelWorkGroupInfo(k, device_, CL_KERNEL_LOCAL_MEM_SIZE, sizeof local_mem, &local_mem, nullptr)};
+    Kernel kernel(k, name, max_wg, reqd[0] != 0 || local_mem > 0);  // owns k: released if a check below throws
+    for (cl_int e : errs) check(e, ("query work-group limits of kernel " + name).c_str(), "clGetKernelWorkGroupInfo");
+    return kernel;
 }
 
 Buffer Context::alloc(std::size_t bytes, const char* what) {
@@ -270,13 +278,28 @@ void Context::fill_zero(const Buffer& b, std::size_t off, std::size_t bytes, con
 
 cl_event Context::launch(const Kernel& k, int dims, const std::size_t* global, const std::size_t* local,
                          bool want_event) {
-    std::size_t g[3];
+    std::size_t g[3], l[3] = {1, 1, 1};
+    std::size_t items = 1;
     for (int i = 0; i < dims; ++i) {
         if (global[i] == 0) return nullptr;  // empty NDRange: nothing to do
-        g[i] = local ? round_up(global[i], local[i]) : global[i];
+        if (local) items *= (l[i] = local[i]);
     }
+    if (local && items > k.max_work_group()) {
+        if (k.fixed_local())
+            throw Error("run kernel " + k.name() + ": its work-group of " + std::to_string(items) +
+                        " work-items exceeds the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE of " +
+                        std::to_string(k.max_work_group()) + " on " + info_.name +
+                        ", and its work-group shape is fixed (local memory or reqd_work_group_size)");
+        while (items > k.max_work_group()) {  // halve the largest dimension: fewer, smaller groups
+            int big = 0;
+            for (int i = 1; i < dims; ++i) if (l[i] > l[big]) big = i;
+            items = items / l[big] * ((l[big] + 1) / 2);
+            l[big] = (l[big] + 1) / 2;
+        }
+    }
+    for (int i = 0; i < dims; ++i) g[i] = local ? round_up(global[i], l[i]) : global[i];
     cl_event ev = nullptr;
-    check(clEnqueueNDRangeKernel(queue_, k.get(), static_cast<cl_uint>(dims), nullptr, g, local, 0, nullptr,
+    check(clEnqueueNDRangeKernel(queue_, k.get(), static_cast<cl_uint>(dims), nullptr, g, local ? l : nullptr, 0, nullptr,
                                  want_event ? &ev : nullptr),
           ("run kernel " + k.name()).c_str(), "clEnqueueNDRangeKernel");
     return ev;

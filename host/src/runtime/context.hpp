@@ -3,6 +3,7 @@
 #include <CL/cl.h>
 
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -49,17 +50,31 @@ private:
 class Kernel {
 public:
     Kernel() = default;
-    Kernel(cl_kernel k, std::string name) : k_(k), name_(std::move(name)) {}
+    // max_work_group: CL_KERNEL_WORK_GROUP_SIZE of the compiled kernel on its device; fixed_local: the kernel's
+    // work-group shape is part of its algorithm (reqd_work_group_size or local memory sized for it).
+    Kernel(cl_kernel k, std::string name, std::size_t max_work_group = SIZE_MAX, bool fixed_local = false)
+        : k_(k), name_(std::move(name)), max_wg_(max_work_group), fixed_local_(fixed_local) {}
     Kernel(const Kernel&) = delete;
     Kernel& operator=(const Kernel&) = delete;
-    Kernel(Kernel&& o) noexcept : k_(std::exchange(o.k_, nullptr)), name_(std::move(o.name_)) {}
+    Kernel(Kernel&& o) noexcept
+        : k_(std::exchange(o.k_, nullptr)), name_(std::move(o.name_)), max_wg_(o.max_wg_), fixed_local_(o.fixed_local_) {}
     Kernel& operator=(Kernel&& o) noexcept {
-        if (this != &o) { if (k_) clReleaseKernel(k_); k_ = std::exchange(o.k_, nullptr); name_ = std::move(o.name_); }
+        if (this != &o) {
+            if (k_) clReleaseKernel(k_);
+            k_ = std::exchange(o.k_, nullptr);
+            name_ = std::move(o.name_);
+            max_wg_ = o.max_wg_;
+            fixed_local_ = o.fixed_local_;
+        }
         return *this;
     }
     ~Kernel() { if (k_) clReleaseKernel(k_); }
     cl_kernel get() const { return k_; }
     const std::string& name() const { return name_; }
+    std::size_t max_work_group() const { return max_wg_; }
+    bool fixed_local() const { return fixed_local_; }
+    // Lowers the work-group limit, as a device with fewer resources would report (tests of the launch fallback).
+    void limit_work_group(std::size_t n) { max_wg_ = std::min(max_wg_, n); }
 
     template <class... Args>
     Kernel& args(const Args&... a) {
@@ -82,6 +97,8 @@ private:
     }
     cl_kernel k_ = nullptr;
     std::string name_;
+    std::size_t max_wg_ = SIZE_MAX;
+    bool fixed_local_ = false;
 };
 
 class Context {
@@ -126,7 +143,9 @@ public:
     void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
     void fill_zero(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const char* what);
 
-    // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds).
+    // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds). A local size
+    // beyond the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE (registers, driver limits) is halved until it fits,
+    // for kernels whose work-group shape is free; for fixed-shape kernels it is an Error naming the kernel.
     // Returns the event when `want_event` (profiling), else nullptr.
     cl_event launch(const Kernel& k, int dims, const std::size_t* global, const std::size_t* local,
                     bool want_event = false);

@@ -1,0 +1,62 @@
+// Runtime behaviour that protects every op: launches that respect the compiled kernel's work-group limit, and
+// device specs by platform name.
+#include <catch2/catch.hpp>
+
+#include "ngi/error.hpp"
+#include "ngi/ops.hpp"
+#include "test_support.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+
+TEST_CASE("launch: a local size beyond the kernel's work-group limit is halved for free-shape kernels",
+          "[runtime][oclgrind]") {
+    auto& c = test::ctx();
+    Kernel k = c.kernel("elementwise", "activate_inplace");
+    CHECK_FALSE(k.fixed_local());
+    REQUIRE(k.max_work_group() >= 1);
+    k.limit_work_group(24);  // as a device with few registers would report
+    std::mt19937 rng(5);
+    const int n = 1000;
+    auto x = test::random_vector(n, rng);
+    Buffer b = test::upload(x);
+    k.args(b, 0, n, int(Activation::ReLU), 0.0f);
+    const std::size_t global = n, local = 64;  // 64 > 24: runs as groups of 16
+    c.launch(k, 1, &global, &local);
+    const auto y = test::download(b, n);
+    for (int i = 0; i < n; ++i) REQUIRE(y[i] == std::max(x[i], 0.0f));
+}
+
+TEST_CASE("launch: a fixed-shape kernel beyond its limit is an error naming the kernel", "[runtime][oclgrind]") {
+    auto& c = test::ctx();
+    Kernel k = c.kernel("metrics", "squared_error_partials");
+    CHECK(k.fixed_local());  // reqd_work_group_size(256) and local memory
+    k.limit_work_group(128);
+    Buffer a = c.alloc(1024, "a"), partial = c.alloc(1024, "partial");
+    k.args(a, a, 16, partial);
+    const std::size_t global = 256, local = 256;
+    try {
+        c.launch(k, 1, &global, &local);
+        FAIL("launch accepted a work-group beyond the kernel's limit");
+    } catch (const Error& e) {
+        CHECK_THAT(e.what(), Catch::Contains("squared_error_partials") && Catch::Contains("128"));
+    }
+}
+
+TEST_CASE("device specs: platform names select devices, unknown names list what exists", "[runtime]") {
+    const auto& info = test::device().info();
+    // The device under test can be reopened by (part of) its platform name, in any case.
+    std::string part = info.platform_name.substr(0, std::min<std::size_t>(info.platform_name.size(), 5));
+    for (auto& ch : part) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+    const Device d = Device::open(part);
+    std::string got = d.info().platform_name.substr(0, part.size());
+    for (auto& ch : got) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+    CHECK(got == part);
+    CHECK(d.info().name == info.name);
+    try {
+        Device::open("no-such-platform-xyz");
+        FAIL("opened a device for an unknown platform name");
+    } catch (const InputError& e) {
+        CHECK_THAT(e.what(), Catch::Contains("no-such-platform-xyz") && Catch::Contains("available"));
+    }
+}
