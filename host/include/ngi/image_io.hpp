@@ -68,7 +68,8 @@ void write_image(const std::string& path, const Image& image);
 //                              emission and env are optional (docs/CONVENTIONS.md: they then count as 0), but
 //                              only as a whole: on all six faces or on none; absent ones stay empty (0x0) Images.
 // <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera (other keys ignored)
-// <dir>/reference.exr          optional: front-view reference lighting, 3 channels, any size
+// <dir>/reference.exr          optional: front-view reference lighting, 3 channels, N x N (the face size;
+//                              any other size is an InputError naming both sizes)
 //
 // All face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
 // feature may carry a 4th channel named A / a PNG alpha channel, which is dropped).
