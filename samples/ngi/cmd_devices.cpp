@@ -6,7 +6,8 @@
 namespace ngi_cli {
 
 int cmd_devices(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {}, {});
+    no_positionals(args);
     const auto devices = ngi::list_devices();
     if (devices.empty()) {
         std::printf("no OpenCL devices found (install an ICD, e.g. pocl-opencl-icd)\n");

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <new>
 
 #include "commands.hpp"
 #include "ngi/error.hpp"
@@ -42,6 +43,11 @@ void usage(FILE* out) {
     for (const auto& c : kCommands) std::fprintf(out, "  %s\n", c.synopsis);
     std::fprintf(out, "devices: --device cpu | gpu | P:D (platform:device, see `ngi devices`); default $NGI_DEVICE, "
                       "else the first GPU, else the first CPU\n");
+    std::fprintf(out, "output: commands that write several files write all of them or none (a folder is staged as\n"
+                      "        DIR.tmp-* and renamed into place; an existing DIR is replaced only if it holds nothing but\n"
+                      "        files the command writes, and only once the new one is complete)\n");
+    std::fprintf(out, "exit codes: 0 success; 1 error (bad input file, failed write, device error; the message names\n"
+                      "            the file); 2 usage error (unknown command or option, bad option value)\n");
 }
 
 }  // namespace
@@ -62,7 +68,11 @@ int main(int argc, char** argv) {
         } catch (const ngi::Error& e) {
             std::fprintf(stderr, "ngi %s: error: %s\n", c.name, e.what());
             return 1;
+        } catch (const std::bad_alloc&) {
+            std::fprintf(stderr, "ngi %s: error: out of memory\n", c.name);
+            return 1;
         } catch (const std::exception& e) {
+            // Last resort: every known failure is converted into an ngi::Error naming the file at its source.
             std::fprintf(stderr, "ngi %s: unexpected error: %s\n", c.name, e.what());
             return 1;
         }
