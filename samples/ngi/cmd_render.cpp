@@ -32,6 +32,9 @@ int cmd_render(int argc, char** argv) {
     const int frame = args.integer("frame", 0, 0, frames - 1);
     const std::string preview = args.get("preview");
     if (args.has("preview") && preview.empty()) throw UsageError("option --preview needs a non-empty value");
+    if (std::error_code ec; !preview.empty() && std::filesystem::exists(preview, ec) &&
+                            !std::filesystem::is_regular_file(preview, ec))  // found before the render, not after
+        throw ngi::InputError("write " + preview + ": exists and is not a regular file; refusing to replace it");
     const double time = args.real("time", -1.0, 0.0, 48.0);  // -1: absent, the scene's default time
     ngi::Device device = ngi::Device::open(args.get("device"));
     const ngi::VoxelScene scene = ngi::make_scene(spec);

@@ -103,7 +103,13 @@ expect_failure out_is_file "$ngi" merge --frame "$work/frame" --out "$work/preci
 expect="holds '.*', which this command does not write"  # a folder holding other files is never replaced
 expect_failure out_foreign "$ngi" merge --frame "$work/frame" --out "$work/frame"
 [ -s "$work/frame/left_albedo.exr" ] || fail "out_foreign: the frame folder was changed"
-for name in time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
+expect="$work/frame: exists and is not a regular file"  # --preview naming a folder: refused before rendering
+expect_failure preview_dir "${render[@]}" --out "$work/out_preview_dir" --preview "$work/frame"
+# --preview is written together with the frame folder, or not at all.
+"${render[@]}" --out "$work/pv_frame" --preview "$work/pv.png" > /dev/null
+[ -s "$work/pv.png" ] && [ -f "$work/pv_frame/camera.json" ] || fail "render --preview: missing output"
+ls "$work" | grep -q "pv.png.tmp" && fail "render --preview: temporary left behind"
+for name in preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
             unknown_option size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
             dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign; do
   no_unexpected $name
