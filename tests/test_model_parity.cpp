@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <vector>
 
+#include "ngi.h"
 #include "ngi/model.hpp"
 #include "test_support.hpp"
 
@@ -61,4 +63,21 @@ TEST_CASE("pix2pix on an all-3.4e38 input: finite output, every value counted", 
     const ngi::Tensor y = model.run(x, &info);
     CHECK(info.sanitized_inputs == int(x.size()));
     CHECK(ngi::test::all_finite(y.data));
+
+    // The C API reports the same count.
+    const char* spec = std::getenv("NGI_TEST_DEVICE");
+    ngi_device* dev = nullptr;
+    ngi_model* m = nullptr;
+    REQUIRE(ngi_device_open(spec ? spec : "cpu", &dev) == NGI_OK);
+    REQUIRE(ngi_model_load(dev, (dir / "pix2pix_running.safetensors").string().c_str(), &m) == NGI_OK);
+    int count = -1;
+    CHECK(ngi_model_sanitized_inputs(m, &count) == NGI_OK);
+    CHECK(count == 0);
+    std::vector<float> out(y.size());
+    REQUIRE(ngi_model_run(m, x.data.data(), x.shape[2], x.shape[3], out.data()) == NGI_OK);
+    CHECK(ngi_model_sanitized_inputs(m, &count) == NGI_OK);
+    CHECK(count == int(x.size()));
+    CHECK(out == y.data);
+    ngi_model_release(m);
+    ngi_device_release(dev);
 }
