@@ -31,7 +31,12 @@ TEST_CASE("output folder: staged, committed, replaced", "[io][output]") {
     TempDir root("outfolder");
     const std::string dir = root / "out";
     {
+        ngi::OutputFolder out(root / "deep/er/out", "write", kOwned);
+        CHECK(root.list().empty());  // nothing on disk before the first file (a command may compute for long)
+    }
+    {
         ngi::OutputFolder out(dir, "write", kOwned);
+        CHECK(root.list().empty());
         out.write_text("a.txt", "one");
         out.write_text("b.txt", "two");
         CHECK_FALSE(fs::exists(dir));  // nothing visible before commit()

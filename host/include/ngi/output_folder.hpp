@@ -17,8 +17,9 @@ public:
     // Stages the output for folder `dir`. Error messages read "<what> <dir>: <reason>" (what = e.g. "write"). An existing
     // `dir` is replaced at commit(), never before, and only if every entry in it is named in `owned_files`
     // (the files this command may write), so a re-run replaces its own earlier output while a mistyped --out
-    // never deletes unrelated files. Checks that up front and creates the staging folder "<dir>.tmp-<pid>-<n>";
-    // throws InputError naming the folder if `dir` is a file, may not be replaced, or cannot be created.
+    // never deletes unrelated files. Checks that up front (InputError naming the folder if `dir` is a file or may
+    // not be replaced); the staging folder "<dir>.tmp-<pid>-<n>" (and missing parents of `dir`) is created on the
+    // first file(), write() or staging() call, so nothing is on disk while a command is still computing.
     OutputFolder(const std::string& dir, const std::string& what, std::vector<std::string> owned_files);
     OutputFolder(const std::string& dir, const std::string& what, ReplaceCheck may_replace);
     OutputFolder(const OutputFolder&) = delete;
@@ -34,7 +35,7 @@ public:
     void write(const std::string& name, const std::function<void(const std::string& path)>& writer) const;
     // write() of a text file, checked (a full disk is an InputError naming the file).
     void write_text(const std::string& name, const std::string& text) const;
-    const std::string& staging() const { return staging_; }
+    const std::string& staging() const;
     const std::string& target() const { return target_; }
 
     // Moves the staging folder to `dir`. An existing `dir` is moved aside first and deleted only after the new
@@ -44,9 +45,11 @@ public:
 
 private:
     void check_replaceable() const;
+    void stage() const;
 
     std::string what_, target_, staging_;
     ReplaceCheck may_replace_;
+    mutable bool staged_ = false;
     bool finished_ = false;
 };
 

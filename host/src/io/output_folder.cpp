@@ -37,6 +37,13 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& what, std:
 OutputFolder::OutputFolder(const std::string& dir, const std::string& what, ReplaceCheck may_replace)
     : what_(what), target_(normalized(dir, what)), may_replace_(std::move(may_replace)) {
     check_replaceable();
+    staging_ = detail::temp_name(target_);
+}
+
+// Created on first use, not in the constructor: a command that checks its output folder first and then computes
+// for minutes leaves nothing on disk if it is killed (or fails) before it writes.
+void OutputFolder::stage() const {
+    if (staged_) return;
     const fs::path target(target_);
     std::error_code ec;
     if (target.has_parent_path()) {
@@ -44,14 +51,14 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& what, Repl
         if (ec) throw InputError(what_ + " " + target_ + ": cannot create " + target.parent_path().string() + ": " +
                                  ec.message());
     }
-    staging_ = detail::temp_name(target_);
     if (!fs::create_directory(staging_, ec) || ec)
         throw InputError(what_ + " " + target_ + ": cannot create " + staging_ + ": " +
                          (ec ? ec.message() : std::string("it already exists")));
+    staged_ = true;
 }
 
 OutputFolder::~OutputFolder() {
-    if (finished_ || staging_.empty()) return;
+    if (finished_ || !staged_) return;
     std::error_code ec;
     fs::remove_all(staging_, ec);  // best effort: a destructor cannot report
 }
@@ -68,7 +75,12 @@ void OutputFolder::check_replaceable() const {
                          "; refusing to replace it (remove it or choose another output folder)");
 }
 
-std::string OutputFolder::file(const std::string& name) const { return (fs::path(staging_) / name).string(); }
+const std::string& OutputFolder::staging() const {
+    stage();
+    return staging_;
+}
+
+std::string OutputFolder::file(const std::string& name) const { return (fs::path(staging()) / name).string(); }
 
 void OutputFolder::write(const std::string& name, const std::function<void(const std::string& path)>& writer) const {
     try {
@@ -89,6 +101,7 @@ void OutputFolder::commit() {
     if (finished_) throw Error(what_ + " " + target_ + ": committed twice");
     std::error_code ec;
     try {
+        stage();              // (an output with no files is an empty folder)
         check_replaceable();  // again: the folder may have appeared or changed while the outputs were computed
         const bool exists = fs::exists(fs::symlink_status(target_, ec));
         // Between the two renames <dir> briefly does not exist; it is never partial.
