@@ -1,5 +1,6 @@
 // ngi: the command-line sample. It uses only the public API (host/include/ngi, bindings/c), so every command
 // doubles as a usage example.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -60,7 +61,14 @@ int main(int argc, char** argv) {
     for (const auto& c : kCommands) {
         if (std::strcmp(argv[1], c.name) != 0) continue;
         try {
-            return c.run(argc, argv);
+            const int rc = c.run(argc, argv);
+            // The report on stdout is output too (metrics prints its result there): a failed write is an error.
+            if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+                std::fprintf(stderr, "ngi %s: error: cannot write to standard output: %s\n", c.name,
+                             std::strerror(errno));
+                return 1;
+            }
+            return rc;
         } catch (const ngi_cli::UsageError& e) {
             std::fprintf(stderr, "ngi %s: %s\n", c.name, e.what());
             usage(stderr);

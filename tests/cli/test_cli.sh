@@ -109,7 +109,10 @@ expect_failure preview_dir "${render[@]}" --out "$work/out_preview_dir" --previe
 "${render[@]}" --out "$work/pv_frame" --preview "$work/pv.png" > /dev/null
 [ -s "$work/pv.png" ] && [ -f "$work/pv_frame/camera.json" ] || fail "render --preview: missing output"
 ls "$work" | grep -q "pv.png.tmp" && fail "render --preview: temporary left behind"
-for name in preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
+# stdout is output too: metrics' JSON to a full device is an error, not exit 0.
+expect="cannot write to standard output"
+expect_failure stdout_full sh -c '"$0" metrics "$1" "$1" > /dev/full' "$ngi" "$work/lm/final.png"
+for name in stdout_full preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
             unknown_option size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
             dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign; do
   no_unexpected $name
