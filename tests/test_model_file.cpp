@@ -142,6 +142,15 @@ TEST_CASE("broken model files give clear errors", "[model][file]") {
         expect_error(write_file("nometa", entries, cfg, [](nlohmann::json& h) { h.erase("__metadata__"); }),
                      "no __metadata__[\"ngi\"]");
     }
+    SECTION("bad input/output ranges") {
+        for (const auto& [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+                 {"input_range", {1, -1}}, {"input_range", {0, 0}}, {"output_range", {0, 1e300}},
+                 {"input_range", {-1}}, {"output_range", "wide"}}) {
+            auto c = cfg;
+            c[key] = value;
+            expect_error(write_file("range", entries, c), key);
+        }
+    }
     SECTION("unknown family") {
         auto c = cfg;
         c["family"] = "resnet";
