@@ -66,6 +66,9 @@ int cmd_lightmap(int argc, char** argv) {
     const ngi::Tensor input = pipeline.network_input(frame, model.config(), &stats);
     ngi::RunInfo info;
     const ngi::Tensor output = model.run(input, &info);
+    if (info.sanitized_inputs)  // the pipeline's input is always within the range: this would be a bug
+        std::fprintf(stderr, "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
+                     info.sanitized_inputs);
     const ngi::Image lightmap = pipeline.front_lightmap(output, model.config());
     const ngi::Image final_image = pipeline.compose(lightmap, frame);
     auto present = [&](const ngi::Image& im) {
