@@ -154,4 +154,12 @@ TEST_CASE("dataset: the whole config is validated before anything is written", "
     CHECK(fs::exists(out / "train" / "bleed_seed1" / "0000" / "camera.json"));
     CHECK(fs::exists(out / "test" / "backlit_seed2" / "0000" / "camera.json"));
     fs::remove_all(out);
+
+    // A non-empty folder that is not a dataset is not written into.
+    fs::create_directories(out);
+    test::spit((out / "notes.txt").string(), "mine");
+    CHECK_THROWS_WITH(render_dataset(test::device(), DatasetConfig::load(good), out.string()),
+                      Catch::Contains("holds no dataset.json"));
+    CHECK_FALSE(fs::exists(out / "train"));
+    fs::remove_all(out);
 }

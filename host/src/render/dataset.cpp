@@ -306,6 +306,10 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
             detail::write_file_atomic(cfg_path.string(), cfg);  // nothing finished contradicts the new config
         }
     } else {
+        // A mistyped --out (the home folder, another dataset's split) must not fill up with train/ and test/.
+        if (fs::exists(out, ec) && !fs::is_empty(out, ec))
+            throw InputError("dataset: " + out_dir + " exists, is not empty and holds no dataset.json; use a new or "
+                             "empty output folder (or the folder of an earlier run of this dataset)");
         fs::create_directories(out, ec);
         if (ec) throw InputError("dataset: cannot create " + out_dir + ": " + ec.message());
         detail::write_file_atomic(cfg_path.string(), cfg);
