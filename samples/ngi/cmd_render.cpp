@@ -36,6 +36,7 @@ int cmd_render(int argc, char** argv) {
                             !std::filesystem::is_regular_file(preview, ec))  // found before the render, not after
         throw ngi::InputError("write " + preview + ": exists and is not a regular file; refusing to replace it");
     const double time = args.real("time", -1.0, 0.0, 48.0);  // -1: absent, the scene's default time
+    ngi::check_frame_folder_target(out);  // before the render, not after
     ngi::Device device = ngi::Device::open(args.get("device"));
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const float hours = time < 0.0 ? scene.default_time : float(time);

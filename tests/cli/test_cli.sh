@@ -72,6 +72,8 @@ expect=--face;        expect_usage face_suffix "${render[@]}" --face 32x --out "
 expect=--spp;         expect_usage spp_zero "${render[@]}" --spp 0 --out "$work/out_spp_zero"
 expect=--frame;       expect_usage frame_range "${render[@]}" --frame 100 --out "$work/out_frame_range"
 expect=--tme;         expect_usage unknown_option "${render[@]}" --tme 12 --out "$work/out_unknown_option"
+expect="--spp given twice"; expect_usage spp_twice "${render[@]}" --spp 3 --out "$work/out_spp_twice"
+expect="unexpected argument 'stray'"; expect_usage stray "${render[@]}" stray --out "$work/out_stray"
 expect=--size;        expect_usage size_bad "$ngi" lightmap --frame "$work/frame" --model "$model" --size 12x --out "$work/out_size_bad"
 expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/frame" --model "$model" --size 0x8 --out "$work/out_size_zero"
 expect=--range;       expect_usage range_nan "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range nan
@@ -112,8 +114,11 @@ ls "$work" | grep -q "pv.png.tmp" && fail "render --preview: temporary left behi
 # stdout is output too: metrics' JSON to a full device is an error, not exit 0.
 expect="cannot write to standard output"
 expect_failure stdout_full sh -c '"$0" metrics "$1" "$1" > /dev/full' "$ngi" "$work/lm/final.png"
+expect="not a frame folder"  # render refuses a foreign --out before rendering
+expect_failure render_foreign "${render[@]}" --out "$work/merged"
+no_unexpected render_foreign
 for name in stdout_full preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
-            unknown_option size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
+            unknown_option spp_twice stray size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
             dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign; do
   no_unexpected $name
 done

@@ -108,4 +108,8 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats = nullptr);
 // InputError, so a mistyped path never deletes unrelated files.
 void write_frame(const std::string& dir, const Frame& frame);
 
+// The target checks of write_frame alone (InputError if <dir> is a file or a non-empty folder without camera.json),
+// so that a caller can refuse a bad --out before spending minutes on the render. Writes nothing.
+void check_frame_folder_target(const std::string& dir);
+
 }  // namespace ngi

@@ -108,7 +108,18 @@ void check_image(const Image& img, int channels, int n, const std::string& name)
                          std::to_string(channels));
 }
 
+// An existing <dir> is replaced only if it is a frame folder (holds camera.json): a mistyped path never deletes
+// unrelated files.
+std::string frame_folder_replaceable(const std::string& existing) {
+    std::error_code ec;
+    return fs::exists(fs::path(existing) / "camera.json", ec) ? "" : "is not a frame folder (no camera.json)";
+}
+
 }  // namespace
+
+void check_frame_folder_target(const std::string& dir) {
+    OutputFolder(dir, "write frame", frame_folder_replaceable);  // checks only: the staging folder is made lazily
+}
 
 std::size_t FrameReadStats::total_sanitized() const {
     std::size_t n = 0;
@@ -208,12 +219,7 @@ void write_frame(const std::string& dir, const Frame& frame) {
         throw InputError(what + e.what());
     }
 
-    // An existing <dir> is replaced only if it is a frame folder (holds camera.json): a mistyped path never
-    // deletes unrelated files.
-    OutputFolder out(dir, "write frame", [](const std::string& existing) -> std::string {
-        std::error_code ec;
-        return fs::exists(fs::path(existing) / "camera.json", ec) ? "" : "is not a frame folder (no camera.json)";
-    });
+    OutputFolder out(dir, "write frame", frame_folder_replaceable);
     for (int fi = 0; fi < kFeatureCount; ++fi) {
         const Feature f = Feature(fi);
         for (int k = 0; k < kFaceCount && !absent[fi]; ++k) {
