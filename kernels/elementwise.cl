@@ -26,14 +26,19 @@ __kernel void dropout_seeded(__global float* restrict x, const int x_off, const 
     x[x_off + i] = r >= p ? x[x_off + i] * (1.0f / (1.0f - p)) : 0.0f;
 }
 
-// Replaces NaN by 0, -Inf by lo and +Inf by hi, in place, and counts the replaced values (atomic counter).
-// Runs on every graph input: one bad texel must not turn the whole lightmap into NaN. lo/hi are the ends of
-// the model's input range (an infinitely bright texel is as bright as the model can see).
+// Replaces NaN by 0 and every value beyond [below, above] (+-Inf, and finite values far outside the model's input
+// range such as 3.4e38) by hi or lo, in place, and counts the replaced values (atomic counter). Runs on every graph
+// input: one bad texel must not turn the whole lightmap into NaN, and a huge finite value overflows the first
+// convolution's sums to Inf and then to NaN (Inf - Inf) just like an Inf would. lo/hi are the ends of the model's
+// input range; below/above widen it a little (host side: 1/1024 of its width), so values that are only rounded
+// past an end pass unchanged. Comparisons only: exact under any OpenCL compiler (no fast-math here).
 __kernel void sanitize_inplace(__global float* restrict x, const int x_off, const int n, const float lo,
-                               const float hi, volatile __global int* restrict bad_count) {
+                               const float hi, const float below, const float above,
+                               volatile __global int* restrict bad_count) {
     const int i = get_global_id(0);
     if (i >= n) return;
     const float v = x[x_off + i];
     if (isnan(v)) { x[x_off + i] = 0.0f; atomic_inc(bad_count); }
-    else if (isinf(v)) { x[x_off + i] = v > 0.0f ? hi : lo; atomic_inc(bad_count); }
+    else if (v > above) { x[x_off + i] = hi; atomic_inc(bad_count); }
+    else if (v < below) { x[x_off + i] = lo; atomic_inc(bad_count); }
 }

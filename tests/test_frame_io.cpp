@@ -96,6 +96,19 @@ TEST_CASE("frame folder: a colour value beyond the half range is written as floa
     CHECK_FALSE(r.reference);
 }
 
+TEST_CASE("frame folder: a reference of another size than the faces is refused, naming both sizes", "[io][frame]") {
+    TempDir root("frame-refsize");
+    std::mt19937 rng(5);
+    ngi::Frame f = make_frame(8, rng);
+    ngi::write_frame(root / "f", f);
+    ngi::write_exr(root / "f/reference.exr", ngi::Image(16, 8, 3), ngi::ExrPixelType::Float);
+    CHECK_THROWS_WITH(ngi::read_frame(root / "f"),
+                      Contains("reference.exr") && Contains("16x8") && Contains("8x8") && Contains("face size"));
+    f.reference = ngi::Image(4, 4, 3);  // and write_frame does not write such a frame
+    CHECK_THROWS_WITH(ngi::write_frame(root / "g", f), Contains("reference") && Contains("8x8x3"));
+    CHECK_FALSE(fs::exists(root / "g"));
+}
+
 TEST_CASE("frame folder: emission and env are optional, on all faces or none", "[io][frame]") {
     TempDir root("frame-optional");
     std::mt19937 rng(6);

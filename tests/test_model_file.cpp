@@ -1,4 +1,5 @@
 // Model files that must be refused with a clear message naming the problem (and the file or tensor).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdint>
 #include <cstring>
@@ -141,6 +142,15 @@ TEST_CASE("broken model files give clear errors", "[model][file]") {
         expect_error(write_file("nometa", entries, cfg, [](nlohmann::json& h) { h.erase("__metadata__"); }),
                      "no __metadata__[\"ngi\"]");
     }
+    SECTION("bad input/output ranges") {
+        for (const auto& [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+                 {"input_range", {1, -1}}, {"input_range", {0, 0}}, {"output_range", {0, 1e300}},
+                 {"input_range", {-1}}, {"output_range", "wide"}}) {
+            auto c = cfg;
+            c[key] = value;
+            expect_error(write_file("range", entries, c), key);
+        }
+    }
     SECTION("unknown family") {
         auto c = cfg;
         c["family"] = "resnet";
@@ -152,15 +162,45 @@ TEST_CASE("broken model files give clear errors", "[model][file]") {
     SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
 }
 
-TEST_CASE("NaN and Inf in the input are sanitized and counted", "[model][extremes]") {
+TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[model][extremes]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("sanitize", tiny_entries(), tiny_config()));
-    ngi::Tensor x({1, 1, 32, 32});
+    ngi::Tensor x({1, 1, 32, 32});  // zeros; input_range is the default [-1, 1]
     x.data[3] = std::numeric_limits<float>::quiet_NaN();
     x.data[40] = std::numeric_limits<float>::infinity();
     x.data[41] = -std::numeric_limits<float>::infinity();
-    x.data[42] = 1e30f;  // finite values far above 65504 pass through unchanged
+    x.data[42] = 1e30f;    // far above the range: clamped like +Inf
+    x.data[43] = -1.5f;    // beyond the 1/1024 margin: clamped
+    x.data[44] = 1.0009f;  // within the margin (rounding at the range's end): unchanged, not counted
+    x.data[45] = -1.0009f;
     ngi::RunInfo info;
     const ngi::Tensor y = m.run(x, &info);
-    CHECK(info.sanitized_inputs == 3);
+    CHECK(info.sanitized_inputs == 5);
     CHECK(ngi::test::all_finite(y.data));
+
+    // The clamped values equal the range's ends exactly: same output as an input holding 1 / -1 there.
+    ngi::Tensor clean = x;
+    clean.data[3] = 0.0f;
+    clean.data[40] = clean.data[42] = 1.0f;
+    clean.data[41] = clean.data[43] = -1.0f;
+    ngi::RunInfo clean_info;
+    const ngi::Tensor yc = m.run(clean, &clean_info);
+    CHECK(clean_info.sanitized_inputs == 0);
+    CHECK(yc.data == y.data);
+}
+
+// Finite values near FLT_MAX overflow the first convolution's sums to Inf, and per-image batch norm turns that into
+// NaN (Inf - Inf): before they were clamped, an all-3.4e38 input gave an all-NaN output and no count.
+TEST_CASE("an input of finite values near FLT_MAX gives a finite output and a full count", "[model][extremes]") {
+    auto m = ngi::Model::load(ngi::test::device(), write_file("flt_max", tiny_entries(), tiny_config()),
+                              ngi::ModelOptions{"per_image", ""});
+    for (const float v : {3.4e38f, -3.4e38f, std::numeric_limits<float>::max()}) {
+        ngi::Tensor x({1, 1, 32, 64});
+        std::fill(x.data.begin(), x.data.end(), v);
+        ngi::RunInfo info;
+        const ngi::Tensor y = m.run(x, &info);
+        CHECK(info.sanitized_inputs == int(x.size()));
+        CHECK(ngi::test::all_finite(y.data));
+        std::fill(x.data.begin(), x.data.end(), v > 0 ? 1.0f : -1.0f);  // what the clamp makes of it
+        CHECK(m.run(x).data == y.data);
+    }
 }

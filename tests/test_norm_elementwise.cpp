@@ -1,5 +1,6 @@
 // Per-image batch norm, activations, seeded dropout and input sanitizing against naive references,
 // including the numerical extremes: zero variance, 1x1 spatial, large offsets, HDR values, saturated tanh.
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #include "ops/elementwise.hpp"
@@ -130,13 +131,30 @@ TEST_CASE("seeded dropout reproduces docs/MODEL_FORMAT.md's hash test vectors", 
     CHECK(sum / 100000.0 == Approx(1.0).margin(0.015));
 }
 
-TEST_CASE("sanitize replaces NaN and Inf and counts them", "[elementwise][extremes]") {
+TEST_CASE("sanitize replaces NaN, Inf and far out-of-range values and counts them", "[elementwise][extremes]") {
     auto& c = test::ctx();
     Elementwise ew(c);
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
-    Buffer b = test::upload({1.0f, nan, inf, -inf, 65504.0f, -2.0f, nan});
-    ew.sanitize(c, View{b.get(), 0, {1, 1, 7}}, -1.0f, 1.0f);
-    const int bad = ew.sanitized_count(c);
-    CHECK(bad == 4);
-    CHECK(test::download(b, 7) == std::vector<float>{1.0f, 0.0f, 1.0f, -1.0f, 65504.0f, -2.0f, 0.0f});
+    const float big = std::numeric_limits<float>::max();
+    // Range [-1, 1]: the margin is 2/1024 = 0.00195 on each side; beyond it values go to the nearer end.
+    Buffer b = test::upload({1.0f, nan, inf, -inf, 65504.0f, -2.0f, nan, 1.0019f, -1.0019f, 1.0021f, -1.0021f, big,
+                             -3.4e38f, 0.5f});
+    ew.sanitize(c, View{b.get(), 0, {1, 1, 14}}, -1.0f, 1.0f);
+    CHECK(ew.sanitized_count(c) == 10);
+    CHECK(test::download(b, 14) == std::vector<float>{1.0f, 0.0f, 1.0f, -1.0f, 1.0f, -1.0f, 0.0f, 1.0019f, -1.0019f,
+                                                       1.0f, -1.0f, 1.0f, -1.0f, 0.5f});
+
+    // Without limits (a graph with no input range: +-FLT_MAX) only NaN and Inf are replaced.
+    Buffer u = test::upload({big, -big, inf, -inf, nan, 3.0f});
+    ew.sanitize(c, View{u.get(), 0, {1, 1, 6}}, -big, big);
+    CHECK(ew.sanitized_count(c) == 3);
+    CHECK(test::download(u, 6) == std::vector<float>{big, -big, big, -big, 0.0f, 3.0f});
+
+    // Many work-groups: the atomic count covers every element.
+    std::vector<float> huge(100003, 3.4e38f);
+    Buffer h = test::upload(huge);
+    ew.sanitize(c, View{h.get(), 0, {1, 1, int(huge.size())}}, -1.0f, 1.0f);
+    CHECK(ew.sanitized_count(c) == int(huge.size()));
+    const auto y = test::download(h, huge.size());
+    CHECK(std::all_of(y.begin(), y.end(), [](float v) { return v == 1.0f; }));
 }

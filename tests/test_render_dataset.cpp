@@ -6,6 +6,7 @@
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
+#include "io_test_support.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
@@ -108,8 +109,57 @@ TEST_CASE("dataset: frame folders, resumable and deterministic", "[render]") {
     for (int f = 0; f < kFeatureCount; ++f)
         for (int face = 0; face < kFaceCount; ++face) CHECK(b.faces[f][face].data == a.faces[f][face].data);
 
-    // Another config must not write into this dataset.
+    // Another config must not write into this dataset: other settings would mix with the rendered frames.
     DatasetConfig other = cfg;
     other.render.reference_spp = 3;
-    CHECK_THROWS_WITH(render_dataset(test::device(), other, out.string()), Catch::Contains("different config"));
+    CHECK_THROWS_WITH(render_dataset(test::device(), other, out.string()),
+                      Catch::Contains("different config") && Catch::Contains("another output folder"));
+    // Nor a changed entry of a scene with rendered frames; the message names the folder to delete.
+    other = cfg;
+    other.test[0].frames = 1;
+    CHECK_THROWS_WITH(render_dataset(test::device(), other, out.string()),
+                      Catch::Contains((out / "test" / "backlit_seed2").string()) &&
+                          Catch::Contains("delete that folder"));
+    const std::string stored = test::slurp((out / "dataset.json").string());
+
+    // A scene whose folder holds no frame may change (the corrected config after a run that stopped before it):
+    // accepted, and dataset.json now records the new config.
+    fs::remove_all(out / "test" / "backlit_seed2");
+    seen.clear();
+    render_dataset(test::device(), other, out.string(), [&](const DatasetProgress& p) { seen.push_back(p); });
+    CHECK(seen.back().frames_rendered == 1);
+    CHECK(seen.back().frames_skipped == 3);
+    CHECK(fs::exists(out / "test" / "backlit_seed2" / "0000" / "camera.json"));
+    CHECK_FALSE(fs::exists(out / "test" / "backlit_seed2" / "0001"));
+    CHECK(test::slurp((out / "dataset.json").string()) != stored);
+}
+
+TEST_CASE("dataset: the whole config is validated before anything is written", "[render]") {
+    const fs::path out = fs::temp_directory_path() / "ngi_render_dataset" / "out_invalid";
+    fs::remove_all(out);
+    // The training scene is fine; the test split names a .vox file that does not exist.
+    const std::string bad = write_config("missing_vox.json", R"({
+        "n": 8, "feature_spp": 1, "reference_spp": 2, "frames_per_scene": 1,
+        "train": [{"scene": "bleed:seed=1"}], "test": [{"vox": "no_such_scene.vox"}]})");
+    CHECK_THROWS_WITH(render_dataset(test::device(), DatasetConfig::load(bad), out.string()),
+                      Catch::Contains("no_such_scene.vox") && Catch::Contains("test scene 0") &&
+                          Catch::Contains("nothing was written"));
+    CHECK_FALSE(fs::exists(out));
+
+    // The corrected config then renders normally into the same folder.
+    const std::string good = write_config("fixed_vox.json", R"({
+        "n": 8, "feature_spp": 1, "reference_spp": 2, "frames_per_scene": 1,
+        "train": [{"scene": "bleed:seed=1"}], "test": [{"scene": "backlit:seed=2"}]})");
+    render_dataset(test::device(), DatasetConfig::load(good), out.string());
+    CHECK(fs::exists(out / "train" / "bleed_seed1" / "0000" / "camera.json"));
+    CHECK(fs::exists(out / "test" / "backlit_seed2" / "0000" / "camera.json"));
+    fs::remove_all(out);
+
+    // A non-empty folder that is not a dataset is not written into.
+    fs::create_directories(out);
+    test::spit((out / "notes.txt").string(), "mine");
+    CHECK_THROWS_WITH(render_dataset(test::device(), DatasetConfig::load(good), out.string()),
+                      Catch::Contains("holds no dataset.json"));
+    CHECK_FALSE(fs::exists(out / "train"));
+    fs::remove_all(out);
 }

@@ -34,6 +34,9 @@ ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output
 /* input: input_nc x height x width floats (CHW, batch 1); output: output_nc x height x width floats.
  * height and width must be multiples of 2^num_downs. */
 ngi_status ngi_model_run(ngi_model* model, const float* input, int height, int width, float* output);
+/* Input values the last successful ngi_model_run replaced before the first layer (NaN -> 0; +-Inf and values far
+ * outside the model's input range -> its nearer end; docs/CONVENTIONS.md section 7); 0 before any run. */
+ngi_status ngi_model_sanitized_inputs(const ngi_model* model, int* count);
 void ngi_model_release(ngi_model* model);
 
 #ifdef __cplusplus

@@ -14,6 +14,7 @@ struct ngi_device {
 };
 struct ngi_model {
     ngi::Model model;
+    int sanitized_inputs = 0;  // of the last successful run
 };
 
 namespace {
@@ -86,9 +87,17 @@ ngi_status ngi_model_run(ngi_model* model, const float* input, int height, int w
         const auto& c = model->model.config();
         ngi::Tensor in({1, c.input_nc, height, width});
         std::memcpy(in.data.data(), input, in.size() * sizeof(float));
-        const ngi::Tensor y = model->model.run(in);
+        ngi::RunInfo info;
+        const ngi::Tensor y = model->model.run(in, &info);
         std::memcpy(output, y.data.data(), y.size() * sizeof(float));
+        model->sanitized_inputs = info.sanitized_inputs;
     });
+}
+
+ngi_status ngi_model_sanitized_inputs(const ngi_model* model, int* count) {
+    if (!model || !count) return invalid("ngi_model_sanitized_inputs: model and count must not be NULL");
+    *count = model->sanitized_inputs;
+    return NGI_OK;
 }
 
 void ngi_model_release(ngi_model* model) { delete model; }

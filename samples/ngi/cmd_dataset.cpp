@@ -21,7 +21,8 @@ std::string hms(double s) {
 }  // namespace
 
 int cmd_dataset(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {}, {"config", "out", "device"});
+    no_positionals(args);
     const std::string config_path = args.require("config"), out = args.require("out");
     const ngi::DatasetConfig config = ngi::DatasetConfig::load(config_path);
     ngi::Device device = ngi::Device::open(args.get("device"));

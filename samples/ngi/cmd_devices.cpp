@@ -10,7 +10,8 @@ namespace ngi_cli {
 // Lists every OpenCL device, and (unless --no-check) opens each one and runs ngi's self-check on it: which GEMM
 // variant passed against the host reference, which were refused and why, and the driver's loop limit.
 int cmd_devices(int argc, char** argv) {
-    Args args(argc, argv, 2, {"no-check"});
+    Args args(argc, argv, 2, {"no-check"}, {});
+    no_positionals(args);
     const auto devices = ngi::list_devices();
     if (devices.empty()) {
         std::printf("no OpenCL devices found (install an ICD, e.g. pocl-opencl-icd)\n");

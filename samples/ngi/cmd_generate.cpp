@@ -8,7 +8,8 @@
 namespace ngi_cli {
 
 int cmd_generate(int argc, char** argv) {
-    Args args(argc, argv, 2, {"profile"});
+    Args args(argc, argv, 2, {"profile"}, {"model", "input", "output", "device", "bn-mode", "dropout"});
+    no_positionals(args);
     const std::string model_path = args.require("model"), input_path = args.require("input"),
                       output_path = args.require("output");
     ngi::DeviceOptions dopt;
@@ -37,8 +38,10 @@ int cmd_generate(int argc, char** argv) {
     std::printf("memory     weights %.1f MiB, tensor arena %.1f MiB (without reuse %.1f MiB), scratch %.1f MiB\n",
                 info.weight_bytes / 1048576.0, info.arena_bytes / 1048576.0, info.naive_bytes / 1048576.0,
                 info.scratch_bytes / 1048576.0);
-    if (info.sanitized_inputs)
-        std::printf("warning    %d NaN/Inf input values were replaced\n", info.sanitized_inputs);
+    if (info.sanitized_inputs)  // on stderr, so that it is seen even when the report is redirected
+        std::fprintf(stderr, "ngi generate: warning: %d of %zu input values were NaN, infinite or outside the model's "
+                     "input range [%g, %g] and were replaced (NaN -> 0, others clamped to the range)\n",
+                     info.sanitized_inputs, x.data.size(), double(c.input_range[0]), double(c.input_range[1]));
     if (args.has("profile")) {
         double total = 0;
         for (const auto& l : info.layers) total += l.ms;

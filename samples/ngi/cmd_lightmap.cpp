@@ -1,8 +1,6 @@
 // ngi lightmap: a frame folder + a trained generator -> the front view's GI lightmap and final image, and, when
 // the frame has a path-traced reference, a side-by-side comparison and metrics.
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
@@ -10,6 +8,7 @@
 #include "ngi/image_io.hpp"
 #include "ngi/metrics.hpp"
 #include "ngi/model.hpp"
+#include "ngi/output_folder.hpp"
 #include "ngi/pipeline.hpp"
 
 namespace ngi_cli {
@@ -39,22 +38,37 @@ nlohmann::json metrics_json(const ngi::ImageMetrics& m) {
 }  // namespace
 
 int cmd_lightmap(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {}, {"frame", "model", "out", "size", "device"});
+    no_positionals(args);
     const std::string frame_dir = args.require("frame"), model_path = args.require("model"),
                       out_dir = args.require("out");
+    int width = 0, height = 0;  // 0: the frame's face size
+    if (args.has("size")) {
+        const std::string s = args.get("size");
+        const auto x = s.find('x');
+        try {
+            if (x == std::string::npos) throw UsageError("");
+            width = Args::parse_int(s.substr(0, x), "", 1, 16384);
+            height = Args::parse_int(s.substr(x + 1), "", 1, 16384);
+        } catch (const UsageError&) {
+            throw UsageError("--size must be WxH with W and H in 1..16384, e.g. 512x512, got '" + s + "'");
+        }
+    }
+    // Checked before the model runs: an output folder this command may not replace is refused up front.
+    ngi::OutputFolder out(out_dir, "write", {"lightmap.exr", "final.png", "compare.png", "metrics.json"});
     ngi::Device device = ngi::Device::open(args.get("device"));
     ngi::Model model = ngi::Model::load(device, model_path);
-    const ngi::Frame frame = ngi::read_frame(frame_dir);
-    int width = frame.n, height = frame.n;
-    if (args.has("size") && std::sscanf(args.get("size").c_str(), "%dx%d", &width, &height) != 2)
-        throw UsageError("--size must be WxH, e.g. 512x512");
-    if (width < 1 || height < 1 || width > 16384 || height > 16384) throw UsageError("--size out of range");
+    const ngi::Frame frame = ngi::read_frame(frame_dir);  // the reference, if any, has the face size
+    if (!width) width = height = frame.n;
 
     ngi::SurroundPipeline pipeline(device, frame.n);
     ngi::PreprocessStats stats;
     const ngi::Tensor input = pipeline.network_input(frame, model.config(), &stats);
     ngi::RunInfo info;
     const ngi::Tensor output = model.run(input, &info);
+    if (info.sanitized_inputs)  // the pipeline's input is always within the range: this would be a bug
+        std::fprintf(stderr, "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
+                     info.sanitized_inputs);
     const ngi::Image lightmap = pipeline.front_lightmap(output, model.config());
     const ngi::Image final_image = pipeline.compose(lightmap, frame);
     auto present = [&](const ngi::Image& im) {
@@ -65,11 +79,6 @@ int cmd_lightmap(int argc, char** argv) {
     std::vector<std::pair<std::string, ngi::Image>> pngs = {{"final.png", pipeline.tonemap(present(final_image))}};
     nlohmann::json metrics;
     if (frame.reference) {
-        if (frame.reference->width != frame.n || frame.reference->height != frame.n)
-            throw ngi::InputError("lightmap: " + frame_dir + "/reference.exr is " +
-                                  std::to_string(frame.reference->width) + "x" +
-                                  std::to_string(frame.reference->height) + ", expected the face size " +
-                                  std::to_string(frame.n) + "x" + std::to_string(frame.n));
         // Direct-only baseline: the direct light alone as the lightmap (what a renderer has without GI).
         const ngi::Image direct_final = pipeline.compose(frame.get(ngi::Feature::Direct, ngi::Face::Front), frame);
         const ngi::Image reference_final = pipeline.compose(*frame.reference, frame);
@@ -96,13 +105,14 @@ int cmd_lightmap(int argc, char** argv) {
         };
     }
 
-    std::filesystem::create_directories(out_dir);
-    ngi::write_exr(out_dir + "/lightmap.exr", present(lightmap), ngi::ExrPixelType::Float);
-    for (const auto& [name, image] : pngs) ngi::write_png(out_dir + "/" + name, image);
-    if (!metrics.is_null()) {
-        std::ofstream(out_dir + "/metrics.json") << metrics.dump(2) << "\n";
-        std::printf("%s\n", metrics.dump(2).c_str());
-    }
+    // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
+    const ngi::Image lightmap_out = present(lightmap);
+    out.write("lightmap.exr", [&](const std::string& p) { ngi::write_exr(p, lightmap_out, ngi::ExrPixelType::Float); });
+    for (const auto& named : pngs)
+        out.write(named.first, [&](const std::string& p) { ngi::write_png(p, named.second); });
+    if (!metrics.is_null()) out.write_text("metrics.json", metrics.dump(2) + "\n");
+    out.commit();
+    if (!metrics.is_null()) std::printf("%s\n", metrics.dump(2).c_str());
     std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s, %d NaN/Inf sanitized\n", out_dir.c_str(),
                 width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
                 ngi::shape_string(input.shape).c_str(), stats.total_nonfinite());

@@ -1,29 +1,43 @@
 // ngi merge: a frame folder -> the global view of every feature, the coordinate map and the network input; with
 // a reference, the training target (the reference encoded as the generator should output it).
 #include <cstdio>
-#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
+#include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/model.hpp"
+#include "ngi/output_folder.hpp"
 #include "ngi/pipeline.hpp"
 
 namespace ngi_cli {
 
 int cmd_merge(int argc, char** argv) {
-    Args args(argc, argv, 2, {"single-view", "npy-only"});
+    Args args(argc, argv, 2, {"single-view", "npy-only"}, {"frame", "out", "mode", "model", "device"});
+    no_positionals(args);
     const std::string frame_dir = args.require("frame"), out_dir = args.require("out");
+    if (args.has("single-view") && args.has("model")) throw UsageError("--single-view and --model exclude each other");
+    ngi::GlobalViewMode mode{};
+    try {
+        mode = ngi::global_view_mode_from_name(args.get("mode", "thesis"));
+    } catch (const ngi::InputError& e) {
+        throw UsageError(std::string("--mode: ") + e.what());
+    }
+    // Checked before any work: an output folder this command may not replace is refused up front.
+    std::vector<std::string> owned = {"coord.exr", "input.npy", "target.npy"};
+    for (int f = 0; f < ngi::kFeatureCount; ++f)
+        owned.push_back(std::string("globalview_") + ngi::feature_name(ngi::Feature(f)) + ".exr");
+    ngi::OutputFolder out(out_dir, "write", owned);
     ngi::Device device = ngi::Device::open(args.get("device"));
     ngi::FrameReadStats read_stats;
     const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);
-    const auto mode = ngi::global_view_mode_from_name(args.get("mode", "thesis"));
     ngi::SurroundPipeline pipeline(device, frame.n, mode);
 
     // The network input follows a model's config when one is given, else the default surround layout (or the
     // front view only with --single-view).
     ngi::ModelConfig config;
     if (args.has("model")) {
-        if (args.has("single-view")) throw UsageError("--single-view and --model exclude each other");
         config = ngi::Model::load(device, args.get("model")).config();
     } else if (args.has("single-view")) {
         config.input_nc = 10;
@@ -47,11 +61,15 @@ int cmd_merge(int argc, char** argv) {
     ngi::Tensor target;
     if (frame.reference) target = pipeline.encode_lightmap(*frame.reference, config);
 
-    std::filesystem::create_directories(out_dir);
-    for (const auto& [name, image] : views) ngi::write_exr(out_dir + "/" + name, image, ngi::ExrPixelType::Float);
-    if (views_wanted) ngi::write_exr(out_dir + "/coord.exr", pipeline.coord_map(), ngi::ExrPixelType::Float);
-    ngi::write_npy(out_dir + "/input.npy", input);
-    if (frame.reference) ngi::write_npy(out_dir + "/target.npy", target);
+    // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
+    auto exr = [&](const std::string& name, const ngi::Image& image) {
+        out.write(name, [&](const std::string& p) { ngi::write_exr(p, image, ngi::ExrPixelType::Float); });
+    };
+    for (const auto& [name, image] : views) exr(name, image);
+    if (views_wanted) exr("coord.exr", pipeline.coord_map());
+    out.write("input.npy", [&](const std::string& p) { ngi::write_npy(p, input); });
+    if (frame.reference) out.write("target.npy", [&](const std::string& p) { ngi::write_npy(p, target); });
+    out.commit();
 
     std::printf("frame      %s: N = %d, %zu NaN/Inf values sanitized on read\n", frame_dir.c_str(), frame.n,
                 read_stats.total_sanitized());

@@ -1,6 +1,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 #include "commands.hpp"
@@ -13,15 +14,13 @@ namespace ngi_cli {
 // ngi metrics A B [--range R] [--device D]: prints {"mse": ..., "psnr": ..., "ssim": ...} as one JSON object.
 // JSON has no infinity: for identical images (mse 0) psnr is printed as null.
 int cmd_metrics(int argc, char** argv) {
-    Args args(argc, argv, 2, {});
+    Args args(argc, argv, 2, {}, {"range", "device"});
     if (args.positional().size() != 2) throw UsageError("expected two image files (.exr, .png or .npy)");
     double range = 1.0;
-    if (args.has("range")) {
-        const std::string r = args.get("range");
-        char* end = nullptr;
-        range = std::strtod(r.c_str(), &end);
-        if (r.empty() || *end != '\0' || !(range > 0.0) || !std::isfinite(range))
-            throw UsageError("--range needs a finite number > 0, got '" + r + "'");
+    try {
+        range = args.real("range", 1.0, std::numeric_limits<double>::min(), std::numeric_limits<double>::max());
+    } catch (const UsageError&) {
+        throw UsageError("--range needs a finite number > 0, got '" + args.get("range") + "'");
     }
     const ngi::Image a = ngi::read_image(args.positional()[0]);
     const ngi::Image b = ngi::read_image(args.positional()[1]);

@@ -1,53 +1,45 @@
 // ngi render: one frame folder of a scene (features of the six faces + the front view's reference lighting).
+#include <unistd.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "commands.hpp"
 #include "ngi/camera_path.hpp"
 #include "ngi/dataset.hpp"
+#include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/render.hpp"
 #include "ngi/scene.hpp"
 
 namespace ngi_cli {
-namespace {
-
-int int_option(const Args& a, const std::string& name, int fallback) {
-    if (!a.has(name)) return fallback;
-    try {
-        std::size_t used = 0;
-        const int v = std::stoi(a.get(name), &used);
-        if (used == a.get(name).size()) return v;
-    } catch (const std::exception&) {
-    }
-    throw UsageError("--" + name + " needs an integer, got '" + a.get(name) + "'");
-}
-
-}  // namespace
 
 int cmd_render(int argc, char** argv) {
-    Args args(argc, argv, 2, {"no-reference"});
+    Args args(argc, argv, 2, {"no-reference"},
+              {"scene", "out", "device", "frame", "face", "spp", "feature-spp", "bounces", "path-frames", "time",
+               "preview"});
+    no_positionals(args);
     const std::string spec = args.require("scene"), out = args.require("out");
+    // Every option is checked before the (possibly long) render. The limits are those of a dataset config.
+    ngi::RenderSettings rs;
+    rs.n = args.integer("face", rs.n, 1, 8192);
+    rs.reference_spp = args.integer("spp", rs.reference_spp, 1, 1 << 20);
+    rs.feature_spp = args.integer("feature-spp", rs.feature_spp, 1, 1 << 20);
+    rs.max_bounces = args.integer("bounces", rs.max_bounces, 0, 1000);
+    rs.reference = !args.has("no-reference");
+    const int frames = args.integer("path-frames", 100, 1, 1000000);
+    const int frame = args.integer("frame", 0, 0, frames - 1);
+    const std::string preview = args.get("preview");
+    if (args.has("preview") && preview.empty()) throw UsageError("option --preview needs a non-empty value");
+    if (std::error_code ec; !preview.empty() && std::filesystem::exists(preview, ec) &&
+                            !std::filesystem::is_regular_file(preview, ec))  // found before the render, not after
+        throw ngi::InputError("write " + preview + ": exists and is not a regular file; refusing to replace it");
+    const double time = args.real("time", -1.0, 0.0, 48.0);  // -1: absent, the scene's default time
+    ngi::check_frame_folder_target(out);  // before the render, not after
     ngi::Device device = ngi::Device::open(args.get("device"));
     const ngi::VoxelScene scene = ngi::make_scene(spec);
-
-    ngi::RenderSettings rs;
-    rs.n = int_option(args, "face", rs.n);
-    rs.reference_spp = int_option(args, "spp", rs.reference_spp);
-    rs.feature_spp = int_option(args, "feature-spp", rs.feature_spp);
-    rs.max_bounces = int_option(args, "bounces", rs.max_bounces);
-    rs.reference = !args.has("no-reference");
-    const int frame = int_option(args, "frame", 0);
-    const int frames = int_option(args, "path-frames", 100);
-    if (frame < 0 || frame >= frames) throw UsageError("--frame must be in 0.." + std::to_string(frames - 1));
-    float hours = scene.default_time;
-    if (args.has("time")) {
-        try {
-            hours = std::stof(args.get("time"));
-        } catch (const std::exception&) {
-            throw UsageError("--time needs hours (e.g. 13.5), got '" + args.get("time") + "'");
-        }
-    }
+    const float hours = time < 0.0 ? scene.default_time : float(time);
     // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene.
     const ngi::CameraPath path = ngi::dataset_camera_path(scene, frames, 25);
     const ngi::CameraPose pose = path.at(float(frame));
@@ -56,8 +48,10 @@ int cmd_render(int argc, char** argv) {
     ngi::Renderer renderer(device, scene);
     ngi::RenderStats st;
     const ngi::Frame fr = renderer.render(pose, ngi::lighting_at(hours, scene.sun_azimuth), rs, &st);
-    ngi::write_frame(out, fr);
-    if (args.has("preview")) {  // final front image: reference x albedo + emission + env (linear, clamped, sRGB)
+    // Both outputs or neither: the preview goes to a temporary name first and is renamed after the frame
+    // folder is in place (write_frame itself is all-or-nothing).
+    std::string preview_tmp;
+    if (!preview.empty()) {  // final front image: reference x albedo + emission + env (linear, clamped, sRGB)
         ngi::Image img(rs.n, rs.n, 3);
         const ngi::Face f = ngi::Face::Front;
         for (std::size_t i = 0; i < img.data.size(); ++i) {
@@ -65,7 +59,23 @@ int cmd_render(int argc, char** argv) {
             img.data[i] = light * fr.get(ngi::Feature::Albedo, f).data[i] + fr.get(ngi::Feature::Emission, f).data[i] +
                           fr.get(ngi::Feature::Env, f).data[i];
         }
-        ngi::write_png(args.get("preview"), img, ngi::PngEncoding::Srgb);
+        preview_tmp = preview + ".tmp-" + std::to_string(::getpid());
+        ngi::write_png(preview_tmp, img, ngi::PngEncoding::Srgb);
+    }
+    try {
+        ngi::write_frame(out, fr);
+        if (!preview.empty()) {
+            std::error_code ec;
+            std::filesystem::rename(preview_tmp, preview, ec);
+            if (ec) throw ngi::InputError("ngi render: cannot move the preview into place as " + preview + ": " +
+                                          ec.message() + " (the frame folder " + out + " was written)");
+        }
+    } catch (...) {
+        if (!preview_tmp.empty()) {
+            std::error_code ec;
+            std::filesystem::remove(preview_tmp, ec);
+        }
+        throw;
     }
     const double rays = double(st.feature_rays + st.reference_rays), ms = st.feature_ms + st.reference_ms;
     std::printf("scene      %s (%d x %d x %d blocks, %zu materials)\n", scene.name.c_str(), scene.size.x, scene.size.y,

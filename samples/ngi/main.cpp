@@ -1,8 +1,10 @@
 // ngi: the command-line sample. It uses only the public API (host/include/ngi, bindings/c), so every command
 // doubles as a usage example.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <new>
 
 #include "commands.hpp"
 #include "ngi/error.hpp"
@@ -10,7 +12,9 @@
 namespace {
 
 const ngi_cli::Command kCommands[] = {
-    {"devices", "ngi devices                      list OpenCL devices and their capabilities", ngi_cli::cmd_devices},
+    {"devices", "ngi devices [--no-check]         list OpenCL devices, their capabilities and ngi's self-check on\n"
+                "                                 each (GEMM variant in use, variants refused and why, loop limit)",
+     ngi_cli::cmd_devices},
     {"generate", "ngi generate --model M.safetensors --input x.npy --output y.npy [--device D] [--profile]\n"
                  "             [--bn-mode running|per_image] [--dropout off|seeded]\n"
                  "                                 run a generator on a NumPy NCHW float32 tensor (N=1)",
@@ -40,8 +44,14 @@ const ngi_cli::Command kCommands[] = {
 void usage(FILE* out) {
     std::fprintf(out, "usage:\n");
     for (const auto& c : kCommands) std::fprintf(out, "  %s\n", c.synopsis);
-    std::fprintf(out, "devices: --device cpu | gpu | P:D (platform:device, see `ngi devices`); default $NGI_DEVICE, "
+    std::fprintf(out, "devices: --device cpu | gpu | P:D (platform:device, see `ngi devices`) | a platform name (pocl, rusticl); "
+                      "default $NGI_DEVICE, "
                       "else the first GPU, else the first CPU\n");
+    std::fprintf(out, "output: commands that write several files write all of them or none (a folder is staged as\n"
+                      "        DIR.tmp-* and renamed into place; an existing DIR is replaced only if it holds nothing but\n"
+                      "        files the command writes, and only once the new one is complete)\n");
+    std::fprintf(out, "exit codes: 0 success; 1 error (bad input file, failed write, device error; the message names\n"
+                      "            the file); 2 usage error (unknown command or option, bad option value)\n");
 }
 
 }  // namespace
@@ -54,7 +64,14 @@ int main(int argc, char** argv) {
     for (const auto& c : kCommands) {
         if (std::strcmp(argv[1], c.name) != 0) continue;
         try {
-            return c.run(argc, argv);
+            const int rc = c.run(argc, argv);
+            // The report on stdout is output too (metrics prints its result there): a failed write is an error.
+            if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+                std::fprintf(stderr, "ngi %s: error: cannot write to standard output: %s\n", c.name,
+                             std::strerror(errno));
+                return 1;
+            }
+            return rc;
         } catch (const ngi_cli::UsageError& e) {
             std::fprintf(stderr, "ngi %s: %s\n", c.name, e.what());
             usage(stderr);
@@ -62,7 +79,11 @@ int main(int argc, char** argv) {
         } catch (const ngi::Error& e) {
             std::fprintf(stderr, "ngi %s: error: %s\n", c.name, e.what());
             return 1;
+        } catch (const std::bad_alloc&) {
+            std::fprintf(stderr, "ngi %s: error: out of memory\n", c.name);
+            return 1;
         } catch (const std::exception& e) {
+            // Last resort: every known failure is converted into an ngi::Error naming the file at its source.
             std::fprintf(stderr, "ngi %s: unexpected error: %s\n", c.name, e.what());
             return 1;
         }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end CLI checks (ctest cli_end_to_end): render a tiny frame, merge it, run a generator on it; then the
-# bad-input cases must fail with exit code 1, name the offending file, and leave no output folder behind.
+# bad-input cases must fail with exit code 1 (bad options: 2), name the offending file or option, never reach the
+# "unexpected error" catch-all, and leave no output (not even a partial folder on a full disk) behind.
 # Usage: test_cli.sh NGI_BINARY WORK_DIR
 set -euo pipefail
 ngi=$1 work=$2
@@ -45,4 +46,151 @@ expect_failure truncated "$ngi" merge --frame "$work/truncated" --out "$work/out
 expect=nonexistent.safetensors
 expect_failure no_model "$ngi" lightmap --frame "$work/frame" --model "$work/nonexistent.safetensors" --out "$work/out_no_model"
 
-echo "cli_end_to_end: 3 commands ran, 4 bad inputs refused cleanly"
+# No reproducer below may reach main()'s catch-all: every failure is a typed error naming its file or option.
+no_unexpected() { ! grep -q "unexpected error" "$work/$1.err" || fail "$1: untyped error: $(cat "$work/$1.err")"; }
+
+# expect_usage NAME CMD...: exit code 2 (usage error), the message names $expect, no $work/out_NAME.
+expect_usage() {
+  local name=$1; shift
+  set +e
+  "$@" > "$work/$name.out" 2> "$work/$name.err"
+  local rc=$?
+  set -e
+  [ $rc -eq 2 ] || fail "$name: exit code $rc, expected 2 (usage): $(cat "$work/$name.err")"
+  grep -q -- "$expect" "$work/$name.err" || fail "$name: message does not name $expect: $(cat "$work/$name.err")"
+  [ ! -e "$work/out_$name" ] || fail "$name: left output behind in $work/out_$name"
+}
+
+# ---- Numeric options are parsed strictly: whole string, finite, in range; errors name the option (exit 2).
+render=("$ngi" render --scene room:seed=1 --face 8 --spp 1 --feature-spp 1)
+expect=--time;        expect_usage time_nan "${render[@]}" --time nan --out "$work/out_time_nan"
+expect=--time;        expect_usage time_inf "${render[@]}" --time inf --out "$work/out_time_inf"
+expect=--time;        expect_usage time_range "${render[@]}" --time 49 --out "$work/out_time_range"
+expect=--path-frames; expect_usage path_frames "${render[@]}" --path-frames 2147483647 --out "$work/out_path_frames"
+expect=--path-frames; expect_usage path_frames_overflow "${render[@]}" --path-frames 99999999999999999999 --out "$work/out_path_frames_overflow"
+expect=--face;        expect_usage face_suffix "${render[@]}" --face 32x --out "$work/out_face_suffix"
+expect=--spp;         expect_usage spp_zero "${render[@]}" --spp 0 --out "$work/out_spp_zero"
+expect=--frame;       expect_usage frame_range "${render[@]}" --frame 100 --out "$work/out_frame_range"
+expect=--tme;         expect_usage unknown_option "${render[@]}" --tme 12 --out "$work/out_unknown_option"
+expect="--spp given twice"; expect_usage spp_twice "${render[@]}" --spp 3 --out "$work/out_spp_twice"
+expect="unexpected argument 'stray'"; expect_usage stray "${render[@]}" stray --out "$work/out_stray"
+expect=--size;        expect_usage size_bad "$ngi" lightmap --frame "$work/frame" --model "$model" --size 12x --out "$work/out_size_bad"
+expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/frame" --model "$model" --size 0x8 --out "$work/out_size_zero"
+expect=--range;       expect_usage range_nan "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range nan
+expect=--mode;        expect_usage mode_bad "$ngi" merge --frame "$work/frame" --mode cubic --out "$work/out_mode_bad"
+
+# ---- A reference.exr that is not the face size is refused, naming the file and both sizes.
+"$ngi" render --scene room:seed=1 --face 16 --spp 1 --feature-spp 1 --out "$work/frame16" > /dev/null
+cp -r "$work/frame" "$work/badref" && cp "$work/frame16/reference.exr" "$work/badref/reference.exr"
+expect="reference.exr: is 16x16.*32x32"
+expect_failure badref_merge "$ngi" merge --frame "$work/badref" --out "$work/out_badref_merge"
+expect_failure badref_lightmap "$ngi" lightmap --frame "$work/badref" --model "$model" --out "$work/out_badref_lightmap"
+
+# ---- Directories and devices where files are expected: typed errors naming the path, never the catch-all.
+expect="$work/frame: cannot open file: it is a directory"
+expect_failure dir_model "$ngi" generate --model "$work/frame" --input "$work/merged/input.npy" --output "$work/out_dir_model.npy"
+expect_failure dir_input "$ngi" generate --model "$model" --input "$work/frame" --output "$work/out_dir_input.npy"
+expect_failure dir_config "$ngi" dataset --config "$work/frame" --out "$work/out_dir_config"
+expect="/dev/zero: cannot open file: it is a device"
+expect_failure zero_model "$ngi" generate --model /dev/zero --input "$work/merged/input.npy" --output "$work/out_zero_model.npy"
+expect_failure zero_input "$ngi" generate --model "$model" --input /dev/zero --output "$work/out_zero_input.npy"
+expect_failure zero_config "$ngi" dataset --config /dev/zero --out "$work/out_zero_config"
+expect="/dev/full: exists and is not a regular file"
+expect_failure dev_full_output "$ngi" generate --model "$model" --input "$work/merged/input.npy" --output /dev/full
+[ -c /dev/full ] || fail "dev_full_output: /dev/full was replaced"
+echo "precious" > "$work/precious"
+expect="$work/precious: exists and is not a directory"
+expect_failure out_is_file "$ngi" merge --frame "$work/frame" --out "$work/precious"
+[ "$(cat "$work/precious")" = precious ] || fail "out_is_file: the file was changed"
+expect="holds '.*', which this command does not write"  # a folder holding other files is never replaced
+expect_failure out_foreign "$ngi" merge --frame "$work/frame" --out "$work/frame"
+[ -s "$work/frame/left_albedo.exr" ] || fail "out_foreign: the frame folder was changed"
+expect="$work/frame: exists and is not a regular file"  # --preview naming a folder: refused before rendering
+expect_failure preview_dir "${render[@]}" --out "$work/out_preview_dir" --preview "$work/frame"
+# --preview is written together with the frame folder, or not at all.
+"${render[@]}" --out "$work/pv_frame" --preview "$work/pv.png" > /dev/null
+[ -s "$work/pv.png" ] && [ -f "$work/pv_frame/camera.json" ] || fail "render --preview: missing output"
+ls "$work" | grep -q "pv.png.tmp" && fail "render --preview: temporary left behind"
+# stdout is output too: metrics' JSON to a full device is an error, not exit 0.
+expect="cannot write to standard output"
+expect_failure stdout_full sh -c '"$0" metrics "$1" "$1" > /dev/full' "$ngi" "$work/lm/final.png"
+expect="not a frame folder"  # render refuses a foreign --out before rendering
+expect_failure render_foreign "${render[@]}" --out "$work/merged"
+no_unexpected render_foreign
+for name in stdout_full preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
+            unknown_option spp_twice stray size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
+            dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign; do
+  no_unexpected $name
+done
+
+# ---- Re-running a command replaces its own earlier output as a whole.
+"$ngi" merge --frame "$work/frame" --out "$work/merged" --npy-only > /dev/null
+[ ! -e "$work/merged/coord.exr" ] && [ -s "$work/merged/input.npy" ] || fail "rerun: merge --npy-only did not replace $work/merged"
+
+# ---- A full disk in the middle of a command: exit 1, nothing at --out, no staging folder left.
+# A tmpfs sized from the real outputs lets the first files succeed and a later one fail (the partial-output
+# case); without mount permission, a file size limit (ulimit -f) makes the first file fail instead.
+full=$work/full
+mkdir -p "$full"
+pages() { local t=0 f; for f in "$@"; do t=$((t + ($(stat -c %s "$f") + 4095) / 4096)); done; echo $t; }
+if mount -t tmpfs -o size=64k tmpfs "$full" 2> /dev/null; then
+  trap 'umount "$full" 2> /dev/null || true' EXIT
+  umount "$full"
+  mode=tmpfs
+else
+  echo "cli_end_to_end: tmpfs mount not permitted; simulating a full disk with ulimit -f (the first file fails)"
+  mode=ulimit
+fi
+# full_disk NAME PAGES EXPECT CMD... (the command writes to $full/out): with room for PAGES pages only.
+full_disk() {
+  local name=$1 pages=$2; expect=$3; shift 3
+  local rc
+  set +e
+  if [ $mode = tmpfs ]; then
+    mount -t tmpfs -o size=$((pages * 4096)) tmpfs "$full" || fail "$name: mount"
+    "$@" > "$work/$name.out" 2> "$work/$name.err"
+    rc=$?
+  else
+    (trap '' XFSZ; ulimit -f 4; exec "$@") > "$work/$name.out" 2> "$work/$name.err"
+    rc=$?
+  fi
+  set -e
+  local left
+  left=$(ls -A "$full")
+  [ $mode = tmpfs ] && umount "$full"
+  [ $rc -eq 1 ] || fail "$name: exit code $rc on a full disk, expected 1"
+  [ -z "$left" ] || fail "$name: left behind on the full disk: $left"
+  grep -q -- "$expect" "$work/$name.err" || fail "$name: message does not name $expect: $(cat "$work/$name.err")"
+  no_unexpected $name
+}
+lm=("$ngi" lightmap --frame "$work/frame" --model "$model" --out "$full/out")
+if [ $mode = tmpfs ]; then
+  # Room for lightmap.exr only: final.png fails (before: lightmap.exr stayed behind, exit 1).
+  full_disk full_lightmap_final "$(pages "$work/lm/lightmap.exr")" "final.png: write failed" "${lm[@]}"
+  # Room for everything but metrics.json (before: exit 0 with an empty metrics.json).
+  full_disk full_lightmap_metrics "$(pages "$work/lm/lightmap.exr" "$work/lm/final.png" "$work/lm/compare.png")" \
+    "metrics.json: write failed" "${lm[@]}"
+  # merge: room for the first global view only (before: some global views stayed behind).
+  "$ngi" merge --frame "$work/frame" --out "$work/merged_full" > /dev/null
+  full_disk full_merge "$(pages "$work/merged_full/globalview_albedo.exr")" "globalview_normal.exr: write failed" \
+    "$ngi" merge --frame "$work/frame" --out "$full/out"
+  # render: room for a few faces of the frame folder.
+  full_disk full_render 4 "write failed" "$ngi" render --scene room:seed=1 --face 32 --spp 1 --feature-spp 1 --out "$full/out"
+else
+  full_disk full_lightmap 0 "lightmap.exr: write failed" "${lm[@]}"
+  full_disk full_merge 0 "write failed" "$ngi" merge --frame "$work/frame" --out "$full/out"
+fi
+
+# ---- dataset: a missing test-split .vox is found before any frame is written; the corrected config then works.
+cat > "$work/ds_bad.json" <<JSON
+{"n": 8, "feature_spp": 1, "reference_spp": 1, "max_bounces": 1, "frames_per_scene": 1,
+ "train": [{"scene": "bleed:seed=1"}], "test": [{"vox": "missing_scene.vox"}]}
+JSON
+expect="missing_scene.vox"
+expect_failure ds "$ngi" dataset --config "$work/ds_bad.json" --out "$work/out_ds"
+no_unexpected ds
+sed 's/{"vox": "missing_scene.vox"}/{"scene": "backlit:seed=2"}/' "$work/ds_bad.json" > "$work/ds_good.json"
+"$ngi" dataset --config "$work/ds_good.json" --out "$work/out_ds" > /dev/null 2>&1 || fail "ds: the corrected config was refused"
+[ -f "$work/out_ds/test/backlit_seed2/0000/camera.json" ] || fail "ds: the corrected config rendered no test frame"
+
+echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

@@ -57,7 +57,13 @@ struct DatasetProgress {
 
 // Renders every frame missing under out_dir: <out_dir>/<split>/<scene folder>/<frame:04d>/ frame folders, a
 // scene.json per scene (spec, times and camera poses of every frame) and <out_dir>/dataset.json (the config).
-// Throws InputError if out_dir holds a dataset.json of a different config.
+// Before writing anything, every scene of both splits is built (.vox files found and parsed) and its camera path
+// computed: a bad entry anywhere is an InputError naming it, and nothing is written.
+// out_dir must be new, empty, or hold a dataset.json (else InputError: a mistyped path is not written into).
+// out_dir/dataset.json records the config; a different config is accepted only if it contradicts no finished
+// frame: the global settings may differ only while no frame exists, a scene entry only while its folder holds no
+// frame (e.g. a corrected test entry after a run that stopped on it). Otherwise InputError naming what differs and
+// what to delete (the scene folder, or the whole dataset) or to use another output folder.
 void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
                     const std::function<void(const DatasetProgress&)>& progress = {});
 

@@ -68,7 +68,8 @@ void write_image(const std::string& path, const Image& image);
 //                              emission and env are optional (docs/CONVENTIONS.md: they then count as 0), but
 //                              only as a whole: on all six faces or on none; absent ones stay empty (0x0) Images.
 // <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera (other keys ignored)
-// <dir>/reference.exr          optional: front-view reference lighting, 3 channels, any size
+// <dir>/reference.exr          optional: front-view reference lighting, 3 channels, N x N (the face size;
+//                              any other size is an InputError naming both sizes)
 //
 // All face images must be square and of one size N; channel counts must match feature_channels() (a 3-channel
 // feature may carry a 4th channel named A / a PNG alpha channel, which is dropped).
@@ -106,5 +107,9 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats = nullptr);
 // existing <dir> is replaced only if it is empty or a frame folder (holds camera.json); anything else is an
 // InputError, so a mistyped path never deletes unrelated files.
 void write_frame(const std::string& dir, const Frame& frame);
+
+// The target checks of write_frame alone (InputError if <dir> is a file or a non-empty folder without camera.json),
+// so that a caller can refuse a bad --out before spending minutes on the render. Writes nothing.
+void check_frame_folder_target(const std::string& dir);
 
 }  // namespace ngi

@@ -39,7 +39,10 @@ struct LayerTiming {
 };
 
 struct RunInfo {
-    int sanitized_inputs = 0;        // NaN/Inf input values replaced (NaN -> 0, +-Inf -> ends of input_range)
+    // Input values replaced before the first layer: NaN -> 0; +-Inf and finite values beyond input_range by
+    // more than 1/1024 of its width (e.g. 3.4e38, which would overflow to Inf and NaN inside the network) -> the
+    // nearer end of input_range. Values within that margin pass unchanged (rounding at the range's ends).
+    int sanitized_inputs = 0;
     std::vector<LayerTiming> layers; // per graph node, when the device was opened with profiling
     std::size_t arena_bytes = 0;     // planned peak of intermediate tensors
     std::size_t naive_bytes = 0;     // what one buffer per tensor would need

@@ -9,23 +9,40 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <new>
 
 #include "ngi/error.hpp"
 
 namespace ngi::detail {
 
-std::string read_file(const std::string& path) {
+void require_readable_file(const std::string& path) {
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
+    const auto st = std::filesystem::status(path, ec);
+    if (std::filesystem::is_directory(st))
         throw InputError("read " + path + ": cannot open file: it is a directory");
+    // A device (/dev/zero, /dev/urandom, a terminal) is endless: reading it would only end in an out-of-memory.
+    if (std::filesystem::is_character_file(st) || std::filesystem::is_block_file(st))
+        throw InputError("read " + path + ": cannot open file: it is a device, not a regular file");
+}
+
+std::string read_file(const std::string& path) {
+    require_readable_file(path);
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) throw InputError("read " + path + ": cannot open file: " + std::strerror(errno));
     std::string bytes;
     char chunk[1 << 16];
     std::size_t n = 0;
-    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
-    const bool failed = std::ferror(f) != 0;
-    const int err = errno;
+    bool failed = false;
+    int err = 0;
+    try {
+        while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
+        failed = std::ferror(f) != 0;
+        err = errno;
+    } catch (const std::bad_alloc&) {  // a pipe that never ends, or a file larger than memory
+        std::fclose(f);
+        throw InputError("read " + path + ": the file does not fit in memory (" + std::to_string(bytes.size()) +
+                         " bytes read so far)");
+    }
     std::fclose(f);
     if (failed) throw InputError("read " + path + ": read error: " + std::strerror(err));
     return bytes;
@@ -37,6 +54,13 @@ std::string temp_name(const std::string& path) {
 }
 
 void write_file_atomic(const std::string& path, const std::string& bytes) {
+    {
+        // The rename would replace whatever is there: never a folder, a device (/dev/null, /dev/full) or a fifo.
+        std::error_code ec;
+        const auto st = std::filesystem::status(path, ec);
+        if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+            throw InputError("write " + path + ": exists and is not a regular file; refusing to replace it");
+    }
     const std::string tmp = temp_name(path);
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw InputError("write " + path + ": cannot create file: " + std::strerror(errno));

@@ -4,7 +4,12 @@
 
 namespace ngi::detail {
 
-// The whole file. Throws InputError("read <path>: cannot open file: <reason>") when it cannot be read.
+// Throws InputError("read <path>: cannot open file: it is a directory / a device") for paths that a std::ifstream
+// would open and then fail on with a std::ios_base::failure or read forever (/dev/zero). Absent files pass: the
+// reader's own open reports them.
+void require_readable_file(const std::string& path);
+
+// The whole file (require_readable_file first; a file larger than memory is an InputError, not a bad_alloc). Throws InputError("read <path>: cannot open file: <reason>") when it cannot be read.
 std::string read_file(const std::string& path);
 
 // A name next to `path` that no other writer in any process uses: "<path>.tmp-<pid>-<n>".

@@ -9,6 +9,7 @@
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
+#include "ngi/output_folder.hpp"
 
 namespace fs = std::filesystem;
 
@@ -107,7 +108,18 @@ void check_image(const Image& img, int channels, int n, const std::string& name)
                          std::to_string(channels));
 }
 
+// An existing <dir> is replaced only if it is a frame folder (holds camera.json): a mistyped path never deletes
+// unrelated files.
+std::string frame_folder_replaceable(const std::string& existing) {
+    std::error_code ec;
+    return fs::exists(fs::path(existing) / "camera.json", ec) ? "" : "is not a frame folder (no camera.json)";
+}
+
 }  // namespace
+
+void check_frame_folder_target(const std::string& dir) {
+    OutputFolder(dir, "write frame", frame_folder_replaceable);  // checks only: the staging folder is made lazily
+}
 
 std::size_t FrameReadStats::total_sanitized() const {
     std::size_t n = 0;
@@ -176,6 +188,12 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
         std::vector<std::string> names;
         Image img = read_exr(ref.string(), &names);
         img = fit_channels(std::move(img), 3, names.back() == "A", ref.string());
+        // The reference is the front view's lighting, pixel for pixel: every consumer (compose, metrics, the
+        // training target) pairs it with the N x N front face.
+        if (img.width != frame.n || img.height != frame.n)
+            throw InputError("read " + ref.string() + ": is " + size_string(img) + ", but the faces (" + first +
+                             ") are " + std::to_string(frame.n) + "x" + std::to_string(frame.n) +
+                             "; the reference must have the face size");
         sanitize(img, Feature::Direct, "reference.exr", ref.string(), st);
         frame.reference = std::move(img);
     }
@@ -194,64 +212,34 @@ void write_frame(const std::string& dir, const Frame& frame) {
             check_image(frame.get(Feature(fi), Face(k)), feature_channels(Feature(fi)), frame.n,
                         what + face_name(Face(k)) + " " + feature_name(Feature(fi)));
     }
-    if (frame.reference) check_image(*frame.reference, 3, -1, what + "reference");
+    if (frame.reference) check_image(*frame.reference, 3, frame.n, what + "reference");
     try {
         CameraCluster::from_look_up(frame.look, frame.up);
     } catch (const InputError& e) {
         throw InputError(what + e.what());
     }
 
-    fs::path target = fs::path(dir).lexically_normal();
-    if (target.filename().empty()) target = target.parent_path();  // "out/frame/" -> "out/frame"
-    if (target.empty()) throw InputError(what + "empty path");
-    std::error_code ec;
-    const bool exists = fs::exists(target, ec);
-    if (exists && !fs::is_directory(target, ec)) throw InputError(what + "exists and is not a directory");
-    if (exists && !fs::is_empty(target, ec) && !fs::exists(target / "camera.json", ec))
-        throw InputError(what + "exists and is not a frame folder (no camera.json); refusing to replace it");
-
-    if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);  // "out/train/frame_0007"
-    const fs::path tmp = detail::temp_name(target.string());
-    if (!fs::create_directory(tmp, ec) || ec)
-        throw InputError(what + "cannot create " + tmp.string() + ": " + ec.message());
-    try {
-        for (int fi = 0; fi < kFeatureCount; ++fi) {
-            const Feature f = Feature(fi);
-            for (int k = 0; k < kFaceCount && !absent[fi]; ++k) {
-                const Image& img = frame.get(f, Face(k));
-                ExrPixelType type = ExrPixelType::Float;
-                if (f != Feature::Normal && f != Feature::Depth) {
-                    const bool fits_half = std::all_of(img.data.begin(), img.data.end(),
-                                                       [](float v) { return !std::isfinite(v) || std::abs(v) <= 65504.0f; });
-                    type = fits_half ? ExrPixelType::Half : ExrPixelType::Float;
-                }
-                write_exr((tmp / (std::string(face_name(Face(k))) + "_" + feature_name(f) + ".exr")).string(), img,
-                          type);
+    OutputFolder out(dir, "write frame", frame_folder_replaceable);
+    for (int fi = 0; fi < kFeatureCount; ++fi) {
+        const Feature f = Feature(fi);
+        for (int k = 0; k < kFaceCount && !absent[fi]; ++k) {
+            const Image& img = frame.get(f, Face(k));
+            ExrPixelType type = ExrPixelType::Float;
+            if (f != Feature::Normal && f != Feature::Depth) {
+                const bool fits_half = std::all_of(img.data.begin(), img.data.end(),
+                                                   [](float v) { return !std::isfinite(v) || std::abs(v) <= 65504.0f; });
+                type = fits_half ? ExrPixelType::Half : ExrPixelType::Float;
             }
+            out.write(std::string(face_name(Face(k))) + "_" + feature_name(f) + ".exr",
+                      [&](const std::string& p) { write_exr(p, img, type); });
         }
-        if (frame.reference) write_exr((tmp / "reference.exr").string(), *frame.reference, ExrPixelType::Float);
-        const nlohmann::json camera = {{"look", {frame.look.x, frame.look.y, frame.look.z}},
-                                       {"up", {frame.up.x, frame.up.y, frame.up.z}}};
-        detail::write_file_atomic((tmp / "camera.json").string(), camera.dump(2) + "\n");
-
-        // Swap the finished folder in. Between the two renames <dir> briefly does not exist; it is never partial.
-        fs::path old;
-        if (exists) {
-            old = detail::temp_name(target.string() + ".old");
-            fs::rename(target, old, ec);
-            if (ec) throw InputError(what + "cannot move the existing folder aside: " + ec.message());
-        }
-        fs::rename(tmp, target, ec);
-        if (ec) {
-            const std::string reason = ec.message();
-            if (exists) fs::rename(old, target, ec);  // put the previous frame back
-            throw InputError(what + "cannot move the finished folder into place: " + reason);
-        }
-        if (exists) fs::remove_all(old, ec);
-    } catch (...) {
-        fs::remove_all(tmp, ec);
-        throw;
     }
+    if (frame.reference)
+        out.write("reference.exr", [&](const std::string& p) { write_exr(p, *frame.reference, ExrPixelType::Float); });
+    const nlohmann::json camera = {{"look", {frame.look.x, frame.look.y, frame.look.z}},
+                                   {"up", {frame.up.x, frame.up.y, frame.up.z}}};
+    out.write_text("camera.json", camera.dump(2) + "\n");
+    out.commit();
 }
 
 }  // namespace ngi

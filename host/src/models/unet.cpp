@@ -128,11 +128,26 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         c.leaky_slope = j.value("leaky_slope", c.leaky_slope);
         c.input_layout = j.value("input_layout", c.input_layout);
         c.source = j.value("source", c.source);
-        if (j.contains("input_range")) { auto r = j["input_range"].get<std::vector<float>>(); if (r.size() == 2) { c.input_range[0] = r[0]; c.input_range[1] = r[1]; } }
-        if (j.contains("output_range")) { auto r = j["output_range"].get<std::vector<float>>(); if (r.size() == 2) { c.output_range[0] = r[0]; c.output_range[1] = r[1]; } }
+        for (const auto& [key, range] : {std::pair<const char*, float*>{"input_range", c.input_range},
+                                         std::pair<const char*, float*>{"output_range", c.output_range}}) {
+            if (!j.contains(key)) continue;
+            const auto& v = j[key];
+            if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
+                throw InputError(what + key + " must be a pair of numbers [lo, hi], got " + v.dump());
+            const auto r = v.get<std::vector<double>>();
+            range[0] = float(r[0]);
+            range[1] = float(r[1]);
+        }
     } catch (const nlohmann::json::exception& e) {
         throw InputError(what + e.what());
     }
+    // The input guard clamps to input_range and decoding divides by the output range's width: both must be
+    // finite, increasing pairs (a file with [1, -1] would clamp every input to one value, silently).
+    for (const auto& [name, r] : {std::pair<const char*, const float*>{"input_range", c.input_range},
+                                  std::pair<const char*, const float*>{"output_range", c.output_range}})
+        if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !(r[0] < r[1]) || !std::isfinite(r[1] - r[0]))
+            throw InputError(what + name + " [" + std::to_string(r[0]) + ", " + std::to_string(r[1]) +
+                             "] must be two finite numbers lo < hi");
     if (c.family != "pix2pix_unet" && c.family != "deepillumination")
         throw InputError(what + "family '" + c.family + "' is not supported (pix2pix_unet, deepillumination)");
     if (c.input_nc < 1 || c.output_nc < 1 || c.ngf < 1)

@@ -1,5 +1,7 @@
 #include "ops/elementwise.hpp"
 
+#include <cmath>
+
 namespace ngi::detail {
 
 namespace {
@@ -31,7 +33,13 @@ cl_event Elementwise::dropout(Context& ctx, const View& x, std::uint32_t seed, s
 void Elementwise::sanitize(Context& ctx, const View& x, float lo, float hi) {
     const int n = int(x.shape.size());
     ctx.fill_zero(counter_, 0, sizeof(int), "sanitize counter");  // enqueued; the pattern is copied at once
-    sanitize_.args(x.mem, int(x.offset), n, lo, hi, counter_);
+    // The tolerance band: 1/1024 of the range's width on each side. Without limits (+-FLT_MAX, whose width
+    // overflows) the band is empty and only +-Inf is clamped.
+    const float tol = (hi - lo) * (1.0f / 1024.0f);
+    float below = lo - tol, above = hi + tol;
+    if (!std::isfinite(below)) below = lo;
+    if (!std::isfinite(above)) above = hi;
+    sanitize_.args(x.mem, int(x.offset), n, lo, hi, below, above, counter_);
     const std::size_t g[1] = {std::size_t(n)};
     ctx.launch(sanitize_, 1, g, kLocal);
 }

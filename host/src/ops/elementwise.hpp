@@ -15,7 +15,8 @@ public:
     // Inverted dropout; the mask is a hash of (seed, site, flat index): see kernels/elementwise.cl.
     cl_event dropout(Context& ctx, const View& x, std::uint32_t seed, std::uint32_t site, float p,
                      bool want_event = false);
-    // Replaces NaN with 0, -Inf with lo and +Inf with hi. Only enqueues: the count of replaced values is read
+    // Replaces NaN with 0 and values beyond [lo, hi] widened by (hi - lo) / 1024 on each side (+-Inf included)
+    // with lo or hi. Only enqueues: the count of replaced values is read
     // by sanitized_count() (which blocks), so a caller can read it after its own work instead of stalling here.
     void sanitize(Context& ctx, const View& x, float lo, float hi);
     int sanitized_count(Context& ctx);

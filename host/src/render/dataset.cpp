@@ -3,7 +3,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -139,11 +138,15 @@ std::string frame_name(int f) {
 
 DatasetConfig DatasetConfig::load(const std::string& path) {
     ConfigReader r{path};
-    std::ifstream in(path);
-    if (!in) r.fail("cannot open file");
+    std::string text;
+    try {
+        text = detail::read_file(path);  // a directory or a device is an InputError here, not a stream error
+    } catch (const InputError& e) {
+        r.fail(e.what());
+    }
     json j;
     try {
-        j = json::parse(in);
+        j = json::parse(text);
     } catch (const json::exception& e) {
         r.fail(std::string("not valid JSON: ") + e.what());
     }
@@ -197,19 +200,118 @@ std::string dataset_scene_folder(const std::string& name) {
     return out;
 }
 
+namespace {
+
+// Every scene of both splits is built (so a .vox file is found and parsed) and its camera path computed, before
+// anything is written: a bad test scene must not surface only after hours of training frames.
+void validate_scenes(const DatasetConfig& config) {
+    const std::pair<const char*, const std::vector<DatasetScene>*> splits[] = {{"train", &config.train},
+                                                                                {"test", &config.test}};
+    for (const auto& [split_name, scenes] : splits)
+        for (std::size_t i = 0; i < scenes->size(); ++i) {
+            const DatasetScene& entry = (*scenes)[i];
+            const int frames = entry.frames > 0 ? entry.frames : config.frames_per_scene;
+            try {
+                const VoxelScene scene = make_scene(entry.spec);
+                dataset_camera_path(scene, frames, config.keyframe_interval);
+            } catch (const Error& e) {
+                throw InputError(std::string("dataset: ") + split_name + " scene " + std::to_string(i) + " (" +
+                                 entry.spec + "): " + e.what() + "; nothing was written");
+            }
+        }
+}
+
+// Frame folders (<scene folder>/<frame>/camera.json) finished under a scene folder.
+int finished_frames(const fs::path& scene_dir) {
+    std::error_code ec;
+    int n = 0;
+    for (fs::directory_iterator it(scene_dir, ec), end; !ec && it != end; it.increment(ec))
+        n += it->is_directory(ec) && fs::exists(it->path() / "camera.json", ec);
+    return n;
+}
+
+// out/dataset.json records the config the frames under `out` were rendered with. A different config is accepted
+// when it does not contradict any finished frame: the global settings (n, spp, bounces, frames per scene, ...)
+// may change only while no frame exists at all, and a scene entry only while its folder holds no frame (e.g. a
+// test .vox path corrected after an earlier run stopped on it). Anything else is refused, naming what to delete.
+void check_stored_config(const fs::path& out, const json& stored, const json& wanted) {
+    const std::string cfg_path = (out / "dataset.json").string();
+    if (!stored.is_object() || !stored.contains("train") || !stored.contains("test"))
+        throw InputError("dataset: " + cfg_path + " is not a dataset.json written by ngi; use another output folder");
+    int total = 0;
+    std::string first_finished;
+    for (const char* split : {"train", "test"}) {
+        std::error_code ec;
+        for (fs::directory_iterator it(out / split, ec), end; !ec && it != end; it.increment(ec)) {
+            if (!it->is_directory(ec)) continue;
+            const int n = finished_frames(it->path());
+            if (n == 0) continue;
+            total += n;
+            if (first_finished.empty()) first_finished = it->path().string();
+            // The entry of this folder in each config (dataset_scene_folder is unique within a config).
+            auto entry_of = [&](const json& cfg) -> std::string {
+                for (const auto& e : cfg[split])
+                    if (e.contains("scene") && e["scene"].is_string() &&
+                        dataset_scene_folder(e["scene"].get<std::string>()) == it->path().filename().string())
+                        return e.dump();
+                return "";
+            };
+            const std::string had = entry_of(stored), want = entry_of(wanted);
+            if (had != want)
+                throw InputError("dataset: " + it->path().string() + " holds " + std::to_string(n) +
+                                 " frames rendered for " + (had.empty() ? std::string("a scene of no config") : had) +
+                                 ", but the config now " +
+                                 (want.empty() ? std::string("does not list it") : "asks for " + want) +
+                                 "; delete that folder to re-render it with the new config, or use another output "
+                                 "folder");
+        }
+    }
+    json stored_globals = stored, wanted_globals = wanted;
+    for (json* g : {&stored_globals, &wanted_globals}) {
+        g->erase("train");
+        g->erase("test");
+    }
+    if (total > 0 && stored_globals != wanted_globals)
+        throw InputError("dataset: " + cfg_path + " was written for a different config (" + stored_globals.dump() +
+                         ", now " + wanted_globals.dump() + ") and " + std::to_string(total) +
+                         " frames of it are rendered (e.g. " + first_finished +
+                         "); frames of two settings must not mix: use another output folder, or delete " +
+                         out.string() +
+                         " to start over");
+}
+
+}  // namespace
+
 void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
                     const std::function<void(const DatasetProgress&)>& progress) {
     const fs::path out(out_dir);
-    std::error_code ec;
-    fs::create_directories(out, ec);
-    if (ec) throw InputError("dataset: cannot create " + out_dir + ": " + ec.message());
-    const std::string cfg = to_json(config).dump(2) + "\n";
+    validate_scenes(config);
+    const json wanted = to_json(config);
+    const std::string cfg = wanted.dump(2) + "\n";
     const fs::path cfg_path = out / "dataset.json";
-    if (fs::exists(cfg_path)) {
-        if (detail::read_file(cfg_path.string()) != cfg)
-            throw InputError("dataset: " + cfg_path.string() +
-                             " was written for a different config; use another output folder (or delete it)");
+    std::error_code ec;
+    if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+        throw InputError("dataset: " + out_dir + " exists and is not a directory");
+    if (fs::exists(cfg_path, ec)) {
+        const std::string text = detail::read_file(cfg_path.string());
+        if (text != cfg) {
+            json stored;
+            try {
+                stored = json::parse(text);
+            } catch (const json::exception& e) {
+                throw InputError("dataset: " + cfg_path.string() + " is not valid JSON (" + e.what() +
+                                 "); use another output folder");
+            }
+            check_stored_config(out, stored, wanted);
+            detail::write_file_atomic(cfg_path.string(), cfg);  // nothing finished contradicts the new config
+        }
     } else {
+        // A mistyped --out (the home folder, another dataset's split) must not fill up with train/ and test/.
+        if (fs::exists(out, ec) && !fs::is_empty(out, ec))
+            throw InputError("dataset: " + out_dir + " exists, is not empty and holds no dataset.json; use a new or "
+                             "empty output folder (or the folder of an earlier run of this dataset)");
+        fs::create_directories(out, ec);
+        if (ec) throw InputError("dataset: cannot create " + out_dir + ": " + ec.message());
         detail::write_file_atomic(cfg_path.string(), cfg);
     }
 
@@ -224,11 +326,11 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
         for (const DatasetScene& entry : *scenes) {
             const int frames = frames_of(entry);
             const fs::path dir = out / split_name / dataset_scene_folder(entry.spec);
-            fs::create_directories(dir, ec);
+            fs::create_directories(dir, ec);  // (a folder without frames: a rerun may still change this entry)
             if (ec) throw InputError("dataset: cannot create " + dir.string() + ": " + ec.message());
             p.scene = dir.filename().string();
             // Leftovers of a killed run: write_frame's temporary folders never become frames; remove them.
-            for (const auto& e : fs::directory_iterator(dir))
+            for (const auto& e : fs::directory_iterator(dir, ec))
                 if (e.path().filename().string().find(".tmp-") != std::string::npos) fs::remove_all(e.path(), ec);
             auto done = [&](int f) { return fs::exists(dir / frame_name(f) / "camera.json"); };
             int missing = 0;

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <charconv>
 
+#include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
 
@@ -77,7 +78,10 @@ std::string scene_spec_name(const std::string& spec) {
 }
 
 VoxelScene make_scene(const std::string& spec) {
-    if (has_vox_extension(spec)) return load_vox(spec);
+    if (has_vox_extension(spec)) {
+        detail::require_readable_file(spec);  // the .vox reader streams: a directory or device fails inside it
+        return load_vox(spec);
+    }
     const auto [family, seed] = parse_family_spec(spec);
     return generate_scene(family, seed);
 }
