@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,13 +14,20 @@
 
 namespace ngi::test {
 
+// Holder of the test device; tests/main.cpp empties it before main returns (see there).
+inline std::optional<Device>& device_slot() {
+    static std::optional<Device> d;
+    return d;
+}
+
 // The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu").
 inline Device& device() {
-    static Device d = [] {
+    std::optional<Device>& d = device_slot();
+    if (!d) {
         const char* e = std::getenv("NGI_TEST_DEVICE");
-        return Device::open(e && *e ? e : "cpu");
-    }();
-    return d;
+        d.emplace(Device::open(e && *e ? e : "cpu"));
+    }
+    return *d;
 }
 inline detail::Context& ctx() { return device().context(); }
 
