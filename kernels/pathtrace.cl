@@ -132,10 +132,10 @@ static inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 // start inside the grid. x->found is always written.
 //
 // x must never be a null pointer, even with track == 0 (use trace()): Mesa 22.3's rusticl on llvmpipe (LLVM 15)
-// crashed with SIGSEGV in gallivm's NIR-to-LLVM translation (LLVMBuildBitCast) at the first launch of
-// pt_patch_weights when this took an optional `Crossing* x` and callers passed 0: after inlining, the stores
-// through the null private pointer stayed in code the compiler could not prove dead (guarded by the loop-carried
-// `covered`), and llvmpipe cannot emit a store to a null private (scratch) address. PoCL and oclgrind were fine.
+// crashed with SIGSEGV in gallivm's NIR-to-LLVM translation (in LLVMBuildBitCast) at the first launch of
+// pt_patch_weights when this took an optional `Crossing* x` and callers passed 0: after inlining, the loads and
+// stores through the null private pointer stayed in code the compiler could not prove dead (guarded by the
+// loop-carried `covered`), and gallivm crashed translating them. PoCL and oclgrind were fine.
 static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax, uint* rays, int track, Crossing* x) {
     Hit h;
     h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
@@ -155,8 +155,8 @@ static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax,
     const int3 step = (int3)(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
     const float3 delta = fabs(inv);
     // The first plane crossed on each axis: the cell's far side (c + 1) where the ray moves +axis. Spelled with
-    // per-component scalar compares (1 for true): oclgrind 21.10 evaluates the vector select
-    // `step > 0 ? (int3)(1) : (int3)(0)` wrongly, so the path tracer could not be checked under it.
+    // per-component scalar compares (1 for true): oclgrind 21.10 evaluates `step > 0 ? (int3)(1) : (int3)(0)`
+    // (compiled to a zext of <3 x i1>) as 255 instead of 1 in the true lanes, which broke every ray under it.
     float3 next = (convert_float3(c + (int3)(step.x > 0, step.y > 0, step.z > 0)) - o) * inv;
     // Walk the linear block index along with the cell: one add per step instead of a 3D index.
     const int sx = s->dims.x, sxy = s->dims.x * s->dims.y;
