@@ -117,7 +117,9 @@ void ssim_tiles(__global const float* restrict a, __global const float* restrict
     }
     const float vx = mxx - mx * mx, vy = myy - my * my, vxy = mxy - mx * my;  // population (co)variances
     const float ux = mx + shift_a, uy = my + shift_b;
-    const float ssim = ((2.0f * ux * uy + c1) * (2.0f * vxy + c2)) / ((ux * ux + uy * uy + c1) * (vx + vy + c2));
+    // The luminance and contrast-structure ratios are divided separately: each is O(1), while the product of
+    // their denominators, mean^2 * variance, overflows float for HDR values beyond ~1e9 (inf / inf = NaN).
+    const float ssim = ((2.0f * ux * uy + c1) / (ux * ux + uy * uy + c1)) * ((2.0f * vxy + c2) / (vx + vy + c2));
     const bool inside = x0 + SSIM_R + lx < W - SSIM_R && y0 + SSIM_R + ly < H - SSIM_R;
     ra[lid] = inside ? ssim : 0.0f;  // ra[0] was last read before two barriers: safe to reuse
     for (int s = TILE_ITEMS / 2; s > 0; s >>= 1) {

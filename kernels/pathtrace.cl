@@ -128,11 +128,18 @@ static inline float3 cosine_sample(float3 n, float2 u) {
 static inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 
 // First solid block along o + t d (d unit), t in [0, tmax]. Counts one ray.
-// With `x` non-null, also reports the first crossing from covered air into open air (Crossing); the ray must
-// start inside the grid.
-static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays, Crossing* x) {
+// With `track` set, also reports in *x the first crossing from covered air into open air (Crossing); the ray must
+// start inside the grid. x->found is always written.
+//
+// x must never be a null pointer, even with track == 0 (use trace()): Mesa 22.3's rusticl on llvmpipe (LLVM 15)
+// crashed with SIGSEGV in gallivm's NIR-to-LLVM translation (in LLVMBuildBitCast) at the first launch of
+// pt_patch_weights when this took an optional `Crossing* x` and callers passed 0: after inlining, the loads and
+// stores through the null private pointer stayed in code the compiler could not prove dead (guarded by the
+// loop-carried `covered`), and gallivm crashed translating them. PoCL and oclgrind were fine.
+static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax, uint* rays, int track, Crossing* x) {
     Hit h;
     h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
+    x->found = 0;
     ++*rays;
     const float3 inv = (float3)(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
     const float3 ta = -o * inv, tb = (convert_float3(s->dims) - o) * inv;
@@ -147,16 +154,15 @@ static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* ra
     int3 c = clamp(convert_int3(floor(p)), (int3)(0), s->dims - 1);
     const int3 step = (int3)(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
     const float3 delta = fabs(inv);
-    float3 next = (convert_float3(c + (step > 0 ? (int3)(1) : (int3)(0))) - o) * inv;
+    // The first plane crossed on each axis: the cell's far side (c + 1) where the ray moves +axis. Spelled with
+    // per-component scalar compares (1 for true): oclgrind 21.10 evaluates `step > 0 ? (int3)(1) : (int3)(0)`
+    // (compiled to a zext of <3 x i1>) as 255 instead of 1 in the true lanes, which broke every ray under it.
+    float3 next = (convert_float3(c + (int3)(step.x > 0, step.y > 0, step.z > 0)) - o) * inv;
     // Walk the linear block index along with the cell: one add per step instead of a 3D index.
     const int sx = s->dims.x, sxy = s->dims.x * s->dims.y;
     const int3 dstep = (int3)(step.x, step.y * sx, step.z * sxy);
     int idx = c.x + sx * c.y + sxy * c.z;
-    int covered = 0;
-    if (x) {
-        x->found = 0;
-        covered = s->region[idx] >= 0;
-    }
+    int covered = track && s->region[idx] >= 0;
     const int max_steps = s->dims.x + s->dims.y + s->dims.z + 3;
     for (int i = 0; i < max_steps; ++i) {
         const int m = s->grid[idx];
@@ -190,6 +196,12 @@ static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* ra
         if (t > tmax) break;
     }
     return h;
+}
+
+// First solid block along o + t d (d unit), t in [0, tmax], no crossing tracking. Counts one ray.
+static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
+    Crossing unused;
+    return trace_crossing(s, o, d, tmax, rays, 0, &unused);
 }
 
 // The hit point, snapped onto the face's plane (removes the DDA's rounding along the normal), then lifted off
@@ -229,7 +241,7 @@ static inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint*
     const float3 w = t * (sr * native_cos(phi)) + b * (sr * native_sin(phi)) + sd * z;
     const float c = dot(n, w);
     if (c <= 0.0f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, T_INF, rays, 0);
+    const Hit h = trace(s, p, w, T_INF, rays);
     return h.mat ? (float3)(0.0f) : E * (c * M_1_PI_F);
 }
 
@@ -262,7 +274,7 @@ static inline float3 emitter_light(const Scene* s, float3 p, float3 n, Rng* r, u
     w /= dist;
     const float cos_x = dot(n, w), cos_l = -dot(face_normal(e.w), w);
     if (cos_x <= 0.0f || cos_l <= 1.0e-6f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, dist + 1.0f, rays, 0);
+    const Hit h = trace(s, p, w, dist + 1.0f, rays);
     if (h.mat == 0 || h.face != e.w || any(h.cell != e.xyz)) return (float3)(0.0f);  // occluded
     const float3 Le = s->mats[2 * h.mat + 1].xyz;
     const float pl = emitter_pdf(s, Le, dist, cos_l), pb = cos_x * M_1_PI_F;
@@ -294,7 +306,7 @@ static inline float3 portal_light(const Scene* s, float3 p, float3 n, int2 range
     const float cos_x = dot(n, w), cos_p = fabs(dot(face_normal(e.w), w));
     if (cos_x <= 0.0f || cos_p <= 1.0e-6f) return (float3)(0.0f);
     Crossing x;
-    const Hit h = trace(s, p, w, T_INF, rays, &x);
+    const Hit h = trace_crossing(s, p, w, T_INF, rays, 1, &x);
     if (h.mat != 0 || !x.found || x.face != e.w || x.cell != e.x + s->dims.x * (e.y + s->dims.y * e.z))
         return (float3)(0.0f);
     const float pp = portal_pdf(range.y, dist, cos_p), pb = cos_x * M_1_PI_F;
@@ -335,7 +347,7 @@ static inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range,
         rng2(r);  // keep the stream position independent of the branch
         return (float3)(0.0f);
     }
-    const Hit h = trace(s, p, w, dist + 1.0f, rays, 0);
+    const Hit h = trace(s, p, w, dist + 1.0f, rays);
     if (h.mat == 0 || h.face != e.w || any(h.cell != e.xyz)) {
         rng2(r);
         return (float3)(0.0f);
@@ -365,7 +377,7 @@ static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max
         if (prange.y > 0) sum += beta * patch_light(s, p, n, prange, r, rays);
         const float3 w = cosine_sample(n, rng2(r));
         Crossing x;
-        const Hit h = trace(s, p, w, T_INF, rays, range.y > 0 ? &x : 0);
+        const Hit h = trace_crossing(s, p, w, T_INF, rays, range.y > 0, &x);
         if (h.mat == 0) {
             float mis = 1.0f;
             if (range.y > 0 && x.found) {
@@ -449,7 +461,7 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
     const float3 o = (float3)(cam[0], cam[1], cam[2]);
     const float3 d = pixel_ray(cam, f, col, row, n, &look);
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays, 0);
+    const Hit h = trace(&s, o, d, T_INF, &rays);
     float3 albedo = (float3)(0.0f), normal = (float3)(0.0f), direct = (float3)(0.0f), emission = (float3)(0.0f),
            env = (float3)(0.0f);
     float depth = SKY_DEPTH;
@@ -493,7 +505,7 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
     const float3 o = (float3)(cam[0], cam[1], cam[2]);
     const float3 d = pixel_ray(cam, face, col, row, n, &look);
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays, 0);
+    const Hit h = trace(&s, o, d, T_INF, &rays);
     float3 mean = (float3)(0.0f), m2 = (float3)(0.0f);
     if (h.mat != 0) {
         const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
@@ -528,7 +540,7 @@ __kernel void pt_patch_weights(SCENE_ARGS, int count, __global float* weight_out
         int visible = 0;
         for (int k = 0; k < 4; ++k) {
             const float3 q = face_point(e.xyz, e.w, (float2)((k & 1) ? 0.75f : 0.25f, (k & 2) ? 0.75f : 0.25f));
-            visible += trace(&s, q + ny * RAY_OFFSET, sd, T_INF, &rays, 0).mat == 0;
+            visible += trace(&s, q + ny * RAY_OFFSET, sd, T_INF, &rays).mat == 0;
         }
         w = luminance(mats[2 * s.grid[e.x + sx * (e.y + sy * e.z)]].xyz) * luminance(E) * c * (float)visible * 0.25f;
     }

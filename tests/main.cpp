@@ -1,4 +1,3 @@
-// Catch2 runner. The device is released before main returns, while the OpenCL runtime is still intact.
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
 
@@ -6,6 +5,9 @@
 
 int main(int argc, char** argv) {
     const int rc = Catch::Session().run(argc, argv);
-    ngi::test::release_device();
+    // Release the OpenCL objects while the process is still whole: oclgrind 21.10 keeps per-thread API state in
+    // thread_local objects, which exit() destroys before static destructors, so clRelease* from a static Device
+    // wrote into freed memory and aborted the run ("corrupted double-linked list", found with valgrind).
+    ngi::test::device_slot().reset();
     return rc;
 }

@@ -1,5 +1,6 @@
 // MSE / PSNR / SSIM: parity with scikit-image (the oracle; tests/parity/ssim_reference.py) and with a naive
 // double-precision transcription of skimage's definition (full 2-D window, reflect padding, crop, mean).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -8,6 +9,8 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <string>
+#include <utility>
 
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -159,7 +162,150 @@ TEST_CASE("metrics: bad input is an InputError that says what is wrong", "[metri
     ngi::Image huge = a;
     huge.data[0] = std::numeric_limits<float>::max();  // read_frame's saturated light
     CHECK_THROWS_WITH(ngi::compare_images(dev, huge, a), Contains("first image has 1 values beyond"));
-    CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, 0.0), Contains("data_range"));
-    CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, -1.0), Contains("data_range"));
+    // compare_images accepts data_range 0 (reported as undefined metrics, see below); ssim() alone does not.
+    CHECK_THROWS_WITH(ngi::ssim(dev, a, a, 0.0), Contains("data_range must be finite and > 0"));
+    CHECK_THROWS_WITH(ngi::compare_images(dev, a, a, -1.0), Contains("data_range must be finite and >= 0"));
     CHECK_THROWS_AS(ngi::compare_images(dev, a, a, std::nan("")), ngi::InputError);
+    CHECK_THROWS_AS(ngi::compare_images(dev, a, a, std::numeric_limits<double>::infinity()), ngi::InputError);
+}
+
+namespace {
+
+ngi::Image constant_image(int w, int h, int c, float v) {
+    ngi::Image img(w, h, c);
+    std::fill(img.data.begin(), img.data.end(), v);
+    return img;
+}
+
+}  // namespace
+
+TEST_CASE("metrics: all-zero and constant images (an empty or pure-sky reference)", "[metrics]") {
+    auto& dev = ngi::test::device();
+    std::mt19937 rng(5);
+    const ngi::Image zero = constant_image(24, 20, 3, 0.0f), sky = constant_image(24, 20, 3, 0.37f);
+    SECTION("identical images: PSNR +infinity with a note, SSIM exactly 1, for any data range") {
+        for (const ngi::Image* im : {&zero, &sky})
+            for (const double range : {1.0, 0.37, 0.0}) {
+                INFO("value " << im->data[0] << " range " << range);
+                const ngi::ImageMetrics m = ngi::compare_images(dev, *im, *im, range);
+                CHECK(m.mse == 0.0);
+                CHECK(std::isinf(m.psnr));
+                CHECK(m.psnr > 0);
+                CHECK_THAT(m.psnr_note, Catch::Matchers::Contains("identical"));
+                CHECK(m.ssim == 1.0);
+                CHECK(m.ssim_note.empty());
+                // The kernel agrees where Wang's constants are > 0: (C1 C2) / (C1 C2) in every constant window.
+                if (range > 0) CHECK(ngi::ssim(dev, *im, *im, range) == Approx(1.0).margin(1e-6));
+            }
+    }
+    SECTION("a constant reference with data_range > 0: defined, and as the definition says") {
+        ngi::Image noisy = sky;
+        std::normal_distribution<float> noise(0.0f, 0.05f);
+        for (float& v : noisy.data) v += noise(rng);
+        const ngi::Image bright = constant_image(24, 20, 3, 0.8f);
+        using Pair = std::pair<const ngi::Image*, const ngi::Image*>;
+        for (const auto& [test, ref] : {Pair{&noisy, &sky}, Pair{&noisy, &zero}, Pair{&bright, &sky}, Pair{&sky, &zero}}) {
+            const ngi::ImageMetrics m = ngi::compare_images(dev, *test, *ref, 1.0);
+            INFO("test " << test->data[0] << " ref " << ref->data[0]);
+            CHECK(std::isfinite(m.psnr));
+            CHECK(m.psnr_note.empty());
+            CHECK(m.ssim_note.empty());
+            CHECK(m.ssim == Approx(naive_ssim(*test, *ref, 1.0)).margin(2e-6));
+        }
+        // Two different constants: only the luminance term is left, (2 a b + C1) / (a^2 + b^2 + C1).
+        const double c1 = 0.01 * 0.01;
+        CHECK(ngi::compare_images(dev, bright, sky).ssim ==
+              Approx((2 * 0.8 * 0.37 + c1) / (0.8 * 0.8 + 0.37 * 0.37 + c1)).epsilon(1e-6));
+    }
+    SECTION("data_range 0 (the maximum of an all-zero reference): PSNR and SSIM undefined, with the reason") {
+        const ngi::Image test = random_image(24, 20, 3, rng);
+        const ngi::ImageMetrics m = ngi::compare_images(dev, test, zero, 0.0);
+        CHECK(m.mse == Approx(ngi::mse(dev, test, zero)).epsilon(1e-12));
+        CHECK(m.mse > 0);
+        CHECK(std::isnan(m.psnr));
+        CHECK_THAT(m.psnr_note, Catch::Matchers::Contains("data_range is 0"));
+        CHECK(std::isnan(m.ssim));
+        CHECK_THAT(m.ssim_note, Catch::Matchers::Contains("C1 = C2 = 0"));
+        CHECK(std::isnan(ngi::psnr_from_mse(0.5, 0.0)));
+        CHECK(std::isinf(ngi::psnr_from_mse(0.0, 0.0)));
+    }
+}
+
+TEST_CASE("metrics: 1x1 and other images smaller than the SSIM window", "[metrics]") {
+    auto& dev = ngi::test::device();
+    std::mt19937 rng(13);
+    ngi::Image a(1, 1, 1), b(1, 1, 1);
+    a.data = {0.75f};
+    b.data = {0.25f};
+    const ngi::ImageMetrics m = ngi::compare_images(dev, a, b, 2.0);
+    CHECK(m.mse == 0.25);
+    CHECK(m.psnr == Approx(10 * std::log10(4.0 / 0.25)).epsilon(1e-12));
+    CHECK(m.psnr_note.empty());
+    CHECK(std::isnan(m.ssim));
+    CHECK_THAT(m.ssim_note, Catch::Matchers::Contains("at least 11x11") && Catch::Matchers::Contains("got 1x1"));
+    const ngi::ImageMetrics same = ngi::compare_images(dev, a, a);
+    CHECK(std::isinf(same.psnr));
+    CHECK(std::isnan(same.ssim));  // no window fits: not even identical images have an SSIM
+    for (const auto& [w, h] : {std::pair{10, 30}, std::pair{30, 10}, std::pair{11, 11}}) {
+        const ngi::ImageMetrics r = ngi::compare_images(dev, random_image(w, h, 2, rng), random_image(w, h, 2, rng));
+        INFO(w << "x" << h);
+        CHECK(std::isnan(r.ssim) == (w < 11 || h < 11));
+        CHECK(std::isfinite(r.psnr));
+    }
+    CHECK_THROWS_WITH(ngi::ssim(dev, a, b), Catch::Matchers::Contains("at least 11x11"));
+}
+
+TEST_CASE("metrics: HDR values at and beyond the largest half float (65504)", "[metrics]") {
+    auto& dev = ngi::test::device();
+    std::mt19937 rng(17);
+    for (const float scale : {65504.0f, 1.0e6f, 1.0e9f, 1.0e12f}) {
+        ngi::Image ref(32, 29, 3), test(32, 29, 3);
+        std::lognormal_distribution<float> radiance(0.0f, 1.0f);
+        std::normal_distribution<float> noise(0.0f, 0.05f);
+        for (std::size_t i = 0; i < ref.data.size(); ++i) {
+            ref.data[i] = scale * radiance(rng);
+            test.data[i] = ref.data[i] * std::exp(noise(rng));
+        }
+        double peak = 0, se = 0;
+        for (std::size_t i = 0; i < ref.data.size(); ++i) {
+            peak = std::max(peak, double(ref.data[i]));
+            se += (double(test.data[i]) - ref.data[i]) * (double(test.data[i]) - ref.data[i]);
+        }
+        const double mse = se / double(ref.data.size());
+        for (const double range : {peak, 1.0}) {
+            INFO("scale " << scale << " range " << range);
+            const ngi::ImageMetrics m = ngi::compare_images(dev, test, ref, range);
+            CHECK(m.mse == Approx(mse).epsilon(1e-5));
+            CHECK(m.psnr == Approx(10 * std::log10(range * range / mse)).margin(1e-4));
+            REQUIRE(std::isfinite(m.ssim));
+            CHECK(m.ssim == Approx(naive_ssim(test, ref, range)).margin(2e-6));
+        }
+    }
+}
+
+TEST_CASE("metrics: to_json writes null and a note where JSON has no number", "[metrics]") {
+    auto& dev = ngi::test::device();
+    std::mt19937 rng(19);
+    const ngi::Image a = random_image(16, 16, 1, rng), b = random_image(16, 16, 1, rng);
+    const ngi::ImageMetrics m = ngi::compare_images(dev, a, b);
+    const nlohmann::json j = nlohmann::json::parse(ngi::to_json(m));
+    CHECK(j.size() == 3);  // no notes for finite values
+    CHECK(j["mse"].get<double>() == m.mse);  // 17 digits: the same double back
+    CHECK(j["psnr"].get<double>() == m.psnr);
+    CHECK(j["ssim"].get<double>() == m.ssim);
+    const nlohmann::json same = nlohmann::json::parse(ngi::to_json(ngi::compare_images(dev, a, a)));
+    CHECK(same["mse"].get<double>() == 0.0);
+    CHECK(same["psnr"].is_null());
+    CHECK(same["psnr_note"].get<std::string>().find("+infinity") != std::string::npos);
+    CHECK(same["ssim"].get<double>() == 1.0);
+    CHECK_FALSE(same.contains("ssim_note"));
+    const nlohmann::json zero = nlohmann::json::parse(ngi::to_json(ngi::compare_images(dev, a, b, 0.0)));
+    CHECK(zero["psnr"].is_null());
+    CHECK(zero["ssim"].is_null());
+    CHECK(zero.contains("psnr_note"));
+    CHECK(zero.contains("ssim_note"));
+    ngi::ImageMetrics quoted;
+    quoted.psnr = std::nan("");
+    quoted.psnr_note = "a \"quoted\" \\ note\n";
+    CHECK(nlohmann::json::parse(ngi::to_json(quoted))["psnr_note"].get<std::string>() == quoted.psnr_note);
 }

@@ -2,6 +2,8 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <unistd.h>
 
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
@@ -14,8 +16,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Per process: test runs of several build trees on one machine (or the same tests under PoCL and oclgrind at
+// once) must not share an output folder ("dataset.json was written for a different config").
+fs::path work_dir() { return fs::temp_directory_path() / ("ngi_render_dataset-" + std::to_string(getpid())); }
+
 std::string write_config(const std::string& name, const std::string& text) {
-    const fs::path dir = fs::temp_directory_path() / "ngi_render_dataset";
+    const fs::path dir = work_dir();
     fs::create_directories(dir);
     const fs::path p = dir / name;
     std::ofstream(p) << text;
@@ -69,8 +75,8 @@ TEST_CASE("dataset config: entries, times, and disjoint splits", "[render]") {
     CHECK_THAT(config_error("{\"train\": [,]}"), Catch::Contains("not valid JSON"));
 }
 
-TEST_CASE("dataset: frame folders, resumable and deterministic", "[render]") {
-    const fs::path out = fs::temp_directory_path() / "ngi_render_dataset" / "out";
+TEST_CASE("dataset: frame folders, resumable and deterministic", "[render][oclgrind-small]") {
+    const fs::path out = work_dir() / "out";
     fs::remove_all(out);
     const std::string cfg_path = write_config("tiny.json", R"({
         "n": 8, "feature_spp": 1, "reference_spp": 2, "frames_per_scene": 3, "keyframe_interval": 2,
@@ -135,7 +141,7 @@ TEST_CASE("dataset: frame folders, resumable and deterministic", "[render]") {
 }
 
 TEST_CASE("dataset: the whole config is validated before anything is written", "[render]") {
-    const fs::path out = fs::temp_directory_path() / "ngi_render_dataset" / "out_invalid";
+    const fs::path out = work_dir() / "out_invalid";
     fs::remove_all(out);
     // The training scene is fine; the test split names a .vox file that does not exist.
     const std::string bad = write_config("missing_vox.json", R"({

@@ -87,7 +87,7 @@ TEST_CASE("white furnace: closed box of albedo a and emission E has lighting E /
 }
 
 TEST_CASE("sun-lit plane: direct = E cos(theta) / pi, zero in the shadow of a pillar, and the sky matches the host model",
-          "[render]") {
+          "[render][oclgrind-small]") {
     VoxelScene s({12, 6, 12}, "plane");
     s.fill({0, 0, 0}, {12, 1, 12}, s.add_material({glm::vec3(0.5f), glm::vec3(0.0f), false}));
     const glm::ivec3 p_lo(7, 1, 5), p_hi(8, 4, 6);  // a pillar

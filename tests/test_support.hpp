@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -14,18 +14,18 @@
 
 namespace ngi::test {
 
-// The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu"). Held in a slot that
-// tests/main.cpp empties before main returns: a static Device would be destroyed after the OpenCL runtime's own
-// thread-local state (a use-after-free inside oclgrind's runtime at exit).
-inline std::unique_ptr<Device>& device_slot() {
-    static std::unique_ptr<Device> d;
+// Holder of the test device; tests/main.cpp empties it before main returns (see there).
+inline std::optional<Device>& device_slot() {
+    static std::optional<Device> d;
     return d;
 }
+
+// The device every test runs on: $NGI_TEST_DEVICE, else PoCL's CPU device ("cpu").
 inline Device& device() {
-    auto& d = device_slot();
+    std::optional<Device>& d = device_slot();
     if (!d) {
         const char* e = std::getenv("NGI_TEST_DEVICE");
-        d = std::make_unique<Device>(Device::open(e && *e ? e : "cpu"));
+        d.emplace(Device::open(e && *e ? e : "cpu"));
     }
     return *d;
 }

@@ -30,10 +30,8 @@ ngi::Image hconcat(const std::vector<const ngi::Image*>& images) {
     return out;
 }
 
-nlohmann::json metrics_json(const ngi::ImageMetrics& m) {
-    return {{"mse", m.mse}, {"psnr", std::isfinite(m.psnr) ? nlohmann::json(m.psnr) : nlohmann::json()},
-            {"ssim", m.ssim}};
-}
+// The library's JSON form (non-finite values as null with a note, docs/CONVENTIONS.md section 11).
+nlohmann::json metrics_json(const ngi::ImageMetrics& m) { return nlohmann::json::parse(ngi::to_json(m)); }
 
 }  // namespace
 
@@ -97,11 +95,11 @@ int cmd_lightmap(int argc, char** argv) {
                            "data_range = max of the reference lightmap"},
             {"network", {{"final_ldr", metrics_json(ngi::compare_images(device, n, r, 1.0))},
                          {"lightmap_linear", metrics_json(ngi::compare_images(device, lightmap, *frame.reference,
-                                                                             std::max(peak, 1e-6)))}}},
+                                                                             peak))}}},
             {"direct_only", {{"final_ldr", metrics_json(ngi::compare_images(device, d, r, 1.0))},
                              {"lightmap_linear",
                               metrics_json(ngi::compare_images(device, frame.get(ngi::Feature::Direct, ngi::Face::Front),
-                                                               *frame.reference, std::max(peak, 1e-6)))}}},
+                                                               *frame.reference, peak))}}},
         };
     }
 

@@ -22,6 +22,20 @@ for f in lightmap.exr final.png compare.png metrics.json; do
   [ -s "$work/lm/$f" ] || fail "ngi lightmap did not write $f"
 done
 
+# ngi metrics prints strict JSON: a PSNR/SSIM that is not a number is null with a note saying why
+# (docs/CONVENTIONS.md, Metrics). check_metrics FILE_A FILE_B RANGE PYTHON_ASSERTION (m = the parsed output).
+check_metrics() {
+  "$ngi" metrics "$1" "$2" --range "$3" > "$work/metrics.out"
+  /usr/bin/python3 -c "import json, sys; m = json.loads(open(sys.argv[1]).read()); assert $4, m" "$work/metrics.out" ||
+    fail "ngi metrics $1 $2 --range $3: $(cat "$work/metrics.out")"
+}
+ref=$work/frame/reference.exr direct=$work/frame/front_direct.exr
+check_metrics "$ref" "$ref" 1 \
+  'm["mse"] == 0 and m["psnr"] is None and "+infinity" in m["psnr_note"] and m["ssim"] == 1 and "ssim_note" not in m'
+check_metrics "$direct" "$ref" 0 \
+  'm["mse"] > 0 and m["psnr"] is None and m["ssim"] is None and "data_range is 0" in m["psnr_note"] + m["ssim_note"]'
+check_metrics "$direct" "$ref" 2 'set(m) == {"mse", "psnr", "ssim"} and all(type(v) is float for v in m.values())'
+
 # expect_failure NAME CMD...: exit code 1, the message names $expect, no $work/NAME output folder.
 expect_failure() {
   local name=$1; shift

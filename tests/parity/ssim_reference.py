@@ -55,6 +55,18 @@ def case_pairs(rng):
     cases.append(("inverted_1x50x50", s, 1.0 - s, 1.0))
     a = rng.uniform(0, 1, (3, 33, 35))
     cases.append(("identical_3x33x35", a, a.copy(), 1.0))
+    # Edge cases (docs/CONVENTIONS.md, Metrics): empty and constant ("pure sky") references, where Wang's C1, C2
+    # keep SSIM defined; HDR values beyond the largest half float (65504) over their own range and over range 1.
+    zero, sky = np.zeros((3, 24, 20)), np.full((3, 24, 20), 0.37)
+    cases.append(("zero_identical_3x24x20", zero, zero.copy(), 1.0))
+    cases.append(("constant_identical_3x24x20", sky, sky.copy(), 1.0))
+    cases.append(("zero_reference_3x24x20", rng.uniform(0, 1, zero.shape), zero, 1.0))
+    cases.append(("constant_reference_3x24x20", np.clip(sky + rng.normal(0, 0.05, sky.shape), 0, 1), sky, 1.0))
+    cases.append(("two_constants_3x24x20", np.full(sky.shape, 0.8), sky, 1.0))
+    a = 65504.0 * np.exp(rng.normal(0.0, 1.0, (3, 29, 32)))
+    b = a * np.exp(rng.normal(0, 0.05, a.shape))
+    cases.append(("hdr_beyond_half_3x29x32_range_max", a, b, float(a.max())))
+    cases.append(("hdr_beyond_half_3x29x32_range_1", a, b, 1.0))
     return [(n, a.astype(np.float32), b.astype(np.float32), r) for (n, a, b, r) in cases]
 
 

@@ -2,6 +2,7 @@
 #include "ngi/metrics.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -49,9 +50,12 @@ void check_inputs(const Image& a, const Image& b, const char* op) {
     }
 }
 
-void check_range(double data_range, const char* op) {
-    if (!(data_range > 0.0) || !std::isfinite(data_range))
-        throw InputError(std::string(op) + ": data_range must be finite and > 0, got " + std::to_string(data_range));
+// allow_zero: compare_images reports the metrics a zero range leaves undefined instead of failing (the range of an
+// all-zero reference is 0, and a sky-only frame has an all-zero lightmap reference).
+void check_range(double data_range, const char* op, bool allow_zero) {
+    if (!(allow_zero ? data_range >= 0.0 : data_range > 0.0) || !std::isfinite(data_range))
+        throw InputError(std::string(op) + ": data_range must be finite and " + (allow_zero ? ">= 0" : "> 0") +
+                         ", got " + std::to_string(data_range));
 }
 
 struct Pair {
@@ -112,18 +116,51 @@ double run_ssim(detail::Context& ctx, const Pair& p, int width, int height, int 
     return total / channels;
 }
 
+bool ssim_fits(const Image& a) { return a.width >= 2 * kRadius + 1 && a.height >= 2 * kRadius + 1; }
+
+std::string ssim_size_message(const Image& a) {
+    return "SSIM needs images of at least " + std::to_string(2 * kRadius + 1) + "x" + std::to_string(2 * kRadius + 1) +
+           " pixels (the Gaussian window), got " + std::to_string(a.width) + "x" + std::to_string(a.height);
+}
+
 void check_ssim_size(const Image& a, const char* op) {
-    if (a.width < 2 * kRadius + 1 || a.height < 2 * kRadius + 1)
-        throw InputError(std::string(op) + ": SSIM needs images of at least " + std::to_string(2 * kRadius + 1) +
-                         "x" + std::to_string(2 * kRadius + 1) + " pixels (the Gaussian window), got " +
-                         std::to_string(a.width) + "x" + std::to_string(a.height));
+    if (!ssim_fits(a)) throw InputError(std::string(op) + ": " + ssim_size_message(a));
+}
+
+void append_json_string(std::string& out, const std::string& s) {
+    out += '"';
+    for (const char c : s) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += c;
+        } else if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    out += '"';
+}
+
+void append_json_number(std::string& out, double v) {
+    if (!std::isfinite(v)) {
+        out += "null";
+        return;
+    }
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    out += buf;
 }
 
 }  // namespace
 
 double psnr_from_mse(double mse, double data_range) {
     if (mse == 0.0) return std::numeric_limits<double>::infinity();
-    return 10.0 * std::log10(data_range * data_range / mse);
+    if (data_range == 0.0) return std::numeric_limits<double>::quiet_NaN();
+    // As two logarithms: data_range^2 / mse would overflow for data ranges beyond 1e154.
+    return 20.0 * std::log10(data_range) - 10.0 * std::log10(mse);
 }
 
 double mse(const Device& device, const Image& a, const Image& b) {
@@ -134,7 +171,7 @@ double mse(const Device& device, const Image& a, const Image& b) {
 
 double ssim(const Device& device, const Image& a, const Image& b, double data_range) {
     check_inputs(a, b, "ssim");
-    check_range(data_range, "ssim");
+    check_range(data_range, "ssim", false);
     check_ssim_size(a, "ssim");
     detail::Context& ctx = device.context();
     return run_ssim(ctx, upload(ctx, a, b), a.width, a.height, a.channels, data_range);
@@ -142,15 +179,51 @@ double ssim(const Device& device, const Image& a, const Image& b, double data_ra
 
 ImageMetrics compare_images(const Device& device, const Image& a, const Image& b, double data_range) {
     check_inputs(a, b, "compare images");
-    check_range(data_range, "compare images");
-    check_ssim_size(a, "compare images");
+    check_range(data_range, "compare images", true);
     detail::Context& ctx = device.context();
     const Pair p = upload(ctx, a, b);
     ImageMetrics m;
     m.mse = run_mse(ctx, p, a.data.size());
     m.psnr = psnr_from_mse(m.mse, data_range);
-    m.ssim = run_ssim(ctx, p, a.width, a.height, a.channels, data_range);
+    if (m.mse == 0.0)
+        m.psnr_note = "mse is 0 (identical images): PSNR is +infinity";
+    else if (data_range == 0.0)
+        m.psnr_note = "data_range is 0 (e.g. an all-zero reference): PSNR is undefined";
+    // Exact equality on the host (the MSE cannot tell: squares of differences below 1e-19 underflow to 0).
+    const bool identical = a.data == b.data;
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    if (!ssim_fits(a)) {
+        m.ssim = nan;
+        m.ssim_note = ssim_size_message(a);
+    } else if (identical) {
+        m.ssim = 1.0;  // by definition, also where C1 = C2 = 0 would make the formula 0 / 0
+    } else if (data_range == 0.0) {
+        m.ssim = nan;
+        m.ssim_note = "data_range is 0 (e.g. an all-zero reference): SSIM's constants C1 = C2 = 0 leave it "
+                      "undefined (0 / 0 wherever a window is constant)";
+    } else {
+        m.ssim = run_ssim(ctx, p, a.width, a.height, a.channels, data_range);
+    }
     return m;
+}
+
+std::string to_json(const ImageMetrics& m) {
+    std::string out = "{\"mse\": ";
+    append_json_number(out, m.mse);
+    out += ", \"psnr\": ";
+    append_json_number(out, m.psnr);
+    out += ", \"ssim\": ";
+    append_json_number(out, m.ssim);
+    if (!std::isfinite(m.psnr)) {
+        out += ", \"psnr_note\": ";
+        append_json_string(out, m.psnr_note);
+    }
+    if (!std::isfinite(m.ssim)) {
+        out += ", \"ssim_note\": ";
+        append_json_string(out, m.ssim_note);
+    }
+    out += "}";
+    return out;
 }
 
 }  // namespace ngi

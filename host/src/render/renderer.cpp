@@ -155,6 +155,10 @@ struct Renderer::Impl {
     int nlights = 0;
     float inv_total = 0.0f;
     detail::Kernel k_features, k_reference;
+    // Work-group size of every path-tracer launch: kLocal, or less where the driver allows fewer work-items for
+    // these register-heavy kernels than kLocal (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE
+    // of 32 and a conforming driver rejects a larger local size). Results do not depend on it.
+    std::size_t local = kLocal;
 
     // Per frame: lamp level into the material table, the emitter list and its CDF, sun/sky, camera.
     void upload_frame(const CameraPose& pose, const Lighting& l, const RenderSettings& rs) {
@@ -240,7 +244,7 @@ struct Renderer::Impl {
         std::vector<float> w(static_cast<std::size_t>(npatches));
         set_scene_args(k_patch, rs, npatches, patch_weight);
         const std::size_t global = std::size_t(npatches);
-        ctx->launch(k_patch, 1, &global, &kLocal);
+        ctx->launch(k_patch, 1, &global, &local);
         ctx->read(patch_weight, 0, w.size() * 4, w.data(), "render: read patch weights");
         std::vector<float> prob(w.size(), 0.0f), cum(w.size(), 1.0f);
         std::vector<std::int32_t> range = patch_static_range;
@@ -331,6 +335,13 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights");
     m.k_features = m.ctx->kernel("pathtrace", "pt_features");
     m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
+    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference}) {
+        std::size_t wg = 0;
+        if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
+                CL_SUCCESS &&
+            wg > 0)
+            m.local = std::min(m.local, wg);
+    }
 }
 
 Renderer::~Renderer() = default;
@@ -346,7 +357,7 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     const std::size_t npix = std::size_t(s.n) * s.n;
     m.set_scene_args(m.k_features, s, m.cam, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
     const std::size_t global = npix * kFaceCount;
-    m.ctx->launch(m.k_features, 1, &global, &kLocal);
+    m.ctx->launch(m.k_features, 1, &global, &m.local);
     std::vector<float> out(npix * kFaceCount * kFeatureChannels);
     m.ctx->read(m.features, 0, out.size() * sizeof(float), out.data(), "render: read feature buffers");
 
@@ -380,7 +391,7 @@ Image Renderer::render_reference(const CameraPose& pose, const Lighting& lightin
     const std::size_t npix = std::size_t(s.n) * s.n;
     m.set_scene_args(m.k_reference, s, m.cam, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
                      std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
-    m.ctx->launch(m.k_reference, 1, &npix, &kLocal);
+    m.ctx->launch(m.k_reference, 1, &npix, &m.local);
     Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
     m.ctx->read(m.mean, 0, mean.data.size() * sizeof(float), mean.data.data(), "render: read reference");
     m.ctx->read(m.var, 0, var.data.size() * sizeof(float), var.data.data(), "render: read reference variance");
