@@ -450,8 +450,12 @@ static inline void store3(__global float* q, int plane, int npix, float3 v) {
 
 // Feature buffers of all six faces: out[(face * F_CHANNELS + channel) * n * n + row * n + col].
 // global size: 6 n^2 (one work-item per pixel).
-__kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp, uint seed, __global float* out,
-                          __global uint* rays_out) {
+// Samples [first, last) of spp: the host splits spp into chunks on drivers that end loops after a fixed number of
+// iterations (llvmpipe: 65,535 per work-item, docs/RELIABILITY.md). The running sum of direct light is kept in
+// `out` between chunks and divided by spp in the last one; since the sum continues in the same order, any split
+// gives bit-identical results. Rays of the primary hit are counted in the first chunk only.
+__kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp, int first, int last, uint seed,
+                          __global float* out, __global uint* rays_out) {
     const int gid = get_global_id(0);
     const int npix = n * n;
     if (gid >= 6 * npix) return;
@@ -462,9 +466,11 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
     const float3 d = pixel_ray(cam, f, col, row, n, &look);
     uint rays = 0;
     const Hit h = trace(&s, o, d, T_INF, &rays);
+    if (first > 0) rays = rays_out[gid];
     float3 albedo = (float3)(0.0f), normal = (float3)(0.0f), direct = (float3)(0.0f), emission = (float3)(0.0f),
            env = (float3)(0.0f);
     float depth = SKY_DEPTH;
+    __global float* q = out + (size_t)f * F_CHANNELS * npix + pix;
     if (h.mat == 0) {
         env = sky_radiance(light, d);
     } else {
@@ -473,15 +479,17 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
         normal = face_normal(h.face);
         depth = h.t * dot(d, look);  // planar depth along the face's look axis
         const float3 p = hit_origin(o, d, &h);
+        if (first > 0)
+            direct = (float3)(q[(size_t)F_DIRECT * npix], q[(size_t)(F_DIRECT + 1) * npix],
+                              q[(size_t)(F_DIRECT + 2) * npix]);
         Rng r;
         r.a = (uint)gid; r.c = seed ^ 0x68e31da4u;
-        for (int i = 0; i < spp; ++i) {
+        for (int i = first; i < last; ++i) {
             r.b = (uint)i; r.n = 0;
             direct += lighting_sample(&s, p, normal, 0, 0, &r, &rays);
         }
-        direct /= (float)max(spp, 1);
+        if (last >= spp) direct /= (float)max(spp, 1);
     }
-    __global float* q = out + (size_t)f * F_CHANNELS * npix + pix;
     store3(q, F_ALBEDO, npix, albedo);
     store3(q, F_NORMAL, npix, normal);
     q[(size_t)F_DEPTH * npix] = depth;
@@ -493,9 +501,12 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
 
 // Reference lighting of face `face`: mean[c * n^2 + pix] and the variance of that mean (sample variance / spp).
 // Zero where the primary ray escapes (sky has no surface to light). global size: n^2.
-__kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int n, int spp, int max_bounces,
-                           int rr_start, uint seed, __global float* mean_out, __global float* var_out,
-                           __global uint* rays_out) {
+// Samples [first, last) of spp, as pt_features: between chunks mean_out holds the running mean and var_out the
+// running sum of squared deviations (Welford's M2), so any split continues the same recurrence bit for bit; the
+// last chunk turns M2 into the variance of the mean.
+__kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int n, int spp, int first, int last,
+                           int max_bounces, int rr_start, uint seed, __global float* mean_out,
+                           __global float* var_out, __global uint* rays_out) {
     const int pix = get_global_id(0);
     const int npix = n * n;
     if (pix >= npix) return;
@@ -506,12 +517,17 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
     const float3 d = pixel_ray(cam, face, col, row, n, &look);
     uint rays = 0;
     const Hit h = trace(&s, o, d, T_INF, &rays);
+    if (first > 0) rays = rays_out[pix];
     float3 mean = (float3)(0.0f), m2 = (float3)(0.0f);
+    if (first > 0) {
+        mean = (float3)(mean_out[pix], mean_out[npix + pix], mean_out[2 * npix + pix]);
+        m2 = (float3)(var_out[pix], var_out[npix + pix], var_out[2 * npix + pix]);
+    }
     if (h.mat != 0) {
         const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
         Rng r;
         r.a = (uint)(face * npix + pix); r.c = seed ^ 0x2545f491u;
-        for (int i = 0; i < spp; ++i) {  // Welford: stable mean and variance in float
+        for (int i = first; i < last; ++i) {  // Welford: stable mean and variance in float
             r.b = (uint)i; r.n = 0;
             const float3 x = lighting_sample(&s, p, nrm, max_bounces, rr_start, &r, &rays);
             const float3 dx = x - mean;
@@ -519,9 +535,9 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
             m2 += dx * (x - mean);
         }
     }
-    const float3 var = spp > 1 ? m2 / ((float)(spp - 1) * (float)spp) : (float3)(0.0f);
+    const float3 out2 = last < spp ? m2 : spp > 1 ? m2 / ((float)(spp - 1) * (float)spp) : (float3)(0.0f);
     mean_out[pix] = mean.x; mean_out[npix + pix] = mean.y; mean_out[2 * npix + pix] = mean.z;
-    var_out[pix] = var.x; var_out[npix + pix] = var.y; var_out[2 * npix + pix] = var.z;
+    var_out[pix] = out2.x; var_out[npix + pix] = out2.y; var_out[2 * npix + pix] = out2.z;
     rays_out[pix] = rays;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "ngi/camera.hpp"
 #include "ngi/error.hpp"
@@ -215,6 +216,25 @@ struct Renderer::Impl {
         ctx->write(cam, 0, sizeof(cb), cb, "render: upload camera");
     }
 
+    // Samples per pixel one launch may take. Unlimited (INT_MAX) unless the driver ends loops after a fixed number
+    // of iterations per work-item (Context::loop_limit; llvmpipe: 65,535, counted over every loop of the kernel).
+    // Bound per sample: per bounce up to six DDA walks (primary or continuation, sun, emitter, portal, patch and
+    // its sun ray) of at most dims.x + dims.y + dims.z + 3 steps, plus three binary searches of at most 32 steps.
+    int samples_per_launch(int max_bounces, const char* what) const {
+        const long limit = ctx->loop_limit();
+        if (limit <= 0) return std::numeric_limits<int>::max();
+        const long walk = long(size.x) + size.y + size.z + 3;
+        const long per_bounce = 6 * walk + 3 * 32;
+        const long per_sample = (long(max_bounces) + 1) * per_bounce;
+        const long fixed = walk + 64;  // the primary ray and the kernel's own loops
+        if (fixed + per_sample > limit)
+            throw Error(std::string(what) + ": one sample may need " + std::to_string(fixed + per_sample) +
+                        " loop iterations, beyond the " + std::to_string(limit) + " that " + ctx->info().name +
+                        " runs per work-item before it ends every loop (docs/RELIABILITY.md); use another device "
+                        "or fewer bounces");
+        return int(std::min<long>((limit - fixed) / per_sample, std::numeric_limits<int>::max()));
+    }
+
     void ensure_buffers(int n) {
         if (n == buffers_n) return;
         const std::size_t npix = std::size_t(n) * n;
@@ -355,9 +375,14 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     m.upload_frame(pose, lighting, s);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_features, s, m.cam, s.n, s.feature_spp, std::uint32_t(s.seed), m.features, m.feature_rays);
     const std::size_t global = npix * kFaceCount;
-    m.ctx->launch(m.k_features, 1, &global, &m.local);
+    const int feature_chunk = m.samples_per_launch(0, "render: feature buffers");
+    for (int first = 0; first < s.feature_spp; first += feature_chunk) {
+        const int last = std::min(s.feature_spp, first + feature_chunk);
+        m.set_scene_args(m.k_features, s, m.cam, s.n, s.feature_spp, first, last, std::uint32_t(s.seed), m.features,
+                         m.feature_rays);
+        m.ctx->launch(m.k_features, 1, &global, &m.local);
+    }
     std::vector<float> out(npix * kFaceCount * kFeatureChannels);
     m.ctx->read(m.features, 0, out.size() * sizeof(float), out.data(), "render: read feature buffers");
 
@@ -389,9 +414,13 @@ Image Renderer::render_reference(const CameraPose& pose, const Lighting& lightin
     m.upload_frame(pose, lighting, s);
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
-    m.set_scene_args(m.k_reference, s, m.cam, int(s.reference_face), s.n, s.reference_spp, s.max_bounces, s.rr_start,
-                     std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
-    m.ctx->launch(m.k_reference, 1, &npix, &m.local);
+    const int chunk = m.samples_per_launch(s.max_bounces, "render: reference");
+    for (int first = 0; first < s.reference_spp; first += chunk) {
+        const int last = std::min(s.reference_spp, first + chunk);
+        m.set_scene_args(m.k_reference, s, m.cam, int(s.reference_face), s.n, s.reference_spp, first, last,
+                         s.max_bounces, s.rr_start, std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
+        m.ctx->launch(m.k_reference, 1, &npix, &m.local);
+    }
     Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
     m.ctx->read(m.mean, 0, mean.data.size() * sizeof(float), mean.data.data(), "render: read reference");
     m.ctx->read(m.var, 0, var.data.size() * sizeof(float), var.data.data(), "render: read reference variance");
