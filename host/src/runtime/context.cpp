@@ -284,12 +284,11 @@ cl_event Context::launch(const Kernel& k, int dims, const std::size_t* global, c
         if (global[i] == 0) return nullptr;  // empty NDRange: nothing to do
         if (local) items *= (l[i] = local[i]);
     }
-    if (local && items > k.max_work_group()) {
-        if (k.fixed_local())
-            throw Error("run kernel " + k.name() + ": its work-group of " + std::to_string(items) +
-                        " work-items exceeds the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE of " +
-                        std::to_string(k.max_work_group()) + " on " + info_.name +
-                        ", and its work-group shape is fixed (local memory or reqd_work_group_size)");
+    // Free-shape kernels shrink to the compiled kernel's limit. Fixed-shape kernels keep their shape: their
+    // algorithm needs it, and the limit a driver reports for them can be wrong (rusticl 22.3 reports 32 for a
+    // kernel compiled with reqd_work_group_size(256), then runs it at 256); a shape the device really cannot run
+    // fails in clEnqueueNDRangeKernel with a ClError naming the kernel.
+    if (local && items > k.max_work_group() && !k.fixed_local()) {
         while (items > k.max_work_group()) {  // halve the largest dimension: fewer, smaller groups
             int big = 0;
             for (int i = 1; i < dims; ++i) if (l[i] > l[big]) big = i;

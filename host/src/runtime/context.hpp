@@ -145,7 +145,7 @@ public:
 
     // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds). A local size
     // beyond the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE (registers, driver limits) is halved until it fits,
-    // for kernels whose work-group shape is free; for fixed-shape kernels it is an Error naming the kernel.
+    // for kernels whose work-group shape is free; fixed-shape kernels launch as they are (see context.cpp).
     // Returns the event when `want_event` (profiling), else nullptr.
     cl_event launch(const Kernel& k, int dims, const std::size_t* global, const std::size_t* local,
                     bool want_event = false);
