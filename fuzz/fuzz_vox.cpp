@@ -1,6 +1,8 @@
 // libFuzzer target for the MagicaVoxel .vox loader (host/src/render/vox.cpp): the input bytes are a .vox file.
 // ngi::Error (InputError for a bad file) is the expected outcome of most inputs; anything else -- a crash, a
-// sanitizer report, std::bad_alloc, a hang, memory past -rss_limit_mb -- is a bug. Seeds: fuzz/corpus/vox/.
+// sanitizer report, std::bad_alloc, a hang, memory past -rss_limit_mb -- is a bug. Seeds: fuzz/corpus/vox/
+// (fuzz/make_vox_seeds.py), dictionary: fuzz/vox.dict. Run e.g.
+//   fuzz_vox -runs=1000000 -rss_limit_mb=2048 -timeout=10 -max_len=65536 -dict=fuzz/vox.dict WORK fuzz/corpus/vox
 #include <cstddef>
 #include <cstdint>
 #include <string>

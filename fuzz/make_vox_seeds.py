@@ -66,6 +66,13 @@ def seeds():
     yield "v200_frames.vox", vox(size(4, 4, 1) + xyzi([(x, x, 0, 10 + x) for x in range(4)]) +
                                  ntrn(0, 1, ({"_t": "1 2 3"}, {"_t": "9 9 9", "_f": "1"}), [("_hidden", "0")]) +
                                  nshp(1, [0]), version=200)
+    # Hostile shapes (refused by the loader, kept as seeds so mutations explore around the limits): a scene graph
+    # 70 nodes deep, and 26 groups each listing their child twice (2^26 paths in a 2 KB file).
+    cube = size(1, 1, 1) + xyzi([(0, 0, 0, 1)])
+    yield "hostile_deep.vox", vox(cube + b"".join(ntrn(i, i + 1, ({"_t": "1 0 0"},)) if i % 2 == 0 else ngrp(i, [i + 1])
+                                                  for i in range(69)) + nshp(69, [0]))
+    yield "hostile_doubling.vox", vox(cube + b"".join(ntrn(2 * l, 2 * l + 1) + ngrp(2 * l + 1, [2 * l + 2] * 2)
+                                                      for l in range(26)) + ntrn(52, 53) + nshp(53, [0]))
 
 
 if __name__ == "__main__":
