@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <stdexcept>
 
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
@@ -371,23 +372,33 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
         for (std::size_t m = 0; m < models.size(); ++m) add_instance(int(m), identity(), L3(0));
     }
 
-    // World cell of a voxel: floor of its centre. Twice the centre is integral (half-voxel offsets of even sizes).
+    // World cell of a voxel: floor of its centre. Twice the centre, 2 rot v + rot (1 - size) + 2 t, is integral
+    // (half-voxel offsets of even sizes) and 2 rot v is even, so cell = rot v + floor((rot (1 - size) + 2 t) / 2):
+    // one offset per instance. Up to kMaxVoxPlaced voxels go through the loops below, so they stay lean: the
+    // bounding box comes from each model's box (a signed permutation maps a box to a box), the grid index is a
+    // linear function of v per instance.
     auto floor_half = [](int a) { return a >= 0 ? a / 2 : -((1 - a) / 2); };  // floor(a / 2)
-    auto place = [&](const Instance& in, glm::ivec3 v) {
-        const glm::ivec3 c2 = mul(in.rot, 2 * v + 1 - models[in.model].size) + 2 * in.t;
-        return glm::ivec3(floor_half(c2.x), floor_half(c2.y), floor_half(c2.z));
+    auto offset = [&](const Instance& in) {
+        const glm::ivec3 k = mul(in.rot, 1 - models[std::size_t(in.model)].size) + 2 * in.t;
+        return glm::ivec3(floor_half(k.x), floor_half(k.y), floor_half(k.z));
     };
+    struct Box { glm::ivec3 lo{INT32_MAX}, hi{INT32_MIN}; bool solid = false; };  // of voxels with a colour
+    std::vector<Box> boxes(models.size());
+    for (std::size_t m = 0; m < models.size(); ++m)
+        for (const auto& v : models[m].voxels)
+            if (v[3] != 0) {
+                const glm::ivec3 c(v[0], v[1], v[2]);
+                boxes[m] = {glm::min(boxes[m].lo, c), glm::max(boxes[m].hi, c), true};
+            }
     glm::ivec3 lo(INT32_MAX), hi(INT32_MIN);
-    std::size_t count = 0;
-    for (const auto& in : instances)
-        for (const auto& v : models[in.model].voxels) {
-            if (v[3] == 0) continue;
-            const glm::ivec3 c = place(in, {v[0], v[1], v[2]});
-            lo = glm::min(lo, c);
-            hi = glm::max(hi, c);
-            ++count;
-        }
-    if (count == 0) throw InputError("read " + path + ": the file has no voxels");
+    for (const auto& in : instances) {
+        const Box& bx = boxes[std::size_t(in.model)];
+        if (!bx.solid) continue;
+        const glm::ivec3 o = offset(in), a = mul(in.rot, bx.lo) + o, c = mul(in.rot, bx.hi) + o;
+        lo = glm::min(lo, glm::min(a, c));
+        hi = glm::max(hi, glm::max(a, c));
+    }
+    if (lo.x > hi.x) throw InputError("read " + path + ": the file has no voxels");
     // |lo|, |hi| <= kMaxVoxCoord + 256, so the extent fits an int; the product is taken in 64 bits.
     const glm::ivec3 ext = hi - lo + 1;  // MagicaVoxel axes
     if (glm::any(glm::greaterThan(ext, glm::ivec3(kMaxVoxAxis))) ||  // checked first: then the product fits
@@ -396,13 +407,24 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
                          std::to_string(ext.z) + " blocks exceeds the budget of " + std::to_string(kMaxVoxBlocks) +
                          " blocks, " + std::to_string(kMaxVoxAxis) + " per axis");
 
-    // (x, y, z)_vox -> (x, z, -y): z-up to y-up, a proper rotation.
+    // (x, y, z)_vox -> (x, z, -y): z-up to y-up, a proper rotation. With c = cell - lo, our block is
+    // (c.x, c.z, ext.y - 1 - c.y), index c.x + X c.z + X Y (ext.y - 1 - c.y) for our X = ext.x, Y = ext.z.
     VoxelScene s({ext.x, ext.z, ext.y}, path);
+    const std::int64_t X = ext.x, XY = std::int64_t(ext.x) * ext.z;
+    const L3 w(1, -XY, X);  // index weights of c.x, c.y, c.z
+    const std::int64_t base = XY * (ext.y - 1);
+    const std::int64_t blocks = std::int64_t(s.voxels.size());
     std::array<int, 256> material{};  // colour index -> palette index, 0 = not yet added
-    for (const auto& in : instances)
-        for (const auto& v : models[in.model].voxels) {
+    for (const auto& in : instances) {
+        const glm::ivec3 o = offset(in) - lo;
+        // index = base + w . (rot v + o) = i0 + dv . v
+        const std::int64_t i0 = base + w.x * o.x + w.y * o.y + w.z * o.z;
+        L3 dv;
+        for (int j = 0; j < 3; ++j) dv[j] = w.x * in.rot[0][j] + w.y * in.rot[1][j] + w.z * in.rot[2][j];
+        for (const auto& v : models[std::size_t(in.model)].voxels) {
             if (v[3] == 0) continue;
-            const glm::ivec3 c = place(in, {v[0], v[1], v[2]}) - lo;
+            const std::int64_t i = i0 + dv.x * v[0] + dv.y * v[1] + dv.z * v[2];
+            if (i < 0 || i >= blocks) throw std::logic_error("load_vox: voxel outside the scene box");  // a bug
             int& m = material[v[3]];
             if (m == 0) {
                 const auto& rgb = colours[v[3]];
@@ -411,8 +433,9 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
                 const auto e = emit.find(v[3]);
                 m = s.add_material({albedo, e == emit.end() ? glm::vec3(0.0f) : albedo * e->second, false});
             }
-            s.set({c.x, c.z, ext.y - 1 - c.y}, std::uint8_t(m));
+            s.voxels[std::size_t(i)] = std::uint8_t(m);
         }
+    }
     s.name = path;
     return s;
 }
