@@ -8,33 +8,12 @@
 
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
+#include "vox_writer.hpp"
 
 using namespace ngi;
+using namespace vox_test;
 
 namespace {
-
-// A tiny .vox writer for the tests: chunks are built by hand so that broken files can be made too.
-std::string i32(std::int32_t v) {
-    std::string s(4, '\0');
-    for (int k = 0; k < 4; ++k) s[k] = char((std::uint32_t(v) >> (8 * k)) & 0xff);
-    return s;
-}
-std::string chunk(const std::string& id, const std::string& content, const std::string& children = "") {
-    return id + i32(std::int32_t(content.size())) + i32(std::int32_t(children.size())) + content + children;
-}
-std::string str(const std::string& s) { return i32(std::int32_t(s.size())) + s; }
-std::string dict(const std::vector<std::pair<std::string, std::string>>& kv) {
-    std::string s = i32(std::int32_t(kv.size()));
-    for (const auto& [k, v] : kv) s += str(k) + str(v);
-    return s;
-}
-std::string size_chunk(int x, int y, int z) { return chunk("SIZE", i32(x) + i32(y) + i32(z)); }
-std::string xyzi(const std::vector<std::array<int, 4>>& v) {
-    std::string s = i32(std::int32_t(v.size()));
-    for (const auto& e : v) for (int k = 0; k < 4; ++k) s += char(e[k]);
-    return chunk("XYZI", s);
-}
-std::string vox_file(const std::string& main_children) { return "VOX " + i32(150) + chunk("MAIN", "", main_children); }
 
 std::string tmp_path(const std::string& name) {
     const auto dir = std::filesystem::temp_directory_path() / "ngi_render_tests";
@@ -98,7 +77,7 @@ TEST_CASE("scene specs", "[render]") {
     CHECK_THROWS_AS(make_scene("room:seed=-1"), InputError);
 }
 
-TEST_CASE(".vox: models, palette, scene graph and unknown chunks", "[render]") {
+TEST_CASE(".vox: models, palette, scene graph and unknown chunks", "[render][vox]") {
     // One 3x2x4 model (MagicaVoxel z up) with three voxels, a custom palette and an emissive material, plus the
     // chunks MagicaVoxel writes that we do not use.
     std::string rgba;
@@ -154,7 +133,7 @@ TEST_CASE(".vox: models, palette, scene graph and unknown chunks", "[render]") {
     CHECK(t.palette[white].albedo.b == Approx(srgb(0xcc)));
 }
 
-TEST_CASE(".vox: broken files give errors that name the file", "[render]") {
+TEST_CASE(".vox: broken files give errors that name the file", "[render][vox]") {
     const std::string good = vox_file(size_chunk(2, 2, 2) + xyzi({{0, 0, 0, 1}, {1, 1, 1, 2}}));
     REQUIRE(vox_error(write("ok.vox", good)).empty());
 

@@ -3,6 +3,7 @@
 // Units and axes (docs/RENDERER.md): 1 block = 1 metre; block (x, y, z) covers [x, x+1) x [y, y+1) x [z, z+1) in
 // world space; +y is up; the grid's minimum corner is the world origin.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -65,9 +66,19 @@ VoxelScene generate_scene(const std::string& family, std::uint32_t seed);
 // Colours are sRGB in the file and become linear albedo. MagicaVoxel's z-up axes map to ours as
 // (x, y, z)_vox -> (x, z, -y) (a rotation: handedness is kept), then the scene is moved to start at the origin.
 // Throws InputError naming the file for truncated data, malformed chunk structure, models over 256 blocks per
-// axis, scenes over kMaxVoxBlocks blocks, or voxels outside their model.
+// axis, voxels outside their model, and files over any of the limits below. The limits keep a hostile file from
+// costing more time or memory than the largest scene the renderer takes (docs/RENDERER.md, ".vox limits").
 constexpr std::size_t kMaxVoxBlocks = std::size_t(1) << 26;  // 64 Mi blocks = 64 MiB of palette indices
+constexpr int kMaxVoxAxis = 4096;           // blocks per scene axis (the tracer's DDA walks up to X + Y + Z cells)
+constexpr int kMaxVoxDepth = 64;            // scene-graph nodes on one path from the root (real files: < 10)
+constexpr std::size_t kMaxVoxNodeVisits = std::size_t(1) << 18;  // node visits of the whole walk (shared subtrees
+                                                                 // count once per reference)
+constexpr std::size_t kMaxVoxInstances = std::size_t(1) << 16;   // shape instances (model placements)
+constexpr std::size_t kMaxVoxPlaced = kMaxVoxBlocks;             // voxels placed, summed over instances
+constexpr std::int64_t kMaxVoxCoord = std::int64_t(1) << 20;     // |translation| per axis, per nTRN and summed
 VoxelScene load_vox(const std::string& path);
+// The same from the file's bytes; `name` stands for the path in errors and VoxelScene::name.
+VoxelScene parse_vox(const std::string& bytes, const std::string& name);
 
 // "family:seed=S" (any key=value list after the colon; only seed is defined, default 0) or a path to a .vox file.
 // Throws InputError for unknown families, keys or bad numbers.

@@ -2,13 +2,14 @@
 // The file is a RIFF-like tree: "VOX " version, then MAIN whose children are SIZE/XYZI model pairs, RGBA, MATL,
 // the scene graph (nTRN/nGRP/nSHP) and chunks we do not use; every chunk is id, content bytes, children bytes.
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <map>
-#include <set>
-#include <sstream>
-#include <array>
+#include <stdexcept>
 
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
@@ -66,6 +67,12 @@ private:
     std::size_t pos_, end_;
 };
 
+using L3 = glm::vec<3, std::int64_t>;  // positions while walking the scene graph
+
+[[noreturn]] void input_error(const std::string& path, const std::string& what) {
+    throw InputError("read " + path + ": " + what);
+}
+
 struct Model {
     glm::ivec3 size{0};
     std::vector<std::array<std::uint8_t, 4>> voxels;  // x, y, z, colour index
@@ -86,7 +93,7 @@ IMat mul(const IMat& a, const IMat& b) {
 struct Node {
     enum Kind { Transform, Group, Shape } kind;
     IMat rot = identity();
-    glm::ivec3 t{0};
+    L3 t{0};                    // nTRN translation, within +-kMaxVoxCoord
     std::vector<int> children;  // node ids (transform: one; group: many) or model ids (shape)
 };
 
@@ -135,12 +142,48 @@ int parse_int(const Reader& rd, const std::string& s, const char* what) {
     }
 }
 
+// nTRN "_t": three integers separated by spaces, each within +-kMaxVoxCoord (so that sums over kMaxVoxDepth
+// levels, doubled for half-voxel centres, stay far from int overflow).
+L3 parse_translation(const Reader& rd, const std::string& s) {
+    L3 t(0);
+    const char* p = s.data();
+    const char* const end = s.data() + s.size();
+    for (int k = 0; k < 3; ++k) {
+        while (p < end && *p == ' ') ++p;
+        if (end - p > 1 && *p == '+' && p[1] >= '0' && p[1] <= '9') ++p;  // from_chars takes no '+'
+        std::int64_t v = 0;
+        const auto r = std::from_chars(p, end, v);
+        if (r.ec == std::errc::result_out_of_range || (r.ec == std::errc() && (v > kMaxVoxCoord || v < -kMaxVoxCoord)))
+            rd.fail("translation '" + s + "' in nTRN is beyond +-" + std::to_string(kMaxVoxCoord) + " blocks");
+        if (r.ec != std::errc()) rd.fail("bad translation '" + s + "' in nTRN");
+        t[k] = v;
+        p = r.ptr;
+    }
+    while (p < end && *p == ' ') ++p;
+    if (p != end) rd.fail("bad translation '" + s + "' in nTRN");
+    return t;
+}
+
+// A MATL number (MagicaVoxel writes them with printf %g); must be finite.
+float parse_float(const Reader& rd, const std::string& s, const char* what) {
+    char* stop = nullptr;
+    const float v = std::strtof(s.c_str(), &stop);
+    if (s.empty() || stop != s.c_str() + s.size() || !std::isfinite(v))
+        rd.fail(std::string("bad number '") + s + "' in " + what);
+    return v;
+}
+
 }  // namespace
 
 VoxelScene load_vox(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError("read " + path + ": cannot open file");
     const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw InputError("read " + path + ": I/O error");
+    return parse_vox(b, path);
+}
+
+VoxelScene parse_vox(const std::string& b, const std::string& path) {
     Reader rd(path, b, 0, b.size());
     if (rd.left() < 8 || b.compare(0, 4, "VOX ") != 0) rd.fail("not a MagicaVoxel file (no \"VOX \" header)");
     rd.bytes(4, "header");
@@ -207,8 +250,8 @@ VoxelScene load_vox(const std::string& path) {
             const int id = r.i32("MATL");
             auto d = r.dict("MATL");
             if (d["_type"] == "_emit" && id >= 1 && id <= 255) {
-                const float e = d.count("_emit") ? std::strtof(d["_emit"].c_str(), nullptr) : 1.0f;
-                const float flux = d.count("_flux") ? std::strtof(d["_flux"].c_str(), nullptr) : 0.0f;
+                const float e = d.count("_emit") ? parse_float(r, d["_emit"], "MATL _emit") : 1.0f;
+                const float flux = d.count("_flux") ? parse_float(r, d["_flux"], "MATL _flux") : 0.0f;
                 emit[id] = glm::vec3(std::max(0.0f, e) * 4.0f * std::exp2(std::clamp(flux, 0.0f, 4.0f)));
             }
         } else if (c.id == "nTRN" || c.id == "nGRP" || c.id == "nSHP") {
@@ -224,10 +267,7 @@ VoxelScene load_vox(const std::string& path) {
                 if (frames < 1) r.fail("nTRN without frames");
                 auto f = r.dict("nTRN");  // frame 0; animation frames are ignored
                 if (f.count("_r")) node.rot = decode_rotation(r, parse_int(r, f["_r"], "nTRN _r"));
-                if (f.count("_t")) {
-                    std::istringstream ts(f["_t"]);
-                    if (!(ts >> node.t.x >> node.t.y >> node.t.z)) r.fail("bad translation '" + f["_t"] + "' in nTRN");
-                }
+                if (f.count("_t")) node.t = parse_translation(r, f["_t"]);
             } else if (c.id == "nGRP") {
                 node.kind = Node::Group;
                 const int n = r.i32("nGRP");
@@ -250,64 +290,141 @@ VoxelScene load_vox(const std::string& path) {
     if (models.empty()) throw InputError("read " + path + ": no model (SIZE/XYZI chunks) in the file");
 
     // Model instances in MagicaVoxel space (z up): each voxel centre goes to rot * (v + 0.5 - size / 2) + t.
+    // The scene graph is a DAG at best (a group may list a subtree twice, nodes may be shared), so the walk is
+    // bounded, not just cycle-checked: kMaxVoxDepth nodes per path (an explicit stack, never the call stack),
+    // kMaxVoxNodeVisits visits in all, kMaxVoxInstances instances, kMaxVoxPlaced voxels, |t| <= kMaxVoxCoord.
+    auto fail = [&](const std::string& what) { input_error(path, what); };
     struct Instance { int model; IMat rot; glm::ivec3 t; };
     std::vector<Instance> instances;
+    std::size_t placed = 0;  // voxels the instances place, summed
+    auto add_instance = [&](int m, const IMat& rot, L3 t) {
+        if (m < 0 || std::size_t(m) >= models.size()) fail("scene graph refers to missing model " + std::to_string(m));
+        if (instances.size() >= kMaxVoxInstances)
+            fail("more than " + std::to_string(kMaxVoxInstances) + " model instances in the scene graph");
+        placed += models[std::size_t(m)].voxels.size();  // <= file size per model: no overflow before the check
+        if (placed > kMaxVoxPlaced)
+            fail("more than " + std::to_string(kMaxVoxPlaced) + " voxels placed by the scene graph");
+        instances.push_back({m, rot, glm::ivec3(t)});  // |t| <= kMaxVoxCoord: fits
+    };
     if (!nodes.empty()) {
-        std::set<int> on_path;
-        auto walk = [&](auto&& self, int id, IMat rot, glm::ivec3 t) -> void {
-            auto it = nodes.find(id);
-            if (it == nodes.end()) throw InputError("read " + path + ": scene graph refers to missing node " + std::to_string(id));
-            if (!on_path.insert(id).second) throw InputError("read " + path + ": scene graph has a cycle at node " + std::to_string(id));
-            const Node& n = it->second;
-            if (n.kind == Node::Transform) {
-                self(self, n.children.at(0), mul(rot, n.rot), t + mul(rot, n.t));
-            } else if (n.kind == Node::Group) {
-                for (int c : n.children) self(self, c, rot, t);
-            } else {
-                for (int m : n.children) {
-                    if (m < 0 || std::size_t(m) >= models.size())
-                        throw InputError("read " + path + ": scene graph refers to missing model " + std::to_string(m));
-                    instances.push_back({m, rot, t});
+        // Node ids -> dense indices, resolved once per reference: a visit is then O(1), however often the file makes
+        // the walk come back to a node. A missing child is an error only if the walk reaches it.
+        constexpr std::size_t kMissing = SIZE_MAX;
+        std::vector<const Node*> graph;
+        std::vector<int> ids;
+        std::map<int, std::size_t> index;
+        for (const auto& [id, n] : nodes) {
+            index[id] = graph.size();
+            graph.push_back(&n);
+            ids.push_back(id);
+        }
+        std::vector<std::vector<std::size_t>> kids(graph.size());  // parallel to Node::children (not for shapes)
+        for (std::size_t i = 0; i < graph.size(); ++i)
+            if (graph[i]->kind != Node::Shape)
+                for (int c : graph[i]->children) {
+                    const auto it = index.find(c);
+                    kids[i].push_back(it == index.end() ? kMissing : it->second);
                 }
-            }
-            on_path.erase(id);
+        struct Frame { std::size_t node; IMat rot; L3 t; std::size_t next; };  // next: the next child to visit
+        std::vector<Frame> stack;
+        std::vector<char> on_path(graph.size(), 0);
+        std::size_t visits = 0;
+        auto enter = [&](std::size_t node, int id, const IMat& rot, L3 t) {
+            if (node == kMissing) fail("scene graph refers to missing node " + std::to_string(id));
+            if (on_path[node]) fail("scene graph has a cycle at node " + std::to_string(id));
+            if (stack.size() >= std::size_t(kMaxVoxDepth))
+                fail("scene graph deeper than " + std::to_string(kMaxVoxDepth) + " levels");
+            if (++visits > kMaxVoxNodeVisits)
+                fail("scene graph expands to more than " + std::to_string(kMaxVoxNodeVisits) +
+                     " node visits (groups listing children repeatedly?)");
+            on_path[node] = 1;
+            stack.push_back({node, rot, t, 0});
         };
-        walk(walk, 0, identity(), glm::ivec3(0));
+        const auto root = index.find(0);
+        enter(root == index.end() ? kMissing : root->second, 0, identity(), L3(0));
+        while (!stack.empty()) {
+            Frame& f = stack.back();
+            const Node& n = *graph[f.node];
+            if (n.kind == Node::Shape) {
+                for (int m : n.children) add_instance(m, f.rot, f.t);
+            } else if (f.next < n.children.size()) {
+                const std::size_t k = f.next++;
+                const int child = n.children[k];
+                IMat rot = f.rot;
+                L3 t = f.t;
+                if (n.kind == Node::Transform) {
+                    // Rotation entries are 0 / +-1: rot * n.t keeps |n.t|, the sum stays within +-2^21 until checked.
+                    const IMat& r = f.rot;
+                    for (int i = 0; i < 3; ++i) t[i] += r[i][0] * n.t.x + r[i][1] * n.t.y + r[i][2] * n.t.z;
+                    if (glm::any(glm::greaterThan(glm::abs(t), L3(kMaxVoxCoord))))
+                        fail("scene graph places node " + std::to_string(child) + " at (" + std::to_string(t.x) + ", " +
+                             std::to_string(t.y) + ", " + std::to_string(t.z) + "), beyond +-" +
+                             std::to_string(kMaxVoxCoord) + " blocks");
+                    rot = mul(f.rot, n.rot);
+                }
+                enter(kids[f.node][k], child, rot, t);  // may reallocate the stack: `f` is not used after this
+                continue;
+            }
+            on_path[f.node] = 0;
+            stack.pop_back();
+        }
     } else {
-        for (std::size_t m = 0; m < models.size(); ++m) instances.push_back({int(m), identity(), glm::ivec3(0)});
+        for (std::size_t m = 0; m < models.size(); ++m) add_instance(int(m), identity(), L3(0));
     }
 
-    // World cell of a voxel: floor of its centre. Twice the centre is integral (half-voxel offsets of even sizes).
+    // World cell of a voxel: floor of its centre. Twice the centre, 2 rot v + rot (1 - size) + 2 t, is integral
+    // (half-voxel offsets of even sizes) and 2 rot v is even, so cell = rot v + floor((rot (1 - size) + 2 t) / 2):
+    // one offset per instance. Up to kMaxVoxPlaced voxels go through the loops below, so they stay lean: the
+    // bounding box comes from each model's box (a signed permutation maps a box to a box), the grid index is a
+    // linear function of v per instance.
     auto floor_half = [](int a) { return a >= 0 ? a / 2 : -((1 - a) / 2); };  // floor(a / 2)
-    auto place = [&](const Instance& in, glm::ivec3 v) {
-        const glm::ivec3 c2 = mul(in.rot, 2 * v + 1 - models[in.model].size) + 2 * in.t;
-        return glm::ivec3(floor_half(c2.x), floor_half(c2.y), floor_half(c2.z));
+    auto offset = [&](const Instance& in) {
+        const glm::ivec3 k = mul(in.rot, 1 - models[std::size_t(in.model)].size) + 2 * in.t;
+        return glm::ivec3(floor_half(k.x), floor_half(k.y), floor_half(k.z));
     };
+    struct Box { glm::ivec3 lo{INT32_MAX}, hi{INT32_MIN}; bool solid = false; };  // of voxels with a colour
+    std::vector<Box> boxes(models.size());
+    for (std::size_t m = 0; m < models.size(); ++m)
+        for (const auto& v : models[m].voxels)
+            if (v[3] != 0) {
+                const glm::ivec3 c(v[0], v[1], v[2]);
+                boxes[m] = {glm::min(boxes[m].lo, c), glm::max(boxes[m].hi, c), true};
+            }
     glm::ivec3 lo(INT32_MAX), hi(INT32_MIN);
-    std::size_t count = 0;
-    for (const auto& in : instances)
-        for (const auto& v : models[in.model].voxels) {
-            if (v[3] == 0) continue;
-            const glm::ivec3 c = place(in, {v[0], v[1], v[2]});
-            lo = glm::min(lo, c);
-            hi = glm::max(hi, c);
-            ++count;
-        }
-    if (count == 0) throw InputError("read " + path + ": the file has no voxels");
+    for (const auto& in : instances) {
+        const Box& bx = boxes[std::size_t(in.model)];
+        if (!bx.solid) continue;
+        const glm::ivec3 o = offset(in), a = mul(in.rot, bx.lo) + o, c = mul(in.rot, bx.hi) + o;
+        lo = glm::min(lo, glm::min(a, c));
+        hi = glm::max(hi, glm::max(a, c));
+    }
+    if (lo.x > hi.x) throw InputError("read " + path + ": the file has no voxels");
+    // |lo|, |hi| <= kMaxVoxCoord + 256, so the extent fits an int; the product is taken in 64 bits.
     const glm::ivec3 ext = hi - lo + 1;  // MagicaVoxel axes
-    const double blocks = double(ext.x) * ext.y * ext.z;
-    if (blocks > double(kMaxVoxBlocks))
+    if (glm::any(glm::greaterThan(ext, glm::ivec3(kMaxVoxAxis))) ||  // checked first: then the product fits
+        std::int64_t(ext.x) * ext.y * ext.z > std::int64_t(kMaxVoxBlocks))
         throw InputError("read " + path + ": scene of " + std::to_string(ext.x) + " x " + std::to_string(ext.y) + " x " +
                          std::to_string(ext.z) + " blocks exceeds the budget of " + std::to_string(kMaxVoxBlocks) +
-                         " blocks");
+                         " blocks, " + std::to_string(kMaxVoxAxis) + " per axis");
 
-    // (x, y, z)_vox -> (x, z, -y): z-up to y-up, a proper rotation.
+    // (x, y, z)_vox -> (x, z, -y): z-up to y-up, a proper rotation. With c = cell - lo, our block is
+    // (c.x, c.z, ext.y - 1 - c.y), index c.x + X c.z + X Y (ext.y - 1 - c.y) for our X = ext.x, Y = ext.z.
     VoxelScene s({ext.x, ext.z, ext.y}, path);
+    const std::int64_t X = ext.x, XY = std::int64_t(ext.x) * ext.z;
+    const L3 w(1, -XY, X);  // index weights of c.x, c.y, c.z
+    const std::int64_t base = XY * (ext.y - 1);
+    const std::int64_t blocks = std::int64_t(s.voxels.size());
     std::array<int, 256> material{};  // colour index -> palette index, 0 = not yet added
-    for (const auto& in : instances)
-        for (const auto& v : models[in.model].voxels) {
+    for (const auto& in : instances) {
+        const glm::ivec3 o = offset(in) - lo;
+        // index = base + w . (rot v + o) = i0 + dv . v
+        const std::int64_t i0 = base + w.x * o.x + w.y * o.y + w.z * o.z;
+        L3 dv;
+        for (int j = 0; j < 3; ++j) dv[j] = w.x * in.rot[0][j] + w.y * in.rot[1][j] + w.z * in.rot[2][j];
+        for (const auto& v : models[std::size_t(in.model)].voxels) {
             if (v[3] == 0) continue;
-            const glm::ivec3 c = place(in, {v[0], v[1], v[2]}) - lo;
+            const std::int64_t i = i0 + dv.x * v[0] + dv.y * v[1] + dv.z * v[2];
+            if (i < 0 || i >= blocks) throw std::logic_error("load_vox: voxel outside the scene box");  // a bug
             int& m = material[v[3]];
             if (m == 0) {
                 const auto& rgb = colours[v[3]];
@@ -316,8 +433,9 @@ VoxelScene load_vox(const std::string& path) {
                 const auto e = emit.find(v[3]);
                 m = s.add_material({albedo, e == emit.end() ? glm::vec3(0.0f) : albedo * e->second, false});
             }
-            s.set({c.x, c.z, ext.y - 1 - c.y}, std::uint8_t(m));
+            s.voxels[std::size_t(i)] = std::uint8_t(m);
         }
+    }
     s.name = path;
     return s;
 }
