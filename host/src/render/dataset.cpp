@@ -3,7 +3,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -138,12 +137,14 @@ std::string frame_name(int f) {
 }  // namespace
 
 DatasetConfig DatasetConfig::load(const std::string& path) {
+    return parse(detail::read_file(path, "dataset config"), path);
+}
+
+DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& path) {
     ConfigReader r{path};
-    std::ifstream in(path);
-    if (!in) r.fail("cannot open file");
     json j;
     try {
-        j = json::parse(in);
+        j = json::parse(text);
     } catch (const json::exception& e) {
         r.fail(std::string("not valid JSON: ") + e.what());
     }
