@@ -196,6 +196,15 @@ TEST_CASE("EXR and PNG headers that promise more pixels than the file holds are 
     std::string attr = exr.substr(0, 8) + std::string("junk\0opaque\0", 12) + std::string("\xff\xff\xff\x7f", 4);
     CHECK_THROWS_WITH(ngi::detail::decode_exr(attr, "attr.exr"), Contains("attr.exr") && Contains("'junk' claims"));
     CHECK(ngi::detail::decode_exr(exr, "a.exr").width == 4);
+    // Tiled, 1x1 tiles, the widest possible data window: 2^32 x 2^32 tiles used to be counted before the size check
+    // (a signed overflow, caught by -DNGI_SANITIZE=ON builds).
+    std::string tiled = big;
+    tiled[5] = char(tiled[5] | 0x02);  // version flag 0x200: single-part tiled
+    tiled.insert(8, std::string("tiles\0tiledesc\0\x09\0\0\0\x01\0\0\0\x01\0\0\0\0", 28));
+    const std::size_t dw_at = tiled.find(std::string("dataWindow\0box2i\0", 17)) + 17 + 4;
+    const std::int32_t widest[4] = {INT32_MIN, INT32_MIN, INT32_MAX, INT32_MAX};
+    std::memcpy(tiled.data() + dw_at, widest, 16);
+    CHECK_THROWS_WITH(ngi::detail::decode_exr(tiled, "tiled.exr"), Contains("tiled.exr") && Contains("data window"));
 
     ngi::write_png(dir / "a.png", ngi::Image(4, 4, 4, 0.5f));
     std::string png = ngi::test::slurp(dir / "a.png");

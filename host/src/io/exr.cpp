@@ -123,6 +123,27 @@ void prescan_header(const std::string& bytes, const std::string& what) {
     };
     const long long file_bytes = (long long)bytes.size();
     long long chunks = 0, samples = 0;
+    auto check_part = [&](long long w, long long h, bool tiled, const std::uint32_t tile[2], int compression,
+                          long long channels) {
+        // Sizes first (w * h cannot overflow once w <= limit / h), then the chunks they make.
+        const long long limit = kSampleAllowance + kMaxSamplesPerByte * file_bytes;
+        if (w > limit / h || (channels && w * h > limit / channels))
+            throw bad("data window " + std::to_string(w) + "x" + std::to_string(h) + " with " +
+                      std::to_string(channels) + " channels is more than a " + std::to_string(file_bytes) +
+                      "-byte file can hold");
+        if (tiled) {
+            const long long tx = std::max<long long>(tile[0], 1), ty = std::max<long long>(tile[1], 1);
+            chunks += ((w + tx - 1) / tx) * ((h + ty - 1) / ty);
+        } else {
+            static const int lines[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+            const int per_chunk = lines[compression >= 0 && compression < 10 ? compression : 0];
+            chunks += (h + per_chunk - 1) / per_chunk;
+        }
+        samples += w * h * std::max<long long>(channels, 1);
+        if (samples > limit || chunks > file_bytes / 8)
+            throw bad("the chunk offset table or the pixel data would be larger than the " +
+                      std::to_string(file_bytes) + "-byte file");
+    };
     for (int part = 0;; ++part) {
         if (pos >= bytes.size()) throw bad("truncated");
         if (bytes[pos] == '\0') {  // an empty header ends a multi-part file's header list
@@ -160,25 +181,9 @@ void prescan_header(const std::string& bytes, const std::string& what) {
             }
             pos += std::size_t(size);
         }
-        if (!has_dw) continue;  // OpenEXR reports the missing attribute itself
         const long long w = (long long)dw[2] - dw[0] + 1, h = (long long)dw[3] - dw[1] + 1;
-        if (w <= 0 || h <= 0) continue;  // ditto: an invalid data window is OpenEXR's error
-        if (tiled) {
-            const long long tx = std::max<long long>(tile[0], 1), ty = std::max<long long>(tile[1], 1);
-            chunks += ((w + tx - 1) / tx) * ((h + ty - 1) / ty);
-        } else {
-            static const int lines[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
-            chunks += (h + lines[compression < 10 ? compression : 0] - 1) / lines[compression < 10 ? compression : 0];
-        }
-        const long long limit = kSampleAllowance + kMaxSamplesPerByte * file_bytes;
-        if (w > limit / h || (channels && w * h > limit / channels))
-            throw bad("data window " + std::to_string(w) + "x" + std::to_string(h) + " with " +
-                      std::to_string(channels) + " channels is more than a " + std::to_string(file_bytes) +
-                      "-byte file can hold");
-        samples += w * h * std::max<long long>(channels, 1);
-        if (samples > limit || chunks > file_bytes / 8)
-            throw bad("the chunk offset table or the pixel data would be larger than the " +
-                      std::to_string(file_bytes) + "-byte file");
+        // A missing or empty data window is left to OpenEXR, which reports it.
+        if (has_dw && w > 0 && h > 0) check_part(w, h, tiled, tile, compression, channels);
         if (!multipart) break;
     }
 }
