@@ -205,6 +205,20 @@ TEST_CASE("EXR and PNG headers that promise more pixels than the file holds are 
     const std::int32_t widest[4] = {INT32_MIN, INT32_MIN, INT32_MAX, INT32_MAX};
     std::memcpy(tiled.data() + dw_at, widest, 16);
     CHECK_THROWS_WITH(ngi::detail::decode_exr(tiled, "tiled.exr"), Contains("tiled.exr") && Contains("data window"));
+    // A chlist whose declared size disagrees with its entries (found by fuzz_exr): OpenEXR reads the entries and
+    // went on to a 64379x257 data window of 12 channels the header walk had not seen (800 MB for a 572-byte file).
+    std::string chlist = exr;
+    const std::size_t ch_at = chlist.find(std::string("channels\0chlist\0", 16)) + 16;
+    std::int32_t ch_size = 0;
+    std::memcpy(&ch_size, chlist.data() + ch_at, 4);
+    ch_size += 5;
+    std::memcpy(chlist.data() + ch_at, &ch_size, 4);
+    CHECK_THROWS_WITH(ngi::detail::decode_exr(chlist, "chlist.exr"),
+                      Contains("chlist.exr") && Contains("'channels' of type chlist does not fill"));
+    std::string short_box = exr;  // a box2i claiming 12 bytes: OpenEXR reads 16 regardless
+    const std::size_t box_at = short_box.find(std::string("dataWindow\0box2i\0", 17)) + 17;
+    short_box[box_at] = 12;
+    CHECK_THROWS_WITH(ngi::detail::decode_exr(short_box, "box.exr"), Contains("'dataWindow' of type box2i"));
 
     ngi::write_png(dir / "a.png", ngi::Image(4, 4, 4, 0.5f));
     std::string png = ngi::test::slurp(dir / "a.png");

@@ -105,6 +105,53 @@ constexpr long long kMaxSamplesPerByte = 1024;  // ZIP's best ratio is ~1032:1 o
 constexpr long long kSampleAllowance = 1ll << 24;
 constexpr long long kMaxDisplaySamples = 1ll << 26;  // 256 MiB as float
 
+// OpenEXR reads an attribute of a known type by its type, not by the size field in front of it (a box2i is 16
+// bytes, a chlist ends at its empty name, a preview is width * height pixels), so a size field that disagrees
+// with the value would make OpenEXR and this walker part ways, and some values allocate by their own length
+// fields (stringvector entries, previews). Every known type's value must therefore fill exactly its declared size.
+template <class Bad>
+void check_attribute_size(const std::string& name, const std::string& type, const char* v, std::size_t size,
+                          const Bad& bad) {
+    static const std::pair<const char*, std::size_t> fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+        {"float", 4}, {"int", 4}, {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64},
+        {"m44d", 128}, {"rational", 8}, {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+        {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"deepImageState", 1}};
+    auto wrong = [&] { return bad("attribute '" + name + "' of type " + type + " does not fill its " +
+                                  std::to_string(size) + " bytes"); };
+    for (const auto& [t, n] : fixed)
+        if (type == t) {
+            if (size != n) throw wrong();
+            return;
+        }
+    if (type == "chlist") {  // (name\0, 16 bytes)*, then \0 as the last byte
+        std::size_t p = 0;
+        while (p < size && v[p] != '\0') {
+            const void* z = std::memchr(v + p, '\0', size - p);
+            if (!z) throw wrong();
+            p = std::size_t(static_cast<const char*>(z) - v) + 1 + 16;
+        }
+        if (p != size - 1 || size == 0) throw wrong();
+    } else if (type == "stringvector") {  // (int32 length, bytes)*
+        std::size_t p = 0;
+        while (p < size) {
+            std::int32_t n = 0;
+            if (size - p < 4) throw wrong();
+            std::memcpy(&n, v + p, 4);
+            p += 4;
+            if (n < 0 || std::size_t(n) > size - p) throw wrong();
+            p += std::size_t(n);
+        }
+    } else if (type == "floatvector") {
+        if (size % 4) throw wrong();
+    } else if (type == "preview") {  // uint32 width, height, then width * height RGBA bytes
+        std::uint32_t wh[2] = {0, 0};
+        if (size < 8) throw wrong();
+        std::memcpy(wh, v, 8);
+        if (std::uint64_t(wh[0]) * wh[1] * 4 != size - 8) throw wrong();
+    }
+}
+
 void prescan_header(const std::string& bytes, const std::string& what) {
     auto bad = [&](const std::string& why) { return InputError(what + "corrupt OpenEXR header: " + why); };
     if (bytes.size() < 8) throw bad("truncated");
@@ -168,6 +215,7 @@ void prescan_header(const std::string& bytes, const std::string& what) {
                 throw bad("attribute '" + name + "' claims " + std::to_string(size) + " bytes, the file has " +
                           std::to_string(bytes.size() - pos) + " left");
             const char* v = bytes.data() + pos;
+            check_attribute_size(name, type, v, std::size_t(size), bad);
             if (name == "dataWindow" && type == "box2i" && size == 16) { std::memcpy(dw, v, 16); has_dw = true; }
             if (name == "tiles" && type == "tiledesc" && size == 9) { std::memcpy(tile, v, 8); tiled = true; }
             if (name == "compression" && type == "compression" && size == 1) compression = (unsigned char)v[0];
@@ -224,17 +272,23 @@ Image detail::decode_exr(const std::string& bytes, const std::string& path, std:
             names.push_back(it.name());
         }
         if (names.empty()) throw InputError(what + "the file has no channels");
+        // Again with OpenEXR's own reading of the header: the data must fit the file (prescan_header's rule).
+        const long long nc = (long long)std::max<std::size_t>(names.size(), 1);
+        const long long file_limit = kSampleAllowance + kMaxSamplesPerByte * (long long)bytes.size();
+        if (dw_w > 0 && dw_h > 0 && dw_w > file_limit / nc / dw_h)  // divisions: no overflow on any window
+            throw InputError(what + "corrupt OpenEXR header: data window " + std::to_string(dw_w) + "x" +
+                             std::to_string(dw_h) + " with " + std::to_string(names.size()) +
+                             " channels is more than a " + std::to_string(bytes.size()) + "-byte file can hold");
         // Refuse absurd headers before allocating (a corrupt header must not become a std::bad_alloc).
         const long long limit = 1ll << 31;
-        if (w <= 0 || hgt <= 0 || dw_w <= 0 || dw_h <= 0 || w * hgt > limit / (long long)names.size() ||
-            dw_w * dw_h > limit / (long long)names.size())
+        if (w <= 0 || hgt <= 0 || dw_w <= 0 || dw_h <= 0 || w > limit / nc / hgt || dw_w > limit / nc / dw_h)
             throw InputError(what + "unsupported image size (display window " + std::to_string(w) + "x" +
                              std::to_string(hgt) + ", data window " + std::to_string(dw_w) + "x" +
                              std::to_string(dw_h) + ", " + std::to_string(names.size()) + " channels)");
         // The display window is not backed by data in the file (pixels outside the data window read as 0): beyond
         // the data window it may add up to kMaxDisplaySamples, so a 100-byte header cannot ask for gigabytes of 0s.
-        const long long samples = w * hgt * (long long)names.size(), data_samples = dw_w * dw_h * (long long)names.size();
-        if (samples > std::max(data_samples, kMaxDisplaySamples))
+        const long long data_samples = dw_w * dw_h * nc;  // <= file_limit, checked above
+        if (w > std::max(data_samples, kMaxDisplaySamples) / nc / hgt)
             throw InputError(what + "display window " + std::to_string(w) + "x" + std::to_string(hgt) + " with " +
                              std::to_string(names.size()) + " channels is larger than the data window (" +
                              std::to_string(dw_w) + "x" + std::to_string(dw_h) + ") and than " +
