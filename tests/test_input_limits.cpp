@@ -205,6 +205,11 @@ TEST_CASE("EXR and PNG headers that promise more pixels than the file holds are 
     const std::int32_t widest[4] = {INT32_MIN, INT32_MIN, INT32_MAX, INT32_MAX};
     std::memcpy(tiled.data() + dw_at, widest, 16);
     CHECK_THROWS_WITH(ngi::detail::decode_exr(tiled, "tiled.exr"), Contains("tiled.exr") && Contains("data window"));
+    // Huge tiles around a 4x4 data window (found by fuzz_exr): OpenEXR allocated a 3 GB tile buffer up front.
+    std::string huge_tiles = exr;
+    huge_tiles[5] = char(huge_tiles[5] | 0x02);
+    huge_tiles.insert(8, std::string("tiles\0tiledesc\0\x09\0\0\0\0\0\x10\0\0\x04\0\0\0", 28));
+    CHECK_THROWS_WITH(ngi::detail::decode_exr(huge_tiles, "tiles.exr"), Contains("tiles.exr") && Contains("tiles of"));
     // A chlist whose declared size disagrees with its entries (found by fuzz_exr): OpenEXR reads the entries and
     // went on to a 64379x257 data window of 12 channels the header walk had not seen (800 MB for a 572-byte file).
     std::string chlist = exr;

@@ -180,6 +180,11 @@ void prescan_header(const std::string& bytes, const std::string& what) {
                       "-byte file can hold");
         if (tiled) {
             const long long tx = std::max<long long>(tile[0], 1), ty = std::max<long long>(tile[1], 1);
+            // OpenEXR allocates one tile's worth of pixels per decoder up front, whatever the data window.
+            if (tx > limit / std::max<long long>(channels, 1) / ty)
+                throw bad("tiles of " + std::to_string(tx) + "x" + std::to_string(ty) + " with " +
+                          std::to_string(channels) + " channels are more than a " + std::to_string(file_bytes) +
+                          "-byte file can hold");
             chunks += ((w + tx - 1) / tx) * ((h + ty - 1) / ty);
         } else {
             static const int lines[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
