@@ -1,7 +1,10 @@
 // Frame folders (host/src/io/frame_io.cpp read_frame): which files exist, EXR vs PNG, sizes and channel counts
 // across faces, sanitizing, camera.json. The input edits a valid base folder (frame_folder_format.hpp) kept in one
 // per-process folder under /dev/shm: before each input the files the previous input touched are restored.
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +39,14 @@ State& state() {
         const fs::path shm = "/dev/shm";
         st->dir = (fs::is_directory(shm) ? shm : fs::temp_directory_path()) /
                   ("ngi-fuzz-frame-" + std::to_string(::getpid()));
+        // libFuzzer leaves without running atexit handlers when interrupted or crashing: remove the folders of
+        // earlier runs whose process is gone.
+        std::error_code ec;
+        for (const auto& e : fs::directory_iterator(st->dir.parent_path(), ec)) {
+            const std::string n = e.path().filename().string(), prefix = "ngi-fuzz-frame-";
+            if (n.rfind(prefix, 0) == 0 && ::kill(std::atoi(n.c_str() + prefix.size()), 0) != 0 && errno == ESRCH)
+                fs::remove_all(e.path(), ec);
+        }
         fs::remove_all(st->dir);
         ngi::write_frame(st->dir.string(), ngi::fuzz::base_frame());
         for (const auto& e : fs::directory_iterator(st->dir))
