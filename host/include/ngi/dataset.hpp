@@ -34,6 +34,8 @@ struct DatasetConfig {
     // stored as absolute paths, so a resumed run from another directory sees the same config).
     // Throws InputError naming the file for bad JSON, unknown keys, bad values, and scenes in both splits.
     static DatasetConfig load(const std::string& path);
+    // The same from the file's text; `path` names the file in errors and is the base of relative .vox paths.
+    static DatasetConfig parse(const std::string& text, const std::string& path);
 };
 
 // The per-scene camera path and per-frame seed the dataset uses, so that `ngi render --frame K` reproduces

@@ -1,7 +1,8 @@
 // Image files and the frame folder: OpenEXR (half/float), PNG (8-bit, 16-bit read), NumPy .npy.
 //
-// Every reader throws InputError naming the file when it cannot be opened, is not of the expected format, is
-// truncated or corrupt. Every writer encodes the whole file in memory, writes it to a temporary file next to
+// Every reader throws InputError naming the file when it cannot be opened, is not a regular file (a directory, a
+// device, a FIFO), is larger than 4 GiB, is not of the expected format, is truncated or corrupt, or its header
+// promises more pixels than its compressed data can hold. Every writer encodes the whole file in memory, writes it to a temporary file next to
 // the target and renames it into place, so a failed write leaves neither a partial file nor a temporary behind.
 // Images are planar CHW float, row 0 = top (ngi/image.hpp).
 #pragma once

@@ -18,6 +18,7 @@
 #include <exception>
 #include <set>
 
+#include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -94,6 +95,152 @@ bool channel_less(const std::string& a, const std::string& b) {
     return natural_less(ba, bb);
 }
 
+// OpenEXR trusts the sizes in a file's header: an attribute of an unknown type is allocated at its declared size
+// and the chunk offset table at the data window's height before a single pixel is read, so a 100-byte file can ask
+// for gigabytes. This walks the header(s) first, without allocating, and refuses sizes the file cannot back:
+// an attribute longer than the rest of the file, an offset table (8 bytes per chunk) larger than the file, or more
+// samples than any compression yields from a file of this size (kMaxSamplesPerByte per byte, plus a flat
+// allowance for small files).
+constexpr long long kMaxSamplesPerByte = 1024;  // ZIP's best ratio is ~1032:1 on bytes, i.e. ~516 half samples
+constexpr long long kSampleAllowance = 1ll << 24;
+constexpr long long kMaxDisplaySamples = 1ll << 26;  // 256 MiB as float
+
+// OpenEXR reads an attribute of a known type by its type, not by the size field in front of it (a box2i is 16
+// bytes, a chlist ends at its empty name, a preview is width * height pixels), so a size field that disagrees
+// with the value would make OpenEXR and this walker part ways, and some values allocate by their own length
+// fields (stringvector entries, previews). Every known type's value must therefore fill exactly its declared size.
+template <class Bad>
+void check_attribute_size(const std::string& name, const std::string& type, const char* v, std::size_t size,
+                          const Bad& bad) {
+    static const std::pair<const char*, std::size_t> fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+        {"float", 4}, {"int", 4}, {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64},
+        {"m44d", 128}, {"rational", 8}, {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+        {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"deepImageState", 1}};
+    auto wrong = [&] { return bad("attribute '" + name + "' of type " + type + " does not fill its " +
+                                  std::to_string(size) + " bytes"); };
+    for (const auto& [t, n] : fixed)
+        if (type == t) {
+            if (size != n) throw wrong();
+            return;
+        }
+    if (type == "chlist") {  // (name\0, 16 bytes)*, then \0 as the last byte
+        std::size_t p = 0;
+        while (p < size && v[p] != '\0') {
+            const void* z = std::memchr(v + p, '\0', size - p);
+            if (!z) throw wrong();
+            p = std::size_t(static_cast<const char*>(z) - v) + 1 + 16;
+        }
+        if (p != size - 1 || size == 0) throw wrong();
+    } else if (type == "stringvector") {  // (int32 length, bytes)*
+        std::size_t p = 0;
+        while (p < size) {
+            std::int32_t n = 0;
+            if (size - p < 4) throw wrong();
+            std::memcpy(&n, v + p, 4);
+            p += 4;
+            if (n < 0 || std::size_t(n) > size - p) throw wrong();
+            p += std::size_t(n);
+        }
+    } else if (type == "floatvector") {
+        if (size % 4) throw wrong();
+    } else if (type == "preview") {  // uint32 width, height, then width * height RGBA bytes
+        std::uint32_t wh[2] = {0, 0};
+        if (size < 8) throw wrong();
+        std::memcpy(wh, v, 8);
+        if (std::uint64_t(wh[0]) * wh[1] * 4 != size - 8) throw wrong();
+    }
+}
+
+void prescan_header(const std::string& bytes, const std::string& what) {
+    auto bad = [&](const std::string& why) { return InputError(what + "corrupt OpenEXR header: " + why); };
+    if (bytes.size() < 8) throw bad("truncated");
+    std::uint32_t version = 0;
+    std::memcpy(&version, bytes.data() + 4, 4);
+    if (version & 0x800) throw InputError(what + "deep (non-image) OpenEXR files are not supported");
+    const bool multipart = version & 0x1000, tiled_single = version & 0x200;
+    const std::size_t name_max = version & 0x400 ? 255 : 31;
+    std::size_t pos = 8;
+    auto cstring = [&](const char* kind) {
+        const std::size_t end = bytes.find('\0', pos);
+        if (end == std::string::npos || end - pos > name_max) throw bad(std::string(kind) + " name unterminated or too long");
+        std::string s = bytes.substr(pos, end - pos);
+        pos = end + 1;
+        return s;
+    };
+    const long long file_bytes = (long long)bytes.size();
+    long long chunks = 0, samples = 0;
+    auto check_part = [&](long long w, long long h, bool tiled, const std::uint32_t tile[2], int compression,
+                          long long channels) {
+        // Sizes first (w * h cannot overflow once w <= limit / h), then the chunks they make.
+        const long long limit = kSampleAllowance + kMaxSamplesPerByte * file_bytes;
+        if (w > limit / h || (channels && w * h > limit / channels))
+            throw bad("data window " + std::to_string(w) + "x" + std::to_string(h) + " with " +
+                      std::to_string(channels) + " channels is more than a " + std::to_string(file_bytes) +
+                      "-byte file can hold");
+        if (tiled) {
+            const long long tx = std::max<long long>(tile[0], 1), ty = std::max<long long>(tile[1], 1);
+            // OpenEXR allocates one tile's worth of pixels per decoder up front, whatever the data window.
+            if (tx > limit / std::max<long long>(channels, 1) / ty)
+                throw bad("tiles of " + std::to_string(tx) + "x" + std::to_string(ty) + " with " +
+                          std::to_string(channels) + " channels are more than a " + std::to_string(file_bytes) +
+                          "-byte file can hold");
+            chunks += ((w + tx - 1) / tx) * ((h + ty - 1) / ty);
+        } else {
+            static const int lines[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+            const int per_chunk = lines[compression >= 0 && compression < 10 ? compression : 0];
+            chunks += (h + per_chunk - 1) / per_chunk;
+        }
+        samples += w * h * std::max<long long>(channels, 1);
+        if (samples > limit || chunks > file_bytes / 8)
+            throw bad("the chunk offset table or the pixel data would be larger than the " +
+                      std::to_string(file_bytes) + "-byte file");
+    };
+    for (int part = 0;; ++part) {
+        if (pos >= bytes.size()) throw bad("truncated");
+        if (bytes[pos] == '\0') {  // an empty header ends a multi-part file's header list
+            if (!multipart || part == 0) throw bad("empty header");
+            ++pos;
+            break;
+        }
+        std::int32_t dw[4] = {0, 0, -1, -1};
+        std::uint32_t tile[2] = {0, 0};
+        bool tiled = tiled_single, has_dw = false;
+        int compression = 0;
+        long long channels = 0;
+        while (true) {
+            if (pos >= bytes.size()) throw bad("truncated");
+            if (bytes[pos] == '\0') { ++pos; break; }
+            const std::string name = cstring("attribute"), type = cstring("type");
+            if (bytes.size() - pos < 4) throw bad("truncated");
+            std::int32_t size = 0;
+            std::memcpy(&size, bytes.data() + pos, 4);
+            pos += 4;
+            if (size < 0 || std::size_t(size) > bytes.size() - pos)
+                throw bad("attribute '" + name + "' claims " + std::to_string(size) + " bytes, the file has " +
+                          std::to_string(bytes.size() - pos) + " left");
+            const char* v = bytes.data() + pos;
+            check_attribute_size(name, type, v, std::size_t(size), bad);
+            if (name == "dataWindow" && type == "box2i" && size == 16) { std::memcpy(dw, v, 16); has_dw = true; }
+            if (name == "tiles" && type == "tiledesc" && size == 9) { std::memcpy(tile, v, 8); tiled = true; }
+            if (name == "compression" && type == "compression" && size == 1) compression = (unsigned char)v[0];
+            if (name == "channels" && type == "chlist") {
+                // name\0, then 16 bytes (type, pLinear + reserved, xSampling, ySampling) per channel; "\0" ends it
+                for (std::size_t p = 0; p < std::size_t(size) && v[p] != '\0'; ++channels) {
+                    const void* z = std::memchr(v + p, '\0', std::size_t(size) - p);
+                    if (!z) break;
+                    p = std::size_t(static_cast<const char*>(z) - v) + 1 + 16;
+                }
+            }
+            pos += std::size_t(size);
+        }
+        const long long w = (long long)dw[2] - dw[0] + 1, h = (long long)dw[3] - dw[1] + 1;
+        // A missing or empty data window is left to OpenEXR, which reports it.
+        if (has_dw && w > 0 && h > 0) check_part(w, h, tiled, tile, compression, channels);
+        if (!multipart) break;
+    }
+}
+
 }  // namespace
 
 std::vector<std::string> exr_channel_names(int channels) {
@@ -106,10 +253,14 @@ std::vector<std::string> exr_channel_names(int channels) {
 }
 
 Image read_exr(const std::string& path, std::vector<std::string>* channel_names) {
-    const std::string bytes = detail::read_file(path);
+    return detail::decode_exr(detail::read_file(path), path, channel_names);
+}
+
+Image detail::decode_exr(const std::string& bytes, const std::string& path, std::vector<std::string>* channel_names) {
     const std::string what = "read " + path + ": ";
     if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data()))
         throw InputError(what + "not an OpenEXR file (bad magic number)");
+    prescan_header(bytes, what);
     Image img;
     std::vector<std::string> names;
     try {
@@ -126,13 +277,27 @@ Image read_exr(const std::string& path, std::vector<std::string>* channel_names)
             names.push_back(it.name());
         }
         if (names.empty()) throw InputError(what + "the file has no channels");
+        // Again with OpenEXR's own reading of the header: the data must fit the file (prescan_header's rule).
+        const long long nc = (long long)std::max<std::size_t>(names.size(), 1);
+        const long long file_limit = kSampleAllowance + kMaxSamplesPerByte * (long long)bytes.size();
+        if (dw_w > 0 && dw_h > 0 && dw_w > file_limit / nc / dw_h)  // divisions: no overflow on any window
+            throw InputError(what + "corrupt OpenEXR header: data window " + std::to_string(dw_w) + "x" +
+                             std::to_string(dw_h) + " with " + std::to_string(names.size()) +
+                             " channels is more than a " + std::to_string(bytes.size()) + "-byte file can hold");
         // Refuse absurd headers before allocating (a corrupt header must not become a std::bad_alloc).
         const long long limit = 1ll << 31;
-        if (w <= 0 || hgt <= 0 || dw_w <= 0 || dw_h <= 0 || w * hgt > limit / (long long)names.size() ||
-            dw_w * dw_h > limit / (long long)names.size())
+        if (w <= 0 || hgt <= 0 || dw_w <= 0 || dw_h <= 0 || w > limit / nc / hgt || dw_w > limit / nc / dw_h)
             throw InputError(what + "unsupported image size (display window " + std::to_string(w) + "x" +
                              std::to_string(hgt) + ", data window " + std::to_string(dw_w) + "x" +
                              std::to_string(dw_h) + ", " + std::to_string(names.size()) + " channels)");
+        // The display window is not backed by data in the file (pixels outside the data window read as 0): beyond
+        // the data window it may add up to kMaxDisplaySamples, so a 100-byte header cannot ask for gigabytes of 0s.
+        const long long data_samples = dw_w * dw_h * nc;  // <= file_limit, checked above
+        if (w > std::max(data_samples, kMaxDisplaySamples) / nc / hgt)
+            throw InputError(what + "display window " + std::to_string(w) + "x" + std::to_string(hgt) + " with " +
+                             std::to_string(names.size()) + " channels is larger than the data window (" +
+                             std::to_string(dw_w) + "x" + std::to_string(dw_h) + ") and than " +
+                             std::to_string(kMaxDisplaySamples) + " samples");
         std::sort(names.begin(), names.end(), channel_less);
 
         // Read the data window into its own planes, then copy its overlap with the display window.

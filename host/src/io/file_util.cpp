@@ -1,5 +1,7 @@
 #include "io/file_util.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,26 +27,55 @@ void require_readable_file(const std::string& path) {
         throw InputError("read " + path + ": cannot open file: it is a device, not a regular file");
 }
 
-std::string read_file(const std::string& path) {
-    require_readable_file(path);
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) throw InputError("read " + path + ": cannot open file: " + std::strerror(errno));
+std::string read_file(const std::string& path, const std::string& op, std::uint64_t max_bytes) {
+    const std::string what = op + " " + path + ": ";
+    // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer. It changes nothing for the regular
+    // files that pass the check below. fstat on the open descriptor (not a stat of the path before opening), so the
+    // check and the read see the same file. Only regular files: a directory opens but cannot be read, and
+    // /dev/zero or a FIFO never end.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw InputError(what + "cannot open file: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        const bool dir = S_ISDIR(st.st_mode);
+        ::close(fd);
+        throw InputError(what + "cannot open file: " + (dir ? "it is a directory" : "not a regular file"));
+    }
+    std::FILE* f = ::fdopen(fd, "rb");
+    if (!f) {
+        const int err = errno;
+        ::close(fd);
+        throw InputError(what + "cannot open file: " + std::strerror(err));
+    }
+    auto too_big = [&](std::uint64_t n) {
+        return InputError(what + "file is larger (" + std::to_string(n) + " bytes) than the limit of " +
+                          std::to_string(max_bytes) + " bytes");
+    };
+    if (std::uint64_t(st.st_size) > max_bytes) {
+        std::fclose(f);
+        throw too_big(std::uint64_t(st.st_size));
+    }
     std::string bytes;
     char chunk[1 << 16];
     std::size_t n = 0;
-    bool failed = false;
-    int err = 0;
+    // The size is checked again while reading: the file may grow after fstat.
     try {
-        while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
-        failed = std::ferror(f) != 0;
-        err = errno;
-    } catch (const std::bad_alloc&) {  // a pipe that never ends, or a file larger than memory
+        bytes.reserve(std::size_t(st.st_size));
+        while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) {
+            if (bytes.size() + n > max_bytes) {
+                std::fclose(f);
+                throw too_big(bytes.size() + n);
+            }
+            bytes.append(chunk, n);
+        }
+    } catch (const std::bad_alloc&) {  // a file larger than this machine's memory
         std::fclose(f);
-        throw InputError("read " + path + ": the file does not fit in memory (" + std::to_string(bytes.size()) +
-                         " bytes read so far)");
+        throw InputError(what + "the file does not fit in memory (" + std::to_string(st.st_size) + " bytes)");
     }
+    const bool failed = std::ferror(f) != 0;
+    const int err = errno;
     std::fclose(f);
-    if (failed) throw InputError("read " + path + ": read error: " + std::strerror(err));
+    if (failed) throw InputError(what + "read error: " + std::strerror(err));
     return bytes;
 }
 

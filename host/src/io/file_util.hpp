@@ -1,5 +1,6 @@
 // Whole-file reads and crash-safe whole-file writes, shared by the image readers and writers. Library-internal.
 #pragma once
+#include <cstdint>
 #include <string>
 
 namespace ngi::detail {
@@ -9,8 +10,15 @@ namespace ngi::detail {
 // reader's own open reports them.
 void require_readable_file(const std::string& path);
 
-// The whole file (require_readable_file first; a file larger than memory is an InputError, not a bad_alloc). Throws InputError("read <path>: cannot open file: <reason>") when it cannot be read.
-std::string read_file(const std::string& path);
+// Largest file read_file accepts: 4 GiB. Every file ngi reads (models, images, frames, configs) is far smaller
+// (the thesis-sized generator is ~220 MB); the cap turns a wrong path or a runaway file into a clear error
+// instead of exhausting memory.
+inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(4) << 30;
+
+// The whole file. Throws InputError("<op> <path>: ...") when it cannot be read, is not a regular file (a
+// directory, a FIFO, a device such as /dev/zero) or is larger than max_bytes. `op` is the message's verb
+// ("read", "load model", "dataset config").
+std::string read_file(const std::string& path, const std::string& op = "read", std::uint64_t max_bytes = kMaxFileBytes);
 
 // A name next to `path` that no other writer in any process uses: "<path>.tmp-<pid>-<n>".
 std::string temp_name(const std::string& path);

@@ -6,6 +6,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -73,29 +74,20 @@ glm::vec3 json_vec3(const nlohmann::json& j, const char* key, const std::string&
     const nlohmann::json& a = j[key];
     if (!a.is_array() || a.size() != 3 || !a[0].is_number() || !a[1].is_number() || !a[2].is_number())
         throw InputError("read " + path + ": \"" + key + "\" must be an array of 3 numbers");
-    const glm::vec3 v(a[0].get<float>(), a[1].get<float>(), a[2].get<float>());
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-        throw InputError("read " + path + ": \"" + key + "\" must be finite");
+    glm::vec3 v;
+    for (int i = 0; i < 3; ++i) {
+        // Checked as double first: converting a double beyond float's range (1e300) to float is undefined.
+        const double d = a[i].get<double>();
+        if (!std::isfinite(d) || std::abs(d) > std::numeric_limits<float>::max())
+            throw InputError("read " + path + ": \"" + key + "\" must be finite (float range)");
+        v[i] = float(d);
+    }
     return v;
 }
 
 void read_camera(Frame& frame, const fs::path& file) {
     const std::string path = file.string();
-    const std::string text = detail::read_file(path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const std::exception& e) {
-        throw InputError("read " + path + ": not valid JSON: " + e.what());
-    }
-    if (!j.is_object()) throw InputError("read " + path + ": expected a JSON object with \"look\" and \"up\"");
-    frame.look = json_vec3(j, "look", path);
-    frame.up = json_vec3(j, "up", path);
-    try {
-        CameraCluster::from_look_up(frame.look, frame.up);
-    } catch (const InputError& e) {
-        throw InputError("read " + path + ": " + e.what());
-    }
+    detail::decode_camera_json(detail::read_file(path), path, frame.look, frame.up);
 }
 
 void check_image(const Image& img, int channels, int n, const std::string& name) {
@@ -119,6 +111,23 @@ std::string frame_folder_replaceable(const std::string& existing) {
 
 void check_frame_folder_target(const std::string& dir) {
     OutputFolder(dir, "write frame", frame_folder_replaceable);  // checks only: the staging folder is made lazily
+}
+
+void detail::decode_camera_json(const std::string& text, const std::string& path, glm::vec3& look, glm::vec3& up) {
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const std::exception& e) {
+        throw InputError("read " + path + ": not valid JSON: " + e.what());
+    }
+    if (!j.is_object()) throw InputError("read " + path + ": expected a JSON object with \"look\" and \"up\"");
+    look = json_vec3(j, "look", path);
+    up = json_vec3(j, "up", path);
+    try {
+        CameraCluster::from_look_up(look, up);
+    } catch (const InputError& e) {
+        throw InputError("read " + path + ": " + e.what());
+    }
 }
 
 std::size_t FrameReadStats::total_sanitized() const {

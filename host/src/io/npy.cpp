@@ -1,7 +1,11 @@
+#include <cctype>
+#include <charconv>
+#include <climits>
 #include <cstdint>
 #include <cstring>
-#include <regex>
 
+#include "io/checked_size.hpp"
+#include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "io/half.hpp"
 #include "ngi/error.hpp"
@@ -15,8 +19,90 @@ std::string shape_string(const std::vector<int>& shape) {
     return s + "]";
 }
 
-Tensor read_npy(const std::string& path) {
-    const std::string bytes = detail::read_file(path);
+namespace {
+
+// The header is a Python dict literal, e.g. {'descr': '<f4', 'fortran_order': False, 'shape': (1, 3, 64, 64), }.
+// A small strict parser (not a regex: libstdc++'s std::regex recurses per character and overflows the stack on
+// long headers) that accepts exactly the literals numpy writes: quoted strings, True/False and tuples of
+// non-negative integers.
+struct NpyHeader {
+    std::string descr;
+    bool fortran_order = false;
+    std::vector<int> shape;
+    bool has_descr = false, has_shape = false;
+};
+
+NpyHeader parse_npy_header(const std::string& h, const std::string& what) {
+    std::size_t i = 0;
+    auto fail = [&](const std::string& why) -> void {
+        throw InputError(what + "malformed header at byte " + std::to_string(i) + ": " + why);
+    };
+    auto ws = [&] { while (i < h.size() && std::isspace(static_cast<unsigned char>(h[i]))) ++i; };
+    auto expect = [&](char c) {
+        ws();
+        if (i >= h.size() || h[i] != c) fail(std::string("expected '") + c + "'");
+        ++i;
+    };
+    auto peek = [&](char c) { ws(); return i < h.size() && h[i] == c; };
+    auto string = [&] {
+        ws();
+        if (i >= h.size() || (h[i] != '\'' && h[i] != '"')) fail("expected a quoted string");
+        const char q = h[i++];
+        const std::size_t end = h.find(q, i);
+        if (end == std::string::npos) fail("unterminated string");
+        std::string s = h.substr(i, end - i);
+        i = end + 1;
+        return s;
+    };
+    NpyHeader r;
+    expect('{');
+    while (!peek('}')) {
+        const std::string key = string();
+        expect(':');
+        ws();
+        if (key == "descr") {
+            r.descr = string();
+            r.has_descr = true;
+        } else if (key == "fortran_order") {
+            if (h.compare(i, 4, "True") == 0) { r.fortran_order = true; i += 4; }
+            else if (h.compare(i, 5, "False") == 0) { r.fortran_order = false; i += 5; }
+            else fail("'fortran_order' must be True or False");
+        } else if (key == "shape") {
+            expect('(');
+            r.shape.clear();
+            while (!peek(')')) {
+                ws();
+                long long v = 0;
+                const auto res = std::from_chars(h.data() + i, h.data() + h.size(), v);
+                if (res.ec == std::errc::result_out_of_range || (res.ec == std::errc() && (v < 0 || v > INT32_MAX)))
+                    fail("shape dimension " + std::string(h.data() + i, res.ptr) + " is not in 0.." +
+                         std::to_string(INT32_MAX));
+                if (res.ec != std::errc()) fail("shape must be a tuple of non-negative integers");
+                i = std::size_t(res.ptr - h.data());
+                r.shape.push_back(int(v));
+                if (r.shape.size() > 32) fail("shape has more than 32 dimensions");
+                if (!peek(',')) break;
+                ++i;
+            }
+            expect(')');
+            r.has_shape = true;
+        } else {
+            fail("unknown key '" + key + "'");
+        }
+        if (!peek(',')) break;
+        ++i;
+    }
+    expect('}');
+    return r;
+}
+
+}  // namespace
+
+Tensor read_npy(const std::string& path) { return detail::decode_npy(detail::read_file(path), path); }
+
+namespace detail {
+
+Tensor decode_npy(const std::string& bytes, const std::string& path) {
     const std::string what = "read " + path + ": ";
     if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) throw InputError(what + "not a .npy file");
     const int major = static_cast<unsigned char>(bytes[6]);
@@ -33,32 +119,28 @@ Tensor read_npy(const std::string& path) {
     } else {
         throw InputError(what + "unsupported .npy version " + std::to_string(major));
     }
-    if (pos + header_len > bytes.size()) throw InputError(what + "header length beyond the end of the file");
-    const std::string header = bytes.substr(pos, header_len);
+    if (header_len > bytes.size() - pos) throw InputError(what + "header length beyond the end of the file");
+    const NpyHeader header = parse_npy_header(bytes.substr(pos, header_len), what);
     pos += header_len;
 
-    std::smatch m;
-    if (!std::regex_search(header, m, std::regex("'descr':\\s*'([^']*)'")))
-        throw InputError(what + "header has no 'descr'");
-    const std::string descr = m[1];
-    if (std::regex_search(header, m, std::regex("'fortran_order':\\s*(True|False)")) && m[1] == "True")
+    if (!header.has_descr) throw InputError(what + "header has no 'descr'");
+    if (header.fortran_order)
         throw InputError(what + "Fortran-ordered arrays are not supported; save with np.ascontiguousarray");
-    if (!std::regex_search(header, m, std::regex("'shape':\\s*\\(([^)]*)\\)")))
-        throw InputError(what + "header has no 'shape'");
-    Tensor t;
-    const std::string dims = m[1];
-    const std::regex number("\\d+");
-    for (std::sregex_iterator it(dims.begin(), dims.end(), number), end; it != end; ++it)
-        t.shape.push_back(std::stoi(it->str()));
-    const std::size_t n = Tensor::element_count(t.shape);
+    if (!header.has_shape) throw InputError(what + "header has no 'shape'");
+    const std::string& descr = header.descr;
     std::size_t elem = 0;
     if (descr == "<f4" || descr == "|f4") elem = 4;
     else if (descr == "<f8") elem = 8;
     else if (descr == "<f2") elem = 2;
     else throw InputError(what + "dtype '" + descr + "' is not supported (use float32 little-endian, '<f4')");
-    if (bytes.size() - pos < n * elem)
-        throw InputError(what + "truncated: shape " + shape_string(t.shape) + " needs " + std::to_string(n * elem) +
-                         " data bytes, the file has " + std::to_string(bytes.size() - pos));
+    Tensor t;
+    t.shape = header.shape;
+    const std::size_t available = bytes.size() - pos;
+    const auto need = checked_byte_count(t.shape, elem, available);
+    if (!need)
+        throw InputError(what + "truncated: shape " + shape_string(t.shape) + " of " + std::to_string(elem) +
+                         "-byte values needs more data bytes than the file's " + std::to_string(available));
+    const std::size_t n = std::size_t(*need / elem);
     t.data.resize(n);
     const char* p = bytes.data() + pos;
     for (std::size_t i = 0; i < n; ++i) {
@@ -68,6 +150,8 @@ Tensor read_npy(const std::string& path) {
     }
     return t;
 }
+
+}  // namespace detail
 
 void write_npy(const std::string& path, const Tensor& t) {
     if (Tensor::element_count(t.shape) != t.data.size())

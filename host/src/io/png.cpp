@@ -9,6 +9,7 @@
 #include <cstring>
 #include <vector>
 
+#include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -56,8 +57,14 @@ struct Raw {
     std::vector<png_bytep> rows;
 };
 
+// Deflate's best ratio is ~1032:1: an image whose rows (plus a filter byte each) need more than that from a file of
+// `file_bytes` is corrupt, and is refused before its pixel buffer is allocated (a small flat allowance keeps tiny
+// files of blank images legal).
+constexpr std::uint64_t kMaxInflateRatio = 1032;
+constexpr std::uint64_t kRawAllowance = 1ull << 24;
+
 // Returns false when libpng reported an error (message in io.message).
-bool decode(png_structp png, png_infop info, Raw& raw) {
+bool decode(png_structp png, png_infop info, std::size_t file_bytes, Raw& raw) {
     if (setjmp(png_jmpbuf(png))) return false;
     png_read_info(png, info);
     int bit_depth = 0, color_type = 0;
@@ -71,6 +78,8 @@ bool decode(png_structp png, png_infop info, Raw& raw) {
     raw.bits = png_get_bit_depth(png, info);
     const std::size_t row_bytes = png_get_rowbytes(png, info);
     if (std::uint64_t(row_bytes) * raw.height > (1ull << 32)) png_error(png, "image too large");
+    if ((std::uint64_t(row_bytes) + 1) * raw.height > kRawAllowance + kMaxInflateRatio * file_bytes)
+        png_error(png, "image size in the header is larger than the file's compressed data can hold");
     raw.pixels.resize(row_bytes * raw.height);
     raw.rows.resize(raw.height);
     for (png_uint_32 y = 0; y < raw.height; ++y) raw.rows[y] = raw.pixels.data() + y * row_bytes;
@@ -98,7 +107,10 @@ bool is_alpha(int c, int channels) { return (channels == 2 || channels == 4) && 
 }  // namespace
 
 Image read_png(const std::string& path, PngEncoding encoding) {
-    const std::string bytes = detail::read_file(path);
+    return detail::decode_png(detail::read_file(path), path, encoding);
+}
+
+Image detail::decode_png(const std::string& bytes, const std::string& path, PngEncoding encoding) {
     if (bytes.size() < 8 || png_sig_cmp(reinterpret_cast<png_const_bytep>(bytes.data()), 0, 8) != 0)
         throw InputError("read " + path + ": not a PNG file (bad signature)");
     PngIo io;
@@ -113,7 +125,7 @@ Image read_png(const std::string& path, PngEncoding encoding) {
     Raw raw;
     bool ok = false;
     try {
-        ok = decode(png, info, raw);
+        ok = decode(png, info, bytes.size(), raw);
     } catch (...) {
         png_destroy_read_struct(&png, &info, nullptr);
         throw;

@@ -3,9 +3,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
+#include <climits>
 #include <nlohmann/json.hpp>
 
+#include "io/checked_size.hpp"
+#include "io/file_util.hpp"
 #include "io/half.hpp"
 #include "ngi/error.hpp"
 #include "ngi/tensor.hpp"
@@ -13,9 +15,10 @@
 namespace ngi::detail {
 
 SafetensorsFile read_safetensors(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError("load model " + path + ": cannot open file");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return parse_safetensors(read_file(path, "load model"), path);
+}
+
+SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& path) {
     const std::string what = "load model " + path + ": ";
     if (bytes.size() < 8) throw InputError(what + "file is " + std::to_string(bytes.size()) + " bytes, too short for a safetensors header");
     std::uint64_t header_len = 0;
@@ -46,20 +49,34 @@ SafetensorsFile read_safetensors(const std::string& path) {
         try {
             StoredTensor t;
             t.dtype = entry.at("dtype").get<std::string>();
-            t.shape = entry.at("shape").get<std::vector<int>>();
-            const auto offsets = entry.at("data_offsets").get<std::vector<std::uint64_t>>();
+            // Each dimension and offset is checked as a JSON integer in range before conversion: get<int> would
+            // silently truncate 2^32 + 4 to 4, and get<uint64_t> would wrap -1 to 2^64 - 1.
+            const nlohmann::json& shape = entry.at("shape");
+            if (!shape.is_array()) throw InputError(tw + "shape must be an array of integers");
+            for (const auto& d : shape) {
+                if (!d.is_number_integer() || d.get<std::int64_t>() < 0 || d.get<std::int64_t>() > INT32_MAX ||
+                    (d.is_number_unsigned() && d.get<std::uint64_t>() > std::uint64_t(INT32_MAX)))
+                    throw InputError(tw + "shape " + shape.dump() + ": every dimension must be an integer in 0.." +
+                                     std::to_string(INT32_MAX));
+                t.shape.push_back(int(d.get<std::int64_t>()));
+            }
+            const nlohmann::json& off = entry.at("data_offsets");
+            if (!off.is_array() || off.size() != 2 || !off[0].is_number_unsigned() || !off[1].is_number_unsigned())
+                throw InputError(tw + "data_offsets must be [begin, end], two non-negative integers");
+            const std::uint64_t offsets[2] = {off[0].get<std::uint64_t>(), off[1].get<std::uint64_t>()};
             std::size_t elem = t.dtype == "F32" ? 4 : t.dtype == "F16" ? 2 : 0;
             if (!elem) throw InputError(tw + "dtype " + t.dtype + " is not supported (F32 or F16)");
-            for (int d : t.shape) if (d < 0) throw InputError(tw + "negative dimension in shape " + shape_string(t.shape));
-            if (offsets.size() != 2 || offsets[1] < offsets[0])
-                throw InputError(tw + "data_offsets must be [begin, end] with begin <= end");
-            const std::size_t n = Tensor::element_count(t.shape);
-            if (offsets[1] - offsets[0] != n * elem)
-                throw InputError(tw + "data_offsets span " + std::to_string(offsets[1] - offsets[0]) + " bytes, shape " +
-                                 shape_string(t.shape) + " of " + t.dtype + " needs " + std::to_string(n * elem));
+            if (offsets[1] < offsets[0]) throw InputError(tw + "data_offsets must be [begin, end] with begin <= end");
             if (offsets[1] > data_size)
                 throw InputError(tw + "data ends at byte " + std::to_string(offsets[1]) + " but the file has only " +
                                  std::to_string(data_size) + " data bytes: the file is truncated");
+            // Checked multiplication: a shape whose byte count overflows must not pass as a small span.
+            const auto need = checked_byte_count(t.shape, elem, data_size);
+            if (!need || offsets[1] - offsets[0] != *need)
+                throw InputError(tw + "data_offsets span " + std::to_string(offsets[1] - offsets[0]) + " bytes, shape " +
+                                 shape_string(t.shape) + " of " + t.dtype + " needs " +
+                                 (need ? std::to_string(*need) : "more than the file's " + std::to_string(data_size)));
+            const std::size_t n = std::size_t(*need / elem);
             const char* p = bytes.data() + data_start + offsets[0];
             t.data.resize(n);
             if (elem == 4) {

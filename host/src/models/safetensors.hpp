@@ -19,5 +19,7 @@ struct SafetensorsFile {
 };
 
 SafetensorsFile read_safetensors(const std::string& path);
+// The same from the file's bytes; `path` only names the file in error messages.
+SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& path);
 
 }  // namespace ngi::detail

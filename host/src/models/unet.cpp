@@ -1,6 +1,8 @@
 #include "models/unet.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "graph/nodes.hpp"
@@ -112,50 +114,100 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     } catch (const nlohmann::json::exception& e) {
         throw InputError(what + "malformed JSON: " + e.what());
     }
+    if (!j.is_object()) throw InputError(what + "the config is not a JSON object");
+    // Every field is checked for its JSON type and range before conversion (get<int> would silently truncate
+    // 2^32 + 4 to 4, get<float> turns 1e300 into inf); the ranges are those of docs/MODEL_FORMAT.md.
+    auto fail = [&](const std::string& key, const std::string& rule) -> InputError {
+        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
+        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
+    };
+    auto integer = [&](const char* key, long long lo, long long hi, long long fallback, bool required) {
+        if (!j.contains(key)) {
+            if (required) throw fail(key, "present");
+            return fallback;
+        }
+        const nlohmann::json& v = j[key];
+        const std::string rule = "an integer in " + std::to_string(lo) + ".." + std::to_string(hi);
+        if (!v.is_number_integer() || (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(hi)))
+            throw fail(key, rule);
+        const long long x = v.get<long long>();
+        if (x < lo || x > hi) throw fail(key, rule);
+        return x;
+    };
+    auto number = [&](const char* key, double lo, double hi, bool lo_open, bool hi_open, float fallback) {
+        if (!j.contains(key)) return fallback;
+        const nlohmann::json& v = j[key];
+        auto fmt = [](double x) { std::ostringstream o; o << x; return o.str(); };
+        const std::string rule = std::string("a number in ") + (lo_open ? "(" : "[") + fmt(lo) + ", " + fmt(hi) +
+                                 (hi_open ? ")" : "]");
+        if (!v.is_number()) throw fail(key, rule);
+        const double x = v.get<double>();
+        if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo) || (hi_open && x == hi)) throw fail(key, rule);
+        return float(x);
+    };
+    auto string = [&](const char* key, const std::vector<std::string>& allowed, const std::string& fallback,
+                      bool required) {
+        if (!j.contains(key)) {
+            if (required) throw fail(key, "present");
+            return fallback;
+        }
+        std::string rule = "a string";
+        for (std::size_t i = 0; i < allowed.size(); ++i) rule += (i ? " | \"" : ": \"") + allowed[i] + "\"";
+        if (!j[key].is_string()) throw fail(key, rule);
+        const std::string s = j[key].get<std::string>();
+        if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
+            if (std::string(key) == "family")  // the most common mistake gets the most specific message
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination)");
+            throw fail(key, rule);
+        }
+        return s;
+    };
+    auto range = [&](const char* key, float* out) {
+        if (!j.contains(key)) return;
+        const nlohmann::json& v = j[key];
+        if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
+            throw fail(key, "[lo, hi], two finite numbers with lo < hi");
+        const double lo = v[0].get<double>(), hi = v[1].get<double>();
+        if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi) || std::abs(lo) > 1e30 || std::abs(hi) > 1e30)
+            throw fail(key, "[lo, hi], two finite numbers with lo < hi");
+        out[0] = float(lo);
+        out[1] = float(hi);
+    };
+
     ModelConfig c;
     c.json = text;
-    try {
-        c.family = j.at("family").get<std::string>();
-        c.input_nc = j.at("input_nc").get<int>();
-        c.output_nc = j.at("output_nc").get<int>();
-        c.ngf = j.at("ngf").get<int>();
-        c.num_downs = j.at("num_downs").get<int>();
-        c.bn_mode = j.value("bn_mode", c.bn_mode);
-        c.bn_eps = j.value("bn_eps", c.bn_eps);
-        c.dropout = j.value("dropout", c.dropout);
-        c.dropout_p = j.value("dropout_p", c.dropout_p);
-        c.dropout_seed = j.value("dropout_seed", c.dropout_seed);
-        c.leaky_slope = j.value("leaky_slope", c.leaky_slope);
-        c.input_layout = j.value("input_layout", c.input_layout);
-        c.source = j.value("source", c.source);
-        for (const auto& [key, range] : {std::pair<const char*, float*>{"input_range", c.input_range},
-                                         std::pair<const char*, float*>{"output_range", c.output_range}}) {
-            if (!j.contains(key)) continue;
-            const auto& v = j[key];
-            if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
-                throw InputError(what + key + " must be a pair of numbers [lo, hi], got " + v.dump());
-            const auto r = v.get<std::vector<double>>();
-            range[0] = float(r[0]);
-            range[1] = float(r[1]);
+    if (j.contains("format_version") && j["format_version"].is_number_integer() &&
+        j["format_version"].get<long long>() > kModelFormatVersion)
+        throw InputError(what + "field 'format_version' is " + j["format_version"].dump() +
+                         ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
+                         "): update ngi");
+    integer("format_version", 1, kModelFormatVersion, 1, false);  // absent: 1 (hand-written test files)
+    c.family = string("family", {"pix2pix_unet", "deepillumination"}, "", true);
+    c.input_nc = int(integer("input_nc", 1, kMaxChannels, 0, true));
+    c.output_nc = int(integer("output_nc", 1, kMaxChannels, 0, true));
+    c.ngf = int(integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
+    if (c.family == "pix2pix_unet") c.num_downs = int(integer("num_downs", 5, 12, 0, true));
+    else c.num_downs = int(integer("num_downs", 8, 8, 0, true));  // DeepIllumination's G has exactly 8
+    string("norm", {"batch"}, "batch", false);
+    c.bn_mode = string("bn_mode", {"running", "per_image"}, c.bn_mode, false);
+    c.bn_eps = number("bn_eps", 0.0, 1.0, true, false, c.bn_eps);
+    c.dropout = string("dropout", {"off", "seeded"}, c.dropout, false);
+    c.dropout_p = number("dropout_p", 0.0, 1.0, false, true, c.dropout_p);  // 1 would divide by 1 - p = 0
+    c.dropout_seed = std::uint32_t(integer("dropout_seed", 0, 0xffffffffll, c.dropout_seed, false));
+    c.leaky_slope = number("leaky_slope", 0.0, 1.0, false, false, c.leaky_slope);
+    if (j.contains("input_layout")) {
+        const nlohmann::json& v = j["input_layout"];
+        const std::string rule = "a list of strings, empty or input_nc (" + std::to_string(c.input_nc) + ") long";
+        if (!v.is_array() || (!v.empty() && v.size() != std::size_t(c.input_nc))) throw fail("input_layout", rule);
+        for (const auto& s : v) {
+            if (!s.is_string()) throw fail("input_layout", rule);
+            c.input_layout.push_back(s.get<std::string>());
         }
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(what + e.what());
     }
-    // The input guard clamps to input_range and decoding divides by the output range's width: both must be
-    // finite, increasing pairs (a file with [1, -1] would clamp every input to one value, silently).
-    for (const auto& [name, r] : {std::pair<const char*, const float*>{"input_range", c.input_range},
-                                  std::pair<const char*, const float*>{"output_range", c.output_range}})
-        if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !(r[0] < r[1]) || !std::isfinite(r[1] - r[0]))
-            throw InputError(what + name + " [" + std::to_string(r[0]) + ", " + std::to_string(r[1]) +
-                             "] must be two finite numbers lo < hi");
-    if (c.family != "pix2pix_unet" && c.family != "deepillumination")
-        throw InputError(what + "family '" + c.family + "' is not supported (pix2pix_unet, deepillumination)");
-    if (c.input_nc < 1 || c.output_nc < 1 || c.ngf < 1)
-        throw InputError(what + "input_nc, output_nc and ngf must be positive");
-    if (c.family == "pix2pix_unet" && (c.num_downs < 5 || c.num_downs > 12))
-        throw InputError(what + "num_downs " + std::to_string(c.num_downs) + " out of range (pix2pix builds 5..12)");
-    if (c.family == "deepillumination" && c.num_downs != 8)
-        throw InputError(what + "DeepIllumination's generator has exactly 8 downsamplings, not " + std::to_string(c.num_downs));
+    range("input_range", c.input_range);
+    range("output_range", c.output_range);
+    c.source = string("source", {}, c.source, false);
+    if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
     return c;
 }
 
@@ -183,9 +235,8 @@ std::vector<std::pair<std::string, std::vector<int>>> expected_tensors(const UNe
     return out;
 }
 
-UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm) {
+void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
     const UNetSpec spec = unet_spec(cfg);
-    // Validate names and shapes before touching the device.
     const auto expected = expected_tensors(spec);
     std::vector<std::string> missing, unexpected, misshaped;
     for (const auto& [name, shape] : expected) {
@@ -211,7 +262,11 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
         throw InputError("load model: bn_mode '" + cfg.bn_mode + "' is not running or per_image");
     if (cfg.dropout != "off" && cfg.dropout != "seeded")
         throw InputError("load model: dropout '" + cfg.dropout + "' is not off or seeded");
+}
 
+UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm) {
+    validate_unet_tensors(cfg, file);  // names, shapes and modes, before touching the device
+    const UNetSpec spec = unet_spec(cfg);
     const bool running = cfg.bn_mode == "running";
     const int D = int(spec.levels.size());
     const Act leaky = Act::leaky(cfg.leaky_slope);

@@ -26,6 +26,13 @@ struct UNetSpec {
     bool decoder_first = false;  // concat order: pix2pix cat(skip, decoder); DeepIllumination cat(decoder, skip)
 };
 
+// The newest docs/MODEL_FORMAT.md version this reader understands; files of a newer version are refused.
+inline constexpr int kModelFormatVersion = 1;
+// Channel counts (input_nc, output_nc, 8 * ngf) above this are refused as corrupt configs.
+inline constexpr int kMaxChannels = 65536;
+
+// Parses and validates __metadata__["ngi"] (every field's type and range, docs/MODEL_FORMAT.md). Throws InputError
+// naming the file and the field.
 ModelConfig parse_model_config(const std::string& json, const std::string& path);
 UNetSpec unet_spec(const ModelConfig& cfg);
 // Expected tensor name -> shape, derived from the spec (used to report missing / unexpected / misshaped tensors).
@@ -42,6 +49,9 @@ struct UNetOps {
     std::size_t weight_bytes = 0;
 };
 
+// Every expected tensor present with its shape, no unexpected ones, bn_mode / dropout known: InputError otherwise.
+// build_unet_ops calls it first; it needs no device (the fuzz target fuzz_safetensors calls it directly).
+void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file);
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm);
 std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width);
 

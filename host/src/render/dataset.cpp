@@ -137,13 +137,11 @@ std::string frame_name(int f) {
 }  // namespace
 
 DatasetConfig DatasetConfig::load(const std::string& path) {
+    return parse(detail::read_file(path, "dataset config"), path);
+}
+
+DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& path) {
     ConfigReader r{path};
-    std::string text;
-    try {
-        text = detail::read_file(path);  // a directory or a device is an InputError here, not a stream error
-    } catch (const InputError& e) {
-        r.fail(e.what());
-    }
     json j;
     try {
         j = json::parse(text);

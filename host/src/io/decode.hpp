@@ -1,0 +1,21 @@
+// In-memory decoders behind the file readers: each takes the file's bytes plus the path it came from (used only
+// in error messages), so the readers are thin wrappers around read_file and the fuzz targets (fuzz/) can feed
+// bytes without touching the disk. Library-internal; the public readers are in ngi/tensor.hpp and ngi/image_io.hpp.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "ngi/image.hpp"
+#include "ngi/image_io.hpp"
+#include "ngi/tensor.hpp"
+
+namespace ngi::detail {
+
+Tensor decode_npy(const std::string& bytes, const std::string& path);
+Image decode_exr(const std::string& bytes, const std::string& path, std::vector<std::string>* channel_names = nullptr);
+Image decode_png(const std::string& bytes, const std::string& path, PngEncoding encoding = PngEncoding::Linear);
+
+// camera.json of a frame folder: {"look": [x, y, z], "up": [x, y, z]}, validated as a camera cluster.
+void decode_camera_json(const std::string& text, const std::string& path, glm::vec3& look, glm::vec3& up);
+
+}  // namespace ngi::detail

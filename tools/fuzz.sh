@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of fuzz/ into ./build-fuzz (clang-15, ASan + UBSan) and runs each for a bounded
+# time. Fails if any target crashes, leaks, times out (> 10 s on one input) or runs out of memory (> 2 GiB RSS).
+#
+#   tools/fuzz.sh [seconds_per_target] [runs]     defaults: 20 s each, no run limit (0 s = no time limit)
+#   tools/fuzz.sh --corpus                        rebuild and rewrite the seed corpora fuzz/corpus/<target>/
+#
+# Environment: NGI_FUZZ_TARGETS="npy exr ..." runs only those (names without fuzz_); NGI_FUZZ_JOBS=2 runs two
+# targets at a time. New inputs go to build-fuzz/corpus/<target>/ (fuzz/corpus/ is read as seeds only); crash
+# reproducers to build-fuzz/artifacts/. Prints one line per target: execs, exec/s, peak RSS, result.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+src=$PWD
+out=$src/build-fuzz
+
+if ! command -v clang++-15 >/dev/null; then
+    echo "fuzz.sh: clang++-15 not found (apt-get install clang-15 libfuzzer-15-dev)" >&2
+    exit 2
+fi
+mkdir -p "$out"
+CC=clang-15 CXX=clang++-15 cmake -S . -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_FUZZ=ON \
+    -DNGI_BUILD_TESTS=OFF -DNGI_BUILD_PERF=OFF >"$out/cmake.log" 2>&1 ||
+    { cat "$out/cmake.log" >&2; exit 2; }
+cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/build.log" 2>&1 ||
+    { tail -50 "$out/build.log" >&2; exit 2; }
+
+if [[ "${1:-}" == "--corpus" ]]; then
+    rm -rf "$src/fuzz/corpus"
+    exec "$out/fuzz/ngi_make_corpus" "$src/fuzz/corpus"
+fi
+
+seconds=${1:-20}
+runs=${2:-}
+declare -A max_len=([npy]=4096 [exr]=16384 [png]=8192 [camera_json]=1024 [dataset_config]=4096
+                    [safetensors]=32768 [frame_folder]=16384)
+targets=${NGI_FUZZ_TARGETS:-}
+if [[ -z "$targets" ]]; then
+    for f in "$src"/fuzz/fuzz_*.cpp; do n=$(basename "$f" .cpp); targets+=" ${n#fuzz_}"; done
+fi
+jobs=${NGI_FUZZ_JOBS:-1}
+mkdir -p "$out/logs" "$out/artifacts"
+
+run_one() {
+    local t=$1 log=$out/logs/$1.log
+    mkdir -p "$out/corpus/$t"
+    local args=(-rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10 -max_len="${max_len[$t]:-8192}"
+                -max_total_time="$seconds" -print_final_stats=1 -artifact_prefix="$out/artifacts/$t-")
+    [[ -n "$runs" ]] && args+=(-runs="$runs")
+    local seeds=()
+    [[ -d "$src/fuzz/corpus/$t" ]] && seeds=("$src/fuzz/corpus/$t")
+    [[ -f "$src/fuzz/$t.dict" ]] && args+=(-dict="$src/fuzz/$t.dict")
+    "$out/fuzz/fuzz_$t" "${args[@]}" "$out/corpus/$t" "${seeds[@]}" >"$log" 2>&1
+    local rc=$?
+    local execs rate rss
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+    rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$log" | tail -1)
+    local result=ok
+    if [[ $rc -ne 0 ]]; then
+        result="FAILED (exit $rc): $(grep -m1 -E 'ERROR: |==[0-9]+==ERROR|runtime error|Test unit written' "$log" || tail -1 "$log"); log $log"
+    fi
+    printf '%-16s execs %10s  exec/s %7s  peak RSS %5s MB  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${rss:-?}" "$result"
+    return $rc
+}
+
+fail=0
+running=0
+pids=()
+for t in $targets; do
+    if [[ ! -x "$out/fuzz/fuzz_$t" ]]; then echo "fuzz.sh: no target fuzz_$t" >&2; fail=1; continue; fi
+    run_one "$t" &
+    pids+=($!)
+    running=$((running + 1))
+    if [[ $running -ge $jobs ]]; then
+        wait -n || fail=1
+        running=$((running - 1))
+    fi
+done
+while [[ $running -gt 0 ]]; do
+    wait -n || fail=1
+    running=$((running - 1))
+done
+if [[ $fail -ne 0 ]]; then echo "fuzz.sh: FAILED" >&2; exit 1; fi
+echo "fuzz.sh: all targets passed"
