@@ -157,7 +157,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     // Every program = kernels/common.cl + kernels/<file>.cl (one translation unit; OpenCL 1.2 has no linking
     // of headers from the library).
     const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
-    const std::string options = "-cl-std=CL1.2 " + defines;
+    const std::string options = build_options(defines);
     const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
     const std::filesystem::path cached = cache_dir() / (file + "-" + variant_key(file, defines) + ".bin");
 
@@ -205,7 +205,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
 std::string Context::variant_key(const std::string& file, const std::string& defines) const {
     const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
     const std::uint64_t h = fnv1a(source, fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
-                                                 '\n' + info_.device_version + '\n' + "-cl-std=CL1.2 " + defines));
+                                                 '\n' + info_.device_version + '\n' + build_options(defines)));
     char hex[17];
     std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
     return hex;
@@ -266,6 +266,13 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
               (std::string("clear ") + what).c_str(), "clEnqueueWriteBuffer");
     }
     return b;
+}
+
+std::string Context::build_options(const std::string& defines) const {
+    // Oclgrind 21.10's uninitialized-value checker aborts the kernel ("Unsupported instruction: freeze") on the
+    // `freeze` that LLVM's optimizer inserts when it splits a paired x / d and x % d (im2col, col2im, SSIM):
+    // on Oclgrind, kernels are built unoptimized, which keeps the source's own operations.
+    return "-cl-std=CL1.2 " + defines + (info_.platform_name == "Oclgrind" ? " -cl-opt-disable" : "");
 }
 
 bool Context::host_stores_via_kernels(std::size_t off, std::size_t bytes) const {
