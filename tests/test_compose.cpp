@@ -28,7 +28,7 @@ double rel_err(double got, double want) { return std::abs(got - want) / (1e-6 + 
 
 }  // namespace
 
-TEST_CASE("front lightmap: model output range and inverse transfer", "[pipeline]") {
+TEST_CASE("front lightmap: model output range and inverse transfer", "[pipeline][oclgrind]") {
     std::mt19937 rng(31);
     const int n = 6;
     for (LuminationTransfer tr : {LuminationTransfer::Reinhard, LuminationTransfer::Clamp})
@@ -56,7 +56,7 @@ TEST_CASE("front lightmap: model output range and inverse transfer", "[pipeline]
         }
 }
 
-TEST_CASE("preprocess then decode: lumination survives the round trip through the transfer", "[pipeline]") {
+TEST_CASE("preprocess then decode: lumination survives the round trip through the transfer", "[pipeline][oclgrind]") {
     // What the model sees as lumination, read back as a lightmap, is the light itself (an identity "model").
     const int n = 4;
     Frame fr;
@@ -83,7 +83,7 @@ TEST_CASE("preprocess then decode: lumination survives the round trip through th
     for (std::size_t i = 0; i < l.data.size(); ++i) REQUIRE(l.data[i] == Approx(want.data[i]).epsilon(5e-4).margin(1e-6));
 }
 
-TEST_CASE("compose: lightmap x albedo + emission + env, hostile values, reference final image", "[pipeline]") {
+TEST_CASE("compose: lightmap x albedo + emission + env, hostile values, reference final image", "[pipeline][oclgrind]") {
     std::mt19937 rng(41);
     const int n = 8;
     SurroundPipeline pl(test::device(), n);
@@ -114,7 +114,7 @@ TEST_CASE("compose: lightmap x albedo + emission + env, hostile values, referenc
     }
 }
 
-TEST_CASE("upscale: bilinear resize at random sizes, odd widths included", "[pipeline]") {
+TEST_CASE("upscale: bilinear resize at random sizes, odd widths included", "[pipeline][oclgrind]") {
     std::mt19937 rng(51);
     SurroundPipeline pl(test::device(), 2);
     std::uniform_int_distribution<int> size(1, 37), chans(1, 4);
@@ -134,7 +134,7 @@ TEST_CASE("upscale: bilinear resize at random sizes, odd widths included", "[pip
     }
 }
 
-TEST_CASE("tone map: exposure, curves, sRGB, always in [0, 1]", "[pipeline]") {
+TEST_CASE("tone map: exposure, curves, sRGB, always in [0, 1]", "[pipeline][oclgrind]") {
     std::mt19937 rng(61);
     SurroundPipeline pl(test::device(), 2);
     Image in(13, 7, 3);
@@ -159,7 +159,7 @@ TEST_CASE("tone map: exposure, curves, sRGB, always in [0, 1]", "[pipeline]") {
     REQUIRE_THROWS_AS(pl.tonemap(in, {kNaN, ToneCurve::Clamp, true}), InputError);
 }
 
-TEST_CASE("output side rejects tensors and images that do not fit", "[pipeline]") {
+TEST_CASE("output side rejects tensors and images that do not fit", "[pipeline][oclgrind]") {
     using Catch::Matchers::Contains;
     const int n = 4;
     SurroundPipeline pl(test::device(), n);
@@ -183,7 +183,7 @@ TEST_CASE("output side rejects tensors and images that do not fit", "[pipeline]"
     REQUIRE_THROWS_AS(pl.upscale(Image(3, 3, 1), 0, 4), InputError);
 }
 
-TEST_CASE("encode lightmap: the inverse of the decoding, the same encoding as the input's lumination", "[pipeline]") {
+TEST_CASE("encode lightmap: the inverse of the decoding, the same encoding as the input's lumination", "[pipeline][oclgrind]") {
     using Catch::Matchers::Contains;
     std::mt19937 rng(53);
     const int n = 6;

@@ -1,8 +1,10 @@
 // conv2d and conv_transpose2d (im2col / pack + packed GEMM + epilogue / col2im) against the naive reference,
 // over random shapes: odd sizes, 1x1 spatial, channel counts and pixel counts that are not tile multiples.
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #include "ops/conv.hpp"
+#include "ops/gemm_selfcheck.hpp"
 #include "reference.hpp"
 #include "test_support.hpp"
 
@@ -113,4 +115,25 @@ TEST_CASE("every GEMM parameter set in the tuning space gives the same convoluti
     const Case k{19, 9, 13, 21, 4, 4, 2, 1, 0, 2};
     for (const char* s : {"1,1,1,1,1,1", "4,4,1,1,4,4", "6,8,2,2,1,1", "8,16,2,1,1,1", "3,16,1,4,2,1", "16,4,3,1,1,2"})
         for (bool t : {false, true}) check_case(k, t, rng, parse_gemm_params(s));
+}
+
+// Small enough for the oclgrind stage (tools/ci/oclgrind.sh): odd channel and pixel counts (C 5, 7x9) through the
+// GEMM knob sets the table picks for a GPU and for a CPU, each with its fallback chain. Oclgrind presents one
+// device (a GPU), so the CPU sets are chosen by describing a CPU to gemm_params_for, not by the device.
+TEST_CASE("conv2d and conv_transpose2d at small odd shapes, GPU and CPU knob sets and their fallback chains",
+          "[conv2d][conv_transpose2d][oclgrind]") {
+    std::mt19937 rng(17);
+    DeviceInfo gpu, cpu;
+    gpu.is_gpu = true;
+    cpu.is_cpu = true;
+    std::vector<GemmParams> sets;
+    for (const DeviceInfo* info : {&gpu, &cpu})
+        for (const GemmParams& p : gemm_fallback_chain(gemm_params_for(*info)))
+            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    const Case conv[] = {{5, 7, 9, 6, 3, 3, 1, 1, 0, 2}, {5, 7, 9, 3, 4, 4, 2, 1, 2, 3}};
+    const Case up[] = {{5, 7, 9, 3, 4, 4, 2, 1, 1, 0}, {5, 3, 5, 2, 3, 3, 2, 1, 0, 4}};
+    for (const GemmParams& gp : sets) {
+        for (const Case& k : conv) check_case(k, false, rng, gp);
+        for (const Case& k : up) check_case(k, true, rng, gp);
+    }
 }

@@ -4,6 +4,9 @@
 // The realistic shapes matter: on Mesa rusticl (llvmpipe) the loop form of the kernel is silently truncated
 // beyond K ~ 1,000-3,000 (a 65,535-iteration loop limiter, docs/RELIABILITY.md), which shapes of a few dozen
 // never showed.
+#include <algorithm>
+#include <cstdlib>
+#include <string>
 #include <catch2/catch.hpp>
 
 #include "ops/gemm.hpp"
@@ -194,10 +197,52 @@ TEST_CASE("GEMM self-check: the loop form is rejected exactly where the driver l
     }
 }
 
-TEST_CASE("loop-limit probe: 0 on drivers without a limiter, the limit where there is one", "[runtime]") {
+TEST_CASE("loop-limit probe: 0 on drivers without a limiter, the limit where there is one", "[runtime][oclgrind]") {
     const long limit = test::ctx().loop_limit();
     const auto& info = test::device().info();
     INFO(info.name << " (" << info.platform_name << "): loop limit " << limit);
     if (info.name.rfind("llvmpipe", 0) == 0) CHECK(limit == 65535);
     if (info.platform_name.find("Portable Computing Language") != std::string::npos) CHECK(limit == 0);
+}
+
+// Small enough for the oclgrind stage (tools/ci/oclgrind.sh): the GEMM at odd shapes that leave a remainder in
+// every tile dimension, through the table's GPU and CPU knob sets and each one's fallback chain. Oclgrind
+// presents one device (a GPU), so the CPU sets are chosen by describing a CPU to gemm_params_for.
+TEST_CASE("GEMM: the GPU and CPU knob sets and their fallback chains at small odd shapes", "[gemm][oclgrind]") {
+    std::mt19937 rng(19);
+    DeviceInfo gpu, cpu;
+    gpu.is_gpu = true;
+    cpu.is_cpu = true;
+    std::vector<GemmParams> sets;
+    for (const DeviceInfo* info : {&gpu, &cpu})
+        for (const GemmParams& p : gemm_fallback_chain(gemm_params_for(*info)))
+            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    REQUIRE(sets.size() >= 5);
+    const int shapes[][3] = {{5, 63, 45}, {7, 9, 13}, {1, 1, 1}};
+    for (const GemmParams& p : sets)
+        for (const auto& s : shapes) {
+            INFO("GEMM M" << s[0] << " N" << s[1] << " K" << s[2] << " knobs " << p.to_string());
+            CHECK(gemm_error(p, s[0], s[1], s[2], 2, rng) <= 1.0);
+        }
+}
+
+// NGI_SELFCHECK=small (simulators only) keeps just the first check problem; the default is every problem.
+TEST_CASE("GEMM self-check: NGI_SELFCHECK chooses the full or the small problem set", "[gemm][selfcheck][oclgrind]") {
+    const char* old = std::getenv("NGI_SELFCHECK");
+    const std::string saved = old ? old : "";
+    const auto& all = gemm_check_problems();
+    REQUIRE(all.size() >= 3);
+    ::unsetenv("NGI_SELFCHECK");
+    CHECK_FALSE(gemm_selfcheck_is_small());
+    CHECK(gemm_selfcheck_problems().size() == all.size());
+    ::setenv("NGI_SELFCHECK", "full", 1);
+    CHECK(gemm_selfcheck_problems().size() == all.size());
+    ::setenv("NGI_SELFCHECK", "small", 1);
+    CHECK(gemm_selfcheck_is_small());
+    REQUIRE(gemm_selfcheck_problems().size() == 1);
+    CHECK(gemm_selfcheck_problems()[0].k == all[0].k);
+    ::setenv("NGI_SELFCHECK", "tiny", 1);
+    CHECK_THROWS_WITH(gemm_selfcheck_problems(), Catch::Contains("NGI_SELFCHECK") && Catch::Contains("tiny"));
+    if (old) ::setenv("NGI_SELFCHECK", saved.c_str(), 1);
+    else ::unsetenv("NGI_SELFCHECK");
 }

@@ -164,7 +164,7 @@ TEST_CASE("merged self-directions agree with the coordinate map within one texel
     }
 }
 
-TEST_CASE("thesis merge: middle band and front crop are bit-exact copies of the faces", "[pipeline]") {
+TEST_CASE("thesis merge: middle band and front crop are bit-exact copies of the faces", "[pipeline][oclgrind]") {
     std::mt19937 rng(11);
     const int n = 20;
     Frame fr;
@@ -193,7 +193,7 @@ TEST_CASE("thesis merge: middle band and front crop are bit-exact copies of the 
         }
 }
 
-TEST_CASE("thesis merge matches the naive layout reference; the gather kernel matches its table", "[pipeline]") {
+TEST_CASE("thesis merge matches the naive layout reference; the gather kernel matches its table", "[pipeline][oclgrind]") {
     std::mt19937 rng(5);
     for (int n : {2, 6, 16, 30}) {
         Frame fr;
@@ -240,7 +240,7 @@ TEST_CASE("thesis merge matches the naive layout reference; the gather kernel ma
     }
 }
 
-TEST_CASE("equirect merge: every pixel resampled at its phi/theta", "[pipeline]") {
+TEST_CASE("equirect merge: every pixel resampled at its phi/theta", "[pipeline][oclgrind]") {
     // A smooth function of direction survives the equirect resampling to within interpolation error.
     const int n = 32;
     Frame fr;
@@ -265,7 +265,7 @@ TEST_CASE("equirect merge: every pixel resampled at its phi/theta", "[pipeline]"
     REQUIRE(worst < 0.02);  // bilinear on a 32-texel face: O(texel^2) plus edge clamping
 }
 
-TEST_CASE("front view extraction: exact crop in thesis mode, resampling in equirect mode", "[pipeline]") {
+TEST_CASE("front view extraction: exact crop in thesis mode, resampling in equirect mode", "[pipeline][oclgrind]") {
     std::mt19937 rng(9);
     const int n = 16;
     ModelConfig cfg;
@@ -306,7 +306,7 @@ TEST_CASE("front view extraction: exact crop in thesis mode, resampling in equir
     REQUIRE(worst < 2e-3);
 }
 
-TEST_CASE("global view rejects odd N, mismatched and non-square faces with clear errors", "[pipeline]") {
+TEST_CASE("global view rejects odd N, mismatched and non-square faces with clear errors", "[pipeline][oclgrind]") {
     using Catch::Matchers::Contains;
     REQUIRE_THROWS_WITH(SurroundPipeline(test::device(), 17), Contains("even") && Contains("17"));
     REQUIRE_THROWS_AS(SurroundPipeline(test::device(), 0), InputError);

@@ -91,7 +91,7 @@ void expect_error(const std::string& path, const std::string& fragment) {
 
 }  // namespace
 
-TEST_CASE("a valid tiny model loads and runs and its output is finite", "[model][file]") {
+TEST_CASE("a valid tiny model loads and runs and its output is finite", "[model][file][oclgrind]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("valid", tiny_entries(), tiny_config()));
     ngi::Tensor x({1, 1, 32, 64});
     for (std::size_t i = 0; i < x.size(); ++i) x.data[i] = float(i % 7) - 3.0f;
@@ -102,7 +102,7 @@ TEST_CASE("a valid tiny model loads and runs and its output is finite", "[model]
     REQUIRE_THROWS_WITH(m.run(ngi::Tensor({1, 2, 32, 64})), Contains("expected [1, 1, H, W]"));
 }
 
-TEST_CASE("broken model files give clear errors", "[model][file]") {
+TEST_CASE("broken model files give clear errors", "[model][file][oclgrind]") {
     const auto cfg = tiny_config();
     auto entries = tiny_entries();
 
@@ -162,7 +162,7 @@ TEST_CASE("broken model files give clear errors", "[model][file]") {
     SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
 }
 
-TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[model][extremes]") {
+TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[model][extremes][oclgrind]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("sanitize", tiny_entries(), tiny_config()));
     ngi::Tensor x({1, 1, 32, 32});  // zeros; input_range is the default [-1, 1]
     x.data[3] = std::numeric_limits<float>::quiet_NaN();
@@ -190,7 +190,7 @@ TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[mo
 
 // Finite values near FLT_MAX overflow the first convolution's sums to Inf, and per-image batch norm turns that into
 // NaN (Inf - Inf): before they were clamped, an all-3.4e38 input gave an all-NaN output and no count.
-TEST_CASE("an input of finite values near FLT_MAX gives a finite output and a full count", "[model][extremes]") {
+TEST_CASE("an input of finite values near FLT_MAX gives a finite output and a full count", "[model][extremes][oclgrind]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("flt_max", tiny_entries(), tiny_config()),
                               ngi::ModelOptions{"per_image", ""});
     for (const float v : {3.4e38f, -3.4e38f, std::numeric_limits<float>::max()}) {

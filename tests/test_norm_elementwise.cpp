@@ -35,7 +35,7 @@ std::vector<float> run_bn(const std::vector<float>& x, int C, int H, int W, cons
 
 }  // namespace
 
-TEST_CASE("per-image batch norm matches a two-pass double reference", "[norm]") {
+TEST_CASE("per-image batch norm matches a two-pass double reference", "[norm][oclgrind]") {
     std::mt19937 rng(5);
     std::uniform_int_distribution<int> C(1, 9), S(1, 37);
     for (int trial = 0; trial < 15; ++trial) {
@@ -50,7 +50,7 @@ TEST_CASE("per-image batch norm matches a two-pass double reference", "[norm]") 
     }
 }
 
-TEST_CASE("per-image batch norm at the extremes stays finite and accurate", "[norm][extremes]") {
+TEST_CASE("per-image batch norm at the extremes stays finite and accurate", "[norm][extremes][oclgrind]") {
     std::mt19937 rng(9);
     const std::vector<float> g = {1.3f, 0.7f, 1.0f}, b = {0.25f, -0.5f, 0.1f};
     SECTION("zero variance: a constant channel normalizes to beta, not NaN") {
@@ -91,7 +91,7 @@ TEST_CASE("per-image batch norm at the extremes stays finite and accurate", "[no
     }
 }
 
-TEST_CASE("activations match the reference and saturate without NaN", "[elementwise][extremes]") {
+TEST_CASE("activations match the reference and saturate without NaN", "[elementwise][extremes][oclgrind]") {
     auto& c = test::ctx();
     Elementwise ew(c);
     std::vector<float> x = {0.0f, -0.0f, 1.0f, -1.0f, 20.0f, -20.0f, 88.8f, -88.8f, 1e30f, -1e30f, 65504.0f,
@@ -109,7 +109,7 @@ TEST_CASE("activations match the reference and saturate without NaN", "[elementw
     }
 }
 
-TEST_CASE("seeded dropout reproduces docs/MODEL_FORMAT.md's hash test vectors", "[elementwise][dropout]") {
+TEST_CASE("seeded dropout reproduces docs/MODEL_FORMAT.md's hash test vectors", "[elementwise][dropout][oclgrind]") {
     auto& c = test::ctx();
     Elementwise ew(c);
     struct Vec { std::uint32_t seed, site; int keep[4]; };
@@ -131,7 +131,7 @@ TEST_CASE("seeded dropout reproduces docs/MODEL_FORMAT.md's hash test vectors", 
     CHECK(sum / 100000.0 == Approx(1.0).margin(0.015));
 }
 
-TEST_CASE("sanitize replaces NaN, Inf and far out-of-range values and counts them", "[elementwise][extremes]") {
+TEST_CASE("sanitize replaces NaN, Inf and far out-of-range values and counts them", "[elementwise][extremes][oclgrind]") {
     auto& c = test::ctx();
     Elementwise ew(c);
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();

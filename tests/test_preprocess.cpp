@@ -133,7 +133,7 @@ ModelConfig config(int input_nc, float lo = -1.0f, float hi = 1.0f) {
 
 }  // namespace
 
-TEST_CASE("preprocessing matches the reference, hostile values sanitized and counted", "[pipeline]") {
+TEST_CASE("preprocessing matches the reference, hostile values sanitized and counted", "[pipeline][oclgrind]") {
     std::mt19937 rng(21);
     for (bool optional_terms : {true, false})
         for (LuminationTransfer tr : {LuminationTransfer::Reinhard, LuminationTransfer::Clamp}) {
@@ -177,7 +177,7 @@ TEST_CASE("preprocessing matches the reference, hostile values sanitized and cou
         }
 }
 
-TEST_CASE("preprocessing: exact values at the edges of every rule", "[pipeline]") {
+TEST_CASE("preprocessing: exact values at the edges of every rule", "[pipeline][oclgrind]") {
     const int n = 2;
     Frame fr;
     fr.look = {0, 0, -1};  // identity cluster basis: cluster space = world space
@@ -222,7 +222,7 @@ TEST_CASE("preprocessing: exact values at the edges of every rule", "[pipeline]"
     REQUIRE(st.sky_normals == 3);
 }
 
-TEST_CASE("network input rejects frames and models that do not fit", "[pipeline]") {
+TEST_CASE("network input rejects frames and models that do not fit", "[pipeline][oclgrind]") {
     using Catch::Matchers::Contains;
     const int n = 4;
     Frame fr;

@@ -67,3 +67,30 @@ TEST_CASE("device specs: platform names select devices, unknown names list what 
         CHECK_THAT(e.what(), Catch::Contains("no-such-platform-xyz") && Catch::Contains("available"));
     }
 }
+
+// Uploads in pieces and at offsets, and partial clears, as the graph (the input inside the arena), the global
+// view (one upload per face plane) and the GEMM tests do. On Oclgrind these go through kernels/transfer.cl (its
+// uninitialized-value checker forgets every earlier host store into a buffer at each new one), so under
+// tools/ci/oclgrind.sh this case is also the regression test for that workaround: the kernel below reads every
+// element and must see no uninitialized value.
+TEST_CASE("upload at offsets and in pieces, partial clears: every byte where it belongs", "[runtime][oclgrind]") {
+    auto& c = test::ctx();
+    std::mt19937 rng(8);
+    const int n = 301;
+    auto x = test::random_vector(n, rng);
+    Buffer b = c.alloc(n * sizeof(float), "pieces");
+    c.write(b, 0, 100 * sizeof(float), x.data(), "pieces");                     // head
+    c.write(b, 200 * sizeof(float), 101 * sizeof(float), &x[200], "pieces");    // tail
+    c.write(b, 100 * sizeof(float), 100 * sizeof(float), &x[100], "pieces");    // middle, last
+    c.fill_zero(b, 150 * sizeof(float), 7 * sizeof(float), "pieces");           // a cleared run inside
+    for (int i = 150; i < 157; ++i) x[i] = 0.0f;
+    Kernel k = c.kernel("elementwise", "activate_inplace");
+    k.args(b, 0, n, int(Activation::LeakyReLU), 0.5f);
+    const std::size_t global = n, local = 64;
+    c.launch(k, 1, &global, &local);
+    const auto y = test::download(b, n);
+    for (int i = 0; i < n; ++i) {
+        INFO("element " << i);
+        REQUIRE(y[i] == (x[i] >= 0.0f ? x[i] : 0.5f * x[i]));
+    }
+}

@@ -27,6 +27,13 @@ struct GemmProblem {
 // (ngf 64: 512 x 4 x 4 = 8192) and an up-convolution's tall M.
 const std::vector<GemmProblem>& gemm_check_problems();
 
+// $NGI_SELFCHECK: unset or "full" (the default) checks every problem above; "small" only the first one. For
+// instruction-level simulators only (oclgrind runs the K = 8192 problem for minutes): the small set cannot see
+// a loop limiter or a miscompile that only deep K shows, so never use it for real runs. Other values throw
+// InputError. Small-set verdicts are cached apart from full ones.
+bool gemm_selfcheck_is_small();
+std::vector<GemmProblem> gemm_selfcheck_problems();
+
 // Runs `p` on the device for each problem and compares with the host reference. Never throws for a variant
 // that fails to build or launch: that is a failed verdict with the OpenCL error as the reason.
 GemmVerdict check_gemm_variant(Context& ctx, const GemmParams& p, const std::vector<GemmProblem>& problems);

@@ -157,7 +157,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     // Every program = kernels/common.cl + kernels/<file>.cl (one translation unit; OpenCL 1.2 has no linking
     // of headers from the library).
     const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
-    const std::string options = "-cl-std=CL1.2 " + defines;
+    const std::string options = build_options(defines);
     const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
     const std::filesystem::path cached = cache_dir() / (file + "-" + variant_key(file, defines) + ".bin");
 
@@ -205,7 +205,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
 std::string Context::variant_key(const std::string& file, const std::string& defines) const {
     const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
     const std::uint64_t h = fnv1a(source, fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
-                                                 '\n' + info_.device_version + '\n' + "-cl-std=CL1.2 " + defines));
+                                                 '\n' + info_.device_version + '\n' + build_options(defines)));
     char hex[17];
     std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
     return hex;
@@ -254,11 +254,45 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
     cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, bytes, nullptr, &err);
     check(err, (std::string("allocate ") + what + " (" + std::to_string(bytes) + " bytes)").c_str(),
           "clCreateBuffer");
-    return Buffer(m, bytes);
+    Buffer b(m, bytes);
+    if (info_.platform_name == "Oclgrind") {
+        // Oclgrind 21.10's uninitialized-value checker gives a buffer shadow memory only at its first host store
+        // or first kernel use, and keeps a released buffer's stale shadow for the next buffer with the same
+        // index (false "uninitialized" reports, or kernel stores silently not tracked). One whole-buffer store
+        // at creation gives every buffer a fresh shadow of its full size. The price: memory no one wrote reads
+        // as initialized (zeros) on Oclgrind; private and local memory are still checked exactly.
+        const std::vector<unsigned char> zeros(bytes, 0);
+        check(clEnqueueWriteBuffer(queue_, m, CL_TRUE, 0, bytes, zeros.data(), 0, nullptr, nullptr),
+              (std::string("clear ") + what).c_str(), "clEnqueueWriteBuffer");
+    }
+    return b;
+}
+
+std::string Context::build_options(const std::string& defines) const {
+    // Oclgrind 21.10's uninitialized-value checker aborts the kernel ("Unsupported instruction: freeze") on the
+    // `freeze` that LLVM's optimizer inserts when it splits a paired x / d and x % d (im2col, col2im, SSIM):
+    // on Oclgrind, kernels are built unoptimized, which keeps the source's own operations.
+    return "-cl-std=CL1.2 " + defines + (info_.platform_name == "Oclgrind" ? " -cl-opt-disable" : "");
+}
+
+bool Context::host_stores_via_kernels(std::size_t off, std::size_t bytes) const {
+    // Oclgrind 21.10's uninitialized-value plugin forgets earlier uploads into a buffer at every host store
+    // (see kernels/transfer.cl); its stores from kernels are exact. Word-aligned ranges only (every caller's).
+    return info_.platform_name == "Oclgrind" && off % 4 == 0 && bytes % 4 == 0;
 }
 
 void Context::write(const Buffer& b, std::size_t off, std::size_t bytes, const void* src, const char* what) {
     if (bytes == 0) return;
+    if ((off != 0 || bytes != b.bytes()) && host_stores_via_kernels(off, bytes)) {
+        Buffer staging = alloc(bytes, what);
+        write(staging, 0, bytes, src, what);  // a whole-buffer upload: its shadow is exact
+        Kernel k = kernel("transfer", "copy_words");
+        k.args(staging, b, cl_ulong(off / 4), cl_ulong(bytes / 4));
+        const std::size_t global = bytes / 4, local = 64;
+        launch(k, 1, &global, &local);
+        finish();  // staging is released on return
+        return;
+    }
     check(clEnqueueWriteBuffer(queue_, b.get(), CL_TRUE, off, bytes, src, 0, nullptr, nullptr),
           (std::string("upload ") + what).c_str(), "clEnqueueWriteBuffer");
 }
@@ -271,6 +305,13 @@ void Context::read(const Buffer& b, std::size_t off, std::size_t bytes, void* ds
 
 void Context::fill_zero(const Buffer& b, std::size_t off, std::size_t bytes, const char* what) {
     if (bytes == 0) return;
+    if (host_stores_via_kernels(off, bytes)) {
+        Kernel k = kernel("transfer", "zero_words");
+        k.args(b, cl_ulong(off / 4), cl_ulong(bytes / 4));
+        const std::size_t global = bytes / 4, local = 64;
+        launch(k, 1, &global, &local);
+        return;
+    }
     const float zero = 0.0f;
     check(clEnqueueFillBuffer(queue_, b.get(), &zero, sizeof zero, off, bytes, 0, nullptr, nullptr),
           (std::string("clear ") + what).c_str(), "clEnqueueFillBuffer");

@@ -153,6 +153,11 @@ public:
 
 private:
     cl_program program(const std::string& file, const std::string& defines);
+    // True when a host store of [off, off + bytes) must be done by a kernel (kernels/transfer.cl): on Oclgrind,
+    // whose uninitialized-value checker loses track of host stores that do not cover a whole buffer.
+    bool host_stores_via_kernels(std::size_t off, std::size_t bytes) const;
+    // "-cl-std=CL1.2 <defines>", plus -cl-opt-disable on Oclgrind (see context.cpp).
+    std::string build_options(const std::string& defines) const;
 
     cl_platform_id platform_;
     cl_device_id device_;
