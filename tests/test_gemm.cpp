@@ -174,12 +174,12 @@ TEST_CASE("GEMM self-check: the device's selection passes, a rejected variant fa
                                  Catch::Contains(c.info().name));
     }
 
-    // A work-group the kernel cannot run is a failed verdict with the reason, not an exception.
+    // A work-group beyond what the kernel may run (2^20 work-items) is a performance knob, not a correctness one:
+    // the launch shrinks it and the variant still computes the right result.
     GemmParams huge = chain.back();
-    huge.local0 = huge.local1 = 1024;  // 1M work-items per group: beyond every device
+    huge.local0 = huge.local1 = 1024;
     const GemmVerdict v = check_gemm_variant(c, huge, {{37, 101, 133}});
-    CHECK_FALSE(v.ok);
-    CHECK_THAT(v.reason, Catch::Contains("1024x1024"));
+    CHECK(v.ok);
 }
 
 TEST_CASE("GEMM self-check: the loop form is rejected exactly where the driver limits loops", "[gemm][selfcheck]") {

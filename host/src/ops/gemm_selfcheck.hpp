@@ -1,6 +1,6 @@
 // The GEMM self-check: before a GEMM variant (a knob set of kernels/gemm.cl) is used on a device, it must
 // reproduce a host double-precision reference on small and realistic problems. A variant that disagrees — a
-// driver miscompile, a loop limiter, a work-group it cannot run — is skipped for the next in a fallback chain
+// driver miscompile, a loop limiter, a build or launch failure — is skipped for the next in a fallback chain
 // of ever safer variants, and the reason is reported (ngi devices, stderr once per process).
 #pragma once
 #include <functional>
