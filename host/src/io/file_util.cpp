@@ -37,9 +37,12 @@ std::string read_file(const std::string& path, const std::string& op, std::uint6
     if (fd < 0) throw InputError(what + "cannot open file: " + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        const bool dir = S_ISDIR(st.st_mode);
+        const char* kind = S_ISDIR(st.st_mode)                          ? "it is a directory"
+                           : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "it is a device, not a regular file"
+                           : S_ISFIFO(st.st_mode)                       ? "it is a FIFO, not a regular file"
+                                                                        : "not a regular file";
         ::close(fd);
-        throw InputError(what + "cannot open file: " + (dir ? "it is a directory" : "not a regular file"));
+        throw InputError(what + "cannot open file: " + kind);
     }
     std::FILE* f = ::fdopen(fd, "rb");
     if (!f) {
