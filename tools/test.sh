@@ -83,7 +83,7 @@ for stage in $stages; do
     fuzz)
       if ! command -v clang++-15 > /dev/null; then missing fuzz "clang-15 not installed"
       elif out=$(bash tools/fuzz.sh "${NGI_FUZZ_SECONDS:-20}" | tee /dev/stderr); then
-        stage_result fuzz ok "$(grep -c '^fuzz_' <<< "$out" || true)" $((SECONDS - start))
+        stage_result fuzz ok "$(grep -c ' execs ' <<< "$out" || true)" $((SECONDS - start))
       else stage_result fuzz failed 0 $((SECONDS - start)); fi ;;
     *) echo "unknown stage '$stage' (pocl rusticl oclgrind sanitize fuzz)" >&2; exit 2 ;;
   esac
