@@ -82,6 +82,7 @@ for stage in $stages; do
       unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS ;;
     fuzz)
       if ! command -v clang++-15 > /dev/null; then missing fuzz "clang-15 not installed"
+      # tee -a: a plain tee would truncate stderr where it is a file (a CI log).
       elif out=$(bash tools/fuzz.sh "${NGI_FUZZ_SECONDS:-20}" | tee -a /dev/stderr); then
         stage_result fuzz ok "$(grep -c ' execs ' <<< "$out" || true)" $((SECONDS - start))
       else stage_result fuzz failed 0 $((SECONDS - start)); fi ;;
