@@ -81,11 +81,15 @@ for stage in $stages; do
       else stage_result sanitize failed "$n" $((SECONDS - start)); fi
       unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS ;;
     fuzz)
+      # The per-target lines go through a file, not tee: reopening /dev/stderr would write past (or truncate)
+      # a CI log that stdout and stderr share.
+      fuzz_out=$(mktemp)
       if ! command -v clang++-15 > /dev/null; then missing fuzz "clang-15 not installed"
-      # tee -a: a plain tee would truncate stderr where it is a file (a CI log).
-      elif out=$(bash tools/fuzz.sh "${NGI_FUZZ_SECONDS:-20}" | tee -a /dev/stderr); then
-        stage_result fuzz ok "$(grep -c ' execs ' <<< "$out" || true)" $((SECONDS - start))
-      else stage_result fuzz failed 0 $((SECONDS - start)); fi ;;
+      elif bash tools/fuzz.sh "${NGI_FUZZ_SECONDS:-20}" > "$fuzz_out"; then
+        cat "$fuzz_out" >&2
+        stage_result fuzz ok "$(grep -c ' execs ' "$fuzz_out" || true)" $((SECONDS - start))
+      else cat "$fuzz_out" >&2; stage_result fuzz failed 0 $((SECONDS - start)); fi
+      rm -f "$fuzz_out" ;;
     *) echo "unknown stage '$stage' (pocl rusticl oclgrind sanitize fuzz)" >&2; exit 2 ;;
   esac
 done
