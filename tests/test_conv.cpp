@@ -123,13 +123,7 @@ TEST_CASE("every GEMM parameter set in the tuning space gives the same convoluti
 TEST_CASE("conv2d and conv_transpose2d at small odd shapes, GPU and CPU knob sets and their fallback chains",
           "[conv2d][conv_transpose2d][oclgrind]") {
     std::mt19937 rng(17);
-    DeviceInfo gpu, cpu;
-    gpu.is_gpu = true;
-    cpu.is_cpu = true;
-    std::vector<GemmParams> sets;
-    for (const DeviceInfo* info : {&gpu, &cpu})
-        for (const GemmParams& p : gemm_fallback_chain(gemm_params_for(*info)))
-            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    const std::vector<GemmParams> sets = test::gpu_and_cpu_gemm_variants();
     const Case conv[] = {{5, 7, 9, 6, 3, 3, 1, 1, 0, 2}, {5, 7, 9, 3, 4, 4, 2, 1, 2, 3}};
     const Case up[] = {{5, 7, 9, 3, 4, 4, 2, 1, 1, 0}, {5, 3, 5, 2, 3, 3, 2, 1, 0, 4}};
     for (const GemmParams& gp : sets) {

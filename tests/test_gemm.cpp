@@ -213,13 +213,7 @@ TEST_CASE("loop-limit probe: 0 on drivers without a limiter, the limit where the
 // presents one device (a GPU), so the CPU sets are chosen by describing a CPU to gemm_params_for.
 TEST_CASE("GEMM: the GPU and CPU knob sets and their fallback chains at small odd shapes", "[gemm][oclgrind]") {
     std::mt19937 rng(19);
-    DeviceInfo gpu, cpu;
-    gpu.is_gpu = true;
-    cpu.is_cpu = true;
-    std::vector<GemmParams> sets;
-    for (const DeviceInfo* info : {&gpu, &cpu})
-        for (const GemmParams& p : gemm_fallback_chain(gemm_params_for(*info)))
-            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    const std::vector<GemmParams> sets = test::gpu_and_cpu_gemm_variants();
     REQUIRE(sets.size() >= 5);
     const int shapes[][3] = {{5, 63, 45}, {7, 9, 13}, {1, 1, 1}};
     for (const GemmParams& p : sets)

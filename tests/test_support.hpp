@@ -1,6 +1,7 @@
 // Shared helpers for the Catch2 suite: the device under test, random data, comparisons, naive references.
 #pragma once
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "ngi/device.hpp"
+#include "ops/gemm_selfcheck.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::test {
@@ -30,6 +32,20 @@ inline Device& device() {
     return *d;
 }
 inline void release_device() { device_slot().reset(); }
+
+// The GEMM knob sets the table picks for a GPU and for a CPU, each with its fallback chain, without duplicates.
+// Chosen by describing a GPU and a CPU to gemm_params_for, not by the device under test: oclgrind presents only
+// a GPU, yet the CPU sets must run under it too.
+inline std::vector<detail::GemmParams> gpu_and_cpu_gemm_variants() {
+    DeviceInfo gpu, cpu;
+    gpu.is_gpu = true;
+    cpu.is_cpu = true;
+    std::vector<detail::GemmParams> sets;
+    for (const DeviceInfo* info : {&gpu, &cpu})
+        for (const detail::GemmParams& p : detail::gemm_fallback_chain(detail::gemm_params_for(*info)))
+            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    return sets;
+}
 inline detail::Context& ctx() { return device().context(); }
 
 inline std::vector<float> random_vector(std::size_t n, std::mt19937& rng, float lo = -1.0f, float hi = 1.0f) {
