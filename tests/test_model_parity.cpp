@@ -74,7 +74,8 @@ TEST_CASE("pix2pix on an all-3.4e38 input: finite output, every value counted", 
     CHECK(ngi_model_sanitized_inputs(m, &count) == NGI_OK);
     CHECK(count == 0);
     std::vector<float> out(y.size());
-    REQUIRE(ngi_model_run(m, x.data.data(), x.shape[2], x.shape[3], out.data()) == NGI_OK);
+    REQUIRE(ngi_model_run(m, x.data.data(), x.size() * sizeof(float), x.shape[2], x.shape[3], out.data(),
+                          out.size() * sizeof(float)) == NGI_OK);
     CHECK(ngi_model_sanitized_inputs(m, &count) == NGI_OK);
     CHECK(count == int(x.size()));
     CHECK(out == y.data);

@@ -46,7 +46,7 @@ inline std::vector<detail::GemmParams> gpu_and_cpu_gemm_variants() {
             if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
     return sets;
 }
-inline detail::Context& ctx() { return device().context(); }
+inline detail::Context& ctx() { return ngi::detail::context_of(device()); }
 
 inline std::vector<float> random_vector(std::size_t n, std::mt19937& rng, float lo = -1.0f, float hi = 1.0f) {
     std::uniform_real_distribution<float> u(lo, hi);

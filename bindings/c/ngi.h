@@ -1,43 +1,201 @@
-/* ngi C API: open a device, load a generator, run it. Every call returns an ngi_status; on failure
- * ngi_last_error() returns the message (thread-local, valid until the next failing call on that thread),
- * which names the operation, the file or tensor and, for OpenCL failures, the CL error name. */
+/* ngi C API: the stable contract of the ngi library (libngi_c, C99).
+ *
+ * Handles are opaque and reference-counted: every *_new / *_open / *_load call returns a handle with one
+ * reference; *_retain adds one, *_release drops one, and the object is destroyed with its last reference. An object
+ * keeps what it was made from alive (a model its device, a buffer its device), so handles may be released in any
+ * order. A handle used after its last release is detected and refused (NGI_ERROR_INVALID_HANDLE), not a crash.
+ *
+ * Errors: every call returns an ngi_status. On failure, ngi_last_error() returns a message that names the call, the
+ * argument or file and, for OpenCL failures, the CL error name; it is thread-local and reset by every call (""
+ * after a success). An error callback (ngi_set_error_callback) sees every failure as it happens.
+ *
+ * Threading: a device may be used by any number of threads at once; a model or a pipeline is used by one thread at
+ * a time (different models and pipelines on one device may run concurrently). See docs/ARCHITECTURE.md.
+ *
+ * Sizes: every buffer argument comes with its size in bytes; a size smaller than the call needs is refused.
+ * Layouts and value ranges: docs/CONVENTIONS.md. Frames: bindings/c/README.md and ngi/pipeline.hpp.
+ */
 #ifndef NGI_H
 #define NGI_H
 
 #include <stddef.h>
 
+#if defined(_WIN32)
+#  if defined(NGI_C_BUILD)
+#    define NGI_API __declspec(dllexport)
+#  else
+#    define NGI_API __declspec(dllimport)
+#  endif
+#elif defined(__GNUC__)
+#  define NGI_API __attribute__((visibility("default")))
+#else
+#  define NGI_API
+#endif
+
+#define NGI_VERSION_MAJOR 0
+#define NGI_VERSION_MINOR 2
+#define NGI_VERSION_PATCH 0
+/* major * 10000 + minor * 100 + patch, as ngi_version() returns it for the library actually loaded. */
+#define NGI_VERSION (NGI_VERSION_MAJOR * 10000 + NGI_VERSION_MINOR * 100 + NGI_VERSION_PATCH)
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* The application's OpenCL objects, without including <CL/cl.h>: cl_mem is `struct _cl_mem *` etc. */
+struct _cl_context;
+struct _cl_device_id;
+struct _cl_command_queue;
+struct _cl_mem;
+struct _cl_event;
+
 typedef enum ngi_status {
     NGI_OK = 0,
-    NGI_ERROR_INVALID_ARGUMENT = 1, /* a NULL pointer or impossible size passed to the API */
-    NGI_ERROR_INPUT = 2,            /* bad user input: file, tensor shape, device spec */
+    NGI_ERROR_INVALID_ARGUMENT = 1, /* a NULL pointer, an impossible size or value passed to the API */
+    NGI_ERROR_INPUT = 2,            /* bad user input: file, shape, device spec, a cl_mem of another context */
     NGI_ERROR_OPENCL = 3,           /* an OpenCL call failed; see ngi_last_cl_error() */
-    NGI_ERROR_INTERNAL = 4          /* anything else (out of memory, ...) */
+    NGI_ERROR_OUT_OF_MEMORY = 4,    /* host or device memory exhausted (also CL_OUT_OF_RESOURCES, ...) */
+    NGI_ERROR_INVALID_HANDLE = 5,   /* a NULL handle, or one whose last reference was released */
+    NGI_ERROR_INTERNAL = 6          /* anything else: a bug in ngi */
 } ngi_status;
 
 typedef struct ngi_device ngi_device;
 typedef struct ngi_model ngi_model;
+typedef struct ngi_buffer ngi_buffer;
+typedef struct ngi_pipeline ngi_pipeline;
 
-const char* ngi_last_error(void);
-int ngi_last_cl_error(void); /* the CL error code of the last NGI_ERROR_OPENCL, else 0 */
+/* --- version and errors ------------------------------------------------------------------------------------- */
+NGI_API int ngi_version(void);              /* NGI_VERSION of the loaded library */
+NGI_API const char* ngi_status_name(ngi_status status); /* "NGI_OK", ... */
+NGI_API const char* ngi_last_error(void);   /* "" after a successful call */
+NGI_API int ngi_last_cl_error(void);        /* the CL error code of the last NGI_ERROR_OPENCL, else 0 */
+/* Called on the failing thread for every failure, before the call returns (NULL: none). Process-wide. */
+typedef void (*ngi_error_callback)(void* user, ngi_status status, const char* message);
+NGI_API void ngi_set_error_callback(ngi_error_callback callback, void* user);
 
-/* spec: "cpu", "gpu", "P:D" or NULL/"" for $NGI_DEVICE, else the first GPU, else the first CPU. */
-ngi_status ngi_device_open(const char* spec, ngi_device** out);
-const char* ngi_device_name(const ngi_device* device);
-void ngi_device_release(ngi_device* device);
+/* --- devices -------------------------------------------------------------------------------------------------- */
+typedef enum ngi_device_property {
+    NGI_DEVICE_NAME = 0,           /* string */
+    NGI_DEVICE_PLATFORM = 1,       /* string: the OpenCL platform's name */
+    NGI_DEVICE_VENDOR = 2,         /* string */
+    NGI_DEVICE_DRIVER_VERSION = 3, /* string */
+    NGI_DEVICE_IS_GPU = 10,        /* integer 0/1 */
+    NGI_DEVICE_IS_CPU = 11,        /* integer 0/1 */
+    NGI_DEVICE_FP16 = 12,          /* integer 0/1: cl_khr_fp16 */
+    NGI_DEVICE_GLOBAL_MEM_BYTES = 13,
+    NGI_DEVICE_MAX_ALLOC_BYTES = 14,
+    NGI_DEVICE_LOCAL_MEM_BYTES = 15,
+    NGI_DEVICE_COMPUTE_UNITS = 16,
+    NGI_DEVICE_PLATFORM_INDEX = 17, /* the "P" of a "P:D" spec; -1 for a device from ngi_device_from_opencl that
+                                       the platform enumeration does not list */
+    NGI_DEVICE_DEVICE_INDEX = 18
+} ngi_device_property;
 
-ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_model** out);
-ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output_nc, int* num_downs);
-/* input: input_nc x height x width floats (CHW, batch 1); output: output_nc x height x width floats.
- * height and width must be multiples of 2^num_downs. */
-ngi_status ngi_model_run(ngi_model* model, const float* input, int height, int width, float* output);
-/* Input values the last successful ngi_model_run replaced before the first layer (NaN -> 0; +-Inf and values far
- * outside the model's input range -> its nearer end; docs/CONVENTIONS.md section 7); 0 before any run. */
-ngi_status ngi_model_sanitized_inputs(const ngi_model* model, int* count);
-void ngi_model_release(ngi_model* model);
+/* Every OpenCL device of every platform, index 0 .. count - 1 (in "P:D" order). */
+NGI_API ngi_status ngi_device_count(int* count);
+/* A string property of listed device `index` into buf (size bytes, NUL-terminated); *needed (may be NULL) receives
+ * the size the whole string needs, NUL included. A buf too small gets a truncated string and NGI_ERROR_INVALID_ARGUMENT. */
+NGI_API ngi_status ngi_device_list_string(int index, ngi_device_property property, char* buf, size_t size,
+                                          size_t* needed);
+NGI_API ngi_status ngi_device_list_integer(int index, ngi_device_property property, long long* value);
+
+/* spec: "cpu", "gpu", "P:D", a platform name ("pocl", "rusticl"), or NULL/"" for $NGI_DEVICE, else the first GPU,
+ * else the first CPU. */
+NGI_API ngi_status ngi_device_open(const char* spec, ngi_device** out);
+/* A device on the application's own context, device and in-order queue: ngi enqueues all its work on `queue`.
+ * The three objects are retained until the device's last reference (and everything made from it) is released. */
+NGI_API ngi_status ngi_device_from_opencl(struct _cl_context* context, struct _cl_device_id* device,
+                                          struct _cl_command_queue* queue, ngi_device** out);
+NGI_API ngi_status ngi_device_string(const ngi_device* device, ngi_device_property property, char* buf, size_t size,
+                                     size_t* needed);
+NGI_API ngi_status ngi_device_integer(const ngi_device* device, ngi_device_property property, long long* value);
+/* The OpenCL objects the device runs on (not retained for the caller); any of the pointers may be NULL. */
+NGI_API ngi_status ngi_device_opencl(const ngi_device* device, struct _cl_context** context,
+                                     struct _cl_command_queue** queue);
+/* Waits for everything enqueued on the device's queue. */
+NGI_API ngi_status ngi_device_sync(ngi_device* device);
+/* An event that completes when everything enqueued so far has; the caller releases it with clReleaseEvent. */
+NGI_API ngi_status ngi_device_marker(ngi_device* device, struct _cl_event** event);
+/* Host <-> device transfers since the device was created (device-to-device copies are not counted). */
+NGI_API ngi_status ngi_device_host_transfers(const ngi_device* device, long long* uploads, long long* downloads);
+NGI_API ngi_status ngi_device_retain(ngi_device* device);
+NGI_API ngi_status ngi_device_release(ngi_device* device);  /* NULL is accepted and ignored */
+
+/* --- device buffers ------------------------------------------------------------------------------------------- */
+/* A new device buffer of `bytes` (> 0) owned by ngi. */
+NGI_API ngi_status ngi_buffer_new(ngi_device* device, size_t bytes, ngi_buffer** out);
+/* Borrows bytes [offset, offset + bytes) of the application's `mem` (of the device's context; retained until the
+ * buffer's last release, never freed by ngi). A non-zero offset must be a multiple of CL_DEVICE_MEM_BASE_ADDR_ALIGN. */
+NGI_API ngi_status ngi_buffer_wrap(ngi_device* device, struct _cl_mem* mem, size_t offset, size_t bytes,
+                                   ngi_buffer** out);
+NGI_API ngi_status ngi_buffer_size(const ngi_buffer* buffer, size_t* bytes);
+/* Blocking copies between host memory and bytes [offset, offset + bytes) of the buffer. */
+NGI_API ngi_status ngi_buffer_write(ngi_buffer* buffer, size_t offset, const void* src, size_t bytes);
+NGI_API ngi_status ngi_buffer_read(const ngi_buffer* buffer, size_t offset, void* dst, size_t bytes);
+NGI_API ngi_status ngi_buffer_retain(ngi_buffer* buffer);
+NGI_API ngi_status ngi_buffer_release(ngi_buffer* buffer);
+
+/* --- models --------------------------------------------------------------------------------------------------- */
+typedef enum ngi_bn_mode {
+    NGI_BN_FROM_FILE = 0,  /* what the model file says */
+    NGI_BN_RUNNING = 1,    /* running statistics (eval mode) */
+    NGI_BN_PER_IMAGE = 2   /* statistics of each image (train mode, batch 1) */
+} ngi_bn_mode;
+typedef enum ngi_dropout {
+    NGI_DROPOUT_FROM_FILE = 0,
+    NGI_DROPOUT_OFF = 1,
+    NGI_DROPOUT_SEEDED = 2  /* the seeded, reproducible mask of docs/MODEL_FORMAT.md */
+} ngi_dropout;
+
+NGI_API ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_model** out);
+NGI_API ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi_bn_mode bn_mode,
+                                               ngi_dropout dropout, ngi_model** out);
+/* Any pointer may be NULL. */
+NGI_API ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output_nc, int* num_downs);
+/* input: input_nc x height x width floats (CHW, batch 1, input_bytes >= that many bytes); output: output_nc x height
+ * x width floats. height and width must be positive multiples of 2^num_downs. Blocking. */
+NGI_API ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
+                                 float* output, size_t output_bytes);
+/* The same on device buffers, asynchronous (ngi_device_sync waits): no host transfer. */
+NGI_API ngi_status ngi_model_enqueue(ngi_model* model, ngi_buffer* input, ngi_buffer* output, int height, int width);
+/* Input values the last run/enqueue replaced before the first layer (NaN -> 0; +-Inf and values far outside the
+ * model's input range -> its nearer end; docs/CONVENTIONS.md section 7); 0 before any run. May block. */
+NGI_API ngi_status ngi_model_sanitized_inputs(ngi_model* model, int* count);
+NGI_API ngi_status ngi_model_retain(ngi_model* model);
+NGI_API ngi_status ngi_model_release(ngi_model* model);
+
+/* --- the surround pipeline: frame planes -> lightmap / final image / display image ----------------------------
+ * Frame planes: float32 [face][16][N][N], faces in the order front, back, left, right, up, down (a single-view model
+ * reads the front face only and accepts 1 face), 16 planes per face: albedo RGB 0-2, normal XYZ 3-5, depth 6,
+ * direct RGB 7-9, emission RGB 10-12, env RGB 13-15. Outputs: N x N x 3 planar float32 each. */
+typedef enum ngi_global_view_mode { NGI_GLOBAL_VIEW_THESIS = 0, NGI_GLOBAL_VIEW_EQUIRECT = 1 } ngi_global_view_mode;
+typedef enum ngi_lumination_transfer { NGI_TRANSFER_REINHARD = 0, NGI_TRANSFER_CLAMP = 1 } ngi_lumination_transfer;
+typedef enum ngi_tone_curve { NGI_TONE_ACES = 0, NGI_TONE_REINHARD = 1, NGI_TONE_CLAMP = 2 } ngi_tone_curve;
+typedef enum ngi_frame_flags {
+    NGI_FRAME_EMISSION = 1, /* the emission planes hold data */
+    NGI_FRAME_ENV = 2       /* the env planes hold data */
+} ngi_frame_flags;
+
+/* n: face size, even, 2..2048. */
+NGI_API ngi_status ngi_pipeline_new(ngi_device* device, int n, ngi_global_view_mode mode,
+                                    ngi_lumination_transfer transfer, ngi_pipeline** out);
+/* Bytes of the frame planes for `faces` (1 or 6) faces of this pipeline: faces * 16 * N * N * 4. */
+NGI_API ngi_status ngi_pipeline_frame_bytes(const ngi_pipeline* pipeline, int faces, size_t* bytes);
+/* The front camera of the next frames (world space; default look (0, 0, -1), up (0, 1, 0)). */
+NGI_API ngi_status ngi_pipeline_set_camera(ngi_pipeline* pipeline, const float look[3], const float up[3]);
+/* The display transform of the next frames (default: 0 EV, ACES, sRGB on). exposure_ev in [-64, 64]. */
+NGI_API ngi_status ngi_pipeline_set_tonemap(ngi_pipeline* pipeline, float exposure_ev, ngi_tone_curve curve, int srgb);
+/* Device in, device out, asynchronous, no host transfer. flags: ngi_frame_flags. Any output may be NULL (not made). */
+NGI_API ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model, ngi_buffer* planes, int faces,
+                                        unsigned flags, ngi_buffer* lightmap, ngi_buffer* final_image,
+                                        ngi_buffer* display);
+/* Host in, host out, blocking: one upload and one download. Each output pointer may be NULL (not made); its size
+ * in bytes must be at least N * N * 3 * 4. */
+NGI_API ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, const float* planes, size_t planes_bytes,
+                                    int faces, unsigned flags, float* lightmap, size_t lightmap_bytes,
+                                    float* final_image, size_t final_bytes, float* display, size_t display_bytes);
+NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
+NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
 
 #ifdef __cplusplus
 }

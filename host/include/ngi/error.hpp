@@ -27,6 +27,13 @@ public:
     using Error::Error;
 };
 
+// Memory exhausted: a request beyond the device's limits (CL_DEVICE_MAX_MEM_ALLOC_SIZE). OpenCL's own allocation
+// failures are ClErrors with CL_MEM_OBJECT_ALLOCATION_FAILURE / CL_OUT_OF_RESOURCES / CL_OUT_OF_HOST_MEMORY.
+class OutOfMemoryError : public Error {
+public:
+    using Error::Error;
+};
+
 // "CL_OUT_OF_RESOURCES" for -5 etc.; "CL_UNKNOWN_ERROR" for codes OpenCL 1.2/3.0 does not define.
 const char* cl_error_name(int code);
 

@@ -6,9 +6,12 @@
 #include <vector>
 
 #include "ngi/device.hpp"
+#include "ngi/device_buffer.hpp"
 #include "ngi/tensor.hpp"
 
 namespace ngi {
+
+namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
@@ -62,7 +65,17 @@ public:
     // The graph for each new H x W is built and planned on first use and reused afterwards.
     Tensor run(const Tensor& input, RunInfo* info = nullptr);
 
+    // Device in, device out, asynchronous: `input` holds [1, input_nc, height, width] float32 (NCHW) from byte 0,
+    // `output` receives [1, output_nc, height, width]; both at least that large and on this model's device
+    // (InputError otherwise). Returns once enqueued on the device's in-order queue: no host transfer, nothing
+    // waited for (Device::finish() or Device::marker() wait). `input` is only read (the guard works on a copy).
+    void enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int height, int width);
+    // Input values the guard replaced in the last enqueue() (see RunInfo::sanitized_inputs). Blocks: it reads a
+    // counter back from the device.
+    int sanitized_inputs();
+
 private:
+    friend struct detail::ModelAccess;
     struct Impl;
     explicit Model(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;

@@ -5,6 +5,10 @@
 //
 // A SurroundPipeline is built for one face size N; it builds its lookup tables once and keeps its device
 // buffers between frames. It is not thread-safe (one in-order device queue).
+//
+// One frame in one call: enqueue() (device in, device out, asynchronous, no host transfer) or run() (host in, host
+// out: one upload of the frame's planes, one download of the outputs asked for). The step-by-step calls below
+// (network_input, front_lightmap, compose, tonemap) remain for training, tests and tools.
 #pragma once
 #include <array>
 #include <glm/glm.hpp>
@@ -13,6 +17,7 @@
 #include <vector>
 
 #include "ngi/device.hpp"
+#include "ngi/device_buffer.hpp"
 #include "ngi/image.hpp"
 #include "ngi/model.hpp"
 #include "ngi/tensor.hpp"
@@ -67,6 +72,38 @@ struct ToneMapOptions {
 const char* tone_curve_name(ToneCurve c);                   // "aces", "reinhard", "clamp"
 ToneCurve tone_curve_from_name(const std::string& name);    // throws InputError
 
+// A frame's raw planes in one array (device buffer or host memory): float32, [face][plane][row][col], row 0 =
+// top, faces in Face order (front, back, left, right, up, down; a frame for a single-view model may hold the
+// front face only), kFramePlanes planes per face: albedo RGB 0-2, normal XYZ 3-5 (world space), depth 6 (metres),
+// direct RGB 7-9, emission RGB 10-12, env RGB 13-15 (kernels/gbuffer.cl reads the same layout). Planes of an
+// absent optional feature (emission, env) are not read. This is the layout the renderer's feature buffers have.
+constexpr int kFramePlanes = 16;
+int frame_plane(Feature feature);                   // first plane of a feature: 0, 3, 6, 7, 10, 13
+std::size_t frame_planes_bytes(int n, int faces);   // faces * 16 * n * n * 4
+// Packs a Frame's face images (faces = 6, or 1: the front face) into that layout; absent optional features are 0.
+std::vector<float> pack_frame_planes(const Frame& frame, int faces);
+
+// What enqueue() needs to know about the planes: how many faces they hold, which optional features, the camera.
+struct FrameDesc {
+    int faces = kFaceCount;  // 6, or 1 (front face only: single-view models)
+    bool has_emission = false, has_env = false;
+    glm::vec3 look{0, 0, -1}, up{0, 1, 0};  // the front camera (world space)
+    static FrameDesc of(const Frame& frame, int faces);  // from a Frame: presence of emission/env, look, up
+};
+
+// The outputs of one frame; empty buffers are not produced. Each is N x N x 3 planar float32 (3 N^2 floats):
+// lightmap = linear HDR lightmap of the front view, final_image = lightmap x albedo + emission + env (linear),
+// display = final_image tone-mapped by `tonemap` to [0, 1].
+struct FrameOutputs {
+    DeviceBuffer lightmap, final_image, display;
+    ToneMapOptions tonemap;
+};
+
+// Host results of run(); the images not asked for stay empty.
+struct FrameImages {
+    Image lightmap, final_image, display;
+};
+
 class SurroundPipeline {
 public:
     // n: face size, even, 2 <= n <= 2048. Builds the merge and extract lookup tables and the coordinate map.
@@ -81,6 +118,24 @@ public:
     LuminationTransfer transfer() const;
     int width() const { return 4 * n(); }   // global view size
     int height() const { return 2 * n(); }
+
+    // One frame, device in and device out: preprocessing, merge, coordinate map, generator, front-view
+    // extraction, decode, compose and tone map enqueued on the device's in-order queue. No host transfer and
+    // nothing waited for (the first frame of a pipeline also uploads its constant coordinate planes), unless
+    // `stats` is given: then it blocks to download the preprocessing counters. `planes` is only read.
+    // Throws InputError for buffers too small, read-only outputs, buffers of another device, or a model that does
+    // not fit (its input width, input_layout or size).
+    void enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc, const FrameOutputs& outputs,
+                 PreprocessStats* stats = nullptr);
+
+    // The same from host memory: exactly one upload (the frame's planes, packed) and one download (the outputs
+    // asked for, side by side), plus the counters' download when `stats` is given.
+    FrameImages run(Model& model, const Frame& frame, bool lightmap, bool final_image, bool display,
+                    const ToneMapOptions& tonemap = {}, PreprocessStats* stats = nullptr);
+    // The same from frame planes already packed in host memory (layout above; planes_bytes >= what desc needs).
+    FrameImages run(Model& model, const float* planes, std::size_t planes_bytes, const FrameDesc& desc, bool lightmap,
+                    bool final_image, bool display, const ToneMapOptions& tonemap = {},
+                    PreprocessStats* stats = nullptr);
 
     // One raw feature of all six faces merged into a 4N x 2N image (no preprocessing, no sanitizing).
     Image global_view(const Frame& frame, Feature feature);

@@ -123,22 +123,37 @@ void Graph::compile(Context& ctx) {
     compiled_ = true;
 }
 
+void Graph::enqueue_nodes(Context& ctx, std::vector<std::vector<cl_event>>* events) {
+    elementwise_->sanitize(ctx, view(input_), input_lo_, input_hi_);  // counted later: no stall here
+    if (events) events->assign(nodes_.size(), {});
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+        const Node& node = nodes_[i];
+        std::vector<View> ins;
+        for (TensorId t : node.inputs) ins.push_back(view(t));
+        node.op->enqueue(ctx, ins, view(node.output), scratch_.get(), events ? &(*events)[i] : nullptr);
+    }
+}
+
+void Graph::enqueue(Context& ctx, cl_mem in, std::size_t in_offset, cl_mem out, std::size_t out_offset) {
+    if (!compiled_) throw Error("graph: enqueue() before compile()");
+    ctx.copy(in, in_offset, arena_.get(), view(input_).offset * sizeof(float), input_bytes(),
+             ("graph input " + tensors_[input_].name).c_str());
+    enqueue_nodes(ctx, nullptr);
+    ctx.copy(arena_.get(), view(output_).offset * sizeof(float), out, out_offset, output_bytes(),
+             ("graph output " + tensors_[output_].name).c_str());
+}
+
+int Graph::sanitized_count(Context& ctx) { return elementwise_->sanitized_count(ctx); }
+
 RunStats Graph::run(Context& ctx, const float* input, float* output) {
     if (!compiled_) throw Error("graph: run() before compile()");
     RunStats stats;
     const View in = view(input_), out = view(output_);
     ctx.write(arena_, in.offset * sizeof(float), in.shape.size() * sizeof(float), input,
               ("graph input " + tensors_[input_].name).c_str());
-    elementwise_->sanitize(ctx, in, input_lo_, input_hi_);  // counted after the output download: no stall here
-
     const bool profile = ctx.options().profiling;
-    std::vector<std::vector<cl_event>> events(profile ? nodes_.size() : 0);
-    for (std::size_t i = 0; i < nodes_.size(); ++i) {
-        const Node& node = nodes_[i];
-        std::vector<View> ins;
-        for (TensorId t : node.inputs) ins.push_back(view(t));
-        node.op->enqueue(ctx, ins, view(node.output), scratch_.get(), profile ? &events[i] : nullptr);
-    }
+    std::vector<std::vector<cl_event>> events;
+    enqueue_nodes(ctx, profile ? &events : nullptr);
     ctx.read(arena_, out.offset * sizeof(float), out.shape.size() * sizeof(float), output,
              ("graph output " + tensors_[output_].name).c_str());
     stats.sanitized_inputs = elementwise_->sanitized_count(ctx);

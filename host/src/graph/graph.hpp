@@ -60,6 +60,13 @@ public:
 
     // input: shape(input) floats; output: shape(output) floats.
     RunStats run(Context& ctx, const float* input, float* output);
+    // Device in, device out, nothing waited for: the input is copied on the device from `in` at byte `in_offset`
+    // into the arena, the output from the arena to `out` at `out_offset`. No host transfer: the count of
+    // sanitized input values stays on the device until sanitized_count() reads it.
+    void enqueue(Context& ctx, cl_mem in, std::size_t in_offset, cl_mem out, std::size_t out_offset);
+    int sanitized_count(Context& ctx);
+    std::size_t input_bytes() const { return tensors_.at(input_).shape.size() * sizeof(float); }
+    std::size_t output_bytes() const { return tensors_.at(output_).shape.size() * sizeof(float); }
 
 private:
     struct Tensor {
@@ -79,6 +86,8 @@ private:
         std::string name;
     };
     TensorId root(TensorId t) const;
+    // Sanitizes the input in the arena and enqueues every node; events per node when profiling.
+    void enqueue_nodes(Context& ctx, std::vector<std::vector<cl_event>>* events);
     View view(TensorId t) const;
 
     std::vector<Tensor> tensors_;

@@ -5,6 +5,7 @@
 #include "io/file_util.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
+#include "models/model_access.hpp"
 #include "ops/gemm_selfcheck.hpp"
 
 namespace ngi {
@@ -14,6 +15,19 @@ struct Model::Impl {
     ModelConfig config;
     detail::UNetOps ops;
     std::map<std::pair<int, int>, std::unique_ptr<detail::Graph>> graphs;  // per input H x W
+    detail::Graph* last = nullptr;  // of the last enqueue (its sanitize counter)
+
+    // The graph for an input of h x w, built, planned and allocated on first use.
+    detail::Graph& graph(int h, int w) {
+        auto& g = graphs[{h, w}];
+        if (!g) {
+            auto fresh = detail::build_unet_graph(ops, h, w);
+            fresh->set_input_limits(config.input_range[0], config.input_range[1]);
+            fresh->compile(ngi::detail::context_of(device));
+            g = std::move(fresh);
+        }
+        return *g;
+    }
 };
 
 Model::Model(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -31,10 +45,10 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     ModelConfig cfg = detail::parse_model_config(meta->second, path);
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}});
+    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr});
     try {
-        impl->ops = detail::build_unet_ops(device.context(), cfg, file,
-                                           detail::gemm_selection(device.context()).params);
+        impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file,
+                                           detail::gemm_selection(ngi::detail::context_of(device)).params);
     } catch (const InputError& e) {
         throw InputError(std::string(e.what()) + " (file " + path + ")");
     }
@@ -52,15 +66,9 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
         throw InputError("run model: input tensor has " + std::to_string(input.data.size()) + " values for shape " +
                          shape_string(input.shape));
     const int h = input.shape[2], w = input.shape[3];
-    auto& graph = impl_->graphs[{h, w}];
-    if (!graph) {
-        auto g = detail::build_unet_graph(impl_->ops, h, w);
-        g->set_input_limits(c.input_range[0], c.input_range[1]);
-        g->compile(impl_->device.context());
-        graph = std::move(g);
-    }
+    detail::Graph* graph = &impl_->graph(h, w);
     Tensor out({1, c.output_nc, h, w});
-    const detail::RunStats stats = graph->run(impl_->device.context(), input.data.data(), out.data.data());
+    const detail::RunStats stats = graph->run(ngi::detail::context_of(impl_->device), input.data.data(), out.data.data());
     if (info) {
         info->sanitized_inputs = stats.sanitized_inputs;
         info->layers.clear();
@@ -71,6 +79,51 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
         info->weight_bytes = impl_->ops.weight_bytes;
     }
     return out;
+}
+
+namespace detail {
+
+void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem out, std::size_t out_offset,
+                          int height, int width) {
+    Model::Impl& im = *model.impl_;
+    Graph& g = im.graph(height, width);
+    g.enqueue(context_of(im.device), in, in_offset, out, out_offset);
+    im.last = &g;
+}
+
+const Device& ModelAccess::device(const Model& model) { return model.impl_->device; }
+
+}  // namespace detail
+
+namespace {
+
+void check_device_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
+    if (!b) throw InputError(std::string("enqueue model: the ") + what + " buffer is empty");
+    if (detail::shared_context_of(b.device()) != detail::shared_context_of(device))
+        throw InputError(std::string("enqueue model: the ") + what + " buffer belongs to another device than the model");
+    if (b.bytes() < need)
+        throw InputError(std::string("enqueue model: the ") + what + " buffer holds " + std::to_string(b.bytes()) +
+                         " bytes, the model needs " + std::to_string(need));
+    if (write && !b.writable())
+        throw InputError(std::string("enqueue model: the ") + what + " buffer was created CL_MEM_READ_ONLY");
+}
+
+}  // namespace
+
+void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int height, int width) {
+    const auto& c = impl_->config;
+    const int step = 1 << c.num_downs;
+    if (height < step || width < step || height % step || width % step)
+        throw InputError("enqueue model: input " + std::to_string(height) + "x" + std::to_string(width) +
+                         " (HxW) must be positive multiples of 2^num_downs = " + std::to_string(step));
+    const std::size_t plane = std::size_t(height) * std::size_t(width) * sizeof(float);
+    check_device_buffer(input, impl_->device, plane * std::size_t(c.input_nc), false, "input");
+    check_device_buffer(output, impl_->device, plane * std::size_t(c.output_nc), true, "output");
+    detail::ModelAccess::enqueue(*this, input.opencl_mem(), 0, output.opencl_mem(), 0, height, width);
+}
+
+int Model::sanitized_inputs() {
+    return impl_->last ? impl_->last->sanitized_count(detail::context_of(impl_->device)) : 0;
 }
 
 }  // namespace ngi

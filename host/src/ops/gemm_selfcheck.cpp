@@ -211,7 +211,7 @@ const GemmSelection& gemm_selection(Context& ctx) {
 namespace ngi {
 
 SelfCheckReport self_check(const Device& device) {
-    auto& ctx = device.context();
+    auto& ctx = ngi::detail::context_of(device);
     const auto& sel = detail::gemm_selection(ctx);
     SelfCheckReport r;
     r.gemm_variant = sel.params.to_string();

@@ -57,7 +57,7 @@ Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& confi
         const std::size_t plane = std::size_t(4 * n) * 2 * n;
         detail::ensure_buffer(im.ctx, im.out, y.data.size() * sizeof(float), "model output");
         im.ctx.write(im.out, 0, y.data.size() * sizeof(float), y.data.data(), "model output");
-        im.gather_planes(im.out, int(plane), im.extract_idx, im.extract_w, int(out.plane()), 3, im.light,
+        im.gather_planes(im.out.get(), int(plane), im.extract_idx, im.extract_w, int(out.plane()), 3, im.light.get(),
                          int(out.plane()));
     } else {
         im.ctx.write(im.light, 0, bytes, y.data.data(), "model output");

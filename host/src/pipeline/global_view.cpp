@@ -187,7 +187,7 @@ Image SurroundPipeline::global_view(const Frame& frame, Feature feature) {
     }
     Image out(4 * n, 2 * n, channels);
     detail::ensure_buffer(im.ctx, im.out, out.data.size() * sizeof(float), "global view");
-    im.gather_planes(im.raw, int(stack_plane), im.merge_idx, im.merge_w, int(out.plane()), channels, im.out,
+    im.gather_planes(im.raw.get(), int(stack_plane), im.merge_idx, im.merge_w, int(out.plane()), channels, im.out.get(),
                      int(out.plane()));
     im.ctx.read(im.out, 0, out.data.size() * sizeof(float), out.data.data(), "global view");
     return out;

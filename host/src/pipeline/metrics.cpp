@@ -165,7 +165,7 @@ double psnr_from_mse(double mse, double data_range) {
 
 double mse(const Device& device, const Image& a, const Image& b) {
     check_inputs(a, b, "mse");
-    detail::Context& ctx = device.context();
+    detail::Context& ctx = ngi::detail::context_of(device);
     return run_mse(ctx, upload(ctx, a, b), a.data.size());
 }
 
@@ -173,14 +173,14 @@ double ssim(const Device& device, const Image& a, const Image& b, double data_ra
     check_inputs(a, b, "ssim");
     check_range(data_range, "ssim", false);
     check_ssim_size(a, "ssim");
-    detail::Context& ctx = device.context();
+    detail::Context& ctx = ngi::detail::context_of(device);
     return run_ssim(ctx, upload(ctx, a, b), a.width, a.height, a.channels, data_range);
 }
 
 ImageMetrics compare_images(const Device& device, const Image& a, const Image& b, double data_range) {
     check_inputs(a, b, "compare images");
     check_range(data_range, "compare images", true);
-    detail::Context& ctx = device.context();
+    detail::Context& ctx = ngi::detail::context_of(device);
     const Pair p = upload(ctx, a, b);
     ImageMetrics m;
     m.mse = run_mse(ctx, p, a.data.size());

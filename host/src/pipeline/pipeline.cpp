@@ -115,7 +115,7 @@ bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what)
 }  // namespace detail
 
 SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, LuminationTransfer transfer_)
-    : device(d), ctx(d.context()), n(n_), mode(mode_), transfer(transfer_),
+    : device(d), ctx(ngi::detail::context_of(d)), n(n_), mode(mode_), transfer(transfer_),
       gather(ctx.kernel("globalview", "lut_gather")),
       preprocess(ctx.kernel("gbuffer", "preprocess_gbuffer")),
       decode(ctx.kernel("compose", "decode_lightmap")),
@@ -124,9 +124,9 @@ SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, Lumi
       compose(ctx.kernel("compose", "compose_final")),
       tonemap(ctx.kernel("compose", "tonemap")) {}
 
-void SurroundPipeline::Impl::gather_planes(const detail::Buffer& src, int src_plane, const detail::Buffer& idx,
-                                           const detail::Buffer& w, int npix, int channels,
-                                           const detail::Buffer& dst, int dst_plane) {
+void SurroundPipeline::Impl::gather_planes(cl_mem src, int src_plane, const detail::Buffer& idx,
+                                           const detail::Buffer& w, int npix, int channels, cl_mem dst,
+                                           int dst_plane) {
     static const std::size_t local[1] = {64};
     gather.args(src, src_plane, idx, w, npix, channels, dst, dst_plane);
     const std::size_t global[1] = {std::size_t(npix)};

@@ -28,6 +28,10 @@ void check_face_image(const Image& image, Feature feature, Face face, int n, con
 bool optional_feature_present(const Frame& frame, Feature feature, const Face* faces, int face_count, int n,
                               const char* what);
 
+// Which input the model wants: true = global view (12 channels), false = front view only (10). Throws InputError
+// for a model whose input width, input_layout or input_range the pipeline cannot serve.
+bool check_model_input(const ModelConfig& config);
+
 // Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept).
 bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what);
 
@@ -49,14 +53,28 @@ struct SurroundPipeline::Impl {
 
     // Scratch reused between frames, grown on demand.
     detail::Buffer raw, stack, view, counters, light, aux[3], out;
+    detail::Buffer frame_out, frame_light, frame_final, frame_result;  // enqueue() / run()
+    DeviceBuffer raw_handle, out_handles[3];                           // run(): raw and the outputs as handles
     // The coordinate planes of `view` hold the coordinate map scaled to this input range.
     float coords_lo = 0.0f, coords_hi = 0.0f;
 
     Impl(const Device& d, int n, GlobalViewMode mode, LuminationTransfer transfer);
 
     // Launches lut_gather: `channels` planes of src (plane stride src_plane) through the table into dst.
-    void gather_planes(const detail::Buffer& src, int src_plane, const detail::Buffer& idx,
-                       const detail::Buffer& w, int npix, int channels, const detail::Buffer& dst, int dst_plane);
+    void gather_planes(cl_mem src, int src_plane, const detail::Buffer& idx, const detail::Buffer& w, int npix,
+                       int channels, cl_mem dst, int dst_plane);
+
+    // The network input from raw planes on the device (layout of kFramePlanes): resets the counters, preprocesses
+    // `faces` faces into `stack` and, for a surround model, merges them into `view` beside the coordinate planes.
+    // Returns the buffer that holds the input ([1, 12, 2N, 4N] in view, or [1, 10, N, N] in stack).
+    const detail::Buffer& enqueue_input(cl_mem raw, int faces, bool has_emission, bool has_env, glm::vec3 look,
+                                        glm::vec3 up, const ModelConfig& config, bool surround);
+    // Downloads the preprocessing counters of the last enqueue_input into `stats`.
+    void read_stats(PreprocessStats& stats);
+    // Decode (in place), compose and tone map of enqueue(); the destinations are raw buffers of >= 3 N^2 floats.
+    void enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes, bool has_emission,
+                         bool has_env, cl_mem light_dst, cl_mem final_dst, cl_mem display_dst,
+                         const ToneMapOptions& tonemap);
 };
 
 }  // namespace ngi

@@ -301,7 +301,7 @@ struct Renderer::Impl {
 
 Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::make_unique<Impl>()) {
     Impl& m = *impl_;
-    m.ctx = device.shared_context();
+    m.ctx = ngi::detail::shared_context_of(device);
     m.size = scene.size;
     m.palette = scene.palette;
     const std::size_t blocks = std::size_t(scene.size.x) * scene.size.y * scene.size.z;

@@ -144,10 +144,69 @@ Context::Context(cl_platform_id platform, cl_device_id device, DeviceInfo info, 
     }
 }
 
+namespace {
+
+// Indices of `device` in the platform/device enumeration ("P:D"), or -1 when it is not enumerated (a device
+// handed in by an application that found it some other way).
+std::pair<int, int> enumeration_index(cl_platform_id p, cl_device_id d) {
+    const auto ps = platforms();
+    for (std::size_t pi = 0; pi < ps.size(); ++pi) {
+        if (ps[pi] != p) continue;
+        const auto ds = devices_of(ps[pi]);
+        for (std::size_t di = 0; di < ds.size(); ++di)
+            if (ds[di] == d) return {int(pi), int(di)};
+    }
+    return {-1, -1};
+}
+
+}  // namespace
+
+Context::Context(cl_context context, cl_device_id device, cl_command_queue queue) {
+    const char* op = "create a device from the application's OpenCL objects";
+    if (!context || !device || !queue) throw InputError(std::string(op) + ": context, device and queue must not be NULL");
+    // The context must hold the device; the queue must belong to both and run in order (ngi relies on the order of
+    // its own commands, and an application's commands before and after ngi's stay ordered with them).
+    cl_uint ndev = 0;
+    check(clGetContextInfo(context, CL_CONTEXT_NUM_DEVICES, sizeof ndev, &ndev, nullptr), op, "clGetContextInfo");
+    std::vector<cl_device_id> devs(ndev);
+    check(clGetContextInfo(context, CL_CONTEXT_DEVICES, ndev * sizeof(cl_device_id), devs.data(), nullptr), op,
+          "clGetContextInfo");
+    if (std::find(devs.begin(), devs.end(), device) == devs.end())
+        throw InputError(std::string(op) + ": the device is not one of the context's devices");
+    cl_context qctx = nullptr;
+    cl_device_id qdev = nullptr;
+    cl_command_queue_properties qprops = 0;
+    check(clGetCommandQueueInfo(queue, CL_QUEUE_CONTEXT, sizeof qctx, &qctx, nullptr), op, "clGetCommandQueueInfo");
+    check(clGetCommandQueueInfo(queue, CL_QUEUE_DEVICE, sizeof qdev, &qdev, nullptr), op, "clGetCommandQueueInfo");
+    check(clGetCommandQueueInfo(queue, CL_QUEUE_PROPERTIES, sizeof qprops, &qprops, nullptr), op,
+          "clGetCommandQueueInfo");
+    if (qctx != context) throw InputError(std::string(op) + ": the queue belongs to another context");
+    if (qdev != device) throw InputError(std::string(op) + ": the queue belongs to another device of the context");
+    if (qprops & CL_QUEUE_OUT_OF_ORDER_EXEC_MODE_ENABLE)
+        throw InputError(std::string(op) + ": the queue executes out of order; ngi needs an in-order queue");
+    check(clGetDeviceInfo(device, CL_DEVICE_PLATFORM, sizeof platform_, &platform_, nullptr), op, "clGetDeviceInfo");
+    const auto [pi, di] = enumeration_index(platform_, device);
+    info_ = describe(platform_, device, pi, di);
+    options_.profiling = (qprops & CL_QUEUE_PROFILING_ENABLE) != 0;
+    device_ = device;
+    // Retained last: nothing above can throw after a retain (a throwing constructor runs no destructor).
+    check(clRetainContext(context), op, "clRetainContext");
+    context_ = context;
+    if (cl_int err = clRetainCommandQueue(queue); err != CL_SUCCESS) {
+        clReleaseContext(context_);
+        check(err, op, "clRetainCommandQueue");
+    }
+    queue_ = queue;
+    // Devices of OpenCL 1.2+ are retained like other objects; root devices ignore it (retain/release are no-ops).
+    clRetainDevice(device_);
+    retained_device_ = true;
+}
+
 Context::~Context() {
     for (auto& [k, p] : programs_) clReleaseProgram(p);
     if (queue_) { clFinish(queue_); clReleaseCommandQueue(queue_); }
     if (context_) clReleaseContext(context_);
+    if (retained_device_) clReleaseDevice(device_);
 }
 
 cl_program Context::program(const std::string& file, const std::string& defines) {
@@ -249,7 +308,7 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
     cl_int err = CL_SUCCESS;
     if (bytes == 0) bytes = 4;  // OpenCL forbids empty buffers; a 0-element tensor still needs a handle
     if (bytes > info_.max_alloc_bytes)
-        throw Error(std::string("allocate ") + what + ": " + std::to_string(bytes) + " bytes exceeds the device's " +
+        throw OutOfMemoryError(std::string("allocate ") + what + ": " + std::to_string(bytes) + " bytes exceeds the device's " +
                     "CL_DEVICE_MAX_MEM_ALLOC_SIZE of " + std::to_string(info_.max_alloc_bytes));
     cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, bytes, nullptr, &err);
     check(err, (std::string("allocate ") + what + " (" + std::to_string(bytes) + " bytes)").c_str(),
@@ -295,12 +354,32 @@ void Context::write(const Buffer& b, std::size_t off, std::size_t bytes, const v
     }
     check(clEnqueueWriteBuffer(queue_, b.get(), CL_TRUE, off, bytes, src, 0, nullptr, nullptr),
           (std::string("upload ") + what).c_str(), "clEnqueueWriteBuffer");
+    uploads_.fetch_add(1, std::memory_order_relaxed);
+    upload_bytes_.fetch_add((long long)bytes, std::memory_order_relaxed);
 }
 
 void Context::read(const Buffer& b, std::size_t off, std::size_t bytes, void* dst, const char* what) {
     if (bytes == 0) return;
     check(clEnqueueReadBuffer(queue_, b.get(), CL_TRUE, off, bytes, dst, 0, nullptr, nullptr),
           (std::string("download ") + what).c_str(), "clEnqueueReadBuffer");
+    downloads_.fetch_add(1, std::memory_order_relaxed);
+    download_bytes_.fetch_add((long long)bytes, std::memory_order_relaxed);
+}
+
+void Context::copy(cl_mem src, std::size_t src_off, cl_mem dst, std::size_t dst_off, std::size_t bytes,
+                   const char* what) {
+    if (bytes == 0) return;
+    check(clEnqueueCopyBuffer(queue_, src, dst, src_off, dst_off, bytes, 0, nullptr, nullptr),
+          (std::string("copy ") + what).c_str(), "clEnqueueCopyBuffer");
+}
+
+HostTransfers Context::transfers() const {
+    HostTransfers t;
+    t.uploads = uploads_.load(std::memory_order_relaxed);
+    t.downloads = downloads_.load(std::memory_order_relaxed);
+    t.upload_bytes = upload_bytes_.load(std::memory_order_relaxed);
+    t.download_bytes = download_bytes_.load(std::memory_order_relaxed);
+    return t;
 }
 
 void Context::fill_zero(const Buffer& b, std::size_t off, std::size_t bytes, const char* what) {
@@ -411,6 +490,26 @@ Device Device::open(const std::string& spec_in, DeviceOptions options) {
     }
     return Device(std::make_shared<detail::Context>(pick->p, pick->d, pick->info, options));
 }
+
+Device Device::from_opencl(_cl_context* context, _cl_device_id* device, _cl_command_queue* queue) {
+    return Device(std::make_shared<detail::Context>(context, device, queue));
+}
+
+namespace detail {
+Context& context_of(const Device& device) { return *device.context_; }
+std::shared_ptr<Context> shared_context_of(const Device& device) { return device.context_; }
+}  // namespace detail
+
+_cl_event* Device::marker() const {
+    cl_event ev = nullptr;
+    detail::check(clEnqueueMarkerWithWaitList(context_->queue(), 0, nullptr, &ev), "enqueue a marker",
+                  "clEnqueueMarkerWithWaitList");
+    return ev;
+}
+_cl_context* Device::opencl_context() const { return context_->context(); }
+_cl_command_queue* Device::opencl_queue() const { return context_->queue(); }
+_cl_device_id* Device::opencl_device() const { return context_->device(); }
+HostTransfers Device::host_transfers() const { return context_->transfers(); }
 
 const DeviceInfo& Device::info() const { return context_->info(); }
 bool Device::profiling() const { return context_->options().profiling; }

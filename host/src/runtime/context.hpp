@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -104,6 +105,9 @@ private:
 class Context {
 public:
     Context(cl_platform_id platform, cl_device_id device, DeviceInfo info, DeviceOptions options);
+    // Interop: runs on the application's context, device and in-order queue. All three are retained here and
+    // released by the destructor; what the application created stays the application's.
+    Context(cl_context context, cl_device_id device, cl_command_queue queue);
     ~Context();
     Context(const Context&) = delete;
     Context& operator=(const Context&) = delete;
@@ -139,9 +143,14 @@ public:
     long loop_limit();
 
     Buffer alloc(std::size_t bytes, const char* what);
+    // Host <-> device transfers (blocking, counted in transfers()); copy() stays on the device (not counted).
     void write(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const void* src, const char* what);
     void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
     void fill_zero(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const char* what);
+    void copy(cl_mem src, std::size_t src_offset, cl_mem dst, std::size_t dst_offset, std::size_t bytes,
+              const char* what);
+    // Every host <-> device transfer of this context since it was created (write/read and their wrappers).
+    HostTransfers transfers() const;
 
     // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds). A local size
     // beyond the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE (registers, driver limits) is halved until it fits,
@@ -159,8 +168,8 @@ private:
     // "-cl-std=CL1.2 <defines>", plus -cl-opt-disable on Oclgrind (see context.cpp).
     std::string build_options(const std::string& defines) const;
 
-    cl_platform_id platform_;
-    cl_device_id device_;
+    cl_platform_id platform_ = nullptr;
+    cl_device_id device_ = nullptr;
     DeviceInfo info_;
     DeviceOptions options_;
     cl_context context_ = nullptr;
@@ -169,7 +178,13 @@ private:
     std::mutex attached_mutex_;
     std::map<std::string, std::shared_ptr<void>> attached_;
     long loop_limit_ = -1;  // -1 = not probed yet
+    bool retained_device_ = false;  // interop: the application's device was retained here
+    std::atomic<long long> uploads_{0}, downloads_{0}, upload_bytes_{0}, download_bytes_{0};
 };
+
+// The context behind a Device (library internals only: the public header keeps it opaque).
+Context& context_of(const Device& device);
+std::shared_ptr<Context> shared_context_of(const Device& device);
 
 // Where compiled programs and per-device verdicts are cached: $NGI_CACHE_DIR, else $XDG_CACHE_HOME/ngi, else
 // ~/.cache/ngi, else a temporary folder.

@@ -1,0 +1,192 @@
+// One frame in one call: SurroundPipeline::enqueue (device in, device out) and run (host in, host out, built on
+// enqueue with one upload and one download). The stages are those of the step-by-step calls (preprocess.cpp,
+// compose.cpp); here they stay on the device from the raw planes to the outputs.
+#include <algorithm>
+#include <cmath>
+
+#include "models/model_access.hpp"
+#include "ngi/error.hpp"
+#include "pipeline/pipeline_impl.hpp"
+
+namespace ngi {
+
+namespace {
+
+const std::size_t kLocal1[1] = {64};
+
+void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
+    const std::string where = std::string("enqueue frame: the ") + what + " buffer";
+    if (!b) throw InputError(where + " is empty");
+    if (detail::shared_context_of(b.device()) != detail::shared_context_of(device))
+        throw InputError(where + " belongs to another device than the pipeline");
+    if (b.bytes() < need)
+        throw InputError(where + " holds " + std::to_string(b.bytes()) + " bytes, the frame needs " +
+                         std::to_string(need));
+    if (write && !b.writable()) throw InputError(where + " was created CL_MEM_READ_ONLY");
+}
+
+void check_tonemap(const ToneMapOptions& t) {
+    if (!std::isfinite(t.exposure_ev) || std::abs(t.exposure_ev) > 64.0f)
+        throw InputError("tone map: exposure " + std::to_string(t.exposure_ev) + " EV is not in [-64, 64]");
+}
+
+}  // namespace
+
+void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes,
+                                             bool has_emission, bool has_env, cl_mem light_dst, cl_mem final_dst,
+                                             cl_mem display_dst, const ToneMapOptions& tm) {
+    const std::size_t face_plane = std::size_t(n) * n, bytes = 3 * face_plane * sizeof(float);
+    const int count = int(3 * face_plane);
+    const std::size_t g[1] = {std::size_t(count)};
+    // The lightmap: extracted from the global view (or the front view as it is), then decoded in place.
+    if (!light_dst) {
+        detail::ensure_buffer(ctx, frame_light, bytes, "frame lightmap");
+        light_dst = frame_light.get();
+    }
+    if (global)
+        gather_planes(model_out, int(8 * face_plane), extract_idx, extract_w, int(face_plane), 3, light_dst,
+                      int(face_plane));
+    else
+        ctx.copy(model_out, 0, light_dst, 0, bytes, "front lightmap");
+    decode.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer));
+    ctx.launch(decode, 1, g, kLocal1);
+    if (!final_dst && !display_dst) return;
+
+    // The front face's albedo, emission and env planes (contiguous RGB triples of face 0) for compose_final.
+    auto front_planes = [&](Feature f, detail::Buffer& dst, const char* what) {
+        detail::ensure_buffer(ctx, dst, bytes, what);
+        ctx.copy(planes, std::size_t(frame_plane(f)) * face_plane * sizeof(float), dst.get(), 0, bytes, what);
+    };
+    front_planes(Feature::Albedo, aux[0], "front albedo");
+    if (has_emission) front_planes(Feature::Emission, aux[1], "front emission");
+    if (has_env) front_planes(Feature::Env, aux[2], "front env");
+    if (!final_dst) {
+        detail::ensure_buffer(ctx, frame_final, bytes, "frame final image");
+        final_dst = frame_final.get();
+    }
+    compose.args(light_dst, aux[0], has_emission ? aux[1] : aux[0], has_env ? aux[2] : aux[0], int(has_emission),
+                 int(has_env), final_dst, count);
+    ctx.launch(compose, 1, g, kLocal1);
+    if (!display_dst) return;
+    tonemap.args(final_dst, display_dst, count, std::exp2(tm.exposure_ev), int(tm.curve), int(tm.srgb));
+    ctx.launch(tonemap, 1, g, kLocal1);
+}
+
+void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc,
+                               const FrameOutputs& outputs, PreprocessStats* stats) {
+    Impl& im = *impl_;
+    const ModelConfig& config = model.config();
+    const bool surround = detail::check_model_input(config);
+    if (detail::shared_context_of(detail::ModelAccess::device(model)) != detail::shared_context_of(im.device))
+        throw InputError("enqueue frame: the model was loaded on another device than the pipeline's");
+    if (desc.faces != 1 && desc.faces != kFaceCount)
+        throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
+    if (surround && desc.faces != kFaceCount)
+        throw InputError("enqueue frame: the model is surround-aware (12 input channels) and needs all 6 faces, "
+                         "the frame holds " + std::to_string(desc.faces));
+    const float lo = config.output_range[0], hi = config.output_range[1];
+    if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi))
+        throw InputError("enqueue frame: the model's output_range [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                         "] is not a finite increasing range");
+    if (config.output_nc != 3)
+        throw InputError("enqueue frame: the model outputs " + std::to_string(config.output_nc) +
+                         " channels; a lightmap needs 3");
+    // The generator's size: the global view (2N x 4N) or the front face; it must be divisible by 2^num_downs.
+    const int h = surround ? 2 * im.n : im.n, w = surround ? 4 * im.n : im.n;
+    const int step = 1 << config.num_downs;
+    if (h % step || w % step)
+        throw InputError("enqueue frame: the model needs sizes divisible by 2^num_downs = " + std::to_string(step) +
+                         "; this pipeline's network input is " + std::to_string(h) + "x" + std::to_string(w) +
+                         " (N = " + std::to_string(im.n) + ")");
+    const std::size_t out_bytes = 3 * std::size_t(im.n) * im.n * sizeof(float);
+    // Only the faces the model reads must be present, but they must all be there.
+    const int faces_used = surround ? kFaceCount : 1;
+    check_buffer(planes, im.device, frame_planes_bytes(im.n, faces_used), false, "planes");
+    const DeviceBuffer* outs[3] = {&outputs.lightmap, &outputs.final_image, &outputs.display};
+    const char* names[3] = {"lightmap", "final image", "display"};
+    for (int i = 0; i < 3; ++i)
+        if (*outs[i]) check_buffer(*outs[i], im.device, out_bytes, true, names[i]);
+    if (outputs.display) check_tonemap(outputs.tonemap);
+
+    const detail::Buffer& input = im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
+                                                   desc.look, desc.up, config, surround);
+    detail::ensure_buffer(im.ctx, im.frame_out, std::size_t(3) * h * w * sizeof(float), "model output");
+    detail::ModelAccess::enqueue(model, input.get(), 0, im.frame_out.get(), 0, h, w);
+    im.enqueue_outputs(im.frame_out.get(), surround, config, planes.opencl_mem(), desc.has_emission, desc.has_env,
+                       outputs.lightmap.opencl_mem(), outputs.final_image.opencl_mem(), outputs.display.opencl_mem(),
+                       outputs.tonemap);
+    if (stats) im.read_stats(*stats);
+}
+
+FrameImages SurroundPipeline::run(Model& model, const Frame& frame, bool lightmap, bool final_image, bool display,
+                                  const ToneMapOptions& tonemap, PreprocessStats* stats) {
+    const bool surround = detail::check_model_input(model.config());
+    if (frame.n != 0 && frame.n != impl_->n)
+        throw InputError("run frame: the frame has N = " + std::to_string(frame.n) + ", this pipeline N = " +
+                         std::to_string(impl_->n));
+    const int faces = surround ? kFaceCount : 1;
+    const std::vector<float> planes = pack_frame_planes(frame, faces);  // checks every image it packs
+    return run(model, planes.data(), planes.size() * sizeof(float), FrameDesc::of(frame, faces), lightmap,
+               final_image, display, tonemap, stats);
+}
+
+FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t planes_bytes, const FrameDesc& desc,
+                                  bool lightmap, bool final_image, bool display, const ToneMapOptions& tonemap,
+                                  PreprocessStats* stats) {
+    Impl& im = *impl_;
+    if (!planes) throw InputError("run frame: the planes pointer is NULL");
+    if (desc.faces != 1 && desc.faces != kFaceCount)
+        throw InputError("run frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
+    const std::size_t need = frame_planes_bytes(im.n, desc.faces);
+    if (planes_bytes < need)
+        throw InputError("run frame: the planes hold " + std::to_string(planes_bytes) + " bytes, " +
+                         std::to_string(desc.faces) + " faces of N = " + std::to_string(im.n) + " need " +
+                         std::to_string(need));
+    if (display) check_tonemap(tonemap);
+
+    // The raw planes and the results live in pipeline-owned buffers, handed to enqueue() as DeviceBuffers; the
+    // outputs are copied side by side on the device so that one download returns all of them.
+    const std::size_t out_bytes = 3 * std::size_t(im.n) * im.n * sizeof(float);
+    const int wanted = int(lightmap) + int(final_image) + int(display);
+    if (detail::ensure_buffer(im.ctx, im.raw, need, "frame planes") || !im.raw_handle)
+        im.raw_handle = DeviceBuffer::wrap(im.device, im.raw.get(), 0, im.raw.bytes());
+    detail::ensure_buffer(im.ctx, im.frame_result, std::size_t(std::max(1, wanted)) * out_bytes, "frame results");
+    im.ctx.write(im.raw, 0, need, planes, "frame planes");
+
+    FrameOutputs outs;
+    outs.tonemap = tonemap;
+    // Each wanted output gets its own scratch DeviceBuffer; they are copied side by side on the device and
+    // downloaded at once.
+    auto scratch = [&](int i) -> const DeviceBuffer& {
+        if (!im.out_handles[i]) im.out_handles[i] = DeviceBuffer::allocate(im.device, out_bytes);
+        return im.out_handles[i];
+    };
+    if (lightmap) outs.lightmap = scratch(0);
+    if (final_image) outs.final_image = scratch(1);
+    if (display) outs.display = scratch(2);
+    enqueue(model, im.raw_handle, desc, outs, nullptr);  // checks the model against the frame
+
+    FrameImages result;
+    std::vector<Image*> images;
+    const DeviceBuffer* sources[3] = {&outs.lightmap, &outs.final_image, &outs.display};
+    Image* targets[3] = {&result.lightmap, &result.final_image, &result.display};
+    std::size_t at = 0;
+    for (int i = 0; i < 3; ++i) {
+        if (!*sources[i]) continue;
+        im.ctx.copy(sources[i]->opencl_mem(), 0, im.frame_result.get(), at, out_bytes, "frame results");
+        *targets[i] = Image(im.n, im.n, 3);
+        images.push_back(targets[i]);
+        at += out_bytes;
+    }
+    if (at) {
+        std::vector<float> all(at / sizeof(float));
+        im.ctx.read(im.frame_result, 0, at, all.data(), "frame results");
+        for (std::size_t k = 0; k < images.size(); ++k)
+            std::copy(all.begin() + std::ptrdiff_t(k * out_bytes / sizeof(float)),
+                      all.begin() + std::ptrdiff_t((k + 1) * out_bytes / sizeof(float)), images[k]->data.begin());
+    }
+    if (stats) im.read_stats(*stats);
+    return result;
+}
+
+}  // namespace ngi
