@@ -134,12 +134,12 @@ int run_gemm(int argc, char** argv) {
     const GemmParams p = gemm_params_for(d.info());
     json out = {{"device", device_json(d, p)}, {"repeats", repeats}};
     std::fprintf(stderr, "gemm 1024^3 ...\n");
-    out["gemm_1024"] = bench_gemm(d.context(), p, {"1024^3", 1024, 1024, 1024}, repeats);
+    out["gemm_1024"] = bench_gemm(ngi::detail::context_of(d), p, {"1024^3", 1024, 1024, 1024}, repeats);
     json layers = json::array();
     double flop = 0, ms = 0;
     for (const auto& s : generator_shapes()) {
         std::fprintf(stderr, "gemm %s (M %d N %d K %d) ...\n", s.name.c_str(), s.m, s.n, s.k);
-        layers.push_back(bench_gemm(d.context(), p, s, std::max(1, repeats / 2)));
+        layers.push_back(bench_gemm(ngi::detail::context_of(d), p, s, std::max(1, repeats / 2)));
         flop += 2.0 * s.m * s.n * s.k;
         ms += layers.back()["ms"].get<double>();
     }
@@ -158,13 +158,13 @@ int run_tune(int argc, char** argv) {
     json results = json::array();
     for (const auto& p : space) {
         json r = {{"params", p.to_string()}};
-        const GemmVerdict v = check_gemm_variant(d.context(), p, gemm_check_problems());
+        const GemmVerdict v = check_gemm_variant(ngi::detail::context_of(d), p, gemm_check_problems());
         if (!v.ok) {
             r["rejected"] = v.reason;
         } else {
             double sum = 0;
             for (const auto& s : shapes) {
-                r[s.name] = bench_gemm(d.context(), p, s, 3)["gflops"];
+                r[s.name] = bench_gemm(ngi::detail::context_of(d), p, s, 3)["gflops"];
                 sum += std::log(r[s.name].get<double>());
             }
             r["geomean_gflops"] = std::exp(sum / 3);
@@ -199,7 +199,7 @@ int run_generator(int argc, char** argv) {
         std::fprintf(stderr, "generator %s %dx%d: warm-up + %d runs ...\n", c.family.c_str(), w, h, repeats);
         RunInfo info;
         Tensor y;
-        const auto ms = time_runs(d.context(), repeats, [&] { y = m.run(x, &info); });
+        const auto ms = time_runs(ngi::detail::context_of(d), repeats, [&] { y = m.run(x, &info); });
         if (const std::string o = arg(argc, argv, "--output"); !o.empty()) write_npy(o, y);
         out = {{"device", device_json(d, gemm_params_for(d.info()))},
                {"model", {{"family", c.family}, {"ngf", c.ngf}, {"num_downs", c.num_downs}, {"bn_mode", c.bn_mode},
