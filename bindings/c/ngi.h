@@ -195,6 +195,16 @@ NGI_API ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, co
                                     int faces, unsigned flags, float* lightmap, size_t lightmap_bytes,
                                     float* final_image, size_t final_bytes, float* display, size_t display_bytes);
 NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
+/* --- files ---------------------------------------------------------------------------------------------------- */
+/* A frame folder (docs/CONVENTIONS.md: <face>_<feature>.exr, camera.json) into frame planes of `faces` (1 or 6) faces.
+ * Call with planes = NULL to learn *n and *bytes; then with a buffer of at least *bytes bytes. *flags receives the
+ * ngi_frame_flags present; look and up (each 3 floats, may be NULL) the front camera. */
+NGI_API ngi_status ngi_read_frame_planes(const char* folder, int faces, float* planes, size_t bytes, int* n,
+                                         size_t* needed, unsigned* flags, float look[3], float up[3]);
+/* Writes a planar float image (channels x height x width) to `path`: .exr (float), .png (8-bit, values clamped to
+ * [0, 1], linear), .npy (float32), by extension. The file appears whole or not at all. */
+NGI_API ngi_status ngi_write_image(const char* path, const float* data, size_t bytes, int width, int height,
+                                   int channels);
 NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
 
 #ifdef __cplusplus
