@@ -158,6 +158,14 @@ TEST_CASE("model config: every field is type- and range-checked, naming the fiel
     refuse("output_range", nlohmann::json::array({0}), "lo < hi");
     refuse("norm", "instance", "\"batch\"");
     refuse("source", 7, "a string");
+    refuse("required", "ngf", "a list of field names");
+    refuse("required", nlohmann::json::array({"ngf", "sparse_weights"}), "'sparse_weights', which this reader does not know");
+    {
+        nlohmann::json c = good_config();
+        c["required"] = nlohmann::json::array({"ngf", "bn_mode"});
+        c["some_future_hint"] = 3;  // unknown but optional: ignored
+        CHECK(ngi::detail::parse_model_config(c.dump(), "m.safetensors").ngf == 64);
+    }
     nlohmann::json di = good_config();
     di["family"] = "deepillumination";
     di["num_downs"] = 7;

@@ -208,6 +208,24 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     range("output_range", c.output_range);
     c.source = string("source", {}, c.source, false);
     if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
+    // "required": the fields a writer says no reader may ignore. Unknown optional fields are ignored (a newer writer
+    // may add hints); a required one this reader does not know means the file needs a newer ngi.
+    static const char* const kKnown[] = {"format_version", "family", "input_nc", "output_nc", "ngf", "num_downs",
+                                         "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
+                                         "leaky_slope", "input_layout", "input_range", "output_range", "source",
+                                         "training", "required"};
+    if (j.contains("required")) {
+        const nlohmann::json& r = j["required"];
+        if (!r.is_array()) throw fail("required", "a list of field names");
+        for (const auto& name : r) {
+            if (!name.is_string()) throw fail("required", "a list of field names");
+            const std::string n = name.get<std::string>();
+            if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return n == k; }) ==
+                std::end(kKnown))
+                throw InputError(what + "field 'required' lists '" + n.substr(0, 80) +
+                                 "', which this reader does not know: the file needs a newer ngi");
+        }
+    }
     return c;
 }
 
