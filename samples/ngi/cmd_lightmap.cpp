@@ -61,14 +61,16 @@ int cmd_lightmap(int argc, char** argv) {
 
     ngi::SurroundPipeline pipeline(device, frame.n);
     ngi::PreprocessStats stats;
-    const ngi::Tensor input = pipeline.network_input(frame, model.config(), &stats);
-    ngi::RunInfo info;
-    const ngi::Tensor output = model.run(input, &info);
-    if (info.sanitized_inputs)  // the pipeline's input is always within the range: this would be a bug
+    // One frame in one call: one upload of the face planes, one download of the lightmap and the final image.
+    const ngi::FrameImages images = pipeline.run(model, frame, true, true, false, {}, &stats);
+    if (const int replaced = model.sanitized_inputs())  // the pipeline's input is always within range: a bug
         std::fprintf(stderr, "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
-                     info.sanitized_inputs);
-    const ngi::Image lightmap = pipeline.front_lightmap(output, model.config());
-    const ngi::Image final_image = pipeline.compose(lightmap, frame);
+                     replaced);
+    const ngi::Image& lightmap = images.lightmap;
+    const ngi::Image& final_image = images.final_image;
+    const bool surround = model.config().input_nc == 12;
+    const std::vector<int> input_shape = {1, model.config().input_nc, surround ? 2 * frame.n : frame.n,
+                                          surround ? 4 * frame.n : frame.n};
     auto present = [&](const ngi::Image& im) {
         return width == im.width && height == im.height ? im : pipeline.upscale(im, width, height);
     };
@@ -113,7 +115,7 @@ int cmd_lightmap(int argc, char** argv) {
     if (!metrics.is_null()) std::printf("%s\n", metrics.dump(2).c_str());
     std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s, %d NaN/Inf sanitized\n", out_dir.c_str(),
                 width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
-                ngi::shape_string(input.shape).c_str(), stats.total_nonfinite());
+                ngi::shape_string(input_shape).c_str(), stats.total_nonfinite());
     return 0;
 }
 
