@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "ngi/error.hpp"
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;

@@ -3,7 +3,7 @@
 #include <cstdint>
 
 #include "ops/view.hpp"
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {

@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {

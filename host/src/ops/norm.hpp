@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "ops/view.hpp"
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {

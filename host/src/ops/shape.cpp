@@ -1,4 +1,4 @@
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 
 namespace ngi {
 

@@ -3,7 +3,7 @@
 #pragma once
 #include <CL/cl.h>
 
-#include "ngi/ops.hpp"
+#include "ops/op_types.hpp"
 
 namespace ngi::detail {
 

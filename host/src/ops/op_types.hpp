@@ -1,4 +1,4 @@
-// Small value types shared by the ops and the graph: activations and CHW shapes (batch 1).
+// Small value types shared by the ops and the graph (library-internal): activations and CHW shapes (batch 1).
 #pragma once
 #include <cstddef>
 #include <string>
