@@ -11,6 +11,8 @@
 #include "ngi/error.hpp"
 #include "ngi/model.hpp"
 #include "ngi/pipeline.hpp"
+#include "ngi/render.hpp"
+#include "ngi/scene.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
@@ -291,4 +293,50 @@ TEST_CASE("frame path: device buffers and interop objects that do not fit are re
     clReleaseMemObject(foreign);
     clReleaseCommandQueue(other_queue);
     clReleaseContext(other);
+}
+
+TEST_CASE("frame path: the path tracer feeds the pipeline without the frame leaving the device", "[frame][render]") {
+    Device& dev = test::device();
+    const int n = 64;
+    const VoxelScene scene = generate_scene("room", 5);
+    Renderer renderer(dev, scene);
+    CameraPose pose;
+    pose.position = glm::vec3(scene.size) * 0.5f;
+    pose.look = glm::normalize(glm::vec3(0.4f, -0.1f, -1.0f));
+    const Lighting lighting = lighting_at(15.0f, 0.7f);
+    RenderSettings rs;
+    rs.n = n;
+    rs.feature_spp = 2;
+    rs.reference = false;
+    const Frame fr = renderer.render(pose, lighting, rs);
+
+    Model model = Model::load(dev, kModels[0]);
+    SurroundPipeline pl(dev, n);
+    const FrameImages want = pl.run(model, fr, true, true, false);
+
+    DeviceBuffer planes = DeviceBuffer::allocate(dev, frame_planes_bytes(n, 6));
+    FrameOutputs outs;
+    outs.lightmap = DeviceBuffer::allocate(dev, 3 * n * n * sizeof(float));
+    outs.final_image = DeviceBuffer::allocate(dev, 3 * n * n * sizeof(float));
+    const FrameDesc desc{6, true, true, pose.look, pose.up};
+    renderer.render_planes(pose, lighting, rs, planes);  // warm-up
+    pl.enqueue(model, planes, desc, outs);
+    dev.finish();
+    const HostTransfers t0 = dev.host_transfers();
+    renderer.render_planes(pose, lighting, rs, planes);
+    pl.enqueue(model, planes, desc, outs);
+    dev.finish();
+    const HostTransfers t = since(dev, t0);
+    CHECK(t.downloads == 0);
+    // Only the renderer's per-frame parameters go up (materials, emitters, camera): far less than one plane.
+    CHECK(t.upload_bytes < (long long)(n * n * sizeof(float)));
+    WARN("render + frame on the device: " << t.uploads << " parameter uploads, " << t.upload_bytes << " bytes");
+
+    // The same values as render()'s faces, bit for bit, so the same lightmap and final image.
+    REQUIRE(read_back(planes) == pack_frame_planes(fr, 6));
+    REQUIRE(read_back(outs.lightmap) == want.lightmap.data);
+    REQUIRE(read_back(outs.final_image) == want.final_image.data);
+
+    DeviceBuffer small = DeviceBuffer::allocate(dev, 64);
+    REQUIRE_THROWS_WITH(renderer.render_planes(pose, lighting, rs, small), Catch::Contains("planes buffer holds"));
 }

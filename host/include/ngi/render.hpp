@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "ngi/device.hpp"
+#include "ngi/device_buffer.hpp"
 #include "ngi/image.hpp"
 #include "ngi/scene.hpp"
 
@@ -82,6 +83,14 @@ public:
     // reference lighting of settings.reference_face in Frame::reference. Frame::look/up come from the pose.
     Frame render(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
                  RenderStats* stats = nullptr);
+
+    // The six faces' features rendered straight into `planes` (on this renderer's device, at least
+    // frame_planes_bytes(n, 6) bytes): the frame-plane layout of ngi/pipeline.hpp with emission and env present,
+    // so SurroundPipeline::enqueue takes them as FrameDesc{6, true, true, pose.look, pose.up}. The frame's data
+    // never leaves the device (only the per-frame parameters are uploaded: materials, emitters, camera), the same
+    // values as render()'s faces, bit for bit. Asynchronous unless `stats` is given (it reads the ray counts).
+    void render_planes(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
+                       const DeviceBuffer& planes, RenderStats* stats = nullptr);
 
     // The reference lighting of one face (3 x N x N) and, if `variance` is given, the per-pixel variance of that
     // estimate (the sample variance / spp, per channel), for error bars.

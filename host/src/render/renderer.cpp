@@ -235,6 +235,9 @@ struct Renderer::Impl {
         return int(std::min<long>((limit - fixed) / per_sample, std::numeric_limits<int>::max()));
     }
 
+    // Renders the six faces' features into `out` (layout: pathtrace.cl's F_CHANNELS planes per face).
+    void enqueue_features(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s, cl_mem out);
+
     void ensure_buffers(int n) {
         if (n == buffers_n) return;
         const std::size_t npix = std::size_t(n) * n;
@@ -368,21 +371,47 @@ Renderer::~Renderer() = default;
 Renderer::Renderer(Renderer&&) noexcept = default;
 Renderer& Renderer::operator=(Renderer&&) noexcept = default;
 
+void Renderer::Impl::enqueue_features(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,
+                                      cl_mem out) {
+    upload_frame(pose, lighting, s);
+    ensure_buffers(s.n);
+    const std::size_t global = std::size_t(s.n) * s.n * kFaceCount;
+    const int feature_chunk = samples_per_launch(0, "render: feature buffers");
+    for (int first = 0; first < s.feature_spp; first += feature_chunk) {
+        const int last = std::min(s.feature_spp, first + feature_chunk);
+        set_scene_args(k_features, s, cam, s.n, s.feature_spp, first, last, std::uint32_t(s.seed), out, feature_rays);
+        ctx->launch(k_features, 1, &global, &local);
+    }
+}
+
+void Renderer::render_planes(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,
+                             const DeviceBuffer& planes, RenderStats* stats) {
+    check_settings(s);
+    Impl& m = *impl_;
+    const std::size_t need = std::size_t(s.n) * s.n * kFaceCount * kFeatureChannels * sizeof(float);
+    if (!planes) throw InputError("render planes: the planes buffer is empty");
+    if (detail::shared_context_of(planes.device()) != m.ctx)
+        throw InputError("render planes: the planes buffer belongs to another device than the renderer");
+    if (planes.bytes() < need)
+        throw InputError("render planes: the planes buffer holds " + std::to_string(planes.bytes()) + " bytes, " +
+                         std::to_string(s.n) + "x" + std::to_string(s.n) + " faces need " + std::to_string(need));
+    if (!planes.writable()) throw InputError("render planes: the planes buffer was created CL_MEM_READ_ONLY");
+    const auto t0 = std::chrono::steady_clock::now();
+    m.enqueue_features(pose, lighting, s, planes.opencl_mem());
+    if (stats) {
+        stats->feature_rays = m.sum_rays(m.feature_rays, std::size_t(s.n) * s.n * kFaceCount);
+        stats->feature_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
+}
+
 Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s, RenderStats* stats) {
     check_settings(s);
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
-    m.upload_frame(pose, lighting, s);
     m.ensure_buffers(s.n);
+    m.enqueue_features(pose, lighting, s, m.features.get());
     const std::size_t npix = std::size_t(s.n) * s.n;
     const std::size_t global = npix * kFaceCount;
-    const int feature_chunk = m.samples_per_launch(0, "render: feature buffers");
-    for (int first = 0; first < s.feature_spp; first += feature_chunk) {
-        const int last = std::min(s.feature_spp, first + feature_chunk);
-        m.set_scene_args(m.k_features, s, m.cam, s.n, s.feature_spp, first, last, std::uint32_t(s.seed), m.features,
-                         m.feature_rays);
-        m.ctx->launch(m.k_features, 1, &global, &m.local);
-    }
     std::vector<float> out(npix * kFaceCount * kFeatureChannels);
     m.ctx->read(m.features, 0, out.size() * sizeof(float), out.data(), "render: read feature buffers");
 
