@@ -1,6 +1,7 @@
 // Naive C++ references for every kernel: straight loops in double precision, written from the definitions
 // (PyTorch's documented semantics), sharing no code with the library.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -12,6 +13,7 @@ inline double activate(double x, int act, double alpha) {
         case 2: return x >= 0 ? x : alpha * x;
         case 3: return std::tanh(x);
         case 4: return 1.0 / (1.0 + std::exp(-x));
+        case 5: return std::exp(std::min(x, 88.0));
         default: return x;
     }
 }
@@ -85,6 +87,44 @@ inline std::vector<float> batch_norm_per_image(const std::vector<float>& x, int 
             std::size_t j = std::size_t(c) * HW + i;
             y[j] = float(activate((x[j] - mean) / std::sqrt(var + eps) * gamma[c] + beta[c], act, alpha));
         }
+    }
+    return y;
+}
+
+// Frequency encoding of one item (docs/CONVENTIONS.md section 13): [v if raw], then per the order the pairs
+// sin(2^(e0 + b) [pi] v_c), cos(...). order 0: per component, per band (sin, cos); 1: per band, sin of every
+// component then cos of every component.
+inline std::vector<double> frequency_encode(const std::vector<double>& v, int bands, int e0, bool pi, bool raw,
+                                            int order) {
+    if (bands == 0) return v;
+    std::vector<double> out;
+    if (raw) out = v;
+    const double kPi = 3.14159265358979323846;
+    auto scale = [&](int b) { return std::ldexp(1.0, e0 + b) * (pi ? kPi : 1.0); };
+    if (order == 0) {
+        for (double x : v)
+            for (int b = 0; b < bands; ++b) {
+                out.push_back(std::sin(scale(b) * x));
+                out.push_back(std::cos(scale(b) * x));
+            }
+    } else {
+        for (int b = 0; b < bands; ++b) {
+            for (double x : v) out.push_back(std::sin(scale(b) * x));
+            for (double x : v) out.push_back(std::cos(scale(b) * x));
+        }
+    }
+    return out;
+}
+
+// One dense layer: y[o] = act(sum_i w[o][i] x[i] + b[o]), w row-major [out][in].
+inline std::vector<double> dense(const std::vector<double>& x, const std::vector<float>& w, const std::vector<float>& b,
+                                 int out, int act, double alpha) {
+    std::vector<double> y(out);
+    const std::size_t in = x.size();
+    for (int o = 0; o < out; ++o) {
+        double s = b.empty() ? 0.0 : b[o];
+        for (std::size_t i = 0; i < in; ++i) s += double(w[o * in + i]) * x[i];
+        y[o] = activate(s, act, alpha);
     }
     return y;
 }

@@ -6,7 +6,7 @@
 namespace ngi {
 
 // Codes match kernels/common.cl.
-enum class Activation : int { None = 0, ReLU = 1, LeakyReLU = 2, Tanh = 3, Sigmoid = 4 };
+enum class Activation : int { None = 0, ReLU = 1, LeakyReLU = 2, Tanh = 3, Sigmoid = 4, Exp = 5 };
 
 struct Act {
     Activation kind = Activation::None;
@@ -16,6 +16,7 @@ struct Act {
     static Act leaky(float a) { return {Activation::LeakyReLU, a}; }
     static Act tanh() { return {Activation::Tanh, 0.0f}; }
     static Act sigmoid() { return {Activation::Sigmoid, 0.0f}; }
+    static Act exp() { return {Activation::Exp, 0.0f}; }  // exp(min(x, 88)): finite for every input
 };
 
 std::string to_string(Activation a);

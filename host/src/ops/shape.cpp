@@ -9,6 +9,7 @@ std::string to_string(Activation a) {
         case Activation::LeakyReLU: return "leaky_relu";
         case Activation::Tanh: return "tanh";
         case Activation::Sigmoid: return "sigmoid";
+        case Activation::Exp: return "exp";
     }
     return "unknown";
 }

@@ -1,0 +1,129 @@
+// Small per-item MLPs (seed 001's AO network, seed 004's per-voxel networks): frequency encoding and every layer of
+// the network in one launch, one work-item per item (pixel or point), activations in private memory.
+// Conventions (the frequency encoding's parameters, layouts): docs/CONVENTIONS.md section 13.
+
+// Compile-time knobs. MAX_WIDTH: the largest layer width (encoded input included), a multiple of 4; the host builds
+// a variant per width class (16, 32, 64, 128). PARAMS_SPACE: __constant when the packed weights fit the device's
+// constant buffer (cached on every GPU), else __global.
+#ifndef MAX_WIDTH
+#define MAX_WIDTH 64
+#endif
+#ifndef PARAMS_SPACE
+#define PARAMS_SPACE __global
+#endif
+
+// Keep in sync with ngi::detail::FrequencyEncoding::Order (host/src/ops/mlp.hpp).
+#define ORDER_COMPONENT 0  // tiny-cuda-nn's Frequency: per component, per band: sin, cos
+#define ORDER_BAND 1       // NeRF / Neural GI Eq. 3: per band: sin of every component, then cos of every component
+
+// Per-layer descriptor: 6 ints (keep in sync with FusedMlp in host/src/ops/mlp.cpp).
+#define D_IN 0      // inputs
+#define D_IN_PAD 1  // inputs rounded up to 4 (the row stride of the weights; padded weights are 0)
+#define D_OUT 2
+#define D_ACT 3
+#define D_W 4       // offset of the weights [out][in_pad] in params
+#define D_B 5       // offset of the bias [out]
+#define D_SIZE 6
+
+// The encoding's scale of band b: 2^(first_exp + b), times pi when use_pi.
+static inline float band_scale(int b, int first_exp, int use_pi) {
+    const float s = ldexp(1.0f, first_exp + b);
+    return use_pi ? s * M_PI_F : s;
+}
+
+// The encoding of c components: [the raw components if include_raw], then 2 * bands * c features, feature
+// j (past the raw part) being encode_one(component, band, is_cos) with feature_index(j). Both kernels use these.
+static inline int encoded_width(int c, int bands, int include_raw) { return (include_raw ? c : 0) + 2 * bands * c; }
+
+static inline float encode_one(float x, int band, int is_cos, int first_exp, int use_pi) {
+    const float t = band_scale(band, first_exp, use_pi) * x;
+    return is_cos ? cos(t) : sin(t);
+}
+
+// Which component, band and function feature k (past the raw part) is.
+static inline void feature_index(int j, int c, int bands, int order, int* comp, int* band, int* is_cos) {
+    if (order == ORDER_COMPONENT) {
+        *comp = j / (2 * bands);
+        const int r = j - *comp * 2 * bands;
+        *band = r / 2;
+        *is_cos = r & 1;
+    } else {
+        *band = j / (2 * c);
+        const int r = j - *band * 2 * c;
+        *is_cos = r >= c;
+        *comp = r - (*is_cos ? c : 0);
+    }
+}
+
+// y = MLP(encode(x)) for n items. Item i's channel ch is x[i * x_item + ch * x_chan] (planar NCHW images: x_item 1,
+// x_chan n; point lists [n, C]: x_item C, x_chan 1); the same for y. Non-finite inputs are the caller's to sanitize.
+__kernel void mlp_fused(__global const float* restrict x, const int x_off, const int n, const int in_ch, const int x_item,
+                        const int x_chan, PARAMS_SPACE const float* restrict params,
+                        PARAMS_SPACE const int* restrict desc, const int layers, const int bands, const int first_exp,
+                        const int use_pi, const int include_raw, const int order, const float alpha,
+                        __global float* restrict y, const int y_off, const int y_item, const int y_chan) {
+    const int i = get_global_id(0);
+    if (i >= n) return;
+    float v[MAX_WIDTH], a[MAX_WIDTH], b[MAX_WIDTH];
+    x += x_off;
+    y += y_off;
+    for (int ch = 0; ch < in_ch; ++ch) v[ch] = x[(size_t)i * x_item + (size_t)ch * x_chan];
+    const int raw = bands == 0 || include_raw ? in_ch : 0;
+    const int width = bands == 0 ? in_ch : encoded_width(in_ch, bands, include_raw);
+    for (int k = 0; k < raw; ++k) a[k] = v[k];
+    for (int k = raw; k < width; ++k) {
+        int comp, band, is_cos;
+        feature_index(k - raw, in_ch, bands, order, &comp, &band, &is_cos);
+        a[k] = encode_one(v[comp], band, is_cos, first_exp, use_pi);
+    }
+    for (int k = width; k < MAX_WIDTH; ++k) a[k] = 0.0f;  // the padding the unrolled dot products read
+
+    float* src = a;
+    float* dst = b;
+    for (int l = 0; l < layers; ++l) {
+        PARAMS_SPACE const int* d = desc + l * D_SIZE;
+        const int in_pad = d[D_IN_PAD], out = d[D_OUT], act = d[D_ACT];
+        PARAMS_SPACE const float* w = params + d[D_W];
+        PARAMS_SPACE const float* bias = params + d[D_B];
+        for (int o = 0; o < out; ++o) {
+            PARAMS_SPACE const float* row = w + o * in_pad;
+            // Four products per iteration: a quarter of the loop iterations (llvmpipe ends a work-item's loops
+            // after 65,535 iterations in total; the host checks the count against Context::loop_limit()).
+            float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+            for (int j = 0; j < in_pad; j += 4) {
+                s0 = mad(row[j], src[j], s0);
+                s1 = mad(row[j + 1], src[j + 1], s1);
+                s2 = mad(row[j + 2], src[j + 2], s2);
+                s3 = mad(row[j + 3], src[j + 3], s3);
+            }
+            dst[o] = ngi_activate(bias[o] + ((s0 + s1) + (s2 + s3)), act, alpha);
+        }
+        for (int k = out; k < ((out + 3) & ~3); ++k) dst[k] = 0.0f;
+        float* t = src;
+        src = dst;
+        dst = t;
+    }
+    const int out = desc[(layers - 1) * D_SIZE + D_OUT];
+    for (int o = 0; o < out; ++o) y[(size_t)i * y_item + (size_t)o * y_chan] = src[o];
+}
+
+// The frequency encoding alone, materialized for the dense (GEMM) path: e[k * n + i] (planar, channel-major).
+// Launch: 2-D (n, encoded width).
+__kernel void frequency_encode_planar(__global const float* restrict x, const int x_off, const int n, const int in_ch,
+                                      const int x_item, const int x_chan, const int bands, const int first_exp,
+                                      const int use_pi, const int include_raw, const int order,
+                                      __global float* restrict e) {
+    const int i = get_global_id(0), k = get_global_id(1);
+    const int raw = include_raw ? in_ch : 0;
+    x += x_off;
+    if (i >= n || k >= encoded_width(in_ch, bands, include_raw)) return;
+    float value;
+    if (k < raw) {
+        value = x[(size_t)i * x_item + (size_t)k * x_chan];
+    } else {
+        int comp, band, is_cos;
+        feature_index(k - raw, in_ch, bands, order, &comp, &band, &is_cos);
+        value = encode_one(x[(size_t)i * x_item + (size_t)comp * x_chan], band, is_cos, first_exp, use_pi);
+    }
+    e[(size_t)k * n + i] = value;
+}

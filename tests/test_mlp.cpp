@@ -1,0 +1,216 @@
+// The MLP family's ops (ops/mlp.*): frequency encoding, the fused per-item MLP and the dense (GEMM) path, against
+// naive double-precision references over random architectures, odd widths and item counts, both layouts.
+#include "ops/gemm_selfcheck.hpp"
+#include "ops/mlp.hpp"
+#include "reference.hpp"
+#include "test_support.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+
+namespace {
+
+// A random MLP: `layers` layers of the given widths, random activations (the last one linear or exp).
+MlpSpec random_spec(std::mt19937& rng, int inputs, const FrequencyEncoding& enc, const std::vector<int>& widths) {
+    MlpSpec s;
+    s.inputs = inputs;
+    s.encoding = enc;
+    int in = enc.width(inputs);
+    const Act acts[5] = {Act::relu(), Act::leaky(0.2f), Act::tanh(), Act::sigmoid(), Act::none()};
+    for (std::size_t l = 0; l < widths.size(); ++l) {
+        DenseSpec d;
+        d.in = in;
+        d.out = widths[l];
+        const bool last = l + 1 == widths.size();
+        d.act = last ? (rng() % 2 ? Act::none() : Act::exp()) : acts[rng() % 5];
+        // He-like scale keeps activations O(1) through the layers.
+        const float a = std::sqrt(3.0f / float(in));
+        d.weight = test::random_vector(std::size_t(d.in) * d.out, rng, -a, a);
+        if (rng() % 4) d.bias = test::random_vector(d.out, rng, -0.5f, 0.5f);
+        s.layers.push_back(std::move(d));
+        in = widths[l];
+    }
+    return s;
+}
+
+// The reference output of item i: [out] in double.
+std::vector<double> reference(const MlpSpec& s, const std::vector<float>& x, int n, ItemLayout in, int i) {
+    std::vector<double> v(s.inputs);
+    for (int c = 0; c < s.inputs; ++c) v[c] = x[std::size_t(i) * in.item_stride + std::size_t(c) * in.channel_stride];
+    const FrequencyEncoding& e = s.encoding;
+    v = ref::frequency_encode(v, e.bands, e.first_exponent, e.pi, e.include_input, int(e.order));
+    for (const DenseSpec& d : s.layers) v = ref::dense(v, d.weight, d.bias, d.out, int(d.act.kind), d.act.alpha);
+    (void)n;
+    return v;
+}
+
+FrequencyEncoding random_encoding(std::mt19937& rng) {
+    FrequencyEncoding e;
+    e.bands = int(rng() % 5);  // 0 = no encoding
+    e.first_exponent = int(rng() % 4) - 1;
+    e.pi = rng() % 2;
+    e.include_input = rng() % 2;
+    e.order = rng() % 2 ? FrequencyEncoding::Order::BandMajor : FrequencyEncoding::Order::ComponentMajor;
+    return e;
+}
+
+}  // namespace
+
+TEST_CASE("fused MLP and dense MLP match the reference: random architectures, odd widths, both layouts", "[mlp]") {
+    std::mt19937 rng(11);
+    auto& ctx = test::ctx();
+    const GemmParams gemm = gemm_selection(ctx).params;
+    for (int trial = 0; trial < 12; ++trial) {
+        const int inputs = 1 + int(rng() % 6);
+        const FrequencyEncoding enc = random_encoding(rng);
+        const int depth = 1 + int(rng() % 4);
+        std::vector<int> widths;
+        for (int l = 0; l + 1 < depth; ++l) widths.push_back(1 + int(rng() % 40));
+        widths.push_back(1 + int(rng() % 5));
+        if (enc.width(inputs) > kFusedMlpMaxWidth) continue;
+        const MlpSpec spec = random_spec(rng, inputs, enc, widths);
+        const int n = trial == 0 ? 1 : 1 + int(rng() % 700);
+        CAPTURE(trial, inputs, enc.bands, enc.first_exponent, enc.pi, enc.include_input, int(enc.order), depth, n);
+        const int out_c = widths.back();
+        const std::vector<float> x = test::random_vector(std::size_t(n) * inputs, rng, -1.0f, 1.0f);
+        const Buffer xb = test::upload(x);
+
+        // Fused, planar in and points out (and the reverse on odd trials), at an offset inside the buffers.
+        const bool planar_in = trial % 2 == 0;
+        const ItemLayout lin = planar_in ? ItemLayout::planar(n) : ItemLayout::points(inputs);
+        const ItemLayout lout = planar_in ? ItemLayout::points(out_c) : ItemLayout::planar(n);
+        if (FusedMlp::fits_device(ctx, spec)) {
+            FusedMlp fused(ctx, spec);
+            const std::size_t y_off = 5;
+            Buffer yb = ctx.alloc((y_off + std::size_t(n) * out_c) * sizeof(float), "test y");
+            fused.enqueue(ctx, xb.get(), 0, lin, n, yb.get(), y_off, lout);
+            const std::vector<float> y = test::download(yb, std::size_t(n) * out_c, y_off);
+            std::vector<float> want(y.size());
+            for (int i = 0; i < n; ++i) {
+                const auto r = reference(spec, x, n, lin, i);
+                for (int o = 0; o < out_c; ++o)
+                    want[std::size_t(i) * lout.item_stride + std::size_t(o) * lout.channel_stride] = float(r[o]);
+            }
+            // float32 sums of <= 128 products of O(1) values and sin/cos of arguments up to ~25: ~1e-5 absolute.
+            REQUIRE(test::worst_ratio(y, want, 1e-4, 1e-4) <= 1.0);
+        } else {
+            WARN("fused MLP exceeds this device's loop limit: " << FusedMlp::loop_iterations(spec));
+        }
+
+        // Dense (planar only).
+        if (planar_in) {
+            DenseMlp dense(ctx, gemm, spec);
+            Buffer scratch = ctx.alloc(dense.scratch_floats(n) * sizeof(float), "test scratch");
+            Buffer yb = ctx.alloc(std::size_t(n) * out_c * sizeof(float), "test y");
+            dense.enqueue(ctx, View{xb.get(), 0, Shape{inputs, 1, n}}, View{yb.get(), 0, Shape{out_c, 1, n}},
+                          scratch.get());
+            const std::vector<float> y = test::download(yb, std::size_t(n) * out_c);
+            std::vector<float> want(y.size());
+            for (int i = 0; i < n; ++i) {
+                const auto r = reference(spec, x, n, lin, i);
+                for (int o = 0; o < out_c; ++o) want[std::size_t(o) * n + i] = float(r[o]);
+            }
+            REQUIRE(test::worst_ratio(y, want, 1e-4, 1e-4) <= 1.0);
+        }
+    }
+}
+
+TEST_CASE("fused MLP at the seed 001 sizes and the widest fused width", "[mlp]") {
+    std::mt19937 rng(12);
+    auto& ctx = test::ctx();
+    FrequencyEncoding none;
+    for (const std::vector<int>& w : {std::vector<int>{16, 8, 1}, {32, 16, 1}, {64, 32, 1}, {128, 128, 3}}) {
+        MlpSpec spec = random_spec(rng, 48, none, w);
+        for (std::size_t l = 0; l + 1 < spec.layers.size(); ++l) spec.layers[l].act = Act::tanh();  // seed 001
+        CAPTURE(w[0], w[1]);
+        if (!FusedMlp::fits_device(ctx, spec)) {
+            WARN("fused MLP " << w[0] << "x" << w[1] << " exceeds this device's loop limit");
+            continue;
+        }
+        FusedMlp fused(ctx, spec);
+        const int n = 1000;
+        const std::vector<float> x = test::random_vector(std::size_t(n) * 48, rng, -1.0f, 1.0f);
+        const Buffer xb = test::upload(x);
+        Buffer yb = ctx.alloc(std::size_t(n) * w.back() * sizeof(float), "test y");
+        fused.enqueue(ctx, xb.get(), 0, ItemLayout::points(48), n, yb.get(), 0, ItemLayout::points(w.back()));
+        const std::vector<float> y = test::download(yb, std::size_t(n) * w.back());
+        std::vector<float> want(y.size());
+        for (int i = 0; i < n; ++i) {
+            const auto r = reference(spec, x, n, ItemLayout::points(48), i);
+            for (int o = 0; o < w.back(); ++o) want[std::size_t(i) * w.back() + o] = float(r[o]);
+        }
+        REQUIRE(test::worst_ratio(y, want, 1e-4, 1e-4) <= 1.0);
+    }
+}
+
+TEST_CASE("MLP specs that do not fit are refused, naming the layer", "[mlp]") {
+    std::mt19937 rng(13);
+    auto& ctx = test::ctx();
+    FrequencyEncoding none;
+    MlpSpec ok = random_spec(rng, 4, none, {8, 2});
+    MlpSpec bad = ok;
+    bad.layers[1].in = 7;
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, bad), Catch::Contains("layer 1 takes 7 inputs"));
+    bad = ok;
+    bad.layers[0].weight[3] = std::nanf("");
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, bad), Catch::Contains("layer 0 has a non-finite weight"));
+    bad = ok;
+    bad.layers[0].bias.assign(3, 0.0f);
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, bad), Catch::Contains("layer 0 has 3 biases"));
+    MlpSpec wide = random_spec(rng, 4, none, {200, 2});
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, wide), Catch::Contains("up to 128"));
+    MlpSpec slopes = random_spec(rng, 4, none, {8, 8, 2});
+    slopes.layers[0].act = Act::leaky(0.2f);
+    slopes.layers[1].act = Act::leaky(0.1f);
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, slopes), Catch::Contains("different slopes"));
+    FrequencyEncoding far;
+    far.bands = 10;
+    far.first_exponent = 30;
+    MlpSpec huge = random_spec(rng, 2, far, {4, 1});
+    REQUIRE_THROWS_WITH(FusedMlp(ctx, huge), Catch::Contains("exponents"));
+}
+
+TEST_CASE("frequency encoding: Neural GI's Eq. 3 and tiny-cuda-nn's Frequency as two settings", "[mlp]") {
+    // Eq. 3 with L = 9: 10 bands from 2^-1 pi, raw input kept, band-major: 34 inputs -> 714 features.
+    FrequencyEncoding eq3{10, -1, true, true, FrequencyEncoding::Order::BandMajor};
+    REQUIRE(eq3.width(34) == 714);
+    const std::vector<double> v = {0.25, -0.5};
+    const auto e = ref::frequency_encode(v, 2, -1, true, true, 1);
+    // [x0, x1, sin(pi/2 x0), sin(pi/2 x1), cos(pi/2 x0), cos(pi/2 x1), sin(pi x0), ...]
+    REQUIRE(e.size() == 10);
+    CHECK(e[0] == 0.25);
+    CHECK(e[2] == Approx(std::sin(M_PI / 2 * 0.25)));
+    CHECK(e[5] == Approx(std::cos(M_PI / 2 * -0.5)));
+    CHECK(e[6] == Approx(std::sin(M_PI * 0.25)));
+    // tiny-cuda-nn: no raw input, per component (sin, cos) for frequencies 2^0, 2^1, ...
+    const auto t = ref::frequency_encode(v, 2, 0, true, false, 0);
+    REQUIRE(t.size() == 8);
+    CHECK(t[0] == Approx(std::sin(M_PI * 0.25)));
+    CHECK(t[1] == Approx(std::cos(M_PI * 0.25)));
+    CHECK(t[2] == Approx(std::sin(2 * M_PI * 0.25)));
+    CHECK(t[4] == Approx(std::sin(M_PI * -0.5)));
+
+    // The device's encoding (through a one-layer identity MLP) equals the reference for both conventions.
+    auto& ctx = test::ctx();
+    for (const FrequencyEncoding& enc : {FrequencyEncoding{3, -1, true, true, FrequencyEncoding::Order::BandMajor},
+                                         FrequencyEncoding{3, 0, true, false, FrequencyEncoding::Order::ComponentMajor}}) {
+        MlpSpec s;
+        s.inputs = 2;
+        s.encoding = enc;
+        const int w = enc.width(2);
+        DenseSpec id;
+        id.in = id.out = w;
+        id.weight.assign(std::size_t(w) * w, 0.0f);
+        for (int i = 0; i < w; ++i) id.weight[std::size_t(i) * w + i] = 1.0f;
+        s.layers.push_back(id);
+        FusedMlp fused(ctx, s);
+        const std::vector<float> x = {0.25f, -0.5f};
+        const Buffer xb = test::upload(x);
+        Buffer yb = ctx.alloc(std::size_t(w) * sizeof(float), "test y");
+        fused.enqueue(ctx, xb.get(), 0, ItemLayout::points(2), 1, yb.get(), 0, ItemLayout::points(w));
+        const std::vector<float> y = test::download(yb, w);
+        const auto want = ref::frequency_encode({0.25, -0.5}, enc.bands, enc.first_exponent, enc.pi, enc.include_input,
+                                                int(enc.order));
+        for (int i = 0; i < w; ++i) CHECK(y[i] == Approx(want[i]).margin(1e-6));
+    }
+}
