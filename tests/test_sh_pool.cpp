@@ -1,0 +1,133 @@
+// Spherical harmonics (ops/sh.*) against the associated-Legendre definition and a numerical cosine-lobe integral,
+// and set pooling with broadcast (ops/set_pool.*) against straight loops.
+#include <cmath>
+
+#include "ops/set_pool.hpp"
+#include "ops/sh.hpp"
+#include "test_support.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+
+namespace {
+
+// Real SH with the Condon-Shortley phase from the textbook definition: theta from +z, phi = atan2(y, x);
+// std::assoc_legendre omits the (-1)^m phase, so it is applied here.
+double sh_reference(int l, int m, double x, double y, double z) {
+    const double theta = std::acos(std::clamp(z, -1.0, 1.0)), phi = std::atan2(y, x);
+    const int am = std::abs(m);
+    double fact = 1.0;  // (l - |m|)! / (l + |m|)!
+    for (int k = l - am + 1; k <= l + am; ++k) fact /= k;
+    const double K = std::sqrt((2 * l + 1) / (4 * M_PI) * fact);
+    const double P = (am % 2 ? -1.0 : 1.0) * std::assoc_legendre(unsigned(l), unsigned(am), std::cos(theta));
+    if (m == 0) return K * P;
+    return std::sqrt(2.0) * K * P * (m > 0 ? std::cos(am * phi) : std::sin(am * phi));
+}
+
+}  // namespace
+
+TEST_CASE("SH bands 0-2: basis = the Legendre definition, irradiance = the integral of the cosine lobe", "[sh]") {
+    std::mt19937 rng(21);
+    auto& ctx = test::ctx();
+    ShEvaluate sh(ctx);
+    const int n = 301, channels = 3;
+    std::vector<float> dir(3 * std::size_t(n));
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    for (auto& v : dir) v = g(rng) * 3.0f;  // not unit length: the kernel normalizes
+    dir[0] = dir[1] = dir[2] = 0.0f;        // a zero direction: band 0 only
+    const std::vector<float> coef = test::random_vector(std::size_t(n) * channels * 9, rng, -1.0f, 1.0f);
+    const Buffer cb = test::upload(coef), db = test::upload(dir);
+    Buffer ob = ctx.alloc(std::size_t(n) * channels * sizeof(float), "test out");
+    for (int irradiance = 0; irradiance < 2; ++irradiance) {
+        sh.enqueue(ctx, cb.get(), db.get(), n, channels, irradiance, ob.get());
+        const std::vector<float> out = test::download(ob, std::size_t(n) * channels);
+        std::vector<float> want(out.size());
+        const double lobe[3] = {M_PI, 2 * M_PI / 3, M_PI / 4};
+        for (int i = 0; i < n; ++i) {
+            double x = dir[3 * i], y = dir[3 * i + 1], z = dir[3 * i + 2];
+            const double len = std::sqrt(x * x + y * y + z * z);
+            for (int c = 0; c < channels; ++c) {
+                double s = 0;
+                for (int l = 0; l <= 2; ++l)
+                    for (int m = -l; m <= l; ++m) {
+                        const double Y = len > 0 ? sh_reference(l, m, x / len, y / len, z / len) : (l == 0 ? sh_reference(0, 0, 0, 0, 1) : 0.0);
+                        s += coef[(std::size_t(i) * channels + c) * 9 + l * (l + 1) + m] * (irradiance ? lobe[l] : 1.0) * Y;
+                    }
+                want[std::size_t(i) * channels + c] = float(s);
+            }
+        }
+        CAPTURE(irradiance);
+        REQUIRE(test::worst_ratio(out, want, 2e-5, 1e-5) <= 1.0);
+    }
+
+    // Irradiance against the integral itself: E(n) = int L(w) max(0, n.w) dw for a band-limited L (exact for
+    // bands 0-2), midpoint rule on a 400 x 800 (theta, phi) grid in double.
+    const float c9[9] = {0.9f, -0.3f, 0.5f, 0.2f, 0.1f, -0.25f, 0.15f, 0.05f, -0.1f};
+    const float nrm[3] = {0.3f, -0.5f, 0.81f};
+    const Buffer c1 = test::upload(std::vector<float>(c9, c9 + 9)), d1 = test::upload(std::vector<float>(nrm, nrm + 3));
+    Buffer o1 = ctx.alloc(sizeof(float), "test out");
+    sh.enqueue(ctx, c1.get(), d1.get(), 1, 1, true, o1.get());
+    const float got = test::download(o1, 1)[0];
+    const double nl = std::sqrt(0.3 * 0.3 + 0.25 + 0.81 * 0.81);
+    const double nx = 0.3 / nl, ny = -0.5 / nl, nz = 0.81 / nl;
+    double E = 0;
+    const int T = 400, P = 800;
+    for (int a = 0; a < T; ++a)
+        for (int b = 0; b < P; ++b) {
+            const double th = (a + 0.5) * M_PI / T, ph = (b + 0.5) * 2 * M_PI / P;
+            const double x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph), z = std::cos(th);
+            double L = 0;
+            for (int l = 0; l <= 2; ++l)
+                for (int m = -l; m <= l; ++m) L += c9[l * (l + 1) + m] * sh_reference(l, m, x, y, z);
+            E += L * std::max(0.0, nx * x + ny * y + nz * z) * std::sin(th) * (M_PI / T) * (2 * M_PI / P);
+        }
+    CHECK(got == Approx(E).epsilon(1e-3));
+}
+
+TEST_CASE("set pooling: max and mean per set (empty sets included), broadcast back", "[pool]") {
+    std::mt19937 rng(22);
+    auto& ctx = test::ctx();
+    SetPool pool(ctx);
+    for (int channels : {1, 5, 17}) {
+        std::vector<int> first = {0};
+        for (int s = 0; s < 9; ++s) first.push_back(first.back() + (s == 3 ? 0 : int(rng() % 300)));
+        const int sets = int(first.size()) - 1, n = first.back();
+        const std::vector<float> x = test::random_vector(std::size_t(n) * channels, rng, -5.0f, 5.0f);
+        const Buffer xb = test::upload(x);
+        Buffer fb = ctx.alloc(first.size() * sizeof(int), "test sets");
+        ctx.write(fb, 0, first.size() * sizeof(int), first.data(), "test sets");
+        Buffer pb = ctx.alloc(std::size_t(sets) * channels * sizeof(float), "test pooled");
+        for (PoolMode mode : {PoolMode::Max, PoolMode::Mean}) {
+            pool.pool(ctx, xb.get(), channels, fb.get(), sets, mode, pb.get());
+            const std::vector<float> got = test::download(pb, std::size_t(sets) * channels);
+            std::vector<float> want(got.size(), 0.0f);
+            for (int s = 0; s < sets; ++s)
+                for (int c = 0; c < channels; ++c) {
+                    double acc = mode == PoolMode::Max ? -INFINITY : 0.0;
+                    for (int i = first[s]; i < first[s + 1]; ++i) {
+                        const double v = x[std::size_t(i) * channels + c];
+                        acc = mode == PoolMode::Max ? std::max(acc, v) : acc + v;
+                    }
+                    const int count = first[s + 1] - first[s];
+                    want[std::size_t(s) * channels + c] = count == 0 ? 0.0f : float(mode == PoolMode::Max ? acc : acc / count);
+                }
+            CAPTURE(channels, int(mode));
+            REQUIRE(test::worst_ratio(got, want, 1e-5, 1e-5) <= 1.0);
+        }
+        // Broadcast the (mean-)pooled features back after each item's own.
+        std::vector<int> set_of(n);
+        for (int s = 0; s < sets; ++s)
+            for (int i = first[s]; i < first[s + 1]; ++i) set_of[i] = s;
+        Buffer sb = ctx.alloc(std::max<std::size_t>(1, set_of.size()) * sizeof(int), "test set_of");
+        ctx.write(sb, 0, set_of.size() * sizeof(int), set_of.data(), "test set_of");
+        Buffer yb = ctx.alloc(std::size_t(n) * 2 * channels * sizeof(float), "test y");
+        pool.broadcast_concat(ctx, xb.get(), channels, pb.get(), channels, sb.get(), n, yb.get());
+        const std::vector<float> y = test::download(yb, std::size_t(n) * 2 * channels);
+        const std::vector<float> pooled = test::download(pb, std::size_t(sets) * channels);
+        for (int i = 0; i < n; i += 7)
+            for (int c = 0; c < channels; ++c) {
+                REQUIRE(y[std::size_t(i) * 2 * channels + c] == x[std::size_t(i) * channels + c]);
+                REQUIRE(y[std::size_t(i) * 2 * channels + channels + c] == pooled[std::size_t(set_of[i]) * channels + c]);
+            }
+    }
+}
