@@ -2,6 +2,8 @@
 // and set pooling with broadcast (ops/set_pool.*) against straight loops.
 #include <cmath>
 
+#include "ops/gemm_selfcheck.hpp"
+#include "ops/mlp.hpp"
 #include "ops/set_pool.hpp"
 #include "ops/sh.hpp"
 #include "test_support.hpp"
@@ -130,4 +132,58 @@ TEST_CASE("set pooling: max and mean per set (empty sets included), broadcast ba
                 REQUIRE(y[std::size_t(i) * 2 * channels + channels + c] == pooled[std::size_t(set_of[i]) * channels + c]);
             }
     }
+}
+
+TEST_CASE("MLP, SH and set-pooling kernels at small shapes (oclgrind: bounds, races, uninitialized reads)",
+          "[oclgrind][mlp][sh][pool]") {
+    std::mt19937 rng(23);
+    auto& ctx = test::ctx();
+    // Fused MLP: 3 inputs, band-major encoding with the raw input (15 wide), 7 -> 2, 5 items.
+    MlpSpec s;
+    s.inputs = 3;
+    s.encoding = FrequencyEncoding{2, -1, true, true, FrequencyEncoding::Order::BandMajor};
+    const int widths[2] = {7, 2};
+    int in = s.encoding.width(3);
+    for (int w : widths) {
+        DenseSpec d;
+        d.in = in;
+        d.out = w;
+        d.act = w == 2 ? Act::exp() : Act::leaky(0.1f);
+        d.weight = test::random_vector(std::size_t(in) * w, rng, -0.5f, 0.5f);
+        d.bias = test::random_vector(w, rng, -0.1f, 0.1f);
+        s.layers.push_back(d);
+        in = w;
+    }
+    const int n = 5;
+    const Buffer xb = test::upload(test::random_vector(std::size_t(n) * 3, rng));
+    Buffer yb = ctx.alloc(std::size_t(n) * 2 * sizeof(float), "test y");
+    FusedMlp fused(ctx, s);
+    fused.enqueue(ctx, xb.get(), 0, ItemLayout::planar(n), n, yb.get(), 0, ItemLayout::points(2));
+    DenseMlp dense(ctx, gemm_selection(ctx).params, s);
+    Buffer scratch = ctx.alloc(dense.scratch_floats(n) * sizeof(float), "test scratch");
+    Buffer yd = ctx.alloc(std::size_t(n) * 2 * sizeof(float), "test y dense");
+    dense.enqueue(ctx, View{xb.get(), 0, Shape{3, 1, n}}, View{yd.get(), 0, Shape{2, 1, n}}, scratch.get());
+    const std::vector<float> a = test::download(yb, std::size_t(n) * 2), b = test::download(yd, std::size_t(n) * 2);
+    for (int i = 0; i < n; ++i)
+        for (int o = 0; o < 2; ++o) REQUIRE(a[std::size_t(i) * 2 + o] == Approx(b[std::size_t(o) * n + i]).epsilon(1e-4));
+
+    // SH on 3 items, pooling over 3 sets (one empty) of 2 channels.
+    ShEvaluate sh(ctx);
+    const Buffer cb = test::upload(test::random_vector(3 * 3 * 9, rng)), db = test::upload(test::random_vector(9, rng));
+    Buffer ob = ctx.alloc(9 * sizeof(float), "test sh");
+    sh.enqueue(ctx, cb.get(), db.get(), 3, 3, true, ob.get());
+    CHECK(test::all_finite(test::download(ob, 9)));
+    SetPool pool(ctx);
+    const std::vector<int> first = {0, 2, 2, 5}, set_of = {0, 0, 2, 2, 2};
+    Buffer fb = ctx.alloc(first.size() * sizeof(int), "test first"), sb = ctx.alloc(set_of.size() * sizeof(int), "test set_of");
+    ctx.write(fb, 0, first.size() * sizeof(int), first.data(), "test first");
+    ctx.write(sb, 0, set_of.size() * sizeof(int), set_of.data(), "test set_of");
+    const Buffer pxb = test::upload(test::random_vector(5 * 2, rng));
+    Buffer pb = ctx.alloc(3 * 2 * sizeof(float), "test pooled"), cat = ctx.alloc(5 * 4 * sizeof(float), "test cat");
+    pool.pool(ctx, pxb.get(), 2, fb.get(), 3, PoolMode::Mean, pb.get());
+    pool.broadcast_concat(ctx, pxb.get(), 2, pb.get(), 2, sb.get(), 5, cat.get());
+    const std::vector<float> pooled = test::download(pb, 6);
+    CHECK(pooled[2] == 0.0f);
+    CHECK(pooled[3] == 0.0f);  // the empty set
+    CHECK(test::all_finite(test::download(cat, 20)));
 }
