@@ -192,7 +192,7 @@ TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[mo
 // NaN (Inf - Inf): before they were clamped, an all-3.4e38 input gave an all-NaN output and no count.
 TEST_CASE("an input of finite values near FLT_MAX gives a finite output and a full count", "[model][extremes][oclgrind]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("flt_max", tiny_entries(), tiny_config()),
-                              ngi::ModelOptions{"per_image", ""});
+                              ngi::ModelOptions{"per_image", "", ""});
     for (const float v : {3.4e38f, -3.4e38f, std::numeric_limits<float>::max()}) {
         ngi::Tensor x({1, 1, 32, 64});
         std::fill(x.data.begin(), x.data.end(), v);
@@ -203,4 +203,51 @@ TEST_CASE("an input of finite values near FLT_MAX gives a finite output and a fu
         std::fill(x.data.begin(), x.data.end(), v > 0 ? 1.0f : -1.0f);  // what the clamp makes of it
         CHECK(m.run(x).data == y.data);
     }
+}
+
+TEST_CASE("broken mlp model files give clear errors naming the field or tensor", "[model][file][mlp]") {
+    const nlohmann::json cfg = {{"family", "mlp"}, {"input_nc", 3},
+                                {"layers", {{{"out", 4}, {"activation", "tanh"}}, {{"out", 2}}}}};
+    const std::vector<Entry> ok = {{"layers.0.weight", {4, 3}, 0.1f}, {"layers.0.bias", {4}, 0.0f},
+                                   {"layers.1.weight", {2, 4}, 0.2f}, {"layers.1.bias", {2}, 0.0f}};
+    {
+        ngi::Model m = ngi::Model::load(ngi::test::device(), write_file("mlp_ok", ok, cfg));
+        CHECK(m.config().output_nc == 2);
+        ngi::Tensor x({5, 3});
+        x.data = {1, 2, 3, 0, 0, 0, -1, -2, -3, NAN, INFINITY, 0.5f, 1, 1, 1};
+        ngi::RunInfo info;
+        const ngi::Tensor y = m.run(x, &info);
+        REQUIRE(y.shape == std::vector<int>{5, 2});
+        CHECK(info.sanitized_inputs == 2);  // NaN and +Inf, like the generator's guard
+        CHECK(ngi::test::all_finite(y.data));
+        // 4 x tanh(0.1 * (1 + 2 + 3)) * 0.2 for item 0
+        CHECK(y.data[0] == Approx(4 * std::tanh(0.6) * 0.2).epsilon(1e-5));
+        REQUIRE_THROWS_WITH(m.run(ngi::Tensor({5, 4})), Contains("[N, 3]"));
+    }
+    auto with = [&](const char* key, nlohmann::json value) {
+        nlohmann::json c = cfg;
+        c[key] = value;
+        return c;
+    };
+    expect_error(write_file("mlp_act", ok, with("layers", {{{"out", 4}, {"activation", "swish"}}, {{"out", 2}}})),
+                 "'layers[0].activation' must be one of");
+    expect_error(write_file("mlp_nolayers", ok, with("layers", nlohmann::json::array())), "'layers' must be");
+    expect_error(write_file("mlp_enc", ok, with("encoding", {{"order", "zigzag"}})), "'encoding.order'");
+    expect_error(write_file("mlp_outnc", ok, with("output_nc", 3)), "'output_nc' must be the last layer's width (2)");
+    std::vector<Entry> bad = ok;
+    bad[2].shape = {2, 5};
+    expect_error(write_file("mlp_shape", bad, cfg), "tensor 'layers.1.weight' is [2, 5], expected [2, 4]");
+    bad = ok;
+    bad.pop_back();
+    bad.push_back({"layers.7.weight", {1}, 0.0f});
+    expect_error(write_file("mlp_extra", bad, cfg), "tensor 'layers.7.weight' is not part of this mlp");
+    bad = ok;
+    bad.erase(bad.begin());
+    expect_error(write_file("mlp_missing", bad, cfg), "tensor 'layers.0.weight' is missing");
+    bad = ok;
+    bad[1].value = NAN;
+    expect_error(write_file("mlp_nan", bad, cfg), "tensor 'layers.0.bias': value 0 is not finite");
+    REQUIRE_THROWS_WITH(ngi::Model::load(ngi::test::device(), write_file("mlp_path", ok, cfg),
+                                         ngi::ModelOptions{"", "", "turbo"}),
+                        Contains("'turbo'"));
 }

@@ -8,14 +8,14 @@
 namespace ngi_cli {
 
 int cmd_generate(int argc, char** argv) {
-    Args args(argc, argv, 2, {"profile"}, {"model", "input", "output", "device", "bn-mode", "dropout"});
+    Args args(argc, argv, 2, {"profile"}, {"model", "input", "output", "device", "bn-mode", "dropout", "mlp-path"});
     no_positionals(args);
     const std::string model_path = args.require("model"), input_path = args.require("input"),
                       output_path = args.require("output");
     ngi::DeviceOptions dopt;
     dopt.profiling = args.has("profile");
     ngi::Device device = ngi::Device::open(args.get("device"), dopt);
-    ngi::ModelOptions mopt{args.get("bn-mode"), args.get("dropout")};
+    ngi::ModelOptions mopt{args.get("bn-mode"), args.get("dropout"), args.get("mlp-path")};
 
     auto t0 = std::chrono::steady_clock::now();
     ngi::Model model = ngi::Model::load(device, model_path, mopt);
@@ -29,8 +29,15 @@ int cmd_generate(int argc, char** argv) {
     const auto& c = model.config();
     auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
     std::printf("device     %s\n", device.info().name.c_str());
-    std::printf("model      %s: %s, %d -> %d channels, ngf %d, %d downs, bn %s, dropout %s\n", model_path.c_str(),
-                c.family.c_str(), c.input_nc, c.output_nc, c.ngf, c.num_downs, c.bn_mode.c_str(), c.dropout.c_str());
+    if (c.family == "mlp") {
+        std::string widths;
+        for (const auto& l : c.layers) widths += (widths.empty() ? "" : "-") + std::to_string(l.out) + " " + l.activation;
+        std::printf("model      %s: mlp, %d inputs, encoding %d bands, layers %s\n", model_path.c_str(), c.input_nc,
+                    c.encoding_bands, widths.c_str());
+    } else {
+        std::printf("model      %s: %s, %d -> %d channels, ngf %d, %d downs, bn %s, dropout %s\n", model_path.c_str(),
+                    c.family.c_str(), c.input_nc, c.output_nc, c.ngf, c.num_downs, c.bn_mode.c_str(), c.dropout.c_str());
+    }
     std::printf("input      %s %s\n", input_path.c_str(), ngi::shape_string(x.shape).c_str());
     std::printf("output     %s %s\n", output_path.c_str(), ngi::shape_string(y.shape).c_str());
     std::printf("time       load %.1f ms, first run %.1f ms (includes graph planning and kernel warm-up)\n",

@@ -17,7 +17,9 @@ const ngi_cli::Command kCommands[] = {
      ngi_cli::cmd_devices},
     {"generate", "ngi generate --model M.safetensors --input x.npy --output y.npy [--device D] [--profile]\n"
                  "             [--bn-mode running|per_image] [--dropout off|seeded]\n"
-                 "                                 run a generator on a NumPy NCHW float32 tensor (N=1)",
+                 "             [--mlp-path fused|dense]\n"
+                 "                                 run a generator on a NumPy NCHW float32 tensor (N=1), or an\n"
+                 "                                 mlp per pixel ([1, C, H, W]) or per point ([N, C])",
      ngi_cli::cmd_generate},
     {"metrics", "ngi metrics A B [--range R] [--device D]\n"
                 "                                 MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON; R = data\n"

@@ -15,7 +15,7 @@ namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp"
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;
@@ -28,12 +28,25 @@ struct ModelConfig {
     float output_range[2] = {-1.0f, 1.0f};
     std::string source;
     std::string json;                // the metadata exactly as stored
+
+    // family "mlp": a network evaluated per item (pixel of an NCHW image, or row of an [N, C] point list):
+    // optional frequency encoding, then dense layers (docs/MODEL_FORMAT.md "mlp", docs/CONVENTIONS.md section 13).
+    struct Layer {
+        int out = 0;
+        std::string activation = "none";  // none | relu | leaky_relu | tanh | sigmoid | exp
+        float slope = 0.01f;              // leaky_relu only
+    };
+    std::vector<Layer> layers;
+    int encoding_bands = 0, encoding_first_exponent = 0;  // bands = 0: no encoding
+    bool encoding_pi = true, encoding_include_input = true;
+    std::string encoding_order = "band";  // "band" (NeRF, Neural GI Eq. 3) | "component" (tiny-cuda-nn)
 };
 
 // Overrides of the file's settings; an empty string keeps the file's value.
 struct ModelOptions {
     std::string bn_mode;
     std::string dropout;
+    std::string mlp_path;  // family "mlp": "fused" | "dense" | "" (auto: fused when it fits the device)
 };
 
 struct LayerTiming {
@@ -62,6 +75,7 @@ public:
 
     const ModelConfig& config() const;
     // input: [1, input_nc, H, W] with H and W multiples of 2^num_downs. Returns [1, output_nc, H, W].
+    // Family "mlp": [1, input_nc, H, W] (per pixel) -> [1, output_nc, H, W], or [N, input_nc] -> [N, output_nc].
     // The graph for each new H x W is built and planned on first use and reused afterwards.
     Tensor run(const Tensor& input, RunInfo* info = nullptr);
 

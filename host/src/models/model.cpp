@@ -5,6 +5,7 @@
 #include "io/file_util.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
+#include "models/mlp_model.hpp"
 #include "models/model_access.hpp"
 #include "ops/gemm_selfcheck.hpp"
 
@@ -16,6 +17,8 @@ struct Model::Impl {
     detail::UNetOps ops;
     std::map<std::pair<int, int>, std::unique_ptr<detail::Graph>> graphs;  // per input H x W
     detail::Graph* last = nullptr;  // of the last enqueue (its sanitize counter)
+    std::unique_ptr<detail::MlpRunner> mlp;  // family "mlp" (instead of ops and graphs)
+    bool mlp_enqueued = false;
 
     // The graph for an input of h x w, built, planned and allocated on first use.
     detail::Graph& graph(int h, int w) {
@@ -45,7 +48,16 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     ModelConfig cfg = detail::parse_model_config(meta->second, path);
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr});
+    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false});
+    auto& ctx = ngi::detail::context_of(device);
+    if (cfg.family == "mlp") {
+        impl->mlp = std::make_unique<detail::MlpRunner>(ctx, detail::mlp_spec(cfg, file, path),
+                                                        detail::gemm_selection(ctx).params, options.mlp_path,
+                                                        cfg.input_range[0], cfg.input_range[1]);
+        return Model(std::move(impl));
+    }
+    if (!options.mlp_path.empty())
+        throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is " + cfg.family);
     try {
         impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file,
                                            detail::gemm_selection(ngi::detail::context_of(device)).params);
@@ -59,6 +71,10 @@ const ModelConfig& Model::config() const { return impl_->config; }
 
 Tensor Model::run(const Tensor& input, RunInfo* info) {
     const auto& c = impl_->config;
+    if (impl_->mlp) {
+        impl_->mlp_enqueued = false;
+        return impl_->mlp->run(ngi::detail::context_of(impl_->device), input, info);
+    }
     if (input.shape.size() != 4 || input.shape[0] != 1 || input.shape[1] != c.input_nc)
         throw InputError("run model: input tensor is " + shape_string(input.shape) + ", expected [1, " +
                          std::to_string(c.input_nc) + ", H, W] (NCHW, batch 1)");
@@ -86,6 +102,7 @@ namespace detail {
 void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem out, std::size_t out_offset,
                           int height, int width) {
     Model::Impl& im = *model.impl_;
+    if (im.mlp) throw InputError("the surround pipeline runs image generators; this model is an mlp");
     Graph& g = im.graph(height, width);
     g.enqueue(context_of(im.device), in, in_offset, out, out_offset);
     im.last = &g;
@@ -112,6 +129,18 @@ void check_device_buffer(const DeviceBuffer& b, const Device& device, std::size_
 
 void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int height, int width) {
     const auto& c = impl_->config;
+    if (impl_->mlp) {
+        if (height < 1 || width < 1 || double(height) * width > double(1 << 30))
+            throw InputError("enqueue model: " + std::to_string(height) + "x" + std::to_string(width) +
+                             " items are not in 1 .. 2^30");
+        const std::size_t items = std::size_t(height) * std::size_t(width) * sizeof(float);
+        check_device_buffer(input, impl_->device, items * std::size_t(c.input_nc), false, "input");
+        check_device_buffer(output, impl_->device, items * std::size_t(c.output_nc), true, "output");
+        impl_->mlp->enqueue(ngi::detail::context_of(impl_->device), input.opencl_mem(), output.opencl_mem(),
+                            height * width);
+        impl_->mlp_enqueued = true;
+        return;
+    }
     const int step = 1 << c.num_downs;
     if (height < step || width < step || height % step || width % step)
         throw InputError("enqueue model: input " + std::to_string(height) + "x" + std::to_string(width) +
@@ -123,6 +152,7 @@ void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int h
 }
 
 int Model::sanitized_inputs() {
+    if (impl_->mlp) return impl_->mlp_enqueued ? impl_->mlp->sanitized_count(ngi::detail::context_of(impl_->device)) : 0;
     return impl_->last ? impl_->last->sanitized_count(detail::context_of(impl_->device)) : 0;
 }
 

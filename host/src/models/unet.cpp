@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "graph/nodes.hpp"
+#include "models/mlp_model.hpp"
 
 namespace ngi::detail {
 
@@ -157,7 +158,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const std::string s = j[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             if (std::string(key) == "family")  // the most common mistake gets the most specific message
-                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination)");
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp)");
             throw fail(key, rule);
         }
         return s;
@@ -182,12 +183,18 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
                          ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
                          "): update ngi");
     integer("format_version", 1, kModelFormatVersion, 1, false);  // absent: 1 (hand-written test files)
-    c.family = string("family", {"pix2pix_unet", "deepillumination"}, "", true);
+    c.family = string("family", {"pix2pix_unet", "deepillumination", "mlp"}, "", true);
     c.input_nc = int(integer("input_nc", 1, kMaxChannels, 0, true));
-    c.output_nc = int(integer("output_nc", 1, kMaxChannels, 0, true));
-    c.ngf = int(integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
-    if (c.family == "pix2pix_unet") c.num_downs = int(integer("num_downs", 5, 12, 0, true));
-    else c.num_downs = int(integer("num_downs", 8, 8, 0, true));  // DeepIllumination's G has exactly 8
+    if (c.family == "mlp") {
+        parse_mlp_fields(j, c, what);  // layers, encoding; output_nc = the last layer's width
+        if (j.contains("output_nc") && integer("output_nc", 1, kMaxChannels, 0, true) != c.output_nc)
+            throw fail("output_nc", "the last layer's width (" + std::to_string(c.output_nc) + ")");
+    } else {
+        c.output_nc = int(integer("output_nc", 1, kMaxChannels, 0, true));
+        c.ngf = int(integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
+        if (c.family == "pix2pix_unet") c.num_downs = int(integer("num_downs", 5, 12, 0, true));
+        else c.num_downs = int(integer("num_downs", 8, 8, 0, true));  // DeepIllumination's G has exactly 8
+    }
     string("norm", {"batch"}, "batch", false);
     c.bn_mode = string("bn_mode", {"running", "per_image"}, c.bn_mode, false);
     c.bn_eps = number("bn_eps", 0.0, 1.0, true, false, c.bn_eps);
@@ -213,7 +220,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     static const char* const kKnown[] = {"format_version", "family", "input_nc", "output_nc", "ngf", "num_downs",
                                          "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
                                          "leaky_slope", "input_layout", "input_range", "output_range", "source",
-                                         "training", "required"};
+                                         "training", "required", "layers", "encoding"};
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");

@@ -1,0 +1,232 @@
+#include "models/mlp_model.hpp"
+
+#include <cmath>
+#include <set>
+
+namespace ngi::detail {
+
+namespace {
+
+constexpr int kMaxMlpLayers = 64;
+constexpr int kMaxMlpWidth = 65536;
+
+Act activation_of(const ModelConfig::Layer& l) {
+    if (l.activation == "none") return Act::none();
+    if (l.activation == "relu") return Act::relu();
+    if (l.activation == "leaky_relu") return Act::leaky(l.slope);
+    if (l.activation == "tanh") return Act::tanh();
+    if (l.activation == "sigmoid") return Act::sigmoid();
+    if (l.activation == "exp") return Act::exp();
+    throw InputError("mlp: unknown activation '" + l.activation + "'");  // parse_mlp_fields already refused it
+}
+
+bool grow(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
+    if (b.bytes() >= bytes) return false;
+    b.reset();
+    b = ctx.alloc(bytes, what);
+    return true;
+}
+
+}  // namespace
+
+void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        return InputError(what + "field '" + key + "' must be " + rule);
+    };
+    if (!j.contains("layers") || !j["layers"].is_array() || j["layers"].empty() || j["layers"].size() > kMaxMlpLayers)
+        throw fail("layers", "a list of 1.." + std::to_string(kMaxMlpLayers) + " layers {\"out\": n, \"activation\": a}");
+    static const std::set<std::string> kActs = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp"};
+    for (std::size_t i = 0; i < j["layers"].size(); ++i) {
+        const nlohmann::json& l = j["layers"][i];
+        const std::string key = "layers[" + std::to_string(i) + "]";
+        if (!l.is_object()) throw fail(key, "an object {\"out\": n, \"activation\": a}");
+        ModelConfig::Layer layer;
+        if (!l.contains("out") || !l["out"].is_number_integer() || l["out"].get<long long>() < 1 ||
+            l["out"].get<long long>() > kMaxMlpWidth)
+            throw fail(key + ".out", "an integer in 1.." + std::to_string(kMaxMlpWidth));
+        layer.out = l["out"].get<int>();
+        if (l.contains("activation")) {
+            if (!l["activation"].is_string() || !kActs.count(l["activation"].get<std::string>()))
+                throw fail(key + ".activation", "one of none, relu, leaky_relu, tanh, sigmoid, exp");
+            layer.activation = l["activation"].get<std::string>();
+        }
+        if (l.contains("slope")) {
+            if (!l["slope"].is_number() || !std::isfinite(l["slope"].get<double>()) ||
+                std::abs(l["slope"].get<double>()) > 1.0)
+                throw fail(key + ".slope", "a number in [-1, 1]");
+            layer.slope = l["slope"].get<float>();
+        }
+        c.layers.push_back(layer);
+    }
+    c.output_nc = c.layers.back().out;
+    // An MLP's inputs (normals, positions, radiance) have no common range: unless the file says otherwise, the
+    // guard replaces only NaN (-> 0) and +-Inf (-> +-FLT_MAX).
+    c.input_range[0] = -3.402823466e38f;
+    c.input_range[1] = 3.402823466e38f;
+    if (j.contains("encoding")) {
+        const nlohmann::json& e = j["encoding"];
+        if (!e.is_object()) throw fail("encoding", "an object");
+        auto integer = [&](const char* k, int lo, int hi, int fallback) {
+            if (!e.contains(k)) return fallback;
+            if (!e[k].is_number_integer() || e[k].get<long long>() < lo || e[k].get<long long>() > hi)
+                throw fail(std::string("encoding.") + k, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+            return e[k].get<int>();
+        };
+        auto boolean = [&](const char* k, bool fallback) {
+            if (!e.contains(k)) return fallback;
+            if (!e[k].is_boolean()) throw fail(std::string("encoding.") + k, "true or false");
+            return e[k].get<bool>();
+        };
+        c.encoding_bands = integer("bands", 0, 24, 0);
+        c.encoding_first_exponent = integer("first_exponent", -32, 31, 0);
+        if (c.encoding_first_exponent + c.encoding_bands > 32)
+            throw fail("encoding.first_exponent", "such that the last band's exponent is at most 31");
+        c.encoding_pi = boolean("pi", true);
+        c.encoding_include_input = boolean("include_input", true);
+        if (e.contains("order")) {
+            if (!e["order"].is_string() || (e["order"] != "band" && e["order"] != "component"))
+                throw fail("encoding.order", "\"band\" | \"component\"");
+            c.encoding_order = e["order"].get<std::string>();
+        }
+    }
+}
+
+MlpSpec mlp_spec(const ModelConfig& c, const SafetensorsFile& file, const std::string& path) {
+    MlpSpec s;
+    s.inputs = c.input_nc;
+    s.encoding.bands = c.encoding_bands;
+    s.encoding.first_exponent = c.encoding_first_exponent;
+    s.encoding.pi = c.encoding_pi;
+    s.encoding.include_input = c.encoding_include_input;
+    s.encoding.order = c.encoding_order == "component" ? FrequencyEncoding::Order::ComponentMajor
+                                                        : FrequencyEncoding::Order::BandMajor;
+    int in = s.encoding.width(s.inputs);
+    std::set<std::string> used;
+    for (std::size_t i = 0; i < c.layers.size(); ++i) {
+        DenseSpec d;
+        d.in = in;
+        d.out = c.layers[i].out;
+        d.act = activation_of(c.layers[i]);
+        const std::string wname = "layers." + std::to_string(i) + ".weight", bname = "layers." + std::to_string(i) + ".bias";
+        auto w = file.tensors.find(wname);
+        if (w == file.tensors.end()) throw InputError("load model " + path + ": tensor '" + wname + "' is missing");
+        if (w->second.shape != std::vector<int>{d.out, d.in})
+            throw InputError("load model " + path + ": tensor '" + wname + "' is " + shape_string(w->second.shape) +
+                             ", expected [" + std::to_string(d.out) + ", " + std::to_string(d.in) + "]");
+        d.weight = w->second.data;
+        used.insert(wname);
+        if (auto b = file.tensors.find(bname); b != file.tensors.end()) {
+            if (b->second.shape != std::vector<int>{d.out})
+                throw InputError("load model " + path + ": tensor '" + bname + "' is " + shape_string(b->second.shape) +
+                                 ", expected [" + std::to_string(d.out) + "]");
+            d.bias = b->second.data;
+            used.insert(bname);
+        }
+        s.layers.push_back(std::move(d));
+        in = c.layers[i].out;
+    }
+    for (const auto& [name, t] : file.tensors)
+        if (!used.count(name))
+            throw InputError("load model " + path + ": tensor '" + name + "' is not part of this mlp (" +
+                             std::to_string(c.layers.size()) + " layers)");
+    s.validate(("load model " + path).c_str());
+    return s;
+}
+
+MlpRunner::MlpRunner(Context& ctx, const MlpSpec& spec, const GemmParams& gemm, const std::string& path, float lo,
+                     float hi)
+    : spec_(spec), guard_(ctx), lo_(lo), hi_(hi) {
+    if (path != "" && path != "fused" && path != "dense")
+        throw InputError("mlp: path '" + path + "' is not one of fused, dense");
+    int widest = spec.encoding.width(spec.inputs);
+    for (const DenseSpec& d : spec.layers) widest = std::max(widest, d.out);
+    bool slopes_agree = true;
+    float slope = 0;
+    bool seen = false;
+    for (const DenseSpec& d : spec.layers)
+        if (d.act.kind == Activation::LeakyReLU) {
+            if (seen && d.act.alpha != slope) slopes_agree = false;
+            slope = d.act.alpha;
+            seen = true;
+        }
+    const bool fits = widest <= kFusedMlpMaxWidth && slopes_agree && FusedMlp::fits_device(ctx, spec);
+    if (path == "fused" && !fits)
+        throw InputError("mlp: the fused path was asked for, but the network (" + std::to_string(widest) +
+                         " wide) does not fit it on this device");
+    if (path != "dense" && fits) fused_ = std::make_unique<FusedMlp>(ctx, spec);
+    else dense_ = std::make_unique<DenseMlp>(ctx, gemm, spec);
+    for (const DenseSpec& d : spec.layers) weight_bytes_ += (d.weight.size() + d.bias.size()) * sizeof(float);
+}
+
+void MlpRunner::enqueue(Context& ctx, cl_mem in, cl_mem out, int n) {
+    const std::size_t in_bytes = std::size_t(spec_.inputs) * n * sizeof(float);
+    grow(ctx, in_, in_bytes, "mlp input");
+    ctx.copy(in, 0, in_.get(), 0, in_bytes, "mlp input");
+    guard_.sanitize(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, lo_, hi_);
+    const int out_c = spec_.layers.back().out;
+    if (fused_) {
+        fused_->enqueue(ctx, in_.get(), 0, ItemLayout::planar(n), n, out, 0, ItemLayout::planar(n));
+    } else {
+        grow(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
+        dense_->enqueue(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, View{out, 0, Shape{out_c, 1, n}},
+                        scratch_.get());
+    }
+}
+
+Tensor MlpRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
+    const auto& s = x.shape;
+    const bool image = s.size() == 4 && s[0] == 1 && s[1] == spec_.inputs;
+    const bool points = s.size() == 2 && s[1] == spec_.inputs;
+    if (!image && !points)
+        throw InputError("run model: input tensor is " + shape_string(s) + ", an mlp takes [1, " +
+                         std::to_string(spec_.inputs) + ", H, W] (per pixel) or [N, " + std::to_string(spec_.inputs) +
+                         "] (points)");
+    if (x.data.size() != Tensor::element_count(s))
+        throw InputError("run model: input tensor has " + std::to_string(x.data.size()) + " values for shape " +
+                         shape_string(s));
+    const std::size_t items = image ? std::size_t(s[2]) * s[3] : std::size_t(s[0]);
+    if (items == 0 || items > std::size_t(1) << 30)
+        throw InputError("run model: " + std::to_string(items) + " items (1 .. 2^30)");
+    const int n = int(items), out_c = spec_.layers.back().out;
+    Tensor y(image ? std::vector<int>{1, out_c, s[2], s[3]} : std::vector<int>{n, out_c});
+    // Planar on the device ([C, n]); a point list is transposed on the host on the way in and out.
+    std::vector<float> planar;
+    const float* src = x.data.data();
+    if (points) {
+        planar.resize(x.data.size());
+        for (int i = 0; i < n; ++i)
+            for (int c = 0; c < spec_.inputs; ++c) planar[std::size_t(c) * n + i] = x.data[std::size_t(i) * spec_.inputs + c];
+        src = planar.data();
+    }
+    const std::size_t in_bytes = std::size_t(spec_.inputs) * n * sizeof(float), out_bytes = std::size_t(out_c) * n * sizeof(float);
+    grow(ctx, in_, in_bytes, "mlp input");
+    grow(ctx, out_, out_bytes, "mlp output");
+    ctx.write(in_, 0, in_bytes, src, "mlp input");
+    guard_.sanitize(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, lo_, hi_);
+    if (fused_) {
+        fused_->enqueue(ctx, in_.get(), 0, ItemLayout::planar(n), n, out_.get(), 0, ItemLayout::planar(n));
+    } else {
+        grow(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
+        dense_->enqueue(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, View{out_.get(), 0, Shape{out_c, 1, n}},
+                        scratch_.get());
+    }
+    if (points) {
+        std::vector<float> p(y.data.size());
+        ctx.read(out_, 0, out_bytes, p.data(), "mlp output");
+        for (int i = 0; i < n; ++i)
+            for (int c = 0; c < out_c; ++c) y.data[std::size_t(i) * out_c + c] = p[std::size_t(c) * n + i];
+    } else {
+        ctx.read(out_, 0, out_bytes, y.data.data(), "mlp output");
+    }
+    if (info) {
+        info->sanitized_inputs = guard_.sanitized_count(ctx);
+        info->layers.clear();
+        info->weight_bytes = weight_bytes_;
+        info->scratch_bytes = scratch_.bytes();
+        info->arena_bytes = in_.bytes() + out_.bytes();
+        info->naive_bytes = info->arena_bytes;
+    }
+    return y;
+}
+
+}  // namespace ngi::detail

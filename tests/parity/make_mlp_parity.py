@@ -1,0 +1,130 @@
+#!/usr/bin/python3
+"""Generate PyTorch parity data for ngi's "mlp" model family (docs/MODEL_FORMAT.md).
+
+For each case: a torch MLP (frequency encoding written from its definition in
+docs/CONVENTIONS.md section 13, nn.Linear layers, activations) with random
+weights, saved as an ngi model file, and its float64 output on a random input
+(per-pixel NCHW images and [N, C] point lists).
+
+Usage: /usr/bin/python3 tests/parity/make_mlp_parity.py --out DIR
+Writes DIR/<case>.safetensors, DIR/<case>_input.npy, DIR/<case>_expected.npy
+and DIR/cases.json. Deterministic.
+"""
+
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+import torch
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
+
+import ngi_convert  # noqa: E402
+
+ACTIVATIONS = {
+    "none": lambda x, s: x,
+    "relu": lambda x, s: torch.relu(x),
+    "leaky_relu": lambda x, s: torch.nn.functional.leaky_relu(x, s),
+    "tanh": lambda x, s: torch.tanh(x),
+    "sigmoid": lambda x, s: torch.sigmoid(x),
+    "exp": lambda x, s: torch.exp(torch.clamp(x, max=88.0)),
+}
+
+# seed 001's sizes (48 inputs, tanh), encodings in both orders, a width beyond the fused kernel (dense path).
+CASES = [
+    {"name": "ao_16x8", "inputs": 48, "layers": [(16, "tanh"), (8, "tanh"), (1, "none")], "encoding": None,
+     "shape": "points", "n": 777, "half": False, "seed": 1},
+    {"name": "ao_64x32_fp16", "inputs": 48, "layers": [(64, "tanh"), (32, "tanh"), (1, "none")], "encoding": None,
+     "shape": "points", "n": 513, "half": True, "seed": 2},
+    {"name": "band_encoded", "inputs": 5, "layers": [(24, "relu"), (17, "sigmoid"), (3, "exp")],
+     "encoding": {"bands": 4, "first_exponent": -1, "pi": True, "include_input": True, "order": "band"},
+     "shape": "image", "h": 9, "w": 13, "half": False, "seed": 3},
+    {"name": "component_encoded_wide", "inputs": 3, "layers": [(200, "leaky_relu"), (129, "leaky_relu"), (4, "none")],
+     "encoding": {"bands": 3, "first_exponent": 0, "pi": True, "include_input": False, "order": "component"},
+     "shape": "image", "h": 8, "w": 8, "half": False, "seed": 4},
+]
+
+
+def encode(x, enc):
+    """x: [n, C] float64 -> [n, encoded width], per CONVENTIONS section 13."""
+    if not enc or enc["bands"] == 0:
+        return x
+    parts = [x] if enc["include_input"] else []
+    scales = [2.0 ** (enc["first_exponent"] + b) * (math.pi if enc["pi"] else 1.0) for b in range(enc["bands"])]
+    if enc["order"] == "band":
+        for s in scales:
+            parts += [torch.sin(s * x), torch.cos(s * x)]
+        return torch.cat(parts, dim=1)
+    per_comp = []
+    for c in range(x.shape[1]):
+        for s in scales:
+            per_comp += [torch.sin(s * x[:, c:c + 1]), torch.cos(s * x[:, c:c + 1])]
+    return torch.cat(parts + per_comp, dim=1)
+
+
+def make_case(case, out_dir):
+    g = torch.Generator().manual_seed(case["seed"])
+    enc = case["encoding"]
+    width = case["inputs"] if not enc else (case["inputs"] if enc["include_input"] else 0) + 2 * enc["bands"] * case["inputs"]
+    tensors, layers, weights = {}, [], []
+    in_f = width
+    for i, (out_f, act) in enumerate(case["layers"]):
+        bound = 1.0 / math.sqrt(in_f)  # nn.Linear's default init range
+        w = (torch.rand((out_f, in_f), generator=g, dtype=torch.float64) * 2 - 1) * bound * 1.7
+        b = (torch.rand((out_f,), generator=g, dtype=torch.float64) * 2 - 1) * bound
+        if case["half"]:  # the file stores F16: the reference uses exactly the stored values
+            w, b = w.half().double(), b.half().double()
+        tensors[f"layers.{i}.weight"] = w.float().numpy()
+        tensors[f"layers.{i}.bias"] = b.float().numpy()
+        layer = {"out": out_f, "activation": act}
+        if act == "leaky_relu":
+            layer["slope"] = 0.1
+        layers.append(layer)
+        weights.append((w, b, act, layer.get("slope", 0.01)))
+        in_f = out_f
+    config = {"format_version": 1, "family": "mlp", "input_nc": case["inputs"], "layers": layers,
+              "source": f"tests/parity/make_mlp_parity.py {case['name']}"}
+    if enc:
+        config["encoding"] = enc
+    model_file = f"{case['name']}.safetensors"
+    ngi_convert.write_model(os.path.join(out_dir, model_file), tensors, config, half=case["half"])
+
+    if case["shape"] == "points":
+        x = torch.rand((case["n"], case["inputs"]), generator=g) * 2 - 1
+        items = x.double()
+    else:
+        x = torch.rand((1, case["inputs"], case["h"], case["w"]), generator=g) * 2 - 1
+        items = x.double().reshape(case["inputs"], -1).t()
+    h = encode(items, enc)
+    for w, b, act, slope in weights:
+        h = ACTIVATIONS[act](h @ w.t() + b, slope)
+    if case["shape"] == "points":
+        y = h.float()
+    else:
+        y = h.t().reshape(1, -1, case["h"], case["w"]).float()
+    input_file, expected_file = f"{case['name']}_input.npy", f"{case['name']}_expected.npy"
+    np.save(os.path.join(out_dir, input_file), x.numpy())
+    np.save(os.path.join(out_dir, expected_file), y.numpy())
+    print(f"{case['name']:26s} input {tuple(x.shape)} output {tuple(y.shape)} max|y| {y.abs().max().item():.4f}")
+    return {"name": case["name"], "model": model_file, "input": input_file, "expected": expected_file,
+            "dtype": "F16" if case["half"] else "F32", "widest": max([width] + [o for o, _ in case["layers"]])}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True)
+    args = parser.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    cases = [make_case(c, args.out) for c in CASES]
+    with open(os.path.join(args.out, "cases.json"), "w") as f:
+        json.dump(cases, f, indent=2)
+        f.write("\n")
+    print(f"wrote {len(cases)} cases to {args.out}")
+
+
+if __name__ == "__main__":
+    main()
