@@ -49,14 +49,24 @@ struct _cl_command_queue;
 struct _cl_mem;
 struct _cl_event;
 
-typedef enum ngi_status {
+/* Every enum is int-sized (its *_MAX_ENUM member is INT_MAX, as in Vulkan) and, in C++, has the fixed underlying
+ * type int: any int a caller passes is a value of the type, so an out-of-range one is a refused argument
+ * (NGI_ERROR_INVALID_ARGUMENT), never undefined behaviour inside the library. */
+#ifdef __cplusplus
+#define NGI_ENUM(name) enum name : int
+#else
+#define NGI_ENUM(name) enum name
+#endif
+
+typedef NGI_ENUM(ngi_status) {
     NGI_OK = 0,
     NGI_ERROR_INVALID_ARGUMENT = 1, /* a NULL pointer, an impossible size or value passed to the API */
     NGI_ERROR_INPUT = 2,            /* bad user input: file, shape, device spec, a cl_mem of another context */
     NGI_ERROR_OPENCL = 3,           /* an OpenCL call failed; see ngi_last_cl_error() */
     NGI_ERROR_OUT_OF_MEMORY = 4,    /* host or device memory exhausted (also CL_OUT_OF_RESOURCES, ...) */
     NGI_ERROR_INVALID_HANDLE = 5,   /* a NULL handle, or one whose last reference was released */
-    NGI_ERROR_INTERNAL = 6          /* anything else: a bug in ngi */
+    NGI_ERROR_INTERNAL = 6,         /* anything else: a bug in ngi */
+    NGI_STATUS_MAX_ENUM = 0x7FFFFFFF
 } ngi_status;
 
 typedef struct ngi_device ngi_device;
@@ -74,7 +84,7 @@ typedef void (*ngi_error_callback)(void* user, ngi_status status, const char* me
 NGI_API void ngi_set_error_callback(ngi_error_callback callback, void* user);
 
 /* --- devices -------------------------------------------------------------------------------------------------- */
-typedef enum ngi_device_property {
+typedef NGI_ENUM(ngi_device_property) {
     NGI_DEVICE_NAME = 0,           /* string */
     NGI_DEVICE_PLATFORM = 1,       /* string: the OpenCL platform's name */
     NGI_DEVICE_VENDOR = 2,         /* string */
@@ -88,7 +98,8 @@ typedef enum ngi_device_property {
     NGI_DEVICE_COMPUTE_UNITS = 16,
     NGI_DEVICE_PLATFORM_INDEX = 17, /* the "P" of a "P:D" spec; -1 for a device from ngi_device_from_opencl that
                                        the platform enumeration does not list */
-    NGI_DEVICE_DEVICE_INDEX = 18
+    NGI_DEVICE_DEVICE_INDEX = 18,
+    NGI_DEVICE_PROPERTY_MAX_ENUM = 0x7FFFFFFF
 } ngi_device_property;
 
 /* Every OpenCL device of every platform, index 0 .. count - 1 (in "P:D" order). */
@@ -136,15 +147,17 @@ NGI_API ngi_status ngi_buffer_retain(ngi_buffer* buffer);
 NGI_API ngi_status ngi_buffer_release(ngi_buffer* buffer);
 
 /* --- models --------------------------------------------------------------------------------------------------- */
-typedef enum ngi_bn_mode {
+typedef NGI_ENUM(ngi_bn_mode) {
     NGI_BN_FROM_FILE = 0,  /* what the model file says */
     NGI_BN_RUNNING = 1,    /* running statistics (eval mode) */
-    NGI_BN_PER_IMAGE = 2   /* statistics of each image (train mode, batch 1) */
+    NGI_BN_PER_IMAGE = 2,  /* statistics of each image (train mode, batch 1) */
+    NGI_BN_MODE_MAX_ENUM = 0x7FFFFFFF
 } ngi_bn_mode;
-typedef enum ngi_dropout {
+typedef NGI_ENUM(ngi_dropout) {
     NGI_DROPOUT_FROM_FILE = 0,
     NGI_DROPOUT_OFF = 1,
-    NGI_DROPOUT_SEEDED = 2  /* the seeded, reproducible mask of docs/MODEL_FORMAT.md */
+    NGI_DROPOUT_SEEDED = 2, /* the seeded, reproducible mask of docs/MODEL_FORMAT.md */
+    NGI_DROPOUT_MAX_ENUM = 0x7FFFFFFF
 } ngi_dropout;
 
 NGI_API ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_model** out);
@@ -168,12 +181,26 @@ NGI_API ngi_status ngi_model_release(ngi_model* model);
  * Frame planes: float32 [face][16][N][N], faces in the order front, back, left, right, up, down (a single-view model
  * reads the front face only and accepts 1 face), 16 planes per face: albedo RGB 0-2, normal XYZ 3-5, depth 6,
  * direct RGB 7-9, emission RGB 10-12, env RGB 13-15. Outputs: N x N x 3 planar float32 each. */
-typedef enum ngi_global_view_mode { NGI_GLOBAL_VIEW_THESIS = 0, NGI_GLOBAL_VIEW_EQUIRECT = 1 } ngi_global_view_mode;
-typedef enum ngi_lumination_transfer { NGI_TRANSFER_REINHARD = 0, NGI_TRANSFER_CLAMP = 1 } ngi_lumination_transfer;
-typedef enum ngi_tone_curve { NGI_TONE_ACES = 0, NGI_TONE_REINHARD = 1, NGI_TONE_CLAMP = 2 } ngi_tone_curve;
-typedef enum ngi_frame_flags {
+typedef NGI_ENUM(ngi_global_view_mode) {
+    NGI_GLOBAL_VIEW_THESIS = 0,
+    NGI_GLOBAL_VIEW_EQUIRECT = 1,
+    NGI_GLOBAL_VIEW_MODE_MAX_ENUM = 0x7FFFFFFF
+} ngi_global_view_mode;
+typedef NGI_ENUM(ngi_lumination_transfer) {
+    NGI_TRANSFER_REINHARD = 0,
+    NGI_TRANSFER_CLAMP = 1,
+    NGI_TRANSFER_MAX_ENUM = 0x7FFFFFFF
+} ngi_lumination_transfer;
+typedef NGI_ENUM(ngi_tone_curve) {
+    NGI_TONE_ACES = 0,
+    NGI_TONE_REINHARD = 1,
+    NGI_TONE_CLAMP = 2,
+    NGI_TONE_CURVE_MAX_ENUM = 0x7FFFFFFF
+} ngi_tone_curve;
+typedef NGI_ENUM(ngi_frame_flags) {
     NGI_FRAME_EMISSION = 1, /* the emission planes hold data */
-    NGI_FRAME_ENV = 2       /* the env planes hold data */
+    NGI_FRAME_ENV = 2,      /* the env planes hold data */
+    NGI_FRAME_FLAGS_MAX_ENUM = 0x7FFFFFFF
 } ngi_frame_flags;
 
 /* n: face size, even, 2..2048. */

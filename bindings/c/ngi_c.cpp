@@ -234,6 +234,7 @@ const char* ngi_status_name(ngi_status s) {
         case NGI_ERROR_OUT_OF_MEMORY: return "NGI_ERROR_OUT_OF_MEMORY";
         case NGI_ERROR_INVALID_HANDLE: return "NGI_ERROR_INVALID_HANDLE";
         case NGI_ERROR_INTERNAL: return "NGI_ERROR_INTERNAL";
+        case NGI_STATUS_MAX_ENUM: break;
     }
     return "NGI_UNKNOWN_STATUS";
 }

@@ -135,6 +135,8 @@ static void test_model(ngi_device* dev, const char* models) {
                 "/nonexistent.safetensors");
     CHECK_FAILS(ngi_model_load_with_options(dev, path, (ngi_bn_mode)7, NGI_DROPOUT_OFF, &m), NGI_ERROR_INVALID_ARGUMENT,
                 "ngi_model_load_with_options", "bn_mode");
+    CHECK_FAILS(ngi_model_load_with_options(dev, path, NGI_BN_FROM_FILE, (ngi_dropout)-1, &m), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_model_load_with_options", "dropout -1");
     CHECK(ngi_model_load_with_options(dev, path, NGI_BN_FROM_FILE, NGI_DROPOUT_OFF, &m) == NGI_OK);
     CHECK(ngi_model_channels(m, &in_nc, &out_nc, &downs) == NGI_OK && in_nc == 10 && out_nc == 3 && downs == 6);
     in_bytes = (size_t)in_nc * h * w * sizeof(float);

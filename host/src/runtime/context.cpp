@@ -210,6 +210,10 @@ Context::~Context() {
 }
 
 cl_program Context::program(const std::string& file, const std::string& defines) {
+    // One lock for the cache and the build: two threads asking for the same program build it once (and never race
+    // on its cache file); different programs of one device build one after the other (a Device is shared by
+    // threads, and a build is a one-time cost per process, usually served from the disk cache).
+    std::lock_guard<std::mutex> lock(programs_mutex_);
     const std::string key = file + '\n' + defines;
     if (auto it = programs_.find(key); it != programs_.end()) return it->second;
 

@@ -174,6 +174,7 @@ private:
     DeviceOptions options_;
     cl_context context_ = nullptr;
     cl_command_queue queue_ = nullptr;
+    std::mutex programs_mutex_;                   // guards programs_ (builds run under it: see program())
     std::map<std::string, cl_program> programs_;  // key: file + '\n' + defines
     std::mutex attached_mutex_;
     std::map<std::string, std::shared_ptr<void>> attached_;
