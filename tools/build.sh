@@ -5,4 +5,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=${NGI_BUILD_DIR:-build}
 cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >&2
-cmake --build "$dir" -j "$(nproc)" >&2
+# NGI_BUILD_TARGETS="ngi_tests": build only these targets (the tsan stage needs only the test binary).
+# shellcheck disable=SC2086
+cmake --build "$dir" -j "$(nproc)" ${NGI_BUILD_TARGETS:+--target $NGI_BUILD_TARGETS} >&2

@@ -5,14 +5,17 @@
 #             path is the one Mesa uses for GPUs
 #   oclgrind  the [oclgrind] kernel tests (small shapes) in the oclgrind simulator: out-of-bounds accesses, data
 #             races, uninitialized reads, barrier divergence and API errors must number zero
+#   install   installs the build into a temporary prefix; a C99 program (pkg-config) and a C++ program
+#             (find_package(ngi)) are built against the installed files and run (tools/ci/install_consumers.sh)
 #   sanitize  the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer, on PoCL
+#   tsan      the [threads] tests (one device, several threads, models and pipelines) under ThreadSanitizer
 #   fuzz      every libFuzzer target for a bounded time (tools/fuzz.sh)
 # NGI_TEST_STAGES="pocl rusticl" runs a subset. A stage whose platform is missing fails (install-deps.sh installs
 # them all); NGI_TEST_ALLOW_MISSING=1 turns that into a skip with the reason printed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-stages=${NGI_TEST_STAGES:-pocl rusticl oclgrind sanitize fuzz}
+stages=${NGI_TEST_STAGES:-pocl install rusticl oclgrind sanitize tsan fuzz}
 bash tools/install-deps.sh
 
 passed=0 failed=0 report=()
@@ -44,7 +47,7 @@ missing() {  # stage, reason
 }
 
 needs_release_build=0
-for s in $stages; do case $s in pocl|rusticl|oclgrind) needs_release_build=1 ;; esac; done
+for s in $stages; do case $s in pocl|install|rusticl|oclgrind) needs_release_build=1 ;; esac; done
 [ $needs_release_build = 1 ] && bash tools/build.sh
 
 for stage in $stages; do
@@ -55,6 +58,12 @@ for stage in $stages; do
       caches "$root/build"
       if n=$(NGI_TEST_DEVICE=pocl run_ctest build); then stage_result pocl ok "$n" $((SECONDS - start))
       else stage_result pocl failed "$n" $((SECONDS - start)); fi ;;
+    install)
+      caches "$root/build"
+      if ! command -v pkg-config > /dev/null; then missing install "pkg-config not installed"
+      elif n=$(NGI_DEVICE=pocl bash tools/ci/install_consumers.sh build); then
+        stage_result install ok "$n" $((SECONDS - start))
+      else stage_result install failed 0 $((SECONDS - start)); fi ;;
     rusticl)
       caches "$root/build"
       export RUSTICL_ENABLE=llvmpipe
@@ -80,6 +89,17 @@ for stage in $stages; do
       if n=$(NGI_TEST_DEVICE=pocl run_ctest build-sanitize); then stage_result sanitize ok "$n" $((SECONDS - start))
       else stage_result sanitize failed "$n" $((SECONDS - start)); fi
       unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS ;;
+    tsan)
+      NGI_BUILD_DIR=build-tsan NGI_BUILD_TARGETS=ngi_tests bash tools/build.sh -DNGI_SANITIZE=thread \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_BUILD_PERF=OFF
+      caches "$root/build-tsan"
+      # No suppressions: PoCL's threads synchronize through pthreads, which TSan intercepts; a report means a race
+      # in ngi (docs/RELIABILITY.md "ThreadSanitizer").
+      if TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" NGI_TEST_DEVICE=pocl \
+          build-tsan/tests/ngi_tests "[threads]" >&2; then
+        stage_result tsan ok "$(build-tsan/tests/ngi_tests "[threads]" --list-test-names-only | grep -c .)" \
+          $((SECONDS - start))
+      else stage_result tsan failed 0 $((SECONDS - start)); fi ;;
     fuzz)
       # The per-target lines go through a file, not tee: reopening /dev/stderr would write past (or truncate)
       # a CI log that stdout and stderr share.
@@ -90,7 +110,7 @@ for stage in $stages; do
         stage_result fuzz ok "$(grep -c ' execs ' "$fuzz_out" || true)" $((SECONDS - start))
       else cat "$fuzz_out" >&2; stage_result fuzz failed 0 $((SECONDS - start)); fi
       rm -f "$fuzz_out" ;;
-    *) echo "unknown stage '$stage' (pocl rusticl oclgrind sanitize fuzz)" >&2; exit 2 ;;
+    *) echo "unknown stage '$stage' (pocl install rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;;
   esac
 done
 
