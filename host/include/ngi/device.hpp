@@ -1,6 +1,7 @@
 // Device discovery and selection. A Device owns (or, created from the application's OpenCL objects, shares) an
 // OpenCL context and one in-order queue, and holds the compiled-program cache. Copies of a Device are handles to
-// the same device state.
+// the same device state. Threads: a Device may be used by any number of threads at once (docs/ARCHITECTURE.md
+// "Threading"); the objects made from it (Model, SurroundPipeline, Renderer, DeviceBuffer) by one thread at a time.
 #pragma once
 #include <cstddef>
 #include <memory>

@@ -1,4 +1,5 @@
 // A trained generator loaded from an ngi model file (.safetensors + architecture metadata) and run on a Device.
+// A Model is used by one thread at a time; several Models may run on one Device from different threads.
 #pragma once
 #include <cstdint>
 #include <memory>

@@ -4,7 +4,7 @@
 //   model output [1, 3, 2N, 4N] --front_lightmap--> N x N linear lightmap --compose--> final --tonemap--> display
 //
 // A SurroundPipeline is built for one face size N; it builds its lookup tables once and keeps its device
-// buffers between frames. It is not thread-safe (one in-order device queue).
+// buffers between frames. It is used by one thread at a time; pipelines of other threads may share its Device.
 //
 // One frame in one call: enqueue() (device in, device out, asynchronous, no host transfer) or run() (host in, host
 // out: one upload of the frame's planes, one download of the outputs asked for). The step-by-step calls below
