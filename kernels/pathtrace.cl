@@ -562,3 +562,38 @@ __kernel void pt_patch_weights(SCENE_ARGS, int count, __global float* weight_out
     }
     weight_out[i] = w;
 }
+
+// Ambient occlusion (seed 001): the accessibility of the surface seen through pixel (col, row) of face `face` =
+// the fraction of cosine-weighted hemisphere rays from the hit point that travel max_dist without meeting a solid
+// block (1 = unoccluded, 0 = enclosed); for a cosine-weighted estimator that is (1/pi) * integral of V cos over the
+// hemisphere. 1 where the primary ray escapes (no surface: evaluations mask it). out[pix]; global size n^2.
+// Rays [first, last) of spp, as pt_features: the running count of unoccluded rays is kept in `out` between chunks
+// and divided by spp in the last one, so any split gives the same bits.
+__kernel void pt_ao(SCENE_ARGS, __global const float* cam, int face, int n, int spp, int first, int last,
+                    float max_dist, uint seed, __global float* out) {
+    const int pix = get_global_id(0);
+    const int npix = n * n;
+    if (pix >= npix) return;
+    MAKE_SCENE(s);
+    const int row = pix / n, col = pix - row * n;
+    float3 look;
+    const float3 o = (float3)(cam[0], cam[1], cam[2]);
+    const float3 d = pixel_ray(cam, face, col, row, n, &look);
+    uint rays = 0;
+    const Hit h = trace(&s, o, d, T_INF, &rays);
+    if (h.mat == 0) {
+        out[pix] = 1.0f;
+        return;
+    }
+    const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
+    float open = first > 0 ? out[pix] : 0.0f;
+    Rng r;
+    r.a = (uint)(face * npix + pix); r.c = seed ^ 0x5bd1e995u;
+    for (int i = first; i < last; ++i) {
+        r.b = (uint)i; r.n = 0;
+        const float3 w = cosine_sample(nrm, rng2(&r));
+        const Hit q = trace(&s, p + RAY_OFFSET * nrm, w, max_dist, &rays);
+        if (q.mat == 0) open += 1.0f;
+    }
+    out[pix] = last >= spp ? open / (float)max(spp, 1) : open;
+}

@@ -92,6 +92,13 @@ public:
     void render_planes(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
                        const DeviceBuffer& planes, RenderStats* stats = nullptr);
 
+    // Ambient occlusion of one face (seed 001), 1 x N x N: per pixel the fraction of `rays` cosine-weighted hemisphere
+    // rays from the visible surface that travel `max_distance` metres (> 0; infinity allowed) without meeting a block:
+    // 1 = unoccluded; 1 where the pixel sees no surface. Deterministic in settings.seed. settings.n is the size;
+    // the lighting and the other settings are not used.
+    Image render_ao(const CameraPose& pose, const RenderSettings& settings, int rays, float max_distance,
+                    Face face = Face::Front);
+
     // The reference lighting of one face (3 x N x N) and, if `variance` is given, the per-pixel variance of that
     // estimate (the sample variance / spp, per channel), for error bars.
     Image render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,

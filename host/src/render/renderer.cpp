@@ -155,7 +155,8 @@ struct Renderer::Impl {
     int buffers_n = 0;
     int nlights = 0;
     float inv_total = 0.0f;
-    detail::Kernel k_features, k_reference;
+    detail::Kernel k_features, k_reference, k_ao;
+    detail::Buffer ao;  // render_ao's output
     // Work-group size of every path-tracer launch: kLocal, or less where the driver allows fewer work-items for
     // these register-heavy kernels than kLocal (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE
     // of 32 and a conforming driver rejects a larger local size). Results do not depend on it.
@@ -358,7 +359,8 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights");
     m.k_features = m.ctx->kernel("pathtrace", "pt_features");
     m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
-    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference}) {
+    m.k_ao = m.ctx->kernel("pathtrace", "pt_ao");
+    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao}) {
         std::size_t wg = 0;
         if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
                 CL_SUCCESS &&
@@ -433,6 +435,28 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     }
     if (s.reference) fr.reference = render_reference(pose, lighting, s, nullptr, stats);
     return fr;
+}
+
+Image Renderer::render_ao(const CameraPose& pose, const RenderSettings& s, int rays, float max_distance, Face face) {
+    check_settings(s);
+    if (rays < 1 || rays > (1 << 20))
+        throw InputError("render ambient occlusion: rays per pixel " + std::to_string(rays) + " not in 1..1048576");
+    if (!(max_distance > 0.0f))
+        throw InputError("render ambient occlusion: max distance " + std::to_string(max_distance) + " must be > 0");
+    Impl& m = *impl_;
+    m.upload_frame(pose, Lighting{}, s);
+    const std::size_t npix = std::size_t(s.n) * s.n;
+    if (m.ao.bytes() < npix * sizeof(float)) m.ao = m.ctx->alloc(npix * sizeof(float), "render: ambient occlusion");
+    const int chunk = m.samples_per_launch(0, "render: ambient occlusion");
+    const float dist = std::min(max_distance, 1.0e30f);  // the tracer's "no limit"
+    for (int first = 0; first < rays; first += chunk) {
+        const int last = std::min(rays, first + chunk);
+        m.set_scene_args(m.k_ao, s, m.cam, int(face), s.n, rays, first, last, dist, std::uint32_t(s.seed), m.ao);
+        m.ctx->launch(m.k_ao, 1, &npix, &m.local);
+    }
+    Image ao(s.n, s.n, 1);
+    m.ctx->read(m.ao, 0, npix * sizeof(float), ao.data.data(), "render: read ambient occlusion");
+    return ao;
 }
 
 Image Renderer::render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,
