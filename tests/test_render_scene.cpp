@@ -44,7 +44,7 @@ std::string vox_error(const std::string& path) {
 }  // namespace
 
 TEST_CASE("procedural families: deterministic per seed, distinct, lit as described", "[render]") {
-    REQUIRE(scene_families() == std::vector<std::string>{"room", "street", "cave", "backlit", "bleed"});
+    REQUIRE(scene_families() == std::vector<std::string>{"room", "street", "cave", "backlit", "bleed", "sculpture"});
     for (const auto& fam : scene_families()) {
         INFO(fam);
         const VoxelScene a = generate_scene(fam, 3), b = generate_scene(fam, 3), c = generate_scene(fam, 4);

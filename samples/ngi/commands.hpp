@@ -17,5 +17,6 @@ int cmd_merge(int argc, char** argv);
 int cmd_lightmap(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_dataset(int argc, char** argv);
+int cmd_ao_data(int argc, char** argv);
 
 }  // namespace ngi_cli

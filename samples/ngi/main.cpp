@@ -35,12 +35,17 @@ const ngi_cli::Command kCommands[] = {
      ngi_cli::cmd_lightmap},
     {"render", "ngi render --scene SPEC --out DIR [--frame K] [--face N] [--spp S] [--time HOURS] [--device D]\n"
                "           [--feature-spp F] [--bounces B] [--path-frames P] [--no-reference] [--preview PNG]\n"
-               "                                 path-trace one frame folder; SPEC = room|street|cave|backlit|bleed"
+               "                                 path-trace one frame folder; SPEC = room|street|cave|backlit|bleed|sculpture"
                "[:seed=S] or a .vox file",
      ngi_cli::cmd_render},
     {"dataset", "ngi dataset --config FILE.json --out DIR [--device D]\n"
                 "                                 render a train/test dataset (resumable; see configs/)",
      ngi_cli::cmd_dataset},
+    {"ao-data", "ngi ao-data --scene SPEC --out DIR [--views 128] [--heldout-views 32] [--n 256] [--rays 256]\n"
+                "            [--max-distance 4] [--sigma 1.5] [--device D]\n"
+                "                                 seed 001's AO data: orbit views of one object (smooth normals,\n"
+                "                                 face normals, depth, ray-traced AO per view; resumable)",
+     ngi_cli::cmd_ao_data},
 };
 
 void usage(FILE* out) {

@@ -99,6 +99,16 @@ public:
     Image render_ao(const CameraPose& pose, const RenderSettings& settings, int rays, float max_distance,
                     Face face = Face::Front);
 
+    // Object-space geometry of one face for per-pixel networks (seed 001), 7 x N x N: the smooth normal (3), the
+    // voxel face normal (3) and the planar depth in metres (1) of the visible surface; zero normals and depth 1e4
+    // where the pixel sees no surface. Scenes are not transformed, so object space is world space (+y up).
+    // Smooth normal = minus the gradient of the block occupancy blurred by a Gaussian of `smooth_sigma` blocks
+    // (0..kMaxSmoothSigma; 0 = the face normal), the face normal where that gradient vanishes or points into the
+    // face. Voxel face normals take only six values; the smooth ones vary across a face near edges and corners.
+    static constexpr float kMaxSmoothSigma = 4.0f;
+    Image render_geometry(const CameraPose& pose, const RenderSettings& settings, float smooth_sigma,
+                          Face face = Face::Front);
+
     // The reference lighting of one face (3 x N x N) and, if `variance` is given, the per-pixel variance of that
     // estimate (the sample variance / spp, per channel), for error bars.
     Image render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,

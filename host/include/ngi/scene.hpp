@@ -57,6 +57,7 @@ struct VoxelScene {
 //   cave     tunnels carved through rock plus straight mine corridors, a few openings to the sky, glowing crystals
 //   backlit  a room lit only through a large opening behind the camera (the camera looks away from it)
 //   bleed    a room with strongly coloured walls and blocks in sunlight through a skylight (colour bleeding)
+//   sculpture  one free-standing smooth object (metaballs, a torus, dents) in a 64^3 grid: per-object networks (AO)
 const std::vector<std::string>& scene_families();
 VoxelScene generate_scene(const std::string& family, std::uint32_t seed);
 

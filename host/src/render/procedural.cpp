@@ -401,10 +401,48 @@ VoxelScene bleed(std::uint32_t seed) {
     return s;
 }
 
+// ---- sculpture: one free-standing object, for per-object networks (seed 001's ambient-occlusion MLP) --------------
+// A 64^3 grid holding a smooth solid: the union of a torus and 5..8 metaballs (a field sum of r^2 / d^2 above 1),
+// minus a few spherical dents, so that it has convex bumps, saddles, concave creases and a hole. No ground, no
+// lamps: the object alone, as the seed renders its Bunny or Dragon.
+VoxelScene sculpture(std::uint32_t seed) {
+    Rand r(seed, 6);
+    const int N = 64;
+    VoxelScene s({N, N, N}, "sculpture");
+    const std::uint8_t m = add(s, r, glm::vec3(0.6f));
+    const glm::vec3 c(N * 0.5f);
+    std::vector<glm::vec4> balls;  // centre, radius
+    for (int k = 0, n = r.irange(5, 8); k < n; ++k)
+        balls.emplace_back(c + glm::vec3(r.range(-13, 13), r.range(-13, 13), r.range(-13, 13)), r.range(4.5f, 8.0f));
+    std::vector<glm::vec4> dents;
+    for (int k = 0, n = r.irange(2, 4); k < n; ++k)
+        dents.emplace_back(c + glm::vec3(r.range(-18, 18), r.range(-18, 18), r.range(-18, 18)), r.range(4, 8));
+    const float R = r.range(16, 20), tube = r.range(3.0f, 4.5f);  // torus about an axis tilted from +y
+    const glm::vec3 axis = glm::normalize(glm::vec3(r.range(-0.6f, 0.6f), 1.0f, r.range(-0.6f, 0.6f)));
+    for (int z = 0; z < N; ++z)
+        for (int y = 0; y < N; ++y)
+            for (int x = 0; x < N; ++x) {
+                const glm::vec3 p = glm::vec3(x, y, z) + 0.5f;
+                float field = 0;
+                for (const auto& b : balls) {
+                    const glm::vec3 d = p - glm::vec3(b);
+                    field += b.w * b.w / std::max(glm::dot(d, d), 1e-3f);
+                }
+                const glm::vec3 q = p - c;
+                const float h = glm::dot(q, axis);
+                const float ring = glm::length(q - h * axis) - R;
+                bool solid = field > 1.0f || ring * ring + h * h < tube * tube;
+                for (const auto& d : dents) solid = solid && glm::length(p - glm::vec3(d)) > d.w;
+                if (solid && x > 0 && y > 0 && z > 0 && x < N - 1 && y < N - 1 && z < N - 1) s.set({x, y, z}, m);
+            }
+    set_region(s, glm::vec3(0.5f), glm::vec3(N - 0.5f));
+    return s;
+}
+
 }  // namespace
 
 const std::vector<std::string>& scene_families() {
-    static const std::vector<std::string> f = {"room", "street", "cave", "backlit", "bleed"};
+    static const std::vector<std::string> f = {"room", "street", "cave", "backlit", "bleed", "sculpture"};
     return f;
 }
 
@@ -415,6 +453,7 @@ VoxelScene generate_scene(const std::string& family, std::uint32_t seed) {
     else if (family == "cave") s = cave(seed);
     else if (family == "backlit") s = backlit(seed);
     else if (family == "bleed") s = bleed(seed);
+    else if (family == "sculpture") s = sculpture(seed);
     else throw InputError("unknown scene family '" + family + "'");
     s.name = family + ":seed=" + std::to_string(seed);
     return s;

@@ -155,8 +155,9 @@ struct Renderer::Impl {
     int buffers_n = 0;
     int nlights = 0;
     float inv_total = 0.0f;
-    detail::Kernel k_features, k_reference, k_ao;
+    detail::Kernel k_features, k_reference, k_ao, k_geometry;
     detail::Buffer ao;  // render_ao's output
+    detail::Buffer geometry;  // render_geometry's output
     // Work-group size of every path-tracer launch: kLocal, or less where the driver allows fewer work-items for
     // these register-heavy kernels than kLocal (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE
     // of 32 and a conforming driver rejects a larger local size). Results do not depend on it.
@@ -360,7 +361,8 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.k_features = m.ctx->kernel("pathtrace", "pt_features");
     m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
     m.k_ao = m.ctx->kernel("pathtrace", "pt_ao");
-    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao}) {
+    m.k_geometry = m.ctx->kernel("pathtrace", "pt_geometry");
+    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry}) {
         std::size_t wg = 0;
         if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
                 CL_SUCCESS &&
@@ -457,6 +459,23 @@ Image Renderer::render_ao(const CameraPose& pose, const RenderSettings& s, int r
     Image ao(s.n, s.n, 1);
     m.ctx->read(m.ao, 0, npix * sizeof(float), ao.data.data(), "render: read ambient occlusion");
     return ao;
+}
+
+Image Renderer::render_geometry(const CameraPose& pose, const RenderSettings& s, float smooth_sigma, Face face) {
+    check_settings(s);
+    if (!(smooth_sigma >= 0.0f && smooth_sigma <= kMaxSmoothSigma))
+        throw InputError("render geometry: smoothing sigma " + std::to_string(smooth_sigma) + " not in 0.." +
+                         std::to_string(kMaxSmoothSigma) + " blocks");
+    Impl& m = *impl_;
+    m.upload_frame(pose, Lighting{}, s);
+    const std::size_t npix = std::size_t(s.n) * s.n;
+    if (m.geometry.bytes() < 7 * npix * sizeof(float))
+        m.geometry = m.ctx->alloc(7 * npix * sizeof(float), "render: geometry");
+    m.set_scene_args(m.k_geometry, s, m.cam, int(face), s.n, smooth_sigma, m.geometry);
+    m.ctx->launch(m.k_geometry, 1, &npix, &m.local);
+    Image g(s.n, s.n, 7);
+    m.ctx->read(m.geometry, 0, 7 * npix * sizeof(float), g.data.data(), "render: read geometry");
+    return g;
 }
 
 Image Renderer::render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,

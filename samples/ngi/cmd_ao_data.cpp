@@ -1,0 +1,168 @@
+// ngi ao-data: the data of seed 001's ambient-occlusion MLP for one object: views on an orbit around its bounding
+// sphere, each an "AO frame folder" (docs/RESULTS_AO.md): normal.npy (smooth object-space normals, [3, N, N]),
+// face_normal.npy ([3, N, N]), depth.npy ([1, N, N], planar depth, 1e4 = no surface) and ao.npy ([1, N, N], the
+// ray-traced reference, 1 = unoccluded). Two orbits: "orbit" (the seed's rotating camera, training data) and
+// "heldout" (other azimuths and heights, for evaluation). Resumable: finished views are kept, a view is written
+// all-or-nothing; progress with an ETA on stderr.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/constants.hpp>
+
+#include "commands.hpp"
+#include "ngi/error.hpp"
+#include "ngi/output_folder.hpp"
+#include "ngi/render.hpp"
+#include "ngi/scene.hpp"
+#include "ngi/tensor.hpp"
+
+namespace ngi_cli {
+namespace {
+
+struct Sphere {
+    glm::vec3 centre{0.0f};
+    float radius = 0.0f;
+};
+
+// Bounding sphere of the solid blocks: the centre of their bounding box, the farthest block corner from it.
+Sphere bounding_sphere(const ngi::VoxelScene& s) {
+    glm::ivec3 lo(s.size), hi(-1);
+    for (int z = 0; z < s.size.z; ++z)
+        for (int y = 0; y < s.size.y; ++y)
+            for (int x = 0; x < s.size.x; ++x)
+                if (s.solid({x, y, z})) {
+                    lo = glm::min(lo, glm::ivec3(x, y, z));
+                    hi = glm::max(hi, glm::ivec3(x, y, z));
+                }
+    if (hi.x < 0) throw ngi::InputError("ngi ao-data: scene " + s.name + " has no solid block");
+    Sphere b;
+    b.centre = (glm::vec3(lo) + glm::vec3(hi + 1)) * 0.5f;
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (s.solid({x, y, z}))
+                    for (int c = 0; c < 8; ++c) {
+                        const glm::vec3 p(x + (c & 1), y + (c >> 1 & 1), z + (c >> 2 & 1));
+                        b.radius = std::max(b.radius, glm::length(p - b.centre));
+                    }
+    return b;
+}
+
+// View k of an orbit around the sphere at 1.15 x the distance at which it fills the 90-degree face.
+// "orbit": azimuth 2 pi k / count, elevation 35 deg sin(3 x azimuth) (three up-and-down swings per turn);
+// "heldout": azimuths half a step (of its own count) off, elevation 50 deg sin(2 x azimuth + 1).
+ngi::CameraPose orbit_pose(const Sphere& b, bool heldout, int k, int count) {
+    const float two_pi = glm::two_pi<float>();
+    const float az = heldout ? two_pi * (float(k) + 0.5f) / float(count) + 0.1f : two_pi * float(k) / float(count);
+    const float el = heldout ? glm::radians(50.0f) * std::sin(2.0f * az + 1.0f) : glm::radians(35.0f) * std::sin(3.0f * az);
+    const float dist = 1.15f * b.radius / std::sin(glm::quarter_pi<float>());
+    const glm::vec3 dir(std::cos(el) * std::cos(az), std::sin(el), std::cos(el) * std::sin(az));
+    ngi::CameraPose p;
+    p.position = b.centre + dist * dir;
+    p.look = -dir;
+    p.up = glm::vec3(0, 1, 0);
+    return p;
+}
+
+std::string hms(double s) {
+    const long t = long(s + 0.5);
+    char b[32];
+    std::snprintf(b, sizeof b, "%ld:%02ld:%02ld", t / 3600, t / 60 % 60, t % 60);
+    return b;
+}
+
+ngi::Tensor planes(const ngi::Image& img, int first, int count) {
+    ngi::Tensor t({count, img.height, img.width});
+    const std::size_t plane = std::size_t(img.width) * img.height;
+    std::copy(img.data.begin() + std::ptrdiff_t(first * plane), img.data.begin() + std::ptrdiff_t((first + count) * plane),
+              t.data.begin());
+    return t;
+}
+
+}  // namespace
+
+int cmd_ao_data(int argc, char** argv) {
+    Args args(argc, argv, 2, {},
+              {"scene", "out", "device", "views", "heldout-views", "n", "rays", "max-distance", "sigma"});
+    no_positionals(args);
+    const std::string spec = args.require("scene"), out = args.require("out");
+    const int views = args.integer("views", 128, 0, 100000);
+    const int heldout = args.integer("heldout-views", 32, 0, 100000);
+    ngi::RenderSettings rs;
+    rs.n = args.integer("n", 256, 16, 4096);
+    const int rays = args.integer("rays", 256, 1, 1 << 20);
+    const float max_distance = float(args.real("max-distance", 4.0, 1e-3, 1e6));
+    const float sigma = float(args.real("sigma", 1.5, 0.0, ngi::Renderer::kMaxSmoothSigma));
+    std::error_code ec;
+    if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
+        throw ngi::InputError("ngi ao-data: " + out + " exists and is not a folder");
+    ngi::Device device = ngi::Device::open(args.get("device"));
+    const ngi::VoxelScene scene = ngi::make_scene(spec);
+    const Sphere b = bounding_sphere(scene);
+    ngi::Renderer renderer(device, scene);
+    std::filesystem::create_directories(out, ec);
+    if (ec) throw ngi::InputError("ngi ao-data: cannot create " + out + ": " + ec.message());
+    char meta[1024];
+    std::snprintf(meta, sizeof meta,
+                  "{\n  \"scene\": \"%s\",\n  \"n\": %d,\n  \"rays\": %d,\n  \"max_distance\": %.9g,\n  \"sigma\": %.9g,\n"
+                  "  \"views\": %d,\n  \"heldout_views\": %d,\n  \"sphere_centre\": [%.9g, %.9g, %.9g],\n"
+                  "  \"sphere_radius\": %.9g\n}\n",
+                  scene.name.c_str(), rs.n, rays, double(max_distance), double(sigma), views, heldout,
+                  double(b.centre.x), double(b.centre.y), double(b.centre.z), double(b.radius));
+    {  // rewritten on every run (it holds only the parameters); checked like every other write
+        const std::string meta_path = out + "/ao_data.json";
+        std::FILE* f = std::fopen(meta_path.c_str(), "wb");
+        const bool ok = f && std::fputs(meta, f) >= 0;
+        if (!f || std::fclose(f) != 0 || !ok) throw ngi::InputError("write " + meta_path + ": failed");
+    }
+
+    const int total = views + heldout;
+    int done = 0, rendered = 0;
+    double seconds = 0;
+    const bool tty = isatty(STDERR_FILENO);
+    for (int split = 0; split < 2; ++split) {
+        const int count = split ? heldout : views;
+        for (int k = 0; k < count; ++k, ++done) {
+            char name[64];
+            std::snprintf(name, sizeof name, "%s/v%04d", split ? "heldout" : "orbit", k);
+            const std::string dir = out + "/" + name;
+            if (std::filesystem::exists(dir + "/ao.npy", ec)) continue;  // finished earlier (folders land whole)
+            const auto t0 = std::chrono::steady_clock::now();
+            const ngi::CameraPose pose = orbit_pose(b, split == 1, k, count);
+            rs.seed = std::uint32_t(split * 100000 + k + 1);
+            const ngi::Image g = renderer.render_geometry(pose, rs, sigma);
+            const ngi::Image ao = renderer.render_ao(pose, rs, rays, max_distance);
+            ngi::OutputFolder f(dir, "write",
+                                std::vector<std::string>{"normal.npy", "face_normal.npy", "depth.npy", "ao.npy", "view.json"});
+            f.write("normal.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 0, 3)); });
+            f.write("face_normal.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 3, 3)); });
+            f.write("depth.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 6, 1)); });
+            f.write("ao.npy", [&](const std::string& p) { ngi::write_npy(p, planes(ao, 0, 1)); });
+            char view[512];
+            std::snprintf(view, sizeof view,
+                          "{\"position\": [%.9g, %.9g, %.9g], \"look\": [%.9g, %.9g, %.9g], \"up\": [0, 1, 0], "
+                          "\"seed\": %u}\n",
+                          double(pose.position.x), double(pose.position.y), double(pose.position.z),
+                          double(pose.look.x), double(pose.look.y), double(pose.look.z), rs.seed);
+            f.write_text("view.json", view);
+            f.commit();
+            seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            ++rendered;
+            const double per = seconds / rendered;
+            std::fprintf(stderr, "%sao-data %s: %d/%d views  %.2f s/view  ETA %s%s", tty ? "\r" : "", scene.name.c_str(),
+                         done + 1, total, per, hms(per * (total - done - 1)).c_str(), tty ? "\x1b[K" : "\n");
+        }
+    }
+    if (tty) std::fputc('\n', stderr);
+    std::printf("%d views (%d rendered now) of %s, N = %d, %d rays, max distance %g -> %s\n", total, rendered,
+                scene.name.c_str(), rs.n, rays, double(max_distance), out.c_str());
+    return 0;
+}
+
+}  // namespace ngi_cli
