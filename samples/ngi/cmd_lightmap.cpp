@@ -10,25 +10,11 @@
 #include "ngi/model.hpp"
 #include "ngi/output_folder.hpp"
 #include "ngi/pipeline.hpp"
+#include "side_by_side.hpp"
 
 namespace ngi_cli {
 
 namespace {
-
-// Images side by side (same height and channel count), left to right.
-ngi::Image hconcat(const std::vector<const ngi::Image*>& images) {
-    ngi::Image out(0, images[0]->height, images[0]->channels);
-    for (const auto* im : images) out.width += im->width;
-    out.data.assign(std::size_t(out.width) * out.height * out.channels, 0.0f);
-    int x0 = 0;
-    for (const auto* im : images) {
-        for (int c = 0; c < out.channels; ++c)
-            for (int y = 0; y < out.height; ++y)
-                for (int x = 0; x < im->width; ++x) out.at(c, y, x0 + x) = im->at(c, y, x);
-        x0 += im->width;
-    }
-    return out;
-}
 
 // The library's JSON form (non-finite values as null with a note, docs/CONVENTIONS.md section 11).
 nlohmann::json metrics_json(const ngi::ImageMetrics& m) { return nlohmann::json::parse(ngi::to_json(m)); }

@@ -18,5 +18,6 @@ int cmd_lightmap(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_dataset(int argc, char** argv);
 int cmd_ao_data(int argc, char** argv);
+int cmd_ao(int argc, char** argv);
 
 }  // namespace ngi_cli

@@ -46,6 +46,10 @@ const ngi_cli::Command kCommands[] = {
                 "                                 seed 001's AO data: orbit views of one object (smooth normals,\n"
                 "                                 face normals, depth, ray-traced AO per view; resumable)",
      ngi_cli::cmd_ao_data},
+    {"ao", "ngi ao --frame DIR --model M.safetensors --out DIR [--radius PX] [--device D]\n"
+           "                                 AO of an AO frame folder with a trained AO MLP: ao.npy, ao.png and, with a\n"
+           "                                 reference, compare.png + metrics.json (--radius 0: the seed's inference)",
+     ngi_cli::cmd_ao},
 };
 
 void usage(FILE* out) {

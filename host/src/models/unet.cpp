@@ -220,7 +220,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     static const char* const kKnown[] = {"format_version", "family", "input_nc", "output_nc", "ngf", "num_downs",
                                          "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
                                          "leaky_slope", "input_layout", "input_range", "output_range", "source",
-                                         "training", "required", "layers", "encoding"};
+                                         "training", "required", "layers", "encoding", "ao"};
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");

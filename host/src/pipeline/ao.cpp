@@ -1,0 +1,120 @@
+// Seed 001's AO network: ring gather (kernels/ao.cl) -> per-pixel MLP (the "mlp" family) -> clamp and mask.
+#include "ngi/ao.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "ngi/error.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi {
+
+struct AoNetwork::Impl {
+    Device device;
+    Model model;
+    std::string path;
+    float radius = 0;
+    int at_size = 0;
+    detail::Kernel gather, finish;
+    detail::Buffer offsets;
+    DeviceBuffer inputs, raw;  // [48][h][w] and [h][w], grown on demand
+    Impl(Device d, Model m) : device(std::move(d)), model(std::move(m)) {}
+};
+
+AoNetwork::AoNetwork(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+AoNetwork::AoNetwork(AoNetwork&&) noexcept = default;
+AoNetwork& AoNetwork::operator=(AoNetwork&&) noexcept = default;
+AoNetwork::~AoNetwork() = default;
+
+AoNetwork AoNetwork::load(const Device& device, const std::string& path, const ModelOptions& options) {
+    Model model = Model::load(device, path, options);
+    const ModelConfig& c = model.config();
+    auto fail = [&](const std::string& why) { return InputError("AO model " + path + ": " + why); };
+    if (c.family != "mlp") throw fail("family is '" + c.family + "', an AO model is an \"mlp\"");
+    if (c.input_nc != 3 * kRingPoints) throw fail("input_nc is " + std::to_string(c.input_nc) + ", expected 48 (16 normals)");
+    if (c.layers.back().out != 1) throw fail("the last layer has " + std::to_string(c.layers.back().out) + " outputs, expected 1");
+    const nlohmann::json j = nlohmann::json::parse(c.json, nullptr, false);
+    if (j.is_discarded() || !j.contains("ao") || !j["ao"].is_object()) throw fail("no \"ao\" object in the metadata");
+    const nlohmann::json& a = j["ao"];
+    if (!a.contains("neighbours") || !a["neighbours"].is_number_integer() || a["neighbours"].get<long long>() != kRingPoints)
+        throw fail("field 'ao.neighbours' must be 16");
+    if (!a.contains("radius_px") || !a["radius_px"].is_number() || !std::isfinite(a["radius_px"].get<double>()) ||
+        a["radius_px"].get<double>() < 0 || a["radius_px"].get<double>() > 1024)
+        throw fail("field 'ao.radius_px' must be a number in 0..1024");
+    if (!a.contains("at_size") || !a["at_size"].is_number_integer() || a["at_size"].get<long long>() < 1 ||
+        a["at_size"].get<long long>() > 65536)
+        throw fail("field 'ao.at_size' must be an integer in 1..65536");
+    auto impl = std::make_unique<Impl>(device, std::move(model));
+    impl->path = path;
+    impl->radius = a["radius_px"].get<float>();
+    impl->at_size = a["at_size"].get<int>();
+    detail::Context& ctx = detail::context_of(device);
+    impl->gather = ctx.kernel("ao", "ao_ring_gather");
+    impl->finish = ctx.kernel("ao", "ao_finish");
+    impl->offsets = ctx.alloc(2 * kRingPoints * sizeof(int), "AO: ring offsets");
+    return AoNetwork(std::move(impl));
+}
+
+const ModelConfig& AoNetwork::config() const { return impl_->model.config(); }
+float AoNetwork::trained_radius_px() const { return impl_->radius; }
+int AoNetwork::trained_size() const { return impl_->at_size; }
+float AoNetwork::radius_for(int height) const { return impl_->radius * float(height) / float(impl_->at_size); }
+
+std::vector<int> AoNetwork::ring_offsets(float radius_px) {
+    std::vector<int> o;
+    for (int k = 0; k < kRingPoints; ++k) {
+        const double a = 2.0 * M_PI * k / kRingPoints;
+        o.push_back(int(std::lround(-double(radius_px) * std::sin(a))));
+        o.push_back(int(std::lround(double(radius_px) * std::cos(a))));
+    }
+    return o;
+}
+
+void AoNetwork::enqueue(const DeviceBuffer& normals, const DeviceBuffer& ao, int height, int width, float radius_px) {
+    Impl& m = *impl_;
+    if (height < 1 || width < 1 || height > 65536 || width > 65536)
+        throw InputError("AO " + m.path + ": image size " + std::to_string(width) + "x" + std::to_string(height) +
+                         " not in 1..65536");
+    if (radius_px < 0) radius_px = radius_for(height);
+    if (!std::isfinite(radius_px) || radius_px > 65536.0f)
+        throw InputError("AO " + m.path + ": ring radius " + std::to_string(radius_px) + " pixels is not a finite number <= 65536");
+    const std::size_t hw = std::size_t(height) * width;
+    if (normals.bytes() < 3 * hw * sizeof(float))
+        throw InputError("AO " + m.path + ": the normals buffer holds " + std::to_string(normals.bytes()) +
+                         " bytes, 3 x " + std::to_string(height) + " x " + std::to_string(width) + " floats need " +
+                         std::to_string(3 * hw * sizeof(float)));
+    if (ao.bytes() < hw * sizeof(float))
+        throw InputError("AO " + m.path + ": the output buffer holds " + std::to_string(ao.bytes()) + " bytes, " +
+                         std::to_string(hw * sizeof(float)) + " needed");
+    detail::Context& ctx = detail::context_of(m.device);
+    if (m.inputs.bytes() < 3 * kRingPoints * hw * sizeof(float)) {
+        m.inputs = DeviceBuffer::allocate(m.device, 3 * kRingPoints * hw * sizeof(float));
+        m.raw = DeviceBuffer::allocate(m.device, hw * sizeof(float));
+    }
+    const std::vector<int> off = ring_offsets(radius_px);
+    ctx.write(m.offsets, 0, off.size() * sizeof(int), off.data(), "AO: upload ring offsets");
+    const int h = height, w = width, points = kRingPoints, n = int(hw);
+    m.gather.args(normals.opencl_mem(), h, w, m.offsets, points, m.inputs.opencl_mem());
+    ctx.launch(m.gather, 1, &hw, nullptr);
+    m.model.enqueue(m.inputs, m.raw, height, width);
+    m.finish.args(normals.opencl_mem(), m.raw.opencl_mem(), n, ao.opencl_mem());
+    ctx.launch(m.finish, 1, &hw, nullptr);
+}
+
+Image AoNetwork::run(const Image& normals, float radius_px, RunInfo* info) {
+    if (normals.channels != 3)
+        throw InputError("AO " + impl_->path + ": the normals image has " + std::to_string(normals.channels) +
+                         " channels, expected 3 (object-space x, y, z)");
+    const std::size_t hw = normals.plane();
+    DeviceBuffer in = DeviceBuffer::allocate(impl_->device, std::max<std::size_t>(3 * hw, 1) * sizeof(float));
+    DeviceBuffer out = DeviceBuffer::allocate(impl_->device, std::max<std::size_t>(hw, 1) * sizeof(float));
+    in.upload(normals.data.data(), 3 * hw * sizeof(float));
+    enqueue(in, out, normals.height, normals.width, radius_px);
+    Image ao(normals.width, normals.height, 1);
+    out.download(ao.data.data(), hw * sizeof(float));
+    if (info) info->sanitized_inputs = impl_->model.sanitized_inputs();
+    return ao;
+}
+
+}  // namespace ngi
