@@ -127,3 +127,113 @@ __kernel void frequency_encode_planar(__global const float* restrict x, const in
     }
     e[(size_t)k * n + i] = value;
 }
+
+// ---- the same MLP with its architecture compiled in (no encoding), VEC items per work-item -----------------------
+// Built per network shape (FusedMlp picks it when there is no encoding and at most 8 layers): NL layers, W0 inputs,
+// layer l (1..NL) with W<l> outputs, activation A<l>, weights [W<l>][INPAD<l>] at WOFF<l> and bias at BOFF<l> in
+// params (the packing of the kernel above). Every bound is a compile-time constant, so the loops unroll and the
+// activations stay in registers (the generic kernel above indexes private arrays at run time, which keeps them in
+// memory and stops a CPU compiler from vectorizing). Knob VEC (1, 2, 4, 8, 16; a per-device choice, see
+// FusedMlp): each work-item evaluates VEC consecutive items in the lanes of a floatVEC, so every weight is loaded
+// once per VEC items and the arithmetic (tanh included) runs on vectors; planar inputs load with vloadVEC. Same
+// sums as the generic kernel up to the order of the additions (one chain per output here, four there).
+#ifdef NL
+#ifndef VEC
+#define VEC 1
+#endif
+#define MLP_CAT2(a, b) a##b
+#define MLP_CAT(a, b) MLP_CAT2(a, b)
+#if VEC == 1
+#define realV float
+#else
+#define realV MLP_CAT(float, VEC)
+#endif
+
+static inline realV mlp_activate_v(realV x, int act, float alpha) {
+    switch (act) {
+        case ACT_RELU: return fmax(x, (realV)0.0f);
+        case ACT_LEAKY_RELU: return select(alpha * x, x, x >= (realV)0.0f);
+        case ACT_TANH: return tanh(x);
+        case ACT_SIGMOID: return (realV)1.0f / ((realV)1.0f + exp(-x));
+        case ACT_EXP: return exp(fmin(x, (realV)88.0f));
+        default: return x;
+    }
+}
+
+#define MLP_DENSE(IN, INPAD, OUT, ACT, WOFF, BOFF, src, dst)                              \
+    _Pragma("unroll") for (int o = 0; o < (OUT); ++o) {                                   \
+        PARAMS_SPACE const float* row = params + (WOFF) + o * (INPAD);                    \
+        realV s = (realV)params[(BOFF) + o];                                              \
+        _Pragma("unroll") for (int j = 0; j < (IN); ++j) s = mad((realV)row[j], src[j], s); \
+        dst[o] = mlp_activate_v(s, (ACT), alpha);                                         \
+    }
+#define MLP_LAYER(l, p) \
+    realV h##l[W##l];   \
+    MLP_DENSE(W##p, INPAD##l, W##l, A##l, WOFF##l, BOFF##l, h##p, h##l)
+
+__kernel void mlp_static(__global const float* restrict x, const int x_off, const int n, const int x_item,
+                         const int x_chan, PARAMS_SPACE const float* restrict params, const float alpha,
+                         __global float* restrict y, const int y_off, const int y_item, const int y_chan) {
+    const int first = get_global_id(0) * VEC;
+    if (first >= n) return;
+    x += x_off;
+    y += y_off;
+    // Full vectors of a planar layout load and store whole; the last, partial one (and strided layouts) go lane by
+    // lane, with lanes past n repeating item n - 1 (computed, never stored).
+    const int whole = first + VEC <= n && x_item == 1;
+    realV h0[W0];
+    _Pragma("unroll") for (int c = 0; c < W0; ++c) {
+        __global const float* src = x + (size_t)c * x_chan;
+#if VEC == 1
+        h0[c] = src[(size_t)first * x_item];
+#else
+        if (whole) {
+            h0[c] = MLP_CAT(vload, VEC)(0, src + first);
+        } else {
+            float lanes[VEC];
+            for (int v = 0; v < VEC; ++v) lanes[v] = src[(size_t)min(first + v, n - 1) * x_item];
+            h0[c] = MLP_CAT(vload, VEC)(0, lanes);
+        }
+#endif
+    }
+    MLP_LAYER(1, 0)
+#if NL >= 2
+    MLP_LAYER(2, 1)
+#endif
+#if NL >= 3
+    MLP_LAYER(3, 2)
+#endif
+#if NL >= 4
+    MLP_LAYER(4, 3)
+#endif
+#if NL >= 5
+    MLP_LAYER(5, 4)
+#endif
+#if NL >= 6
+    MLP_LAYER(6, 5)
+#endif
+#if NL >= 7
+    MLP_LAYER(7, 6)
+#endif
+#if NL >= 8
+    MLP_LAYER(8, 7)
+#endif
+#define MLP_OUT MLP_CAT(h, NL)
+#define MLP_OUT_W MLP_CAT(W, NL)
+    const int store_whole = first + VEC <= n && y_item == 1;
+    _Pragma("unroll") for (int o = 0; o < MLP_OUT_W; ++o) {
+        __global float* dst = y + (size_t)o * y_chan;
+#if VEC == 1
+        dst[(size_t)first * y_item] = MLP_OUT[o];
+#else
+        if (store_whole) {
+            MLP_CAT(vstore, VEC)(MLP_OUT[o], 0, dst + first);
+        } else {
+            float lanes[VEC];
+            MLP_CAT(vstore, VEC)(MLP_OUT[o], 0, lanes);
+            for (int v = 0; v < VEC && first + v < n; ++v) dst[(size_t)(first + v) * y_item] = lanes[v];
+        }
+#endif
+    }
+}
+#endif  // NL

@@ -5,6 +5,10 @@
 //                                                       transposed conv: M=Cout*16, N=HWin, K=Cin)
 //   ngi_bench tune [--device D]                         try GEMM parameter sets (each checked against a
 //                                                       reference first, CLBlast style) and rank them
+//   ngi_bench mlp --model M.safetensors [--width 1920 --height 1080] [--path fused|dense] [--ao] [--repeats R]
+//                                                       a per-pixel MLP over W x H pixels, device in, device out
+//                                                       (Model::enqueue): median ms and GFLOP/s (2 x MACs); --ao:
+//                                                       the whole AO network (ring gather + MLP + clamp)
 //   ngi_bench generator --model M.safetensors [--width 1024 --height 512] [--repeats R] [--device D]
 //                                                       whole-model wall time (median) + per-op device time
 //
@@ -19,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "ngi/ao.hpp"
 #include "ngi/model.hpp"
 #include "ops/gemm.hpp"
 #include "ops/gemm_selfcheck.hpp"
@@ -233,6 +238,60 @@ int run_generator(int argc, char** argv) {
     return 0;
 }
 
+int run_mlp(int argc, char** argv) {
+    const std::string path = arg(argc, argv, "--model");
+    if (path.empty()) throw InputError("mlp: --model M.safetensors is required");
+    const int w = std::stoi(arg(argc, argv, "--width", "1920")), h = std::stoi(arg(argc, argv, "--height", "1080"));
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "5"));
+    const bool ao = std::find_if(argv, argv + argc, [](const char* a) { return !std::strcmp(a, "--ao"); }) != argv + argc;
+    ModelOptions opt;
+    opt.mlp_path = arg(argc, argv, "--path");
+    Device d = Device::open(arg(argc, argv, "--device"));
+    Context& ctx = ngi::detail::context_of(d);
+    const std::size_t hw = std::size_t(w) * h;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1, 1);
+    json out = {{"device", device_json(d, gemm_params_for(d.info()))}, {"width", w}, {"height", h}};
+    double macs = 0;
+    std::vector<double> ms;
+    if (ao) {
+        AoNetwork net = AoNetwork::load(d, path, opt);
+        int in = net.config().input_nc;
+        for (const auto& l : net.config().layers) macs += double(in) * l.out, in = l.out;
+        std::vector<float> n(3 * hw);
+        for (std::size_t i = 0; i < hw; ++i) {  // random unit normals, no background
+            float x = u(rng), y = u(rng), z = u(rng) + 1e-3f, len = std::sqrt(x * x + y * y + z * z);
+            n[i] = x / len, n[hw + i] = y / len, n[2 * hw + i] = z / len;
+        }
+        DeviceBuffer nb = DeviceBuffer::allocate(d, n.size() * 4), ob = DeviceBuffer::allocate(d, hw * 4);
+        nb.upload(n.data(), n.size() * 4);
+        std::fprintf(stderr, "ao %s %dx%d: warm-up + %d runs ...\n", path.c_str(), w, h, repeats);
+        ms = time_runs(ctx, repeats, [&] { net.enqueue(nb, ob, h, w); });
+        out["what"] = "AO network: ring gather + MLP + clamp";
+        out["radius_px"] = net.radius_for(h);
+    } else {
+        Model m = Model::load(d, path, opt);
+        int in = m.config().input_nc;
+        for (const auto& l : m.config().layers) macs += double(in) * l.out, in = l.out;
+        std::vector<float> x(std::size_t(m.config().input_nc) * hw);
+        for (auto& v : x) v = u(rng);
+        DeviceBuffer xb = DeviceBuffer::allocate(d, x.size() * 4), yb = DeviceBuffer::allocate(d, std::size_t(in) * hw * 4);
+        xb.upload(x.data(), x.size() * 4);
+        std::fprintf(stderr, "mlp %s %dx%d: warm-up + %d runs ...\n", path.c_str(), w, h, repeats);
+        ms = time_runs(ctx, repeats, [&] { m.enqueue(xb, yb, h, w); });
+        out["what"] = "MLP per pixel (Model::enqueue)";
+    }
+    const double gflop = 2.0 * macs * double(hw) / 1e9;
+    out["path"] = opt.mlp_path.empty() ? "auto" : opt.mlp_path;
+    out["macs_per_item"] = macs;
+    out["gflop"] = gflop;
+    out["ms_median"] = median(ms);
+    out["ms_all"] = ms;
+    out["gflops"] = gflop / (median(ms) * 1e-3);
+    std::printf("%s\n", out.dump(2).c_str());
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -241,11 +300,12 @@ int main(int argc, char** argv) {
         if (cmd == "gemm") return run_gemm(argc, argv);
         if (cmd == "tune") return run_tune(argc, argv);
         if (cmd == "generator") return run_generator(argc, argv);
+        if (cmd == "mlp") return run_mlp(argc, argv);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "ngi_bench %s: error: %s\n", cmd.c_str(), e.what());
         return 1;
     }
-    std::fprintf(stderr, "usage: ngi_bench gemm|tune|generator [options]  (see the comment at the top of "
+    std::fprintf(stderr, "usage: ngi_bench gemm|tune|generator|mlp [options]  (see the comment at the top of "
                          "perf/ngi_bench.cpp)\n");
     return 2;
 }

@@ -125,6 +125,7 @@ TEST_CASE("AO network: ring gather + MLP + clamp match a naive reference; device
         ngi::AoNetwork net = ngi::AoNetwork::load(ngi::test::device(), path, opt);
         CHECK(net.trained_radius_px() == 3.0f);
         CHECK(net.trained_size() == 64);
+        CHECK(net.normals() == "smooth");
         CHECK(net.radius_for(128) == 6.0f);
         for (auto [w, h] : {std::pair{37, 29}, std::pair{1, 1}, std::pair{64, 3}}) {
             ngi::Image n(w, h, 3);
@@ -182,6 +183,10 @@ TEST_CASE("AO network: bad models and inputs give errors naming them", "[ao][mlp
     CHECK_THROWS_WITH(load(write_ao_model(dir / "radius.safetensors", good, {{"input_nc", 48}, {"ao", bad}})),
                       Contains("ao.radius_px"));
     bad = ao_meta;
+    bad["normals"] = "bent";
+    CHECK_THROWS_WITH(load(write_ao_model(dir / "kind.safetensors", good, {{"input_nc", 48}, {"ao", bad}})),
+                      Contains("ao.normals"));
+    bad = ao_meta;
     bad["neighbours"] = 8;
     CHECK_THROWS_WITH(load(write_ao_model(dir / "ring.safetensors", good, {{"input_nc", 48}, {"ao", bad}})),
                       Contains("ao.neighbours"));
@@ -190,4 +195,21 @@ TEST_CASE("AO network: bad models and inputs give errors naming them", "[ao][mlp
     CHECK_THROWS_WITH(net.run(ngi::Image(4, 4, 3), NAN), Contains("ring radius"));
     ngi::DeviceBuffer small = ngi::DeviceBuffer::allocate(ngi::test::device(), 16);
     CHECK_THROWS_WITH(net.enqueue(small, small, 4, 4), Contains("normals buffer"));
+}
+
+TEST_CASE("AO network on a tiny image (ring gather, shape-specialized MLP, clamp)", "[ao][mlp][oclgrind]") {
+    ngi::test::TempDir dir("ao-tiny");
+    std::mt19937 rng(5);
+    const std::vector<Layer> layers = random_layers(rng, {48, 5, 3, 1});
+    const nlohmann::json ao_meta = {{"neighbours", 16}, {"radius_px", 2.0}, {"at_size", 5}};
+    ngi::AoNetwork net = ngi::AoNetwork::load(
+        ngi::test::device(),
+        write_ao_model(dir / "tiny.safetensors", layers, {{"input_nc", 48}, {"input_range", {-1, 1}}, {"ao", ao_meta}}));
+    ngi::Image n(7, 5, 3);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 7; ++x)
+            if ((x + y) % 4 != 0)
+                for (int c = 0; c < 3; ++c) n.at(c, y, x) = c == (x % 3) ? 1.0f : 0.0f;
+    const ngi::Image got = net.run(n);
+    CHECK(ngi::test::max_abs_diff(got.data, reference_ao(n, layers, 2.0f).data) < 2e-5);
 }

@@ -140,6 +140,32 @@ TEST_CASE("fused MLP at the seed 001 sizes and the widest fused width", "[mlp]")
             for (int o = 0; o < w.back(); ++o) want[std::size_t(i) * w.back() + o] = float(r[o]);
         }
         REQUIRE(test::worst_ratio(y, want, 1e-4, 1e-4) <= 1.0);
+        // The shape-specialized kernel at every items-per-work-item knob, planar in and out (odd n: the last
+        // vector is partial) and points in (lane-by-lane loads), at offsets.
+        if (w[0] == 128) {
+            REQUIRE_FALSE(fused.static_architecture());  // beyond kStaticMlpMaxMacs: the generic kernel
+            continue;
+        }
+        REQUIRE(fused.static_architecture());
+        for (int vec : {1, 2, 4, 8, 16}) {
+            CAPTURE(vec);
+            FusedMlp knob(ctx, spec, vec);
+            REQUIRE(knob.items_per_work_item() == vec);
+            const int m = 37 + vec;  // not a multiple of vec
+            Buffer planar_x = test::upload(x);  // the first m * 48 values as a planar [48][m] image
+            const std::size_t y_off = 3;
+            Buffer py = ctx.alloc((y_off + std::size_t(m) * w.back()) * sizeof(float), "test y");
+            knob.enqueue(ctx, planar_x.get(), 0, ItemLayout::planar(m), m, py.get(), y_off, ItemLayout::planar(m));
+            const std::vector<float> got = test::download(py, std::size_t(m) * w.back(), y_off);
+            std::vector<float> expect(got.size());
+            for (int i = 0; i < m; ++i) {
+                const auto r = reference(spec, x, m, ItemLayout::planar(m), i);
+                for (int o = 0; o < w.back(); ++o) expect[std::size_t(o) * m + i] = float(r[o]);
+            }
+            REQUIRE(test::worst_ratio(got, expect, 1e-4, 1e-4) <= 1.0);
+            knob.enqueue(ctx, xb.get(), 0, ItemLayout::points(48), n, yb.get(), 0, ItemLayout::points(w.back()));
+            REQUIRE(test::worst_ratio(test::download(yb, std::size_t(n) * w.back()), want, 1e-4, 1e-4) <= 1.0);
+        }
     }
 }
 

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 RING = 16
+NORMAL_FILE = {"smooth": "normal", "face": "face_normal"}  # model metadata ao.normals -> the frame folder's file
 
 
 def ring_offsets(radius_px):
@@ -65,9 +66,9 @@ def image_inputs(v, radius_px):
     return ring_inputs(v["normal"], v["mask"], radius_px, rows, cols), rows, cols
 
 
-def sample(data_dir, radius_px, per_view=512, seed=1):
+def sample(data_dir, radius_px, per_view=512, seed=1, normals="smooth"):
     """The seed's training set: `per_view` random foreground pixels of every orbit view. Returns X [S, 48],
-    y [S] (reference AO) and the view index of each sample."""
+    y [S] (reference AO) and the view index of each sample. normals: "smooth" (normal.npy) or "face"."""
     rng = np.random.default_rng(seed)
     xs, ys, ids = [], [], []
     for i, folder in enumerate(views(data_dir, "orbit")):
@@ -75,7 +76,7 @@ def sample(data_dir, radius_px, per_view=512, seed=1):
         rows, cols = np.nonzero(v["mask"])
         pick = rng.choice(len(rows), size=min(per_view, len(rows)), replace=False)
         r, c = rows[pick], cols[pick]
-        xs.append(ring_inputs(v["normal"], v["mask"], radius_px, r, c))
+        xs.append(ring_inputs(v[NORMAL_FILE[normals]], v["mask"], radius_px, r, c))
         ys.append(v["ao"][0, r, c])
         ids.append(np.full(len(r), i))
     return np.concatenate(xs), np.concatenate(ys).astype(np.float32), np.concatenate(ids)

@@ -18,6 +18,7 @@ Methods, each evaluated on every held-out view (`ngi ao-data`'s "heldout" orbit)
 Metrics over the object's pixels: SSIM (Wang: Gaussian 11x11 window, sigma 1.5, K1 0.01, K2 0.03, population
 covariances, data range 1, i.e. skimage's structural_similarity(gaussian_weights=True, sigma=1.5,
 use_sample_covariance=False)), its map averaged over the object's pixels only (background masked), MSE and PSNR.
+--ablation LABEL=PATH adds other AO models (e.g. trained on face normals) as more rows.
 Writes OUT/results.json, OUT/<object>_compare.png (network | reference | |difference| for one view) and prints
 Markdown tables. Resumable per (object, model, mode, view): ngi outputs are kept under OUT/.runs.
 """
@@ -109,7 +110,7 @@ def run_ngi(ngi, env, frame, model, out, radius):
     return np.load(out / "ao.npy")[0]
 
 
-def evaluate_object(name, data, models_dir, out_dir, ngi, env):
+def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
     X, y, _ = ao_common.sample(data, 3.0)
     mean_ao = float(y.mean())
     coef, *_ = np.linalg.lstsq(sh9(X[:, :3].astype(np.float64)), y.astype(np.float64), rcond=None)
@@ -139,6 +140,7 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env):
 
     held = ao_common.views(data, "heldout")
     methods = [f"mlp {s} ring" for s in SIZES] + [f"mlp {s} r=0" for s in SIZES] + ["constant", "sh2", "baked", "ssao"]
+    methods += [label for label, _ in ablations]
     scores = {m: [] for m in methods}
     bar = Progress(len(held), 0, label=f"eval {name}", unit="view")
     example = None
@@ -150,6 +152,9 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env):
             model = Path(models_dir) / f"ao_{name}_{s}.safetensors"
             preds[f"mlp {s} ring"] = run_ngi(ngi, env, folder, model, Path(out_dir) / ".runs" / name / s / "ring" / folder.name, None)
             preds[f"mlp {s} r=0"] = run_ngi(ngi, env, folder, model, Path(out_dir) / ".runs" / name / s / "r0" / folder.name, 0)
+        for label, template in ablations:
+            preds[label] = run_ngi(ngi, env, folder, Path(template.format(object=name)),
+                                   Path(out_dir) / ".runs" / name / label.replace(" ", "_") / folder.name, None)
         const = np.ones_like(ref)
         const[mask] = mean_ao
         preds["constant"] = const
@@ -205,6 +210,8 @@ def main():
     ap.add_argument("--models", default=str(Path(__file__).resolve().parent.parent / "models"))
     ap.add_argument("--out", required=True)
     ap.add_argument("--ngi", default=None)
+    ap.add_argument("--ablation", action="append", default=[],
+                    help="LABEL=PATH: another AO model per object, {object} in PATH is the object's name")
     a = ap.parse_args()
     ngi = ngi_paths.find_ngi(a.ngi)
     env = ngi_paths.ngi_env()
@@ -212,7 +219,8 @@ def main():
     results = {}
     for spec in a.object:
         name, data = spec.split("=", 1)
-        results[name] = evaluate_object(name, data, a.models, a.out, ngi, env)
+        results[name] = evaluate_object(name, data, a.models, a.out, ngi, env,
+                                        [tuple(x.split("=", 1)) for x in a.ablation])
         results[name]["data"] = json.loads((Path(data) / "ao_data.json").read_text())
     (Path(a.out) / "results.json").write_text(json.dumps(results, indent=2) + "\n")
     for name, r in results.items():

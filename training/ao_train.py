@@ -42,6 +42,8 @@ def main(argv=None):
     ap.add_argument("--size", required=True, help="hidden widths XxY, e.g. 16x8")
     ap.add_argument("--out", required=True)
     ap.add_argument("--radius", type=float, default=3.0, help="ring radius in pixels at the data's resolution")
+    ap.add_argument("--normals", choices=sorted(ao_common.NORMAL_FILE), default="smooth",
+                    help="which normals the ring reads: smooth (normal.npy) or the voxel face normals")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--max-iters", type=int, default=3000)
     ap.add_argument("--check-every", type=int, default=10, help="L-BFGS iterations between validation checks")
@@ -53,7 +55,7 @@ def main(argv=None):
     hx, hy = (int(v) for v in a.size.lower().split("x"))
     meta = json.loads((Path(a.data) / "ao_data.json").read_text())
 
-    X, y, _ = ao_common.sample(a.data, a.radius, seed=a.seed)
+    X, y, _ = ao_common.sample(a.data, a.radius, seed=a.seed, normals=a.normals)
     perm = np.random.default_rng(a.seed).permutation(len(y))
     n_tr, n_va = len(y) // 2, len(y) // 4
     tr, va, te = perm[:n_tr], perm[n_tr:n_tr + n_va], perm[n_tr + n_va:]
@@ -122,7 +124,7 @@ def main(argv=None):
     test_mse = float(np.mean((pred[te] - y[te]) ** 2))
     val_mse = float(np.mean((pred[va] - y[va]) ** 2))
     train_mse = float(np.mean((pred[tr] - y[tr]) ** 2))
-    report = {"size": a.size, "parameters": sum(p.numel() for p in net.parameters()), "samples": int(len(y)),
+    report = {"size": a.size, "normals": a.normals, "radius_px": a.radius, "parameters": sum(p.numel() for p in net.parameters()), "samples": int(len(y)),
               "train_mse": train_mse, "val_mse": val_mse, "test_mse": test_mse, "iterations": it,
               "seconds": round(seconds, 1), "optimizer": "L-BFGS (strong Wolfe), full batch, early stopping",
               "max_fail": a.max_fail, "check_every": a.check_every, "seed": a.seed}
@@ -131,7 +133,7 @@ def main(argv=None):
                          {"out": 1, "activation": "none"}],
               "input_range": [-1.0, 1.0],
               "ao": {"neighbours": ao_common.RING, "radius_px": a.radius, "at_size": meta["n"],
-                     "normals": "smooth", "sigma": meta["sigma"], "max_distance": meta["max_distance"],
+                     "normals": a.normals, "sigma": meta["sigma"], "max_distance": meta["max_distance"],
                      "rays": meta["rays"], "scene": meta["scene"]},
               "source": f"training/ao_train.py --size {a.size} --data {Path(a.data).name}",
               "training": report}

@@ -1,6 +1,6 @@
-// ngi ao: an AO frame folder (normal.npy; `ngi ao-data` writes them) + a trained AO model -> ao.npy and ao.png,
-// and, when the folder holds the ray-traced reference (ao.npy), compare.png (network | reference | |difference|)
-// and metrics.json over the object's pixels.
+// ngi ao: an AO frame folder (normal.npy or face_normal.npy, as the model says; `ngi ao-data` writes them) + a
+// trained AO model -> ao.npy and ao.png, and, when the folder holds the ray-traced reference (ao.npy),
+// compare.png (network | reference | |difference|) and metrics.json over the object's pixels.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -46,7 +46,11 @@ int cmd_ao(int argc, char** argv) {
     const std::string frame = args.require("frame"), model_path = args.require("model"), out_dir = args.require("out");
     const double radius = args.real("radius", -1.0, -1.0, 65536.0);  // -1: the model's radius scaled to the image
     ngi::OutputFolder out(out_dir, "write", {"ao.npy", "ao.png", "compare.png", "metrics.json"});
-    const ngi::Image normals = image_from_npy(frame + "/normal.npy", 3);
+    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::AoNetwork net = ngi::AoNetwork::load(device, model_path);
+    // The kind of normals the model was trained on (docs/CONVENTIONS.md section 15).
+    const std::string normals_file = net.normals() == "face" ? "face_normal.npy" : "normal.npy";
+    const ngi::Image normals = image_from_npy(frame + "/" + normals_file, 3);
     const std::string ref_path = frame + "/ao.npy";
     std::error_code ec;
     const bool has_ref = std::filesystem::exists(ref_path, ec);
@@ -55,11 +59,9 @@ int cmd_ao(int argc, char** argv) {
         ref = image_from_npy(ref_path, 1);
         if (ref.width != normals.width || ref.height != normals.height)
             throw ngi::InputError(ref_path + " is " + std::to_string(ref.width) + "x" + std::to_string(ref.height) +
-                                  " but normal.npy is " + std::to_string(normals.width) + "x" +
+                                  " but " + normals_file + " is " + std::to_string(normals.width) + "x" +
                                   std::to_string(normals.height));
     }
-    ngi::Device device = ngi::Device::open(args.get("device"));
-    ngi::AoNetwork net = ngi::AoNetwork::load(device, model_path);
     const float r = radius < 0 ? net.radius_for(normals.height) : float(radius);
     ngi::RunInfo info;
     const auto t0 = std::chrono::steady_clock::now();
@@ -71,7 +73,7 @@ int cmd_ao(int argc, char** argv) {
                 normals.width, normals.height, double(r), ms);
     if (info.sanitized_inputs) std::printf("sanitized  %d non-finite normal components\n", info.sanitized_inputs);
     if (has_ref) {
-        // Metrics over the object's pixels (background: no surface in normal.npy). SSIM needs whole windows: it
+        // Metrics over the object's pixels (background: no surface in the normals). SSIM needs whole windows: it
         // is taken over the image with the background equal (1) in both, and reported as such.
         double se = 0;
         std::size_t fg = 0;

@@ -207,4 +207,26 @@ sed 's/{"vox": "missing_scene.vox"}/{"scene": "backlit:seed=2"}/' "$work/ds_bad.
 "$ngi" dataset --config "$work/ds_good.json" --out "$work/out_ds" > /dev/null 2>&1 || fail "ds: the corrected config was refused"
 [ -f "$work/out_ds/test/backlit_seed2/0000/camera.json" ] || fail "ds: the corrected config rendered no test frame"
 
+# ---- seed 001's AO: orbit data of an object, then a shipped AO network on a view with a reference.
+"$ngi" ao-data --scene sculpture:seed=1 --out "$work/aod" --views 2 --heldout-views 1 --n 32 --rays 16 > /dev/null 2>&1
+for f in normal.npy face_normal.npy depth.npy ao.npy view.json; do
+  [ -s "$work/aod/heldout/v0000/$f" ] || fail "ngi ao-data did not write $f"
+done
+"$ngi" ao-data --scene sculpture:seed=1 --out "$work/aod" --views 2 --heldout-views 1 --n 32 --rays 16 2>/dev/null |
+  grep -q "(0 rendered now)" || fail "ngi ao-data re-rendered finished views"
+ao_model=$(dirname "$0")/../../models/ao_sculpture_16x8.safetensors
+"$ngi" ao --frame "$work/aod/heldout/v0000" --model "$ao_model" --out "$work/ao" > /dev/null
+for f in ao.npy ao.png compare.png metrics.json; do
+  [ -s "$work/ao/$f" ] || fail "ngi ao did not write $f"
+done
+/usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1])); assert m['object_pixels'] > 0 and 0 <= m['mse_object'] < 1, m" \
+  "$work/ao/metrics.json" || fail "ngi ao metrics: $(cat "$work/ao/metrics.json")"
+expect="an AO model is an"
+expect_failure ao_generator "$ngi" ao --frame "$work/aod/heldout/v0000" --model "$model" --out "$work/out_ao_generator"
+no_unexpected ao_generator
+expect=normal.npy
+expect_failure ao_missing "$ngi" ao --frame "$work/missing" --model "$ao_model" --out "$work/out_ao_missing"
+expect=--radius
+expect_usage ao_radius "$ngi" ao --frame "$work/aod/heldout/v0000" --model "$ao_model" --out "$work/out_ao_radius" --radius nan
+
 echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

@@ -27,6 +27,10 @@ public:
 
     const ModelConfig& config() const;
     float trained_radius_px() const;  // the ring radius of the training data, in its pixels
+    // Which normals the network was trained on (metadata ao.normals): "smooth" (Renderer::render_geometry's
+    // blurred-occupancy normals, an AO frame folder's normal.npy; the default) or "face" (voxel face normals,
+    // face_normal.npy). Feed it the same kind.
+    const std::string& normals() const;
     int trained_size() const;         // the training images' height in pixels
     // The training radius scaled to an image of `height` rows (the ring covers the same part of the view).
     float radius_for(int height) const;

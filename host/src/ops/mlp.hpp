@@ -51,12 +51,21 @@ struct ItemLayout {
 
 // The widest layer (encoded input included) the fused kernel takes; wider MLPs take the dense path.
 constexpr int kFusedMlpMaxWidth = 128;
+// Networks without an encoding, with at most this many layers and multiply-adds per item get a kernel built for
+// their exact shape (kernels/mlp.cl mlp_static: fully unrolled, activations in registers; the MAC bound keeps the
+// unrolled code, and its compile time, small); the others the generic fused kernel.
+constexpr std::size_t kStaticMlpMaxLayers = 8;
+constexpr long kStaticMlpMaxMacs = 8192;
+
+// Items per work-item of the shape-specialized kernel (kernels/mlp.cl VEC): the device's knob.
+int mlp_items_per_work_item(const DeviceInfo& info);
 
 class FusedMlp {
 public:
     // Throws InputError when the spec is invalid or wider than kFusedMlpMaxWidth, and Error when the per-item
     // loop count exceeds the device's limit (Context::loop_limit): use the dense path then (fits_device()).
-    FusedMlp(Context& ctx, const MlpSpec& spec);
+    // vec: items per work-item of the shape-specialized kernel, 0 = the device's choice (mlp_items_per_work_item).
+    FusedMlp(Context& ctx, const MlpSpec& spec, int vec = 0);
     // Loop iterations one work-item runs (what llvmpipe's limit counts).
     static long loop_iterations(const MlpSpec& spec);
     static bool fits_device(Context& ctx, const MlpSpec& spec);
@@ -64,12 +73,16 @@ public:
     cl_event enqueue(Context& ctx, cl_mem x, std::size_t x_off, ItemLayout in, int n, cl_mem y, std::size_t y_off,
                      ItemLayout out, bool want_event = false);
     int width_class() const { return max_width_; }
+    bool static_architecture() const { return static_arch_; }
+    int items_per_work_item() const { return vec_; }
     bool constant_params() const { return constant_; }
 
 private:
     MlpSpec spec_;
     int max_width_ = 0;
     bool constant_ = false;
+    bool static_arch_ = false;
+    int vec_ = 1;  // items per work-item (static kernel)
     float alpha_ = 0.0f;  // the LeakyReLU slope of the network
     bool alpha_set_ = false;
     Kernel kernel_;

@@ -14,6 +14,7 @@ struct AoNetwork::Impl {
     Device device;
     Model model;
     std::string path;
+    std::string normals = "smooth";
     float radius = 0;
     int at_size = 0;
     detail::Kernel gather, finish;
@@ -45,7 +46,14 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
     if (!a.contains("at_size") || !a["at_size"].is_number_integer() || a["at_size"].get<long long>() < 1 ||
         a["at_size"].get<long long>() > 65536)
         throw fail("field 'ao.at_size' must be an integer in 1..65536");
+    std::string normals = "smooth";
+    if (a.contains("normals")) {
+        if (!a["normals"].is_string() || (a["normals"] != "smooth" && a["normals"] != "face"))
+            throw fail("field 'ao.normals' must be \"smooth\" or \"face\"");
+        normals = a["normals"].get<std::string>();
+    }
     auto impl = std::make_unique<Impl>(device, std::move(model));
+    impl->normals = normals;
     impl->path = path;
     impl->radius = a["radius_px"].get<float>();
     impl->at_size = a["at_size"].get<int>();
@@ -57,6 +65,7 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
 }
 
 const ModelConfig& AoNetwork::config() const { return impl_->model.config(); }
+const std::string& AoNetwork::normals() const { return impl_->normals; }
 float AoNetwork::trained_radius_px() const { return impl_->radius; }
 int AoNetwork::trained_size() const { return impl_->at_size; }
 float AoNetwork::radius_for(int height) const { return impl_->radius * float(height) / float(impl_->at_size); }
