@@ -4,7 +4,7 @@
 For each case: a torch MLP (frequency encoding written from its definition in
 docs/CONVENTIONS.md section 13, nn.Linear layers, activations) with random
 weights, saved as an ngi model file, and its float64 output on a random input
-(per-pixel NCHW images and [N, C] point lists).
+(per-pixel NCHW images and [N, C] point lists); and every shipped AO model (models/ao_*.safetensors) as it is.
 
 Usage: /usr/bin/python3 tests/parity/make_mlp_parity.py --out DIR
 Writes DIR/<case>.safetensors, DIR/<case>_input.npy, DIR/<case>_expected.npy
@@ -114,12 +114,38 @@ def make_case(case, out_dir):
             "dtype": "F16" if case["half"] else "F32", "widest": max([width] + [o for o, _ in case["layers"]])}
 
 
+def shipped_case(path, out_dir, seed):
+    """A shipped model file (models/ao_*.safetensors) as it is: PyTorch float64 on its stored (F16) weights, input
+    an [n, 48] list of random unit normals (16 per row, seed 001's input)."""
+    tensors, config = ngi_convert.read_model(path)
+    name = "shipped_" + os.path.basename(path).replace(".safetensors", "")
+    g = torch.Generator().manual_seed(seed)
+    x = torch.randn((301, config["input_nc"] // 3, 3), generator=g, dtype=torch.float64)
+    x = (x / x.norm(dim=2, keepdim=True)).reshape(301, -1).float()
+    h = x.double()
+    for i, layer in enumerate(config["layers"]):
+        w = torch.from_numpy(tensors[f"layers.{i}.weight"].astype(np.float64))
+        b = torch.from_numpy(tensors[f"layers.{i}.bias"].astype(np.float64))
+        h = ACTIVATIONS[layer.get("activation", "none")](h @ w.t() + b, layer.get("slope", 0.01))
+    model_file = os.path.basename(path)
+    with open(path, "rb") as src, open(os.path.join(out_dir, model_file), "wb") as dst:
+        dst.write(src.read())
+    np.save(os.path.join(out_dir, f"{name}_input.npy"), x.numpy())
+    np.save(os.path.join(out_dir, f"{name}_expected.npy"), h.float().numpy())
+    print(f"{name:26s} input {tuple(x.shape)} output {tuple(h.shape)}")
+    return {"name": name, "model": model_file, "input": f"{name}_input.npy", "expected": f"{name}_expected.npy",
+            "dtype": "F16", "widest": max([config["input_nc"]] + [l["out"] for l in config["layers"]])}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     cases = [make_case(c, args.out) for c in CASES]
+    models = os.path.join(HERE, "..", "..", "models")
+    for i, f in enumerate(sorted(f for f in os.listdir(models) if f.startswith("ao_") and f.endswith(".safetensors"))):
+        cases.append(shipped_case(os.path.join(models, f), args.out, 100 + i))
     with open(os.path.join(args.out, "cases.json"), "w") as f:
         json.dump(cases, f, indent=2)
         f.write("\n")
