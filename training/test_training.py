@@ -12,7 +12,9 @@
 4. interrupts a run with SIGINT, resumes it, and gets the same weights and losses as an uninterrupted run;
 5. exports (bn_mode auto), runs `ngi generate` on the same input and compares with PyTorch (max |diff| < 1e-4),
    runs `ngi lightmap` on the test frame and evaluate.py on the test split;
-6. the same for a single-view model (10 input channels).
+6. the same for a single-view model (10 input channels);
+7. seed 001's AO: `ngi ao-data` (6 + 1 views at 48 px), ao_train.py for 40 iterations, and `ngi ao` equal to the
+   exported network evaluated in PyTorch on ao_common.py's ring inputs (max |diff| < 1e-4, background 1).
 Exit code 77 (ctest: skipped) when torch or numpy is missing.
 """
 
@@ -38,6 +40,7 @@ sys.path.insert(0, str(HERE))
 import data  # noqa: E402
 import networks  # noqa: E402
 import ngi_paths  # noqa: E402
+import ao_common  # noqa: E402
 import ngi_convert  # noqa: E402
 import reference_models  # noqa: E402
 
@@ -240,6 +243,33 @@ def main():
     check(np.mean(l1_sv[-5:]) < np.mean(l1_sv[:5]),
           f"single view: L1 {np.mean(l1_sv[:5]):.4f} -> {np.mean(l1_sv[-5:]):.4f} over 20 steps")
     _, worst_v = test_export_and_run(ngi, dataset, work, work / "run_sv", "single_view")
+
+    # 7. Seed 001's AO MLP: tiny orbit data, a short training, and `ngi ao` == the exported network in PyTorch
+    # on the ring inputs ao_common.py builds (the Python and the C++ ring conventions agree).
+    aod = work / "aod"
+    run([ngi, "ao-data", "--scene", "sculpture:seed=1", "--out", aod, "--views", 6, "--heldout-views", 1, "--n", 48,
+         "--rays", 16])
+    ao_model = work / "ao_16x8.safetensors"
+    proc, _ = run([sys.executable, HERE / "ao_train.py", "--data", aod, "--size", "16x8", "--out", ao_model,
+                   "--max-iters", 40])
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    check(report["parameters"] == 929 and report["test_mse"] < 0.2, f"ao_train.py: 16x8, test MSE {report['test_mse']:.4f}")
+    view = aod / "heldout" / "v0000"
+    run([ngi, "ao", "--frame", view, "--model", ao_model, "--out", work / "ao_out"])
+    got = np.load(work / "ao_out" / "ao.npy")[0]
+    v = ao_common.load_view(view)
+    x, rows, cols = ao_common.image_inputs(v, 3.0)  # the model's radius at its own size
+    tensors, config = ngi_convert.read_model(ao_model)
+    h = torch.from_numpy(x).double()
+    for i, layer in enumerate(config["layers"]):
+        h = h @ torch.from_numpy(tensors[f"layers.{i}.weight"].astype(np.float64)).T + \
+            torch.from_numpy(tensors[f"layers.{i}.bias"].astype(np.float64))
+        h = torch.tanh(h) if layer["activation"] == "tanh" else h
+    want = np.ones_like(got)
+    want[rows, cols] = h[:, 0].clamp(0, 1).numpy()
+    ao_diff = float(np.abs(got - want).max())
+    check(ao_diff < 1e-4 and (~v["mask"]).sum() > 0 and np.all(got[~v["mask"]] == 1.0),
+          f"ngi ao == PyTorch on ao_common's ring inputs: max |diff| {ao_diff:.2g}; background 1")
 
     print(f"training_smoke: all checks passed in {time.monotonic() - t_start:.1f} s "
           f"(L1 {first:.4f} -> {last:.4f}; ngi generate vs PyTorch max |diff| surround {worst_s:.2g}, "
