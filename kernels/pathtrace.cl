@@ -442,6 +442,16 @@ static inline float3 pixel_ray(__global const float* cam, int f, int col, int ro
     return normalize(*look + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]));
 }
 
+// The primary ray through pixel `pix` (row-major, n x n) of face `face` from the cluster centre, and its first hit
+// (counted in *rays). *o, *d, *look: the ray's origin, unit direction and the face's look axis.
+static inline Hit primary_hit(const Scene* s, __global const float* cam, int face, int pix, int n, float3* o,
+                              float3* d, float3* look, uint* rays) {
+    const int row = pix / n, col = pix - row * n;
+    *o = (float3)(cam[0], cam[1], cam[2]);
+    *d = pixel_ray(cam, face, col, row, n, look);
+    return trace(s, *o, *d, T_INF, rays);
+}
+
 static inline void store3(__global float* q, int plane, int npix, float3 v) {
     q[(size_t)plane * npix] = v.x;
     q[(size_t)(plane + 1) * npix] = v.y;
@@ -511,12 +521,9 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
     const int npix = n * n;
     if (pix >= npix) return;
     MAKE_SCENE(s);
-    const int row = pix / n, col = pix - row * n;
-    float3 look;
-    const float3 o = (float3)(cam[0], cam[1], cam[2]);
-    const float3 d = pixel_ray(cam, face, col, row, n, &look);
+    float3 o, d, look;
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays);
+    const Hit h = primary_hit(&s, cam, face, pix, n, &o, &d, &look, &rays);
     if (first > 0) rays = rays_out[pix];
     float3 mean = (float3)(0.0f), m2 = (float3)(0.0f);
     if (first > 0) {
@@ -575,12 +582,9 @@ __kernel void pt_ao(SCENE_ARGS, __global const float* cam, int face, int n, int 
     const int npix = n * n;
     if (pix >= npix) return;
     MAKE_SCENE(s);
-    const int row = pix / n, col = pix - row * n;
-    float3 look;
-    const float3 o = (float3)(cam[0], cam[1], cam[2]);
-    const float3 d = pixel_ray(cam, face, col, row, n, &look);
+    float3 o, d, look;
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays);
+    const Hit h = primary_hit(&s, cam, face, pix, n, &o, &d, &look, &rays);
     if (h.mat == 0) {
         out[pix] = 1.0f;
         return;
@@ -611,13 +615,10 @@ __kernel void pt_geometry(SCENE_ARGS, __global const float* cam, int face, int n
     const int npix = n * n;
     if (pix >= npix) return;
     MAKE_SCENE(s);
-    const int row = pix / n, col = pix - row * n;
-    float3 look;
-    const float3 o = (float3)(cam[0], cam[1], cam[2]);
-    const float3 d = pixel_ray(cam, face, col, row, n, &look);
     __global float* q = out + pix;
+    float3 o, d, look;
     uint rays = 0;
-    const Hit h = trace(&s, o, d, T_INF, &rays);
+    const Hit h = primary_hit(&s, cam, face, pix, n, &o, &d, &look, &rays);
     if (h.mat == 0) {
         store3(q, 0, npix, (float3)(0.0f));
         store3(q, 3, npix, (float3)(0.0f));
