@@ -107,7 +107,7 @@ std::string npy_raw(const std::string& descr, const std::string& shape, const st
     return b + header + data;
 }
 
-// A safetensors file of the named tensors (constant values) and config, as tools/ngi_convert.py writes it.
+// A safetensors file of the named tensors (constant values) and config, as ngi.model_file (Python) writes it.
 std::string safetensors(const std::vector<std::pair<std::string, std::vector<int>>>& tensors, const json& config,
                         bool half) {
     json header = json::object();

@@ -11,7 +11,8 @@ scripted, torch.jit.freeze + torch.jit.optimize_for_inference (its fastest CPU i
 (its natural layout), median of --repeats after two warm-ups. The GEMM roof: `ngi_bench gemm` (ngi's packed GEMM
 at 1024^3) and torch.mm at 1024^3, in the same run.
 
-Usage: /usr/bin/python3 perf/mlp_side_by_side.py --bench build/perf/ngi_bench [--repeats 5] [--out FILE.json]
+Usage: PYTHONPATH=build/python /usr/bin/python3 perf/mlp_side_by_side.py --bench build/perf/ngi_bench [--repeats 5]
+           [--out FILE.json]
 """
 
 import argparse
@@ -26,10 +27,10 @@ import time
 import numpy as np
 import torch
 
+import ngi.model_file as model_file
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(REPO, "tools"))
-import ngi_convert  # noqa: E402
 
 
 def run_json(cmd):
@@ -100,11 +101,11 @@ def main():
             tensors[f"layers.{i}.bias"] = rng.uniform(-bound, bound, l["out"]).astype(np.float32)
             in_f = l["out"]
         big = os.path.join(tmp, "mlp_8x256.safetensors")
-        ngi_convert.write_model(big, tensors, {"format_version": 1, "family": "mlp", "input_nc": 64, "layers": layers})
+        model_file.write_model(big, tensors, {"format_version": 1, "family": "mlp", "input_nc": 64, "layers": layers})
         cases.append(("mlp 8x256", big, 256, 256))
 
         for name, path, w, h in cases:
-            tensors, config = ngi_convert.read_model(path)
+            tensors, config = model_file.read_model(path)
             items = w * h
             row = {"case": name, "width": w, "height": h, "items": items}
             for p in ("fused", "dense"):

@@ -10,7 +10,8 @@
    SGEMM through torch.mm at 1024^3.
 Prints one JSON object with both sides and the ratios. Progress goes to stderr.
 
-Usage: /usr/bin/python3 perf/side_by_side.py --bench build/perf/ngi_bench [--repeats 5] [--out FILE.json]
+Usage: PYTHONPATH=build/python /usr/bin/python3 perf/side_by_side.py --bench build/perf/ngi_bench [--repeats 5]
+           [--out FILE.json]
 """
 
 import argparse
@@ -24,14 +25,11 @@ import tempfile
 import numpy as np
 import torch
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tests", "parity"))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-sys.path.insert(0, HERE)
+import ngi.convert as convert
+import ngi.model_file as model_file
+import ngi.reference_models as reference_models
 
-import ngi_convert  # noqa: E402
-import reference_models  # noqa: E402
-import torch_generator  # noqa: E402
+import torch_generator
 
 
 def run_json(cmd):
@@ -59,10 +57,9 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         model_path = os.path.join(tmp, "thesis_generator.safetensors")
-        config = ngi_convert.make_config("pix2pix_unet", bn_mode="per_image", input_nc=12, output_nc=3, ngf=64,
-                                         num_downs=8, source="perf/side_by_side.py: PyTorch default init")
-        state = {k: v for k, v in model.state_dict().items() if not k.endswith("num_batches_tracked")}
-        ngi_convert.write_model(model_path, state, config)
+        config = model_file.make_config("pix2pix_unet", bn_mode="per_image", input_nc=12, output_nc=3, ngf=64,
+                                        num_downs=8, source="perf/side_by_side.py: PyTorch default init")
+        model_file.write_model(model_path, convert.validate_state_dict(model.state_dict(), config), config)
         np.save(os.path.join(tmp, "input.npy"), x.numpy())
 
         ngi_gen = run_json([args.bench, "generator", "--model", model_path, "--input", os.path.join(tmp, "input.npy"),

@@ -5,7 +5,7 @@ junyanz UnetGenerator(12, 3, num_downs=8, ngf=64) on one 1024x512 image
 (N=1, C=12, H=512, W=1024), torch.no_grad(), dropout off. Also measures a
 1024^3 SGEMM through torch.mm, to tell how fast this torch's BLAS is.
 
-Usage: /usr/bin/python3 perf/torch_generator.py [--bn-mode per_image|running]
+Usage: PYTHONPATH=build/python /usr/bin/python3 perf/torch_generator.py [--bn-mode per_image|running]
            [--repeats 5] [--threads 2] [--width 1024 --height 512]
 Prints one JSON object on stdout; progress goes to stderr.
 """
@@ -20,9 +20,7 @@ import time
 
 import torch
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "parity"))
-
-import reference_models  # noqa: E402
+import ngi.reference_models as reference_models
 
 
 def blas_info():

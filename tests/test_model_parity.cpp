@@ -1,5 +1,5 @@
 // Whole-generator parity against PyTorch (the oracle): tests/parity/make_parity.py builds both generator
-// families with random weights and random running statistics, converts them with tools/ngi_convert.py and
+// families with random weights and random running statistics, converts them with ngi.convert (Python) and
 // stores PyTorch's output (computed in float64). ngi must reproduce it in both BN modes, with seeded dropout
 // and with fp16-stored weights.
 #include <algorithm>

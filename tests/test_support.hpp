@@ -92,13 +92,14 @@ inline bool all_finite(const std::vector<float>& v) {
 }
 
 // Runs tests/parity/<script> --out <build>/<name> once per build tree (Debian's /usr/bin/python3, which has
-// torch / numpy / skimage) unless <build>/<name>/cases.json exists, and returns that folder. The script's
-// output goes to <build>/<name>.log.
+// torch / numpy / skimage; PYTHONPATH=<build>/python, where the build assembles the Python package ngi) unless
+// <build>/<name>/cases.json exists, and returns that folder. The script's output goes to <build>/<name>.log.
 inline std::filesystem::path python_oracle_data(const std::string& script, const std::string& name) {
     const std::filesystem::path dir = std::filesystem::path(NGI_BINARY_DIR) / name;
     if (!std::filesystem::exists(dir / "cases.json")) {
-        const std::string cmd = "/usr/bin/python3 " + std::string(NGI_SOURCE_DIR) + "/tests/parity/" + script +
-                                " --out " + dir.string() + " > " + dir.string() + ".log 2>&1";
+        const std::string cmd = "PYTHONPATH=" + std::string(NGI_BINARY_DIR) + "/python /usr/bin/python3 " +
+                                std::string(NGI_SOURCE_DIR) + "/tests/parity/" + script + " --out " + dir.string() +
+                                " > " + dir.string() + ".log 2>&1";
         INFO("running: " << cmd);
         REQUIRE(std::system(cmd.c_str()) == 0);
     }

@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
 # Installs what ngi needs on Debian 12 (as root), skipping packages that are already there.
 # Build: cmake, ninja, g++, OpenCL headers + ICD loader, PoCL (the CPU OpenCL device every test runs on),
-# Catch2, nlohmann-json, OpenEXR, libpng, GLM. Python side (parity oracle, training, perf baseline):
-# Debian's python3-torch/numpy/skimage/matplotlib, and OpenBLAS so PyTorch's BLAS is not the reference one.
+# Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser). Python side (parity oracle,
+# training, perf baseline): Debian's python3-torch/numpy/skimage/matplotlib/tqdm, and OpenBLAS so PyTorch's BLAS is
+# not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest.
 # Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
 # simulator), clang-15 + libFuzzer (fuzz targets).
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
-  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev
-  python3-torch python3-numpy python3-skimage python3-matplotlib libopenblas0-pthread
+  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev
+  python3-torch python3-numpy python3-skimage python3-matplotlib python3-tqdm libopenblas0-pthread
+  pybind11-dev python3-dev python3-pyopencl python3-pytest
   mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
 )
 missing=()

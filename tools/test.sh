@@ -69,11 +69,11 @@ for stage in $stages; do
       export RUSTICL_ENABLE=llvmpipe
       if ! build/ngi devices --no-check | grep -q "platform rusticl"; then
         missing rusticl "no rusticl device (mesa-opencl-icd with RUSTICL_ENABLE=llvmpipe)"
-      # The CLI, training, C ABI, C sample and threading tests exercise host code already covered on PoCL (and by
+      # The CLI, training, C ABI, C sample, Python and threading tests exercise host code already covered on PoCL (and by
       # the sanitize and tsan stages); each of them would recompile the generators' programs in new processes and
       # contexts, minutes on llvmpipe. The Catch2 kernel, model and frame-path tests are what runs the device.
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(training_smoke|cli_end_to_end|c_api|c_sample_lightmap|threads: .*)$'); then
+                 -E '^(training_smoke|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|threads: .*)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;

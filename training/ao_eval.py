@@ -2,7 +2,7 @@
 """Evaluate seed 001's AO networks (run by ngi) and the baselines a careful user would try first, on the held-out
 views of each object, against the ray-traced reference (docs/RESULTS_AO.md).
 
-    /usr/bin/python3 training/ao_eval.py --object sculpture=DATA1 --object trefoil=DATA2 \
+    PYTHONPATH=build/python /usr/bin/python3 training/ao_eval.py --object sculpture=DATA1 --object trefoil=DATA2 \\
         --models models --out docs/ao [--ngi build/ngi]
 
 Methods, each evaluated on every held-out view (`ngi ao-data`'s "heldout" orbit):
@@ -33,10 +33,10 @@ from pathlib import Path
 
 import numpy as np
 from skimage.metrics import structural_similarity
+from tqdm import tqdm
 
 import ao_common
 import ngi_paths
-from progress import Progress
 
 SIZES = ("16x8", "32x16", "64x32")
 
@@ -142,7 +142,7 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
     methods = [f"mlp {s} ring" for s in SIZES] + [f"mlp {s} r=0" for s in SIZES] + ["constant", "sh2", "baked", "ssao"]
     methods += [label for label, _ in ablations]
     scores = {m: [] for m in methods}
-    bar = Progress(len(held), 0, label=f"eval {name}", unit="view")
+    bar = tqdm(total=len(held), desc=f"eval {name}", unit="view", **ngi_paths.progress_options())
     example = None
     for i, folder in enumerate(held):
         v = ao_common.load_view(folder)
@@ -169,7 +169,7 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
             scores[m].append(masked_metrics(preds[m].astype(np.float64), ref.astype(np.float64), mask))
         if i == 0:
             example = (preds, ref, mask)
-        bar.update(i + 1, {})
+        bar.update(1)
     bar.close()
     summary = {m: {"ssim": float(np.mean([s["ssim"] for s in scores[m]])),
                    "mse": float(np.mean([s["mse"] for s in scores[m]])),

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Train seed 001's ambient-occlusion MLP (48 -> X tanh -> Y tanh -> 1) on one object and export it for ngi.
 
-    /usr/bin/python3 training/ao_train.py --data DATA --size 16x8 --out models/ao_sculpture_16x8.safetensors
+    PYTHONPATH=build/python /usr/bin/python3 training/ao_train.py --data DATA --size 16x8 \\
+        --out models/ao_sculpture_16x8.safetensors
 
 DATA is an `ngi ao-data` folder. As the seed (section 3): 512 random pixels from each of the 128 orbit views
 (65,536 samples), input = 16 normals on a circle around the pixel (ao_common.py), target = its AO; split
@@ -23,12 +24,12 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
-import ngi_convert  # noqa: E402
+import ngi.model_file as model_file
 
-import ao_common  # noqa: E402
-from progress import Progress  # noqa: E402
+import ao_common
+import ngi_paths
 
 
 def make_net(x, y):
@@ -79,7 +80,7 @@ def main(argv=None):
         return loss
 
     best, best_state, fails, it = float("inf"), None, 0, 0
-    bar = Progress(a.max_iters, 0, label=f"ao {a.size}", unit="iter")
+    bar = tqdm(total=a.max_iters, desc=f"ao {a.size}", unit="iter", **ngi_paths.progress_options())
     t0 = time.monotonic()
     try:
         while it < a.max_iters and fails < a.max_fail:
@@ -92,10 +93,11 @@ def main(argv=None):
                 best_state = {k: v.clone() for k, v in net.state_dict().items()}
             else:
                 fails += 1
-            bar.update(it, {"val": val, "best": best})
+            bar.set_postfix({"val": f"{val:.4g}", "best": f"{best:.4g}"}, refresh=False)
+            bar.update(it - bar.n)
     except KeyboardInterrupt:
         print("interrupted: exporting the best weights so far", file=sys.stderr)
-    bar.update(it, {"val": best, "best": best}, force=True)
+    bar.close()
     seconds = time.monotonic() - t0
     net.load_state_dict(best_state)
 
@@ -137,8 +139,8 @@ def main(argv=None):
                      "rays": meta["rays"], "scene": meta["scene"]},
               "source": f"training/ao_train.py --size {a.size} --data {Path(a.data).name}",
               "training": report}
-    ngi_convert.write_model(a.out, tensors, config, half=half)
-    back = ngi_convert.read_model(a.out)
+    model_file.write_model(a.out, tensors, config, half=half)
+    back = model_file.read_model(a.out)
     assert back[1]["ao"]["neighbours"] == ao_common.RING, "metadata did not round-trip"
     print(json.dumps(report))
 

@@ -2,7 +2,7 @@
 """Seconds per training step of a config at a face size, on random data (no dataset needed), and the projected
 training time for the config's steps.
 
-    /usr/bin/python3 training/bench.py --config training/configs/surround.json --n 128 --steps 8
+    PYTHONPATH=build/python /usr/bin/python3 training/bench.py --config training/configs/surround.json --n 128 --steps 8
 
 One warm-up step, then --steps timed steps (G forward, D update, G update: what train.py does per frame).
 Prints every step's time, the minimum (the machine's speed when nothing else runs) and the median.

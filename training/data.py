@@ -1,16 +1,15 @@
 """Training data: frame folders -> exactly the tensors the C++ pipeline feeds the generator, and the targets.
 
-The C++ pipeline is the only implementation of the preprocessing: every frame goes once through
+The C++ pipeline is the only implementation of the preprocessing: every frame goes once through it, in process,
+through the Python bindings (bindings/python: ngi.Pipeline.network_input / encode_lightmap, the same calls
+`ngi merge --npy-only [--single-view]` makes), giving input.npy (SurroundPipeline::network_input: [1, 12, 2N, 4N]
+surround or [1, 10, N, N] front view only, values in [-1, 1]) and target.npy (SurroundPipeline::encode_lightmap of
+the frame's reference.exr: [1, 3, N, N], the front view's linear lighting through the Reinhard transfer into
+[-1, 1], i.e. the exact inverse of the decoding `ngi lightmap` applies to the generator's output). Nothing here
+re-implements the merge or the encoding; the loader only reads those files back. training/test_training.py checks
+them against `ngi merge`'s files bit for bit.
 
-    ngi merge --frame FRAME --out DIR --npy-only [--single-view]
-
-which writes input.npy (SurroundPipeline::network_input: [1, 12, 2N, 4N] surround or [1, 10, N, N] front
-view only, values in [-1, 1]) and target.npy (SurroundPipeline::encode_lightmap of the frame's reference.exr:
-[1, 3, N, N], the front view's linear lighting through the Reinhard transfer into [-1, 1], i.e. the exact
-inverse of the decoding `ngi lightmap` applies to the generator's output). Nothing here re-implements the
-merge or the encoding; the loader only reads those files back.
-
-Cache layout (reused on rerun, one `ngi merge` per new or changed frame):
+Cache layout (reused on rerun, one merge per new or changed frame):
 
     CACHE/cache.json                      layout, channel names, format version
     CACHE/<split>/<scene>/<frame>/        input.npy, target.npy, manifest.json
@@ -27,22 +26,22 @@ import hashlib
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
-import ngi_paths
+import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in this project's scripts
 
 CACHE_FORMAT = 1
 LAYOUTS = ("surround", "single_view")
 
 # docs/CONVENTIONS.md section 7 (surround_input_channels / single_view_input_channels in pipeline.hpp). Checked
-# against what `ngi merge` prints for every frame it merges.
+# against ngi.surround_input_channels() / single_view_input_channels() for every frame merged.
 SURROUND_CHANNELS = ["albedo.r", "albedo.g", "albedo.b", "normal.x", "normal.y", "normal.z", "depth",
                      "lumination.r", "lumination.g", "lumination.b", "coord.phi", "coord.theta"]
 SINGLE_VIEW_CHANNELS = SURROUND_CHANNELS[:10]
@@ -139,34 +138,59 @@ def frame_stamp(frame_dir):
 # The merge cache
 # --------------------------------------------------------------------------
 
-def run_merge(ngi, frame_dir, out_dir, layout, device=None):
-    """`ngi merge --npy-only` of one frame into out_dir; returns the channel names it reported."""
-    cmd = [ngi, "merge", "--frame", str(frame_dir), "--out", str(out_dir), "--npy-only"]
-    if layout == "single_view":
-        cmd.append("--single-view")
-    if device:
-        cmd += ["--device", device]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
-    names = None
-    for line in proc.stdout.splitlines():
-        if line.startswith("input.npy") and "channels:" in line:
-            names = line.split("channels:", 1)[1].split()
-    if names is None:
-        raise RuntimeError(f"{' '.join(cmd)}: no channel list in its output:\n{proc.stdout}")
+_DEVICES = {}
+_DEVICES_LOCK = threading.Lock()
+_LOCAL = threading.local()
+
+
+def _pipeline(device, n):
+    """This thread's ngi.Pipeline of face size n on `device` (a device is shared by threads, a pipeline is not)."""
+    with _DEVICES_LOCK:
+        if device not in _DEVICES:
+            _DEVICES[device] = ngi_py.Device(device or "")
+        dev = _DEVICES[device]
+    pipes = _LOCAL.__dict__.setdefault("pipes", {})
+    if (device, n) not in pipes:
+        pipes[(device, n)] = ngi_py.Pipeline(dev, n)
+    return pipes[(device, n)]
+
+
+def _save_atomic(path, array):
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", suffix=".npy", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.save(f, array)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def run_merge(frame_dir, out_dir, layout, device=None):
+    """input.npy and target.npy of one frame into out_dir (created if needed; target.npy is written last), as
+    `ngi merge --npy-only [--single-view]` writes them; returns the input's channel names."""
+    single = layout == "single_view"
+    names = list(ngi_py.single_view_input_channels() if single else ngi_py.surround_input_channels())
     if names != channels(layout):
-        raise RuntimeError(f"ngi merge reports the channels {names}, the training code expects {channels(layout)} "
+        raise RuntimeError(f"ngi reports the channels {names}, the training code expects {channels(layout)} "
                            "(docs/CONVENTIONS.md section 7 changed? update training/data.py)")
+    frame = ngi_py.read_frame(frame_dir)
+    if frame.reference is None:
+        raise RuntimeError(f"{frame_dir}: no reference.exr (a training frame needs its reference lighting)")
+    pipe = _pipeline(device, frame.n)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    _save_atomic(out_dir / "input.npy", pipe.network_input(frame, single_view=single))
+    _save_atomic(out_dir / "target.npy", pipe.encode_lightmap(frame.reference))
     return names
 
 
 class MergeCache:
-    """input.npy / target.npy of every frame, made by `ngi merge`, cached under cache_dir."""
+    """input.npy / target.npy of every frame, made by run_merge, cached under cache_dir."""
 
-    def __init__(self, ngi, cache_dir, layout, device=None, jobs=1, log=sys.stderr):
+    def __init__(self, cache_dir, layout, device=None, jobs=1, log=sys.stderr):
         check_layout(layout)
-        self.ngi = ngi
         self.dir = Path(cache_dir)
         self.layout = layout
         self.device = device
@@ -202,7 +226,7 @@ class MergeCache:
         stamp = frame_stamp(frame_dir)
         tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.tmp-", dir=dest.parent))
         try:
-            names = run_merge(self.ngi, frame_dir, tmp, self.layout, self.device)
+            names = run_merge(frame_dir, tmp, self.layout, self.device)
             x = np.load(tmp / "input.npy", mmap_mode="r")
             y = np.load(tmp / "target.npy", mmap_mode="r")
             manifest = {"frame": str(Path(frame_dir).resolve()), "stamp": stamp, "layout": self.layout,
@@ -219,7 +243,7 @@ class MergeCache:
     def _verify_one(self, dataset_dir, rel):
         """Re-merge one cached frame and compare it with the cache bit for bit."""
         with tempfile.TemporaryDirectory(dir=self.dir) as tmp:
-            run_merge(self.ngi, Path(dataset_dir) / rel, tmp, self.layout, self.device)
+            run_merge(Path(dataset_dir) / rel, tmp, self.layout, self.device)
             for name in ("input.npy", "target.npy"):
                 if not np.array_equal(np.load(Path(tmp) / name), np.load(self.entry(rel) / name)):
                     return False
@@ -272,11 +296,11 @@ class FrameDataset(torch.utils.data.Dataset):
         return torch.from_numpy(x), torch.from_numpy(y), self.frames[i]
 
 
-def load_split(ngi, dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr):
+def load_split(dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr):
     """The FrameDataset of one split (max_frames: an evenly spread subset), merged (or reused) through the cache;
     returns (dataset, n, merge stats)."""
     frames = select_frames(list_frames(dataset_dir, split), max_frames)
-    cache = MergeCache(ngi, cache_dir, layout, device=device, jobs=jobs, log=log)
+    cache = MergeCache(cache_dir, layout, device=device, jobs=jobs, log=log)
     stats = cache.prepare(dataset_dir, frames)
     ds = FrameDataset(cache, frames)
     _, y = ds.arrays(0)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Held-out evaluation: in PyTorch (during training and for export's bn_mode choice) and with ngi itself.
 
-heldout_scores() runs the generator as ngi will (reference_models.UnetGenerator, bn_mode running or per_image,
+heldout_scores() runs the generator as ngi will (ngi.reference_models.UnetGenerator, bn_mode running or per_image,
 dropout off or seeded) over held-out frames and scores its front view against the target:
   l1          mean |G(x)_front - y| in the model's [-1, 1] output encoding (the L1 term of the training loss)
   psnr_enc    PSNR of the same, on the [0, 1] Reinhard-encoded scale (data range 1)
@@ -11,7 +11,8 @@ As a command, it evaluates an exported model with the C++ pipeline end to end: `
 of a split, and a summary of the per-frame metrics.json files (tone-mapped final images and linear lightmaps,
 the network against the direct-only baseline):
 
-    /usr/bin/python3 training/evaluate.py --model M.safetensors --dataset DATA --split test --out DIR
+    PYTHONPATH=build/python /usr/bin/python3 training/evaluate.py --model M.safetensors --dataset DATA \\
+        --split test --out DIR
 """
 
 import argparse
@@ -25,10 +26,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
+import ngi.reference_models as reference_models
+
 import data
 import networks
 import ngi_paths
-import reference_models
 
 LIGHT_MAX = 65504.0
 

@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """Export a training checkpoint as an ngi model file (.safetensors, docs/MODEL_FORMAT.md).
 
-    /usr/bin/python3 training/export.py --run runs/surround --out models/surround.safetensors
+    PYTHONPATH=build/python /usr/bin/python3 training/export.py --run runs/surround \\
+        --out models/surround.safetensors
 
-The generator's state_dict goes through tools/ngi_convert.write_model unchanged (the tensor names are
-junyanz's; num_batches_tracked is dropped). The config says how ngi must run it:
+The generator's state_dict goes through ngi.convert.validate_state_dict (the tensor names are junyanz's, checked
+with their shapes against the config; num_batches_tracked is dropped) into ngi.model_file.write_model. The
+config says how ngi must run it:
   family pix2pix_unet, input_nc 12 (surround) or 10 (single view), output_nc 3, ngf, num_downs,
   input_layout   the C++ channel names (surround_input_channels / single_view_input_channels)
   input_range, output_range  [-1, 1]
@@ -28,28 +30,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
+import ngi.convert as convert
+import ngi.model_file as model_file
+
 import checkpoint
 import data
 import evaluate
-import ngi_convert
-import ngi_paths
-
-
-def generator_tensors(state_dict, config):
-    """The generator's tensors in upstream state_dict order, checked against the expected names and shapes."""
-    expected = ngi_convert.expected_shapes(config)
-    tensors = {k: v for k, v in state_dict.items() if not k.endswith("num_batches_tracked")}
-    missing = sorted(set(expected) - set(tensors))
-    unexpected = sorted(set(tensors) - set(expected))
-    if missing or unexpected:
-        raise ValueError(f"generator state_dict does not match the config: missing {missing}, "
-                         f"unexpected {unexpected}")
-    out = {}
-    for name, shape in expected.items():
-        if tuple(tensors[name].shape) != tuple(shape):
-            raise ValueError(f"{name}: shape {tuple(tensors[name].shape)}, expected {tuple(shape)}")
-        out[name] = tensors[name].detach().cpu().float()
-    return out
 
 
 def main(argv=None):
@@ -63,7 +49,7 @@ def main(argv=None):
     ap.add_argument("--eval-split", help="held-out split for --bn-mode auto (default: the config's eval_split)")
     ap.add_argument("--eval-frames", type=int, default=100, help="held-out frames scored for auto (0 = all)")
     ap.add_argument("--dataset", help="dataset folder (default: the one the run was trained on)")
-    ap.add_argument("--ngi", help="ngi binary for merging held-out frames (default: $NGI_BIN or build*/ngi)")
+    ap.add_argument("--device", help="OpenCL device for merging held-out frames (ngi.Device spec)")
     ap.add_argument("--half", action="store_true", help="store F16 tensors")
     args = ap.parse_args(argv)
 
@@ -80,7 +66,7 @@ def main(argv=None):
     if bn_mode == "auto":
         split = args.eval_split or cfg["eval_split"]
         cache_dir = Path(cfg["cache_dir"]) if cfg["cache_dir"] else data.default_cache_dir(dataset_dir, cfg["layout"])
-        eval_set, _, _ = data.load_split(ngi_paths.find_ngi(args.ngi), dataset_dir, split, cfg["layout"], cache_dir,
+        eval_set, _, _ = data.load_split(dataset_dir, split, cfg["layout"], cache_dir, device=args.device,
                                          max_frames=args.eval_frames)
         scores = {mode: evaluate.heldout_scores(g_state, cfg, eval_set, n, mode, args.dropout, args.dropout_seed)
                   for mode in ("per_image", "running")}
@@ -92,10 +78,10 @@ def main(argv=None):
                   f"MSE(linear) {s['mse_linear']:.5g}  on {s['frames']} {split} frames"
                   + ("   <- chosen" if mode == bn_mode else ""), file=sys.stderr)
 
-    config = ngi_convert.make_config("pix2pix_unet", bn_mode=bn_mode, input_nc=data.input_nc(cfg["layout"]),
-                                     output_nc=3, ngf=cfg["ngf"], num_downs=cfg["num_downs"], dropout=args.dropout,
-                                     dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
-                                     source=f"ngi training/train.py, run {run.resolve().name}, step {state['step']}")
+    config = model_file.make_config("pix2pix_unet", bn_mode=bn_mode, input_nc=data.input_nc(cfg["layout"]),
+                                    output_nc=3, ngf=cfg["ngf"], num_downs=cfg["num_downs"], dropout=args.dropout,
+                                    dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
+                                    source=f"ngi training/train.py, run {run.resolve().name}, step {state['step']}")
     steps = state["step"]
     config["training"] = {
         "layout": cfg["layout"],
@@ -115,16 +101,16 @@ def main(argv=None):
         "exported": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "torch": torch.__version__,
     }
-    tensors = generator_tensors(g_state, config)
+    tensors = convert.validate_state_dict(g_state, config)  # name -> float32 array, upstream order
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.tmp")
-    ngi_convert.write_model(str(tmp), tensors, config, half=args.half)
-    back, back_config = ngi_convert.read_model(str(tmp))
+    model_file.write_model(str(tmp), tensors, config, half=args.half)
+    back, back_config = model_file.read_model(str(tmp))
     if back_config != config or list(back) != list(tensors):
         raise RuntimeError(f"{tmp}: read back a different config or tensor list")
     for name, t in tensors.items():
-        want = t.numpy().astype(np.float16) if args.half else t.numpy()
+        want = t.astype(np.float16) if args.half else t
         if not np.array_equal(back[name], want):
             raise RuntimeError(f"{tmp}: tensor {name} differs after the round trip")
     tmp.replace(out)

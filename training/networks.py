@@ -1,8 +1,8 @@
 """The two networks of pix2pix: the U-Net generator ngi runs and the PatchGAN discriminator that trains it.
 
-Generator: tests/parity/reference_models.UnetGenerator, the module-for-module copy of junyanz's
+Generator: ngi.reference_models.UnetGenerator, the module-for-module copy of junyanz's
 UnetGenerator(norm='batch') that the C++ library is tested against, so the trained state_dict is exactly what
-`ngi_convert.write_model` stores and `ngi generate` runs. For training its dropout sites (nn.Identity there
+`ngi.model_file.write_model` stores and `ngi generate` runs. For training its dropout sites (nn.Identity there
 when dropout is "off") become nn.Dropout(0.5), pix2pix's default; they hold no parameters, so the state_dict
 keys do not change.
 
@@ -16,8 +16,7 @@ Both are initialized like pix2pix's init_weights(init_type='normal', init_gain=0
 
 import torch.nn as nn
 
-import ngi_paths  # noqa: F401  (puts tests/parity on sys.path)
-import reference_models
+import ngi.reference_models as reference_models
 
 
 def build_generator(input_nc, output_nc, ngf, num_downs, use_dropout=True):

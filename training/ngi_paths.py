@@ -1,20 +1,20 @@
-"""Where things are: the repository, the modules the training code borrows, the ngi command-line tool.
+"""Where things are: the repository and the ngi command-line tool (and running it); how the training scripts
+report progress.
 
-The training scripts are plain files run with /usr/bin/python3 (`python3 training/train.py ...`); importing
-this module puts tools/ (ngi_convert: the model file writer) and tests/parity/ (reference_models: the
-PyTorch generator the C++ library is tested against) on sys.path.
+The training scripts are plain files run with /usr/bin/python3 (`python3 training/train.py ...`). What they
+share with the converter and the parity tests (the model-file writer, the PyTorch reference generators) is the
+Python package `ngi` (bindings/python/ngi), importable once a build has assembled it in <build>/python:
+`PYTHONPATH=build/python /usr/bin/python3 training/train.py ...`.
 """
 
 import os
 import shutil
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
-for _sub in ("tools", "tests/parity"):
-    _path = str(REPO / _sub)
-    if _path not in sys.path:
-        sys.path.insert(0, _path)
 
 
 def find_ngi(explicit=None):
@@ -35,3 +35,24 @@ def ngi_env():
     env.setdefault("POCL_CACHE_DIR", "/tmp/pocl-cache")
     env.setdefault("NGI_CACHE_DIR", "/tmp/ngi-cache")
     return env
+
+
+def run(cmd, **kw):
+    """Runs `cmd` (items str()-ed) with ngi_env(), output captured as text; returns (CompletedProcess, seconds).
+    A non-zero exit raises RuntimeError with the command and its output."""
+    t0 = time.monotonic()
+    proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=ngi_env(), **kw)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
+    return proc, time.monotonic() - t0
+
+
+def progress_options():
+    """tqdm keyword arguments of the training scripts' progress bars (ETA included) on stderr: redrawn in place
+    four times a second on a terminal; in a log (stderr not a TTY) plain ASCII, at most every 30 s, so CI logs
+    stay short."""
+    tty = sys.stderr.isatty()
+    interval = 0.25 if tty else 30.0
+    # maxinterval >= mininterval: tqdm's monitor thread would otherwise force a redraw every 10 s.
+    return {"file": sys.stderr, "mininterval": interval, "maxinterval": max(10.0, interval), "ascii": not tty,
+            "dynamic_ncols": tty}

@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Everything docs/RESULTS.md shows, from the trained models, in one command:
 
-    /usr/bin/python3 training/report.py --dataset DATA --surround models/surround.safetensors \\
-        --single-view models/single_view.safetensors --out docs/results [--ngi build/ngi] [--max-frames K]
+    PYTHONPATH=build/python /usr/bin/python3 training/report.py --dataset DATA \\
+        --surround models/surround.safetensors --single-view models/single_view.safetensors --out docs/results \\
+        [--ngi build/ngi] [--max-frames K]
 
 1. Held-out table: `ngi lightmap` (through evaluate.py) on every frame of DATA's test split (scenes disjoint
    from training) for the surround-aware and the single-view model; SSIM / MSE / PSNR of the tone-mapped final
@@ -41,11 +42,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
+
+import ngi.model_file as model_file
 
 import data
 import evaluate
 import ngi_paths
-from progress import Progress, hms
 
 VARIANTS = ("surround", "single_view")
 LABEL = {"surround": "surround-aware", "single_view": "single view", "direct_only": "direct light only",
@@ -86,22 +89,6 @@ def text_digest(obj, length=10):
     return hashlib.sha1(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:length]
 
 
-def model_config(path):
-    """The ngi config of a model file (safetensors __metadata__.ngi), read from the header only."""
-    with open(path, "rb") as f:
-        header_len = int.from_bytes(f.read(8), "little")
-        header = json.loads(f.read(header_len))
-    return json.loads(header["__metadata__"]["ngi"])
-
-
-def run(cmd, **kw):
-    t0 = time.monotonic()
-    proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=ngi_paths.ngi_env(), **kw)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
-    return proc.stdout, time.monotonic() - t0
-
-
 def write_json(path, obj):
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
@@ -128,12 +115,14 @@ class Stage:
     def __init__(self, name, total, todo, unit):
         self.name, self.todo, self.done = name, todo, 0
         log(f"== {name}: {total} {unit}s, {total - todo} already done, {todo} to do")
-        self.bar = Progress(todo, 0, label=name, unit=unit) if todo else None
+        self.bar = tqdm(total=todo, desc=name, unit=unit, **ngi_paths.progress_options()) if todo else None
 
     def step(self):
         self.done += 1
         if self.bar:
-            self.bar.update(self.done, {}, force=self.done == self.todo)
+            self.bar.update(1)
+            if self.done == self.todo:
+                self.bar.close()
 
 
 # --------------------------------------------------------------------------
@@ -291,7 +280,8 @@ def render_frame(ngi, seq, item, dest, settings, device):
         cmd += ["--device", device]
     if dest.exists():  # a frame folder without its info file: render again
         shutil.rmtree(dest)
-    out, seconds = run(cmd)
+    proc, seconds = ngi_paths.run(cmd)
+    out = proc.stdout
     m = CAMERA_RE.search(out)
     if not m:
         raise RuntimeError(f"cannot read the camera line of ngi render:\n{out}")
@@ -370,7 +360,7 @@ def sequences(args, ngi, models, work, settings):
                 stage.step()
         merge_dir = seq["dir"] / "merge" / item["id"]
         if not (merge_dir / "target.npy").is_file():
-            data.run_merge(ngi, frame_dir, merge_dir, "surround", args.device)
+            data.run_merge(frame_dir, merge_dir, "surround", args.device)
         item["light"] = light_diagnostics(merge_dir, settings["n"])
         # Mean brightness of the tone-mapped final images (compare.png: direct only | network | reference).
         item["brightness"] = {}
@@ -409,7 +399,7 @@ def strip_images(compare_png):
 
 def ngi_devices(ngi):
     try:
-        out, _ = run([ngi, "devices"])
+        out = ngi_paths.run([ngi, "devices"])[0].stdout
     except RuntimeError as e:
         out = str(e)
     return out
@@ -440,8 +430,7 @@ def speed(args, ngi, bench, models, work, settings, heldout_result):
                "--repeats", args.repeats]
         if args.device:
             cmd += ["--device", args.device]
-        out, _ = run(cmd)
-        b = json.loads(out)
+        b = json.loads(ngi_paths.run(cmd)[0].stdout)
         # The whole ngi lightmap command per frame: process start, device, model load (cached kernels), reading
         # the frame's EXRs, preprocessing + merge, generator, decode, compose, tone map, metrics, writing.
         tmp = work / "speed" / "tmp"
@@ -780,7 +769,7 @@ def main(argv=None):
         log(f"warning: the dataset used rr_start {settings['rr_start']}; ngi render always uses 2")
     models = {}
     for v, p in (("surround", args.surround), ("single_view", args.single_view)):
-        cfg = model_config(p)
+        cfg = model_file.read_config(p)
         models[v] = {"path": str(Path(p).resolve()), "digest": file_digest(p), "config": cfg}
         want = 12 if v == "surround" else 10
         if cfg.get("input_nc") != want:
@@ -838,7 +827,7 @@ def main(argv=None):
     (out / "tables.md").write_text(md + "\n")
     write_json(out / "results.json", repo_relative(res))
     print(md)
-    log(f"report: done in {hms(time.monotonic() - t_start)}: {out}/tables.md, results.json, "
+    log(f"report: done in {tqdm.format_interval(time.monotonic() - t_start)}: {out}/tables.md, results.json, "
         f"{len(list(out.glob('*.png')))} PNGs")
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Smoke test of the training pipeline against the real ngi binary (ctest: training_smoke, < 1 min on 2 cores).
 
-    /usr/bin/python3 training/test_training.py --ngi build/ngi --work build/training_smoke
+    PYTHONPATH=build/python /usr/bin/python3 training/test_training.py --ngi build/ngi --work build/training_smoke
 
 1. renders a tiny dataset with `ngi dataset` (N = 32: 2 train frames, 1 test frame, few samples);
 2. the loader (data.py, surround and single view) yields exactly, bit for bit, what a fresh `ngi merge` writes
@@ -35,14 +35,15 @@ except ImportError as e:  # pragma: no cover
     print(f"training_smoke: skipped ({e})")
     sys.exit(77)
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-import data  # noqa: E402
-import networks  # noqa: E402
-import ngi_paths  # noqa: E402
+import ngi.model_file as model_file  # noqa: E402
+import ngi.reference_models as reference_models  # noqa: E402
+
 import ao_common  # noqa: E402
-import ngi_convert  # noqa: E402
-import reference_models  # noqa: E402
+import data  # noqa: E402
+import ngi_paths  # noqa: E402
+from ngi_paths import run  # noqa: E402  (a failed command raises RuntimeError with its output)
+
+HERE = Path(__file__).resolve().parent
 
 # Output tolerance of `ngi generate` against the float64 PyTorch reference. ngi computes in float32 with
 # another summation order (im2col + GEMM); the rounding differences (~1e-7 relative per layer) are amplified
@@ -60,14 +61,6 @@ DATASET = {
 }
 TRAIN = {"ngf": 4, "num_downs": 5, "ndf": 8, "d_layers": 3, "steps": 40, "checkpoint_every": 10,
          "keep_every": 20, "seed": 7, "threads": 1, "eval_every": 20, "eval_frames": 1}
-
-
-def run(cmd, **kw):
-    t0 = time.monotonic()
-    proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=ngi_paths.ngi_env(), **kw)
-    if proc.returncode != 0:
-        raise SystemExit(f"FAILED ({proc.returncode}): {' '.join(map(str, cmd))}\n{proc.stdout}{proc.stderr}")
-    return proc, time.monotonic() - t0
 
 
 def check(cond, message):
@@ -92,7 +85,7 @@ def test_loader(ngi, dataset, work):
     for layout in data.LAYOUTS:
         for split in ("train", "test"):
             cache_dir = data.default_cache_dir(dataset, layout)
-            ds, n, stats = data.load_split(ngi, dataset, split, layout, cache_dir)
+            ds, n, stats = data.load_split(dataset, split, layout, cache_dir)
             check(stats["merged"] == len(ds) and stats["reused"] == 0, f"{layout}/{split}: {len(ds)} frames merged")
             for i in range(len(ds)):
                 x, y, name = ds[i]
@@ -110,7 +103,7 @@ def test_loader(ngi, dataset, work):
                 check(printed == [data.channels(layout)], f"{layout}: C++ channel names == data.channels()")
                 check(-1 <= want_y.min() and want_y.max() <= 1, f"{name}: target in the output range [-1, 1]")
                 loaded[(layout, name)] = (x.numpy(), y.numpy())
-            again = data.load_split(ngi, dataset, split, layout, cache_dir)[2]
+            again = data.load_split(dataset, split, layout, cache_dir)[2]
             check(again == {"merged": 0, "reused": len(ds)}, f"{layout}/{split}: rerun reuses the cache")
     n = DATASET["n"]
     rows, cols = data.front_region(n)
@@ -123,23 +116,21 @@ def test_loader(ngi, dataset, work):
     frame = dataset / data.list_frames(dataset, "train")[0]
     st = os.stat(frame / "reference.exr")
     os.utime(frame / "reference.exr", ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000_000))
-    stats = data.load_split(ngi, dataset, "train", "surround", data.default_cache_dir(dataset, "surround"))[2]
+    stats = data.load_split(dataset, "train", "surround", data.default_cache_dir(dataset, "surround"))[2]
     check(stats == {"merged": 1, "reused": 1}, "a changed frame is merged again, the other reused")
 
 
 def reference_output(model_path, x):
-    tensors, cfg = ngi_convert.read_model(str(model_path))
-    g = networks.inference_generator({k: torch.from_numpy(v) for k, v in tensors.items()}, cfg["input_nc"],
-                                     cfg["output_nc"], cfg["ngf"], cfg["num_downs"], cfg["dropout"],
-                                     cfg["dropout_seed"])
+    tensors, cfg = model_file.read_model(str(model_path))
+    g = reference_models.load_generator(tensors, cfg)
     return reference_models.run_reference(g, torch.from_numpy(x), cfg["bn_mode"]).numpy(), cfg
 
 
 def test_export_and_run(ngi, dataset, work, run_dir, layout):
     model = work / f"{layout}.safetensors"
-    proc, _ = run([sys.executable, HERE / "export.py", "--run", run_dir, "--out", model, "--ngi", ngi])
+    proc, _ = run([sys.executable, HERE / "export.py", "--run", run_dir, "--out", model])
     print(proc.stderr.strip())
-    tensors, cfg = ngi_convert.read_model(str(model))
+    tensors, cfg = model_file.read_model(str(model))
     check(cfg["input_layout"] == data.channels(layout) and cfg["bn_mode"] in ("per_image", "running")
           and cfg["training"]["steps"] > 0 and cfg["training"]["bn_mode_selection"]["chosen"] == cfg["bn_mode"]
           and cfg["training"]["dataset_config"]["n"] == DATASET["n"],
@@ -259,12 +250,8 @@ def main():
     got = np.load(work / "ao_out" / "ao.npy")[0]
     v = ao_common.load_view(view)
     x, rows, cols = ao_common.image_inputs(v, 3.0)  # the model's radius at its own size
-    tensors, config = ngi_convert.read_model(ao_model)
-    h = torch.from_numpy(x).double()
-    for i, layer in enumerate(config["layers"]):
-        h = h @ torch.from_numpy(tensors[f"layers.{i}.weight"].astype(np.float64)).T + \
-            torch.from_numpy(tensors[f"layers.{i}.bias"].astype(np.float64))
-        h = torch.tanh(h) if layer["activation"] == "tanh" else h
+    tensors, config = model_file.read_model(ao_model)
+    h = reference_models.run_mlp_reference(tensors, config, x)
     want = np.ones_like(got)
     want[rows, cols] = h[:, 0].clamp(0, 1).numpy()
     ao_diff = float(np.abs(got - want).max())

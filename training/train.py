@@ -1,13 +1,14 @@
 #!/usr/bin/python3
 """Train a pix2pix generator for ngi on a rendered dataset (training/README.md has the whole recipe).
 
-    /usr/bin/python3 training/train.py --config training/configs/surround.json --dataset DATA --run runs/surround
+    PYTHONPATH=build/python /usr/bin/python3 training/train.py --config training/configs/surround.json \\
+        --dataset DATA --run runs/surround
 
 The run folder holds run.json (the resolved config), checkpoints/latest.pt (every checkpoint_every steps, at
 the end and on Ctrl-C / SIGTERM), checkpoints/step_<k>.pt (every keep_every steps) and log.jsonl (one line of
 losses per step, eval lines every eval_every steps). Running the same command again resumes from latest.pt
 bit for bit (same machine and thread count); --steps S extends or shortens a run. A progress bar with ETA
-goes to stderr.
+(tqdm, with the smoothed losses) goes to stderr.
 
 Config keys (JSON; training/configs/*.json): layout ("surround" | "single_view"), ngf, num_downs, dropout
 (bool, pix2pix's nn.Dropout(0.5) in training), ndf, d_layers, lambda_l1, lr, beta1, beta2, steps,
@@ -25,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 import checkpoint
 import data
@@ -32,7 +34,6 @@ import evaluate
 import gan
 import networks
 import ngi_paths
-from progress import Progress
 
 DEFAULTS = {
     "layout": "surround", "ngf": 32, "num_downs": 8, "dropout": True, "ndf": 32, "d_layers": 3,
@@ -146,12 +147,12 @@ def main(argv=None):
     ngi = ngi_paths.find_ngi(args.ngi)
     dataset_dir = Path(args.dataset).resolve()
     cache_dir = Path(cfg["cache_dir"]) if cfg["cache_dir"] else data.default_cache_dir(dataset_dir, cfg["layout"])
-    train_set, n, merge_stats = data.load_split(ngi, dataset_dir, cfg["train_split"], cfg["layout"], cache_dir,
+    train_set, n, merge_stats = data.load_split(dataset_dir, cfg["train_split"], cfg["layout"], cache_dir,
                                                 device=args.device, jobs=cfg["merge_jobs"],
                                                 max_frames=cfg["max_frames"])
     eval_set = None
     if cfg["eval_every"]:
-        eval_set, _, _ = data.load_split(ngi, dataset_dir, cfg["eval_split"], cfg["layout"], cache_dir,
+        eval_set, _, _ = data.load_split(dataset_dir, cfg["eval_split"], cfg["layout"], cache_dir,
                                          device=args.device, jobs=cfg["merge_jobs"], max_frames=cfg["eval_frames"])
     check_sizes(cfg, n)
     digest = data.frame_list_digest(train_set.frames)
@@ -189,7 +190,8 @@ def main(argv=None):
                                "frames_digest": digest, "dataset": str(dataset_dir)})
 
     stop = StopSignal()
-    progress = Progress(cfg["steps"], step)
+    progress = tqdm(total=cfg["steps"], initial=step, unit="step", **ngi_paths.progress_options())
+    shown = {}  # the losses on the bar, smoothed
     exit_code = 0
     try:
         with open(log_path, "a") as log:
@@ -205,7 +207,11 @@ def main(argv=None):
                     scores = evaluate.heldout_scores(model.G.state_dict(), cfg, eval_set, n, "per_image")
                     log.write(json.dumps({"step": step, "eval": scores}) + "\n")
                 log.flush()
-                progress.update(step, losses)
+                for k in ("G_GAN", "G_L1", "D_real", "D_fake"):
+                    if k in losses:
+                        shown[k] = losses[k] if k not in shown else 0.9 * shown[k] + 0.1 * losses[k]
+                progress.set_postfix({k: f"{v:.4g}" for k, v in shown.items()}, refresh=False)
+                progress.update(step - progress.n)
                 if step % cfg["checkpoint_every"] == 0 or step == cfg["steps"] or stop.signum is not None:
                     log.flush()
                     save(latest)

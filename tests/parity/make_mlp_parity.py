@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """Generate PyTorch parity data for ngi's "mlp" model family (docs/MODEL_FORMAT.md).
 
-For each case: a torch MLP (frequency encoding written from its definition in
-docs/CONVENTIONS.md section 13, nn.Linear layers, activations) with random
-weights, saved as an ngi model file, and its float64 output on a random input
-(per-pixel NCHW images and [N, C] point lists); and every shipped AO model (models/ao_*.safetensors) as it is.
+For each case: an MLP with random weights, saved as an ngi model file, and its
+float64 output on a random input (per-pixel NCHW images and [N, C] point lists),
+computed by ngi.reference_models.run_mlp_reference (the frequency encoding written
+from its definition in docs/CONVENTIONS.md section 13, linear layers, activations);
+and every shipped AO model (models/ao_*.safetensors) as it is.
 
-Usage: /usr/bin/python3 tests/parity/make_mlp_parity.py --out DIR
+Usage: PYTHONPATH=<build>/python /usr/bin/python3 tests/parity/make_mlp_parity.py --out DIR
 Writes DIR/<case>.safetensors, DIR/<case>_input.npy, DIR/<case>_expected.npy
 and DIR/cases.json. Deterministic.
 """
@@ -15,24 +16,14 @@ import argparse
 import json
 import math
 import os
-import sys
 
 import numpy as np
 import torch
 
+import ngi.model_file as model_file
+import ngi.reference_models as reference_models
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
-
-import ngi_convert  # noqa: E402
-
-ACTIVATIONS = {
-    "none": lambda x, s: x,
-    "relu": lambda x, s: torch.relu(x),
-    "leaky_relu": lambda x, s: torch.nn.functional.leaky_relu(x, s),
-    "tanh": lambda x, s: torch.tanh(x),
-    "sigmoid": lambda x, s: torch.sigmoid(x),
-    "exp": lambda x, s: torch.exp(torch.clamp(x, max=88.0)),
-}
 
 # seed 001's sizes (48 inputs, tanh), encodings in both orders, a width beyond the fused kernel (dense path).
 CASES = [
@@ -49,28 +40,11 @@ CASES = [
 ]
 
 
-def encode(x, enc):
-    """x: [n, C] float64 -> [n, encoded width], per CONVENTIONS section 13."""
-    if not enc or enc["bands"] == 0:
-        return x
-    parts = [x] if enc["include_input"] else []
-    scales = [2.0 ** (enc["first_exponent"] + b) * (math.pi if enc["pi"] else 1.0) for b in range(enc["bands"])]
-    if enc["order"] == "band":
-        for s in scales:
-            parts += [torch.sin(s * x), torch.cos(s * x)]
-        return torch.cat(parts, dim=1)
-    per_comp = []
-    for c in range(x.shape[1]):
-        for s in scales:
-            per_comp += [torch.sin(s * x[:, c:c + 1]), torch.cos(s * x[:, c:c + 1])]
-    return torch.cat(parts + per_comp, dim=1)
-
-
 def make_case(case, out_dir):
     g = torch.Generator().manual_seed(case["seed"])
     enc = case["encoding"]
     width = case["inputs"] if not enc else (case["inputs"] if enc["include_input"] else 0) + 2 * enc["bands"] * case["inputs"]
-    tensors, layers, weights = {}, [], []
+    tensors, layers, weights = {}, [], {}
     in_f = width
     for i, (out_f, act) in enumerate(case["layers"]):
         bound = 1.0 / math.sqrt(in_f)  # nn.Linear's default init range
@@ -80,18 +54,18 @@ def make_case(case, out_dir):
             w, b = w.half().double(), b.half().double()
         tensors[f"layers.{i}.weight"] = w.float().numpy()
         tensors[f"layers.{i}.bias"] = b.float().numpy()
+        weights[f"layers.{i}.weight"], weights[f"layers.{i}.bias"] = w, b  # float64: the exact reference
         layer = {"out": out_f, "activation": act}
         if act == "leaky_relu":
             layer["slope"] = 0.1
         layers.append(layer)
-        weights.append((w, b, act, layer.get("slope", 0.01)))
         in_f = out_f
     config = {"format_version": 1, "family": "mlp", "input_nc": case["inputs"], "layers": layers,
               "source": f"tests/parity/make_mlp_parity.py {case['name']}"}
     if enc:
         config["encoding"] = enc
-    model_file = f"{case['name']}.safetensors"
-    ngi_convert.write_model(os.path.join(out_dir, model_file), tensors, config, half=case["half"])
+    model_name = f"{case['name']}.safetensors"
+    model_file.write_model(os.path.join(out_dir, model_name), tensors, config, half=case["half"])
 
     if case["shape"] == "points":
         x = torch.rand((case["n"], case["inputs"]), generator=g) * 2 - 1
@@ -99,9 +73,7 @@ def make_case(case, out_dir):
     else:
         x = torch.rand((1, case["inputs"], case["h"], case["w"]), generator=g) * 2 - 1
         items = x.double().reshape(case["inputs"], -1).t()
-    h = encode(items, enc)
-    for w, b, act, slope in weights:
-        h = ACTIVATIONS[act](h @ w.t() + b, slope)
+    h = reference_models.run_mlp_reference(weights, config, items)
     if case["shape"] == "points":
         y = h.float()
     else:
@@ -110,30 +82,26 @@ def make_case(case, out_dir):
     np.save(os.path.join(out_dir, input_file), x.numpy())
     np.save(os.path.join(out_dir, expected_file), y.numpy())
     print(f"{case['name']:26s} input {tuple(x.shape)} output {tuple(y.shape)} max|y| {y.abs().max().item():.4f}")
-    return {"name": case["name"], "model": model_file, "input": input_file, "expected": expected_file,
+    return {"name": case["name"], "model": model_name, "input": input_file, "expected": expected_file,
             "dtype": "F16" if case["half"] else "F32", "widest": max([width] + [o for o, _ in case["layers"]])}
 
 
 def shipped_case(path, out_dir, seed):
     """A shipped model file (models/ao_*.safetensors) as it is: PyTorch float64 on its stored (F16) weights, input
     an [n, 48] list of random unit normals (16 per row, seed 001's input)."""
-    tensors, config = ngi_convert.read_model(path)
+    tensors, config = model_file.read_model(path)
     name = "shipped_" + os.path.basename(path).replace(".safetensors", "")
     g = torch.Generator().manual_seed(seed)
     x = torch.randn((301, config["input_nc"] // 3, 3), generator=g, dtype=torch.float64)
     x = (x / x.norm(dim=2, keepdim=True)).reshape(301, -1).float()
-    h = x.double()
-    for i, layer in enumerate(config["layers"]):
-        w = torch.from_numpy(tensors[f"layers.{i}.weight"].astype(np.float64))
-        b = torch.from_numpy(tensors[f"layers.{i}.bias"].astype(np.float64))
-        h = ACTIVATIONS[layer.get("activation", "none")](h @ w.t() + b, layer.get("slope", 0.01))
-    model_file = os.path.basename(path)
-    with open(path, "rb") as src, open(os.path.join(out_dir, model_file), "wb") as dst:
+    h = reference_models.run_mlp_reference(tensors, config, x)
+    model_name = os.path.basename(path)
+    with open(path, "rb") as src, open(os.path.join(out_dir, model_name), "wb") as dst:
         dst.write(src.read())
     np.save(os.path.join(out_dir, f"{name}_input.npy"), x.numpy())
     np.save(os.path.join(out_dir, f"{name}_expected.npy"), h.float().numpy())
     print(f"{name:26s} input {tuple(x.shape)} output {tuple(h.shape)}")
-    return {"name": name, "model": model_file, "input": f"{name}_input.npy", "expected": f"{name}_expected.npy",
+    return {"name": name, "model": model_name, "input": f"{name}_input.npy", "expected": f"{name}_expected.npy",
             "dtype": "F16", "widest": max([config["input_nc"]] + [l["out"] for l in config["layers"]])}
 
 

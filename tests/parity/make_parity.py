@@ -2,11 +2,11 @@
 """Generate the PyTorch parity data that ngi's C++ parity test compares against.
 
 For each case: build a small generator with random weights, save it as the
-upstream training code would (.pth), convert it with tools/ngi_convert.py,
+upstream training code would (.pth), convert it with ngi.convert,
 check the converted file holds exactly the model's weights, and run the
 reference forward pass on a random input.
 
-Usage: /usr/bin/python3 tests/parity/make_parity.py --out DIR
+Usage: PYTHONPATH=<build>/python /usr/bin/python3 tests/parity/make_parity.py --out DIR
 Writes DIR/<case>.safetensors, DIR/<case>_input.npy, DIR/<case>_expected.npy
 and DIR/cases.json. Deterministic: the same torch/numpy give identical bytes.
 """
@@ -15,18 +15,17 @@ import argparse
 import json
 import math
 import os
-import sys
 import tempfile
 import time
 
 import numpy as np
 import torch
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
+import ngi.convert as convert
+import ngi.model_file as model_file
+import ngi.reference_models as reference_models
 
-import ngi_convert  # noqa: E402
-import reference_models  # noqa: E402
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 # Small architectures: the C++ test runs every case on a 2-core CPU OpenCL device.
 ARCHITECTURES = {
@@ -120,7 +119,7 @@ def save_upstream_checkpoint(model, family, directory):
 
 def check_converted(path, model, case, arch):
     """The converted file must hold the model's weights bit for bit (as F16 when half)."""
-    tensors, config = ngi_convert.read_model(path)
+    tensors, config = model_file.read_model(path)
     expected = {name: value.numpy() for name, value in model.state_dict().items()
                 if not name.endswith("num_batches_tracked")}
     if list(tensors) != list(expected):
@@ -148,17 +147,17 @@ def make_case(case, out_dir, work_dir):
         round_to_half(model)
 
     checkpoint = save_upstream_checkpoint(model, case["family"], work_dir)
-    model_file = f"{case['name']}.safetensors"
-    argv = [checkpoint, os.path.join(out_dir, model_file), "--family", case["family"],
+    model_name = f"{case['name']}.safetensors"
+    argv = [checkpoint, os.path.join(out_dir, model_name), "--family", case["family"],
             "--bn-mode", case["bn_mode"], "--input-nc", str(arch["input_nc"]),
             "--output-nc", str(arch["output_nc"]), "--ngf", str(arch["ngf"]),
             "--num-downs", str(arch["num_downs"]), "--dropout", case["dropout"],
             "--dropout-seed", str(case["dropout_seed"]), "--source", f"tests/parity/make_parity.py {case['name']}"]
     if case["half"]:
         argv.append("--half")
-    if ngi_convert.main(argv) != 0:
+    if convert.main(argv) != 0:
         raise RuntimeError(f"{case['name']}: conversion failed")
-    check_converted(os.path.join(out_dir, model_file), model, case, arch)
+    check_converted(os.path.join(out_dir, model_name), model, case, arch)
 
     shape = (1, arch["input_nc"], arch["height"], arch["width"])
     x = torch.rand(shape, generator=generator) * 2 - 1
@@ -173,7 +172,7 @@ def make_case(case, out_dir, work_dir):
     values = y.abs()
     print(f"{case['name']:28s} output {tuple(y.shape)}  max|y| {values.max().item():.4f}  "
           f"mean|y| {values.mean().item():.4f}  |y|>0.99: {int((values > 0.99).sum())}/{y.numel()}")
-    return {"name": case["name"], "model": model_file, "input": input_file, "expected": expected_file,
+    return {"name": case["name"], "model": model_name, "input": input_file, "expected": expected_file,
             "family": case["family"], "bn_mode": case["bn_mode"], "dropout": case["dropout"],
             "dtype": "F16" if case["half"] else "F32"}
 
@@ -181,14 +180,8 @@ def make_case(case, out_dir, work_dir):
 def make_shipped_case(case, out_dir):
     """PyTorch's float64 output of a shipped model file on a random input of the size it was trained at."""
     path = os.path.join(REPO, case["file"])
-    tensors, config = ngi_convert.read_model(path)
-    model = reference_models.build_generator(config["family"], config["input_nc"], config["output_nc"],
-                                             config["ngf"], config["num_downs"], config["dropout"],
-                                             config["dropout_seed"])
-    state = {name: torch.from_numpy(array.astype(np.float32)) for name, array in tensors.items()}
-    missing, unexpected = model.load_state_dict(state, strict=False)
-    if unexpected or any(not name.endswith("num_batches_tracked") for name in missing):
-        raise AssertionError(f"{case['name']}: state_dict mismatch: missing {missing}, unexpected {unexpected}")
+    tensors, config = model_file.read_model(path)
+    model = reference_models.load_generator(tensors, config)
     generator = torch.Generator().manual_seed(case["seed"])
     x = torch.rand((1, config["input_nc"], case["height"], case["width"]), generator=generator) * 2 - 1
     y = reference_models.run_reference(model, x, config["bn_mode"]).to(torch.float32)

@@ -44,4 +44,22 @@ cmake -S "$root/tests/consumers/cxx_find_package" -B "$work/cxx" -G Ninja -DCMAK
 cmake --build "$work/cxx" > "$work/cxx-build.log" || { cat "$work/cxx-build.log" >&2; exit 1; }
 "$work/cxx/cxx_consumer" "$root/models/surround.safetensors" >&2
 checks=$((checks + 1))
+
+# 4. Python: the installed package (pure-Python modules + the native module) imports from the prefix alone and
+# runs a shipped model, from a directory that holds no ngi sources.
+pydir=$prefix/lib/python3/dist-packages
+if [ -d "$pydir/ngi" ]; then
+  (cd "$work" && PYTHONPATH=$pydir /usr/bin/python3 -c '
+import sys, numpy as np, ngi
+assert ngi.__file__.startswith(sys.argv[1]), ngi.__file__
+m = ngi.Model(ngi.Device(), sys.argv[2])
+y = m.run(np.zeros((1, 48, 4, 4), np.float32))
+assert y.shape == (1, 1, 4, 4) and np.isfinite(y).all()
+import ngi.model_file
+print("install: python: ngi", ngi.__version__, "from", ngi.__file__, file=sys.stderr)
+' "$pydir" "$root/models/ao_sculpture_16x8.safetensors") || { step "the installed Python package does not work"; exit 1; }
+  checks=$((checks + 1))
+else
+  step "no Python package installed ($pydir)"; exit 1
+fi
 echo "$checks"

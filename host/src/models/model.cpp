@@ -44,7 +44,7 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     auto meta = file.metadata.find("ngi");
     if (meta == file.metadata.end())
         throw InputError("load model " + path + ": no __metadata__[\"ngi\"] architecture config; convert the "
-                         "checkpoint with tools/ngi_convert.py (docs/MODEL_FORMAT.md)");
+                         "checkpoint with python3 -m ngi.convert (docs/MODEL_FORMAT.md)");
     ModelConfig cfg = detail::parse_model_config(meta->second, path);
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;

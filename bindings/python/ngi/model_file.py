@@ -1,5 +1,4 @@
-#!/usr/bin/python3
-"""Convert a PyTorch generator checkpoint into an ngi model file (.safetensors).
+"""ngi model files (.safetensors): the writer, the reader and the config every generator family needs.
 
 The file is a Hugging Face safetensors file written by hand (the `safetensors`
 package is not a dependency): an 8-byte little-endian header length, a JSON
@@ -7,30 +6,18 @@ header padded with spaces to a multiple of 8 bytes, then the raw little-endian
 tensor data. The ngi configuration travels as a JSON string in
 `__metadata__["ngi"]`. docs/MODEL_FORMAT.md is the specification.
 
-Two generator families are understood, each from the checkpoint layout its
-upstream training code writes:
-  * pix2pix_unet     - junyanz/pytorch-CycleGAN-and-pix2pix UnetGenerator,
-                       `<epoch>_net_G.pth` = torch.save(net.state_dict())
-  * deepillumination - CreativeCodingLab/DeepIllumination G,
-                       `netG_model_epoch_<n>.pth` =
-                       torch.save({'epoch', 'state_dict_G', 'optimizer_G'})
-
-Usage:
-  /usr/bin/python3 tools/ngi_convert.py IN.pth OUT.safetensors \\
-      --family pix2pix_unet --bn-mode per_image [--input-nc 12 --output-nc 3 \\
-      --ngf 64 --num-downs 8] [--dropout off|seeded --dropout-seed S] [--half]
+NumPy and the standard library only: write_model also takes torch tensors, but
+this module never imports torch. The PyTorch checkpoint converter built on it
+is ngi.convert.
 """
 
-import argparse
-import inspect
 import json
 import os
-import pickle
 import struct
-import sys
 
 import numpy as np
-import torch
+
+from .dropout import DROPOUT_P
 
 FORMAT_VERSION = 1
 FAMILIES = ("pix2pix_unet", "deepillumination")
@@ -38,8 +25,8 @@ BN_MODES = ("running", "per_image")
 DROPOUT_MODES = ("off", "seeded")
 
 # Hyper-parameters both upstream generators hard-code; they are written into
-# the config anyway so the C++ side never has to assume them.
-DROPOUT_P = 0.5      # nn.Dropout(0.5)
+# the config anyway so the C++ side never has to assume them (DROPOUT_P, the
+# p of their nn.Dropout(0.5), is ngi.dropout's).
 BN_EPS = 1e-05       # nn.BatchNorm2d default, not overridden upstream
 LEAKY_SLOPE = 0.2    # nn.LeakyReLU(0.2, True)
 # Both families are trained on images scaled to [-1, 1] and end in a Tanh.
@@ -50,7 +37,7 @@ _NUMPY_DTYPES = {"F32": np.dtype("<f4"), "F16": np.dtype("<f2")}
 
 
 class ConversionError(ValueError):
-    """A checkpoint or option that cannot become a valid ngi model file."""
+    """A checkpoint, option or file that cannot become (or is not) a valid ngi model file."""
 
 
 # --------------------------------------------------------------------------
@@ -72,7 +59,7 @@ def write_model(path, tensors, config, half=False):
     for name, value in tensors.items():
         if name == METADATA_KEY:
             raise ConversionError(f"'{METADATA_KEY}' is reserved and cannot be a tensor name")
-        if isinstance(value, torch.Tensor):
+        if hasattr(value, "detach"):  # a torch.Tensor (duck-typed: this module does not import torch)
             value = value.detach().cpu().numpy()
         # np.array (unlike ascontiguousarray) keeps 0-d tensors 0-d. Overflow
         # warnings are silenced because the isfinite check below reports it by name.
@@ -101,25 +88,35 @@ def write_model(path, tensors, config, half=False):
             f.write(data)
 
 
+def _read_header(path, f):
+    """(tensor entries of the header, ngi config) of the open model file `f`, read from its start."""
+    prefix = f.read(8)
+    if len(prefix) < 8:
+        raise ConversionError(f"{path}: too short to be a safetensors file")
+    (header_len,) = struct.unpack("<Q", prefix)
+    if 8 + header_len > os.fstat(f.fileno()).st_size:
+        raise ConversionError(f"{path}: header length {header_len} exceeds the file size")
+    header = json.loads(f.read(header_len).decode("utf-8"))
+    metadata = header.pop(METADATA_KEY, {})
+    if "ngi" not in metadata:
+        raise ConversionError(f"{path}: no __metadata__.ngi config; not an ngi model file")
+    return header, json.loads(metadata["ngi"])
+
+
+def read_config(path):
+    """The ngi config of a model file, read from the header only (the tensor data is not read)."""
+    with open(path, "rb") as f:
+        return _read_header(path, f)[1]
+
+
 def read_model(path):
     """Read an ngi model file; returns (tensors: dict name -> np.ndarray, config: dict).
 
     Arrays keep their stored dtype (float32 or float16), in file order.
     """
     with open(path, "rb") as f:
-        raw = f.read()
-    if len(raw) < 8:
-        raise ConversionError(f"{path}: too short to be a safetensors file")
-    (header_len,) = struct.unpack_from("<Q", raw, 0)
-    if 8 + header_len > len(raw):
-        raise ConversionError(f"{path}: header length {header_len} exceeds the file size")
-    header = json.loads(raw[8:8 + header_len].decode("utf-8"))
-    data = memoryview(raw)[8 + header_len:]
-
-    metadata = header.pop(METADATA_KEY, {})
-    if "ngi" not in metadata:
-        raise ConversionError(f"{path}: no __metadata__.ngi config; not an ngi model file")
-    config = json.loads(metadata["ngi"])
+        header, config = _read_header(path, f)
+        data = memoryview(f.read())
 
     tensors = {}
     for name, entry in header.items():
@@ -255,148 +252,3 @@ def make_config(family, *, bn_mode, input_nc=12, output_nc=3, ngf=64, num_downs=
         "output_range": VALUE_RANGE,
         "source": source,
     }
-
-
-# --------------------------------------------------------------------------
-# Checkpoint loading and validation
-# --------------------------------------------------------------------------
-
-def _torch_load(pth_path):
-    """torch.load on the CPU, refusing arbitrary pickled code wherever torch can."""
-    if "weights_only" not in inspect.signature(torch.load).parameters:
-        # torch < 1.13 has no safe loader at all.
-        print("ngi_convert: warning: this torch cannot load without unpickling arbitrary code; "
-              "only convert checkpoints you trust", file=sys.stderr)
-        return torch.load(pth_path, map_location="cpu")
-    try:
-        return torch.load(pth_path, map_location="cpu", weights_only=True)
-    except pickle.UnpicklingError as error:
-        # torch 1.x's weights_only unpickler rejects plain floats (pytorch
-        # issue 94670, fixed in 2.0), and DeepIllumination checkpoints hold
-        # the optimizer's lr and betas. torch >= 2 rejecting a file means it
-        # holds more than weights: refuse it.
-        if int(torch.__version__.split(".")[0]) >= 2:
-            raise ConversionError(f"{pth_path}: refused by torch.load(weights_only=True): {error}") from None
-        print(f"ngi_convert: warning: torch {torch.__version__} cannot load {pth_path} with weights_only=True; "
-              "loading it with full unpickling - only convert checkpoints you trust", file=sys.stderr)
-        return torch.load(pth_path, map_location="cpu", weights_only=False)
-
-
-def load_state_dict(pth_path):
-    """Load a generator state_dict from either upstream checkpoint layout.
-
-    Returns (state_dict, description of the layout found).
-    """
-    checkpoint = _torch_load(pth_path)
-    if not isinstance(checkpoint, dict):
-        raise ConversionError(
-            f"{pth_path}: expected a state_dict or a DeepIllumination checkpoint dict, "
-            f"got {type(checkpoint).__name__}")
-    if "state_dict_G" in checkpoint:
-        return checkpoint["state_dict_G"], f"DeepIllumination checkpoint, epoch {checkpoint.get('epoch', '?')}"
-    return checkpoint, "state_dict"
-
-
-def _format_names(names):
-    return "".join(f"\n    {name}" for name in names)
-
-
-def validate_state_dict(state_dict, config):
-    """Check `state_dict` against `config`; return name -> float32 np.ndarray in canonical order.
-
-    Drops num_batches_tracked and a DataParallel `module.` prefix. Every
-    problem found is reported at once, by tensor name.
-    """
-    tensors = {}
-    for key, value in state_dict.items():
-        if not isinstance(value, torch.Tensor):
-            raise ConversionError(f"entry '{key}' is a {type(value).__name__}, not a tensor; "
-                                  "is this a generator state_dict?")
-        name = key[len("module."):] if key.startswith("module.") else key
-        if name.endswith("num_batches_tracked"):
-            continue
-        tensors[name] = value
-
-    shapes = expected_shapes(config)
-    missing = [name for name in shapes if name not in tensors]
-    unexpected = [name for name in tensors if name not in shapes]
-    problems = []
-    if missing:
-        problems.append(f"missing {len(missing)} tensor(s):{_format_names(missing)}")
-    if unexpected:
-        problems.append(f"unexpected {len(unexpected)} tensor(s):{_format_names(unexpected)}")
-    for name, shape in shapes.items():
-        if name in tensors and tuple(tensors[name].shape) != shape:
-            problems.append(f"tensor '{name}' has shape {tuple(tensors[name].shape)}, expected {shape}")
-    if missing and len(missing) == len(shapes):
-        problems.append("none of the expected tensors is present: wrong --family?")
-    if problems:
-        arch = (f"{config['family']} input_nc={config['input_nc']} output_nc={config['output_nc']} "
-                f"ngf={config['ngf']} num_downs={config['num_downs']}")
-        raise ConversionError(f"checkpoint does not match {arch}:\n  " + "\n  ".join(problems))
-
-    result = {}
-    for name in shapes:
-        tensor = tensors[name]
-        if not tensor.is_floating_point():
-            raise ConversionError(f"tensor '{name}' has dtype {tensor.dtype}, expected a floating-point type")
-        array = tensor.detach().to(torch.float32).numpy()
-        bad = np.count_nonzero(~np.isfinite(array))
-        if bad:
-            raise ConversionError(f"tensor '{name}' has {bad} non-finite value(s) (NaN or Inf)")
-        result[name] = array
-    return result
-
-
-def convert_checkpoint(pth_path, out_path, family, *, half=False, **options):
-    """Convert `pth_path` to the ngi model file `out_path`; returns the config written.
-
-    `options` are make_config's keyword arguments (bn_mode is required).
-    """
-    state_dict, layout = load_state_dict(pth_path)
-    options.setdefault("source", f"{os.path.basename(pth_path)} ({layout}), converted by ngi_convert.py")
-    config = make_config(family, **options)
-    tensors = validate_state_dict(state_dict, config)
-    write_model(out_path, tensors, config, half=half)
-    return config
-
-
-def main(argv=None):
-    parser = argparse.ArgumentParser(description="Convert a PyTorch generator checkpoint to an ngi model file.")
-    parser.add_argument("input", help="checkpoint: junyanz <epoch>_net_G.pth or DeepIllumination netG_model_epoch_<n>.pth")
-    parser.add_argument("output", help="ngi model file to write (.safetensors)")
-    parser.add_argument("--family", required=True, choices=FAMILIES)
-    parser.add_argument("--bn-mode", required=True, choices=BN_MODES,
-                        help="running: eval-mode BatchNorm; per_image: each image normalized by its own "
-                             "statistics, as pix2pix's test.py (no --eval) and DeepIllumination's test.py run it")
-    parser.add_argument("--input-nc", type=int, default=12)
-    parser.add_argument("--output-nc", type=int, default=3)
-    parser.add_argument("--ngf", type=int, default=64)
-    parser.add_argument("--num-downs", type=int, default=8)
-    parser.add_argument("--dropout", choices=DROPOUT_MODES, default="off")
-    parser.add_argument("--dropout-seed", type=int, default=0)
-    parser.add_argument("--input-layout", default="",
-                        help="comma-separated input channel names, e.g. albedo.r,albedo.g,...")
-    parser.add_argument("--source", help="free text stored in the config (default: input file name)")
-    parser.add_argument("--half", action="store_true", help="store tensors as F16 instead of F32")
-    args = parser.parse_args(argv)
-
-    options = {"bn_mode": args.bn_mode, "input_nc": args.input_nc, "output_nc": args.output_nc,
-               "ngf": args.ngf, "num_downs": args.num_downs, "dropout": args.dropout,
-               "dropout_seed": args.dropout_seed,
-               "input_layout": [name for name in args.input_layout.split(",") if name]}
-    if args.source is not None:
-        options["source"] = args.source
-    try:
-        config = convert_checkpoint(args.input, args.output, args.family, half=args.half, **options)
-    except ConversionError as error:
-        print(f"ngi_convert: error: {error}", file=sys.stderr)
-        return 1
-    print(f"ngi_convert: wrote {args.output} ({config['family']}, bn_mode={config['bn_mode']}, "
-          f"dropout={config['dropout']}, {'F16' if args.half else 'F32'}, "
-          f"{os.path.getsize(args.output)} bytes)", file=sys.stderr)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

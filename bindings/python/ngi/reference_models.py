@@ -9,40 +9,25 @@ state_dict keys, layer order and in-place activations match upstream:
 Only dropout differs from upstream: nn.Dropout draws from torch's RNG, which
 no other implementation can reproduce. Here every Dropout is either an
 identity (dropout "off") or SeededDropout, the counter-based hash that ngi's
-kernel computes bit for bit (dropout "seeded"), see docs/MODEL_FORMAT.md.
+kernel computes bit for bit (dropout "seeded", ngi.dropout), see docs/MODEL_FORMAT.md.
+
+Also the float64 reference of the "mlp" family (run_mlp_reference), and
+load_generator, which builds the reference generator of a model file.
 """
 
 import copy
+import math
 
 import numpy as np
 import torch
 import torch.nn as nn
 
-DROPOUT_P = 0.5
+from .dropout import DROPOUT_P, dropout_keep_mask
 
 
 # --------------------------------------------------------------------------
-# Seeded dropout
+# Seeded dropout (the hash itself is ngi.dropout's)
 # --------------------------------------------------------------------------
-
-def mix32(x):
-    """The 32-bit integer hash of ngi's dropout; x is a np.uint32 array, wrapping arithmetic."""
-    x = x ^ (x >> np.uint32(16))
-    x = x * np.uint32(0x7FEB352D)
-    x = x ^ (x >> np.uint32(15))
-    x = x * np.uint32(0x846CA68B)
-    return x ^ (x >> np.uint32(16))
-
-
-def dropout_keep_mask(seed, site, numel, p):
-    """Boolean keep mask for the flat NCHW indices 0..numel-1 of dropout site `site`."""
-    site_key = mix32(np.array([(seed + 0x9E3779B9 * (site + 1)) & 0xFFFFFFFF], dtype=np.uint32))
-    u = mix32(site_key ^ np.arange(numel, dtype=np.uint32))
-    # The top 24 bits as a float in [0, 1): exact in float32, and compared in
-    # float32 like the OpenCL kernel does, so no element can round differently.
-    uniform = (u >> np.uint32(8)).astype(np.float32) * np.float32(2.0 ** -24)
-    return uniform >= np.float32(p)
-
 
 class DropoutSites:
     """Hands out dropout site numbers in execution order; reset before each forward."""
@@ -273,3 +258,62 @@ def run_reference(model, x, bn_mode, dtype=torch.float64):
     set_bn_mode(reference, bn_mode)
     with torch.no_grad():
         return reference(x.to(dtype))
+
+
+def load_generator(tensors, config):
+    """The reference generator of a model file (ngi.model_file.read_model's tensors and config), its weights
+    as float32 (exact for F16 files). bn_mode is not applied: pass config["bn_mode"] to run_reference."""
+    model = build_generator(config["family"], config["input_nc"], config["output_nc"], config["ngf"],
+                            config["num_downs"], config["dropout"], config["dropout_seed"])
+    state = {name: torch.from_numpy(np.asarray(array).astype(np.float32)) for name, array in tensors.items()}
+    missing, unexpected = model.load_state_dict(state, strict=False)
+    if unexpected or any(not name.endswith("num_batches_tracked") for name in missing):
+        raise ValueError(f"model file does not match its config: missing {missing}, unexpected {unexpected}")
+    return model
+
+
+# --------------------------------------------------------------------------
+# The "mlp" family (docs/MODEL_FORMAT.md)
+# --------------------------------------------------------------------------
+
+MLP_ACTIVATIONS = {
+    "none": lambda x, s: x,
+    "relu": lambda x, s: torch.relu(x),
+    "leaky_relu": lambda x, s: torch.nn.functional.leaky_relu(x, s),
+    "tanh": lambda x, s: torch.tanh(x),
+    "sigmoid": lambda x, s: torch.sigmoid(x),
+    "exp": lambda x, s: torch.exp(torch.clamp(x, max=88.0)),
+}
+
+
+def encode_frequencies(x, encoding):
+    """The mlp input encoding (docs/CONVENTIONS.md section 13): x [n, C] -> [n, encoded width]; no encoding (None
+    or 0 bands) returns x."""
+    if not encoding or encoding["bands"] == 0:
+        return x
+    parts = [x] if encoding["include_input"] else []
+    scales = [2.0 ** (encoding["first_exponent"] + b) * (math.pi if encoding["pi"] else 1.0)
+              for b in range(encoding["bands"])]
+    if encoding["order"] == "band":
+        for s in scales:
+            parts += [torch.sin(s * x), torch.cos(s * x)]
+        return torch.cat(parts, dim=1)
+    per_comp = []
+    for c in range(x.shape[1]):
+        for s in scales:
+            per_comp += [torch.sin(s * x[:, c:c + 1]), torch.cos(s * x[:, c:c + 1])]
+    return torch.cat(parts + per_comp, dim=1)
+
+
+def run_mlp_reference(tensors, config, x):
+    """An "mlp" model in float64: x [n, input_nc] (array or tensor) -> [n, last layer's out] float64 tensor.
+
+    tensors: name -> array or tensor (layers.<i>.weight [out, in], layers.<i>.bias [out]), converted to float64;
+    config: the model's config (layers with activation and slope, the optional encoding).
+    """
+    h = encode_frequencies(torch.as_tensor(x).double(), config.get("encoding"))
+    for i, layer in enumerate(config["layers"]):
+        w = torch.as_tensor(tensors[f"layers.{i}.weight"]).double()
+        b = torch.as_tensor(tensors[f"layers.{i}.bias"]).double()
+        h = MLP_ACTIVATIONS[layer.get("activation", "none")](h @ w.t() + b, layer.get("slope", 0.01))
+    return h

@@ -1,0 +1,154 @@
+// ngi.Model: a model file (generator or mlp) loaded on a device, run on NumPy arrays or on device buffers.
+#include <nlohmann/json.hpp>
+
+#include "common.hpp"
+#include "model_ref.hpp"
+#include "ngi/ao.hpp"
+
+namespace ngi_py {
+
+namespace {
+
+py::dict config_dict(const ngi::ModelConfig& c) {
+    py::dict d;
+    d["family"] = c.family;
+    d["input_nc"] = c.input_nc;
+    d["output_nc"] = c.output_nc;
+    if (c.family != "mlp") {
+        d["ngf"] = c.ngf;
+        d["num_downs"] = c.num_downs;
+        d["bn_mode"] = c.bn_mode;
+        d["dropout"] = c.dropout;
+    }
+    d["input_layout"] = c.input_layout;
+    d["input_range"] = py::make_tuple(c.input_range[0], c.input_range[1]);
+    d["output_range"] = py::make_tuple(c.output_range[0], c.output_range[1]);
+    d["metadata"] = py::module_::import("json").attr("loads")(c.json.empty() ? std::string("{}") : c.json);
+    return d;
+}
+
+ngi::ModelOptions options(const std::optional<std::string>& bn_mode, const std::optional<std::string>& dropout,
+                          const std::optional<std::string>& mlp_path) {
+    ngi::ModelOptions o;
+    if (bn_mode) o.bn_mode = *bn_mode;
+    if (dropout) o.dropout = *dropout;
+    if (mlp_path) o.mlp_path = *mlp_path;
+    return o;
+}
+
+// [1, C, H, W] straight from the array's memory into a device buffer and back into the result's memory: no host
+// copy on either side. The buffers are kept for the next call of the same size.
+py::array_t<float> run_nchw(PyModel& pm, const FloatArray& x) {
+    const ngi::ModelConfig& c = pm.model.config();
+    const int h = int(x.shape(2)), w = int(x.shape(3));
+    const std::size_t in_bytes = std::size_t(x.size()) * sizeof(float);
+    const std::size_t out_bytes = std::size_t(c.output_nc) * std::size_t(h) * std::size_t(w) * sizeof(float);
+    const ngi::Device& dev = pm.device->get("Model.run");
+    FloatArray y(std::vector<py::ssize_t>{1, c.output_nc, h, w});
+    float* dst = y.mutable_data();
+    {
+        py::gil_scoped_release release;
+        if (!pm.input || pm.input.bytes() != in_bytes) pm.input = ngi::DeviceBuffer::allocate(dev, in_bytes);
+        if (!pm.output || pm.output.bytes() != out_bytes) pm.output = ngi::DeviceBuffer::allocate(dev, out_bytes);
+        pm.input.upload(x.data(), in_bytes);
+        pm.model.enqueue(pm.input, pm.output, h, w);
+        pm.output.download(dst, out_bytes);
+        pm.sanitized = pm.model.sanitized_inputs();
+    }
+    return y;
+}
+
+}  // namespace
+
+void register_model(py::module_& m) {
+    py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
+A model file loaded on a device: a generator (pix2pix_unet, deepillumination) or an mlp (docs/MODEL_FORMAT.md).
+
+Model(device, path, bn_mode=None, dropout=None, mlp_path=None): the options override the file's settings
+("running" | "per_image"; "off" | "seeded"; "fused" | "dense"). Weights are packed and uploaded once; the graph for
+each input size is built on first use.)doc")
+        .def(py::init([](const DeviceRef& device, const py::object& path, std::optional<std::string> bn_mode,
+                         std::optional<std::string> dropout, std::optional<std::string> mlp_path) {
+                 const std::string p = path_string(path, "Model: path");
+                 const ngi::Device& dev = device->get("Model");
+                 const ngi::ModelOptions o = options(bn_mode, dropout, mlp_path);
+                 py::gil_scoped_release release;
+                 return std::make_shared<PyModel>(PyModel{device, ngi::Model::load(dev, p, o), p, 0, {}, {}});
+             }),
+             py::arg("device"), py::arg("path"), py::arg("bn_mode") = py::none(), py::arg("dropout") = py::none(),
+             py::arg("mlp_path") = py::none())
+        .def_property_readonly("config", [](const PyModel& pm) { return config_dict(pm.model.config()); },
+                               "The architecture (family, channel counts, ranges, ...) and the file's metadata.")
+        .def_property_readonly("path", [](const PyModel& pm) { return pm.path; })
+        .def_property_readonly("sanitized_inputs", [](const PyModel& pm) { return pm.sanitized; },
+                               "Input values the last run() replaced (NaN -> 0; +-Inf and values far outside the "
+                               "input range -> its nearer end).")
+        .def("run", [](PyModel& pm, const py::object& input) -> py::array_t<float> {
+            FloatArray x = float_array(input, "Model.run: input");
+            const ngi::ModelConfig& c = pm.model.config();
+            const bool mlp = c.family == "mlp";
+            expect_ndim(x, mlp ? std::initializer_list<int>{2, 4} : std::initializer_list<int>{4}, "Model.run: input",
+                        mlp ? "[1, C, H, W] or [N, C]" : "[1, C, H, W]");
+            if (x.ndim() == 4) {
+                if (x.shape(0) != 1 || x.shape(1) != c.input_nc)
+                    throw py::value_error("Model.run: input: expected [1, " + std::to_string(c.input_nc) +
+                                          ", H, W] for " + pm.path + ", got [" + std::to_string(x.shape(0)) + ", " +
+                                          std::to_string(x.shape(1)) + ", ...]");
+                return run_nchw(pm, x);
+            }
+            // [N, C] points: channels last, so the library transposes; one copy into its Tensor.
+            ngi::Tensor t({int(x.shape(0)), int(x.shape(1))});
+            std::memcpy(t.data.data(), x.data(), t.data.size() * sizeof(float));
+            ngi::RunInfo info;
+            pm.device->get("Model.run");
+            ngi::Tensor y = [&] {
+                py::gil_scoped_release release;
+                return pm.model.run(t, &info);
+            }();
+            pm.sanitized = info.sanitized_inputs;
+            return from_tensor(std::move(y));
+        }, py::arg("input"), R"doc(
+Run the model on a float array and return a new float32 array.
+Generators: [1, input_nc, H, W] -> [1, output_nc, H, W] (H, W multiples of 2^num_downs).
+mlp: per pixel [1, input_nc, H, W] -> [1, output_nc, H, W], or per point [N, input_nc] -> [N, output_nc].
+A C-contiguous float32 [1, C, H, W] array goes to the device without a host copy; other dtypes/orders are
+converted first. The GIL is released while the device works.)doc")
+        .def("enqueue", [](PyModel& pm, const py::object& input, const py::object& output, int height, int width) {
+            const ngi::DeviceBuffer in = device_buffer(pm.device, input, "Model.enqueue: input");
+            const ngi::DeviceBuffer out = device_buffer(pm.device, output, "Model.enqueue: output");
+            py::gil_scoped_release release;
+            pm.model.enqueue(in, out, height, width);
+        }, py::arg("input"), py::arg("output"), py::arg("height"), py::arg("width"), R"doc(
+Device in, device out, asynchronous: `input` (a DeviceBuffer or a pyopencl Buffer of the device's context) holds
+[1, input_nc, height, width] float32, `output` receives [1, output_nc, height, width]. Returns once enqueued;
+Device.finish() waits (or pyopencl's queue.finish() on a Device.from_pyopencl device).)doc")
+        .def("__repr__", [](const PyModel& pm) {
+            const auto& c = pm.model.config();
+            return "<ngi.Model " + c.family + " " + std::to_string(c.input_nc) + " -> " + std::to_string(c.output_nc) +
+                   " from '" + pm.path + "'>";
+        });
+
+    py::class_<ngi::AoNetwork, std::shared_ptr<ngi::AoNetwork>>(m, "AoNetwork", R"doc(
+Seed 001's ambient-occlusion MLP (docs/RESULTS_AO.md): AoNetwork(device, path); run(normals [3, H, W],
+radius_px=-1) -> accessibility [1, H, W] in [0, 1] (1 = open; radius -1: the training radius scaled to H).)doc")
+        .def(py::init([](const DeviceRef& device, const py::object& path) {
+                 const std::string p = path_string(path, "AoNetwork: path");
+                 const ngi::Device& dev = device->get("AoNetwork");
+                 py::gil_scoped_release release;
+                 return std::make_shared<ngi::AoNetwork>(ngi::AoNetwork::load(dev, p));
+             }),
+             py::arg("device"), py::arg("path"))
+        .def_property_readonly("normals", &ngi::AoNetwork::normals, "'smooth' or 'face': the normals it was trained on.")
+        .def("radius_for", &ngi::AoNetwork::radius_for, py::arg("height"))
+        .def("run", [](ngi::AoNetwork& net, const py::object& normals, float radius_px) {
+            ngi::Image n = to_image(normals, "AoNetwork.run: normals");
+            if (n.channels != 3) throw py::value_error("AoNetwork.run: normals: expected [3, H, W]");
+            ngi::Image ao = [&] {
+                py::gil_scoped_release release;
+                return net.run(n, radius_px);
+            }();
+            return from_image(std::move(ao));
+        }, py::arg("normals"), py::arg("radius_px") = -1.0f);
+}
+
+}  // namespace ngi_py

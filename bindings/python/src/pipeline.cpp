@@ -1,0 +1,344 @@
+// ngi.Frame, ngi.read_frame / write_frame, ngi.Pipeline (the surround-aware pipeline around a generator).
+#include <cstring>
+
+#include "common.hpp"
+#include "model_ref.hpp"
+#include "ngi/image_io.hpp"
+#include "ngi/pipeline.hpp"
+
+namespace ngi_py {
+
+namespace {
+
+constexpr ngi::Feature kFeatures[] = {ngi::Feature::Albedo, ngi::Feature::Normal, ngi::Feature::Depth,
+                                      ngi::Feature::Direct, ngi::Feature::Emission, ngi::Feature::Env};
+
+bool optional_feature(ngi::Feature f) { return f == ngi::Feature::Emission || f == ngi::Feature::Env; }
+
+// One feature of every face as [6, C, N, N] (a copy), or None when the frame does not have it.
+py::object feature_array(const ngi::Frame& frame, ngi::Feature f) {
+    const ngi::Image& front = frame.get(f, ngi::Face::Front);
+    if (front.data.empty()) return py::none();
+    const int c = front.channels, n = front.width;
+    FloatArray out(std::vector<py::ssize_t>{ngi::kFaceCount, c, n, n});
+    float* dst = out.mutable_data();
+    for (int face = 0; face < ngi::kFaceCount; ++face) {
+        const ngi::Image& img = frame.get(f, ngi::Face(face));
+        std::memcpy(dst + std::size_t(face) * img.data.size(), img.data.data(), img.data.size() * sizeof(float));
+    }
+    return out;
+}
+
+// [faces, C, N, N] of a dict entry, checked: faces and N as given (0 = take from the array), C as the feature's.
+FloatArray dict_feature(const py::dict& d, ngi::Feature f, int& faces, int& n) {
+    const std::string key = ngi::feature_name(f);
+    const std::string what = "frame['" + key + "']";
+    FloatArray a = float_array(d[key.c_str()], what.c_str());
+    const int c = ngi::feature_channels(f);
+    const bool squeeze_ok = c == 1 && a.ndim() == 3;  // depth may be [faces, N, N]
+    if (a.ndim() != 4 && !squeeze_ok)
+        throw py::value_error(what + ": expected [faces, " + std::to_string(c) + ", N, N] (faces = 6, or 1 for the "
+                              "front face only)");
+    const int fa = int(a.shape(0)), ch = a.ndim() == 4 ? int(a.shape(1)) : 1;
+    const int h = int(a.shape(a.ndim() - 2)), w = int(a.shape(a.ndim() - 1));
+    if (ch != c || h != w || (fa != 1 && fa != ngi::kFaceCount))
+        throw py::value_error(what + ": expected [faces, " + std::to_string(c) + ", N, N] with faces 6 or 1, got [" +
+                              std::to_string(fa) + ", " + std::to_string(ch) + ", " + std::to_string(h) + ", " +
+                              std::to_string(w) + "]");
+    if (faces == 0) faces = fa;
+    if (n == 0) n = h;
+    if (fa != faces || h != n)
+        throw py::value_error(what + ": " + std::to_string(fa) + " faces of N = " + std::to_string(h) +
+                              ", the other features have " + std::to_string(faces) + " of N = " + std::to_string(n));
+    return a;
+}
+
+// A Frame from a dict of [6, C, N, N] arrays (see Frame.from_dict).
+ngi::Frame frame_from_dict(const py::dict& d) {
+    ngi::Frame fr;
+    int faces = 0, n = 0;
+    for (ngi::Feature f : kFeatures) {
+        if (!d.contains(ngi::feature_name(f))) {
+            if (optional_feature(f)) continue;
+            throw py::value_error(std::string("frame: the dict has no '") + ngi::feature_name(f) + "' entry");
+        }
+        FloatArray a = dict_feature(d, f, faces, n);
+        if (faces != ngi::kFaceCount) throw py::value_error("Frame.from_dict: a Frame holds all six faces");
+        const int c = ngi::feature_channels(f);
+        for (int face = 0; face < ngi::kFaceCount; ++face) {
+            ngi::Image img(n, n, c);
+            std::memcpy(img.data.data(), a.data() + std::size_t(face) * img.data.size(), img.data.size() * sizeof(float));
+            fr.get(f, ngi::Face(face)) = std::move(img);
+        }
+    }
+    fr.n = n;
+    if (d.contains("look")) fr.look = vec3(d["look"], "frame['look']");
+    if (d.contains("up")) fr.up = vec3(d["up"], "frame['up']");
+    if (d.contains("reference") && !d["reference"].is_none()) {
+        fr.reference = to_image(d["reference"], "frame['reference']");
+        if (fr.reference->channels != 3 || fr.reference->width != n || fr.reference->height != n)
+            throw py::value_error("frame['reference']: expected [3, N, N] with N = " + std::to_string(n));
+    }
+    return fr;
+}
+
+// A dict of [faces, C, N, N] arrays packed straight into the frame-plane layout [faces][16][N][N].
+std::vector<float> planes_from_dict(const py::dict& d, ngi::FrameDesc& desc, int& n) {
+    int faces = 0;
+    n = 0;
+    std::vector<std::pair<ngi::Feature, FloatArray>> present;
+    for (ngi::Feature f : kFeatures) {
+        if (!d.contains(ngi::feature_name(f))) {
+            if (optional_feature(f)) continue;
+            throw py::value_error(std::string("frame: the dict has no '") + ngi::feature_name(f) + "' entry");
+        }
+        present.emplace_back(f, dict_feature(d, f, faces, n));
+    }
+    const std::size_t plane = std::size_t(n) * std::size_t(n);
+    std::vector<float> planes(ngi::frame_planes_bytes(n, faces) / sizeof(float), 0.0f);
+    for (const auto& [f, a] : present) {
+        const int c = ngi::feature_channels(f), first = ngi::frame_plane(f);
+        for (int face = 0; face < faces; ++face)
+            std::memcpy(planes.data() + (std::size_t(face) * ngi::kFramePlanes + first) * plane,
+                        a.data() + std::size_t(face) * c * plane, std::size_t(c) * plane * sizeof(float));
+        if (f == ngi::Feature::Emission) desc.has_emission = true;
+        if (f == ngi::Feature::Env) desc.has_env = true;
+    }
+    desc.faces = faces;
+    if (d.contains("look")) desc.look = vec3(d["look"], "frame['look']");
+    if (d.contains("up")) desc.up = vec3(d["up"], "frame['up']");
+    return planes;
+}
+
+ngi::ToneMapOptions tonemap_options(float exposure_ev, const std::string& curve, bool srgb) {
+    ngi::ToneMapOptions t;
+    t.exposure_ev = exposure_ev;
+    t.curve = ngi::tone_curve_from_name(curve);
+    t.srgb = srgb;
+    return t;
+}
+
+struct Wanted {
+    bool lightmap = false, final_image = false, display = false;
+};
+Wanted wanted_outputs(const std::vector<std::string>& names) {
+    Wanted w;
+    for (const auto& s : names) {
+        if (s == "lightmap") w.lightmap = true;
+        else if (s == "final") w.final_image = true;
+        else if (s == "display") w.display = true;
+        else throw py::value_error("Pipeline.run: unknown output '" + s + "' (lightmap, final, display)");
+    }
+    if (!w.lightmap && !w.final_image && !w.display) throw py::value_error("Pipeline.run: no output asked for");
+    return w;
+}
+
+py::dict stats_dict(const ngi::PreprocessStats& s) {
+    py::dict d, nonfinite;
+    for (ngi::Feature f : kFeatures) nonfinite[ngi::feature_name(f)] = s.nonfinite[int(f)];
+    d["nonfinite"] = nonfinite;
+    d["sky_normals"] = s.sky_normals;
+    d["far_depths"] = s.far_depths;
+    return d;
+}
+
+// The config the network input follows: the model's, else the default surround (or single-view) layout, as
+// `ngi merge` does without --model.
+ngi::ModelConfig merge_config(const PyModel* model, bool single_view) {
+    if (model) {
+        if (single_view) throw py::value_error("network_input: single_view and model exclude each other");
+        model->device->get("network_input: model");
+        return model->model.config();
+    }
+    ngi::ModelConfig c;
+    c.input_nc = single_view ? 10 : 12;
+    c.input_layout = single_view ? ngi::single_view_input_channels() : ngi::surround_input_channels();
+    return c;
+}
+
+struct PyPipeline {
+    DeviceRef device;
+    ngi::SurroundPipeline pipeline;
+};
+
+}  // namespace
+
+void register_pipeline(py::module_& m) {
+    py::class_<ngi::Frame, std::shared_ptr<ngi::Frame>>(m, "Frame", R"doc(
+One frame of the camera cluster: every feature of the six N x N faces, the front camera's look and up, and
+optionally the path-traced reference lighting of the front view (docs/CONVENTIONS.md). Faces in the order
+front, back, left, right, up, down; features albedo (3), normal (3, world space), depth (1, metres), direct (3),
+emission (3, optional), env (3, optional); planar, row 0 = top, linear values.)doc")
+        .def_static("from_dict", &frame_from_dict, py::arg("planes"), R"doc(
+A Frame from a dict: 'albedo', 'normal', 'depth', 'direct' (and optionally 'emission', 'env') as [6, C, N, N]
+float arrays (depth may be [6, N, N]), 'look' and 'up' as three numbers, 'reference' as [3, N, N] or absent.)doc")
+        .def("to_dict", [](const ngi::Frame& fr) {
+            py::dict d;
+            for (ngi::Feature f : kFeatures) {
+                py::object a = feature_array(fr, f);
+                if (!a.is_none()) d[ngi::feature_name(f)] = a;
+            }
+            d["look"] = tuple3(fr.look);
+            d["up"] = tuple3(fr.up);
+            if (fr.reference) d["reference"] = from_image(ngi::Image(*fr.reference));
+            return d;
+        }, "The frame as a dict of arrays (copies), the form Frame.from_dict and Pipeline.run take.")
+        .def_readonly("n", &ngi::Frame::n, "Face size N in pixels.")
+        .def_property_readonly("look", [](const ngi::Frame& fr) { return tuple3(fr.look); })
+        .def_property_readonly("up", [](const ngi::Frame& fr) { return tuple3(fr.up); })
+        .def_property_readonly("reference", [](const ngi::Frame& fr) -> py::object {
+            if (!fr.reference) return py::none();
+            return from_image(ngi::Image(*fr.reference));
+        }, "The front view's reference lighting [3, N, N] (linear, irradiance / pi), or None.")
+        .def("feature", [](const ngi::Frame& fr, const std::string& name) {
+            for (ngi::Feature f : kFeatures)
+                if (name == ngi::feature_name(f)) return feature_array(fr, f);
+            throw py::value_error("Frame.feature: unknown feature '" + name +
+                                  "' (albedo, normal, depth, direct, emission, env)");
+        }, py::arg("name"), "One feature of all six faces as [6, C, N, N], or None if the frame does not have it.")
+        .def("__repr__", [](const ngi::Frame& fr) {
+            return "<ngi.Frame N = " + std::to_string(fr.n) + (fr.reference ? ", with reference" : "") + ">";
+        });
+
+    m.def("read_frame", [](const py::object& path) {
+        const std::string p = path_string(path, "read_frame: path");
+        py::gil_scoped_release release;
+        return std::make_shared<ngi::Frame>(ngi::read_frame(p));
+    }, py::arg("path"), "Read a frame folder (<face>_<feature>.exr/.png, camera.json, optional reference.exr); NaN/Inf "
+                        "values are sanitized as docs/CONVENTIONS.md says.");
+    m.def("write_frame", [](const py::object& path, const ngi::Frame& frame) {
+        const std::string p = path_string(path, "write_frame: path");
+        py::gil_scoped_release release;
+        ngi::write_frame(p, frame);
+    }, py::arg("path"), py::arg("frame"), "Write a frame folder (all files or none; see ngi/image_io.hpp).");
+    m.def("surround_input_channels", &ngi::surround_input_channels,
+          "Channel names of the surround-aware network input, in tensor order (12).");
+    m.def("single_view_input_channels", &ngi::single_view_input_channels,
+          "Channel names of the single-view network input, in tensor order (10).");
+
+    py::class_<PyPipeline, std::shared_ptr<PyPipeline>>(m, "Pipeline", R"doc(
+The surround-aware pipeline for face size N: preprocessing, MergeToGlobalView, coordinate map, the generator,
+front-view extraction, decoding, compose and tone map (docs/CONVENTIONS.md).
+Pipeline(device, n, mode="thesis" | "equirect", transfer="reinhard" | "clamp").)doc")
+        .def(py::init([](const DeviceRef& device, int n, const std::string& mode, const std::string& transfer) {
+                 const ngi::Device& dev = device->get("Pipeline");
+                 const auto gm = ngi::global_view_mode_from_name(mode);
+                 const auto lt = ngi::lumination_transfer_from_name(transfer);
+                 py::gil_scoped_release release;
+                 return std::make_shared<PyPipeline>(PyPipeline{device, ngi::SurroundPipeline(dev, n, gm, lt)});
+             }),
+             py::arg("device"), py::arg("n"), py::arg("mode") = "thesis", py::arg("transfer") = "reinhard")
+        .def_property_readonly("n", [](const PyPipeline& p) { return p.pipeline.n(); })
+        .def("run", [](PyPipeline& p, PyModel& model, const py::object& frame, const std::vector<std::string>& outputs,
+                       float exposure_ev, const std::string& curve, bool srgb, bool stats) {
+            p.device->get("Pipeline.run");
+            model.device->get("Pipeline.run: model");
+            const Wanted w = wanted_outputs(outputs);
+            const ngi::ToneMapOptions tm = tonemap_options(exposure_ev, curve, srgb);
+            ngi::PreprocessStats st;
+            ngi::FrameImages r;
+            if (py::isinstance<py::dict>(frame)) {
+                ngi::FrameDesc desc;
+                int n = 0;
+                const std::vector<float> planes = planes_from_dict(frame.cast<py::dict>(), desc, n);
+                py::gil_scoped_release release;
+                r = p.pipeline.run(model.model, planes.data(), planes.size() * sizeof(float), desc, w.lightmap,
+                                   w.final_image, w.display, tm, stats ? &st : nullptr);
+            } else {
+                std::shared_ptr<ngi::Frame> fr;
+                if (py::isinstance<ngi::Frame>(frame)) fr = frame.cast<std::shared_ptr<ngi::Frame>>();
+                else {
+                    const std::string path = path_string(frame, "Pipeline.run: frame (a Frame, a dict or a path)");
+                    py::gil_scoped_release release;
+                    fr = std::make_shared<ngi::Frame>(ngi::read_frame(path));
+                }
+                py::gil_scoped_release release;
+                r = p.pipeline.run(model.model, *fr, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr);
+            }
+            py::dict out;
+            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
+            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
+            if (w.display) out["display"] = from_image(std::move(r.display));
+            if (stats) out["stats"] = stats_dict(st);
+            return out;
+        }, py::arg("model"), py::arg("frame"), py::arg("outputs") = std::vector<std::string>{"lightmap", "final"},
+           py::arg("exposure_ev") = 0.0f, py::arg("curve") = "aces", py::arg("srgb") = true, py::arg("stats") = false,
+           R"doc(
+One frame through the whole pipeline: one upload of its planes, one download of the outputs. `frame` is a Frame,
+a frame folder path, or a dict of [faces, C, N, N] arrays (faces 6, or 1 for a single-view model; see
+Frame.from_dict), packed straight into the device layout. Returns a dict with the outputs asked for, each
+[3, N, N] float32: 'lightmap' (linear HDR), 'final' (lightmap x albedo + emission + env, linear), 'display'
+(tone-mapped to [0, 1]: exposure_ev, curve 'aces' | 'reinhard' | 'clamp', srgb); with stats=True also 'stats'
+(non-finite values replaced per feature, sky normals, far depths).)doc")
+        .def("enqueue", [](PyPipeline& p, PyModel& model, const py::object& planes, const py::object& look,
+                           const py::object& up, int faces, bool has_emission, bool has_env, const py::object& lightmap,
+                           const py::object& final_image, const py::object& display) {
+            ngi::FrameDesc desc;
+            desc.faces = faces;
+            desc.has_emission = has_emission;
+            desc.has_env = has_env;
+            desc.look = vec3(look, "Pipeline.enqueue: look");
+            desc.up = vec3(up, "Pipeline.enqueue: up");
+            const ngi::DeviceBuffer in = device_buffer(p.device, planes, "Pipeline.enqueue: planes");
+            ngi::FrameOutputs out;
+            if (!lightmap.is_none()) out.lightmap = device_buffer(p.device, lightmap, "Pipeline.enqueue: lightmap");
+            if (!final_image.is_none()) out.final_image = device_buffer(p.device, final_image, "Pipeline.enqueue: final");
+            if (!display.is_none()) out.display = device_buffer(p.device, display, "Pipeline.enqueue: display");
+            py::gil_scoped_release release;
+            p.pipeline.enqueue(model.model, in, desc, out);
+        }, py::arg("model"), py::arg("planes"), py::arg("look"), py::arg("up"), py::arg("faces") = 6,
+           py::arg("has_emission") = true, py::arg("has_env") = true, py::arg("lightmap") = py::none(),
+           py::arg("final") = py::none(), py::arg("display") = py::none(), R"doc(
+Device in, device out, asynchronous, no host transfer: `planes` (a DeviceBuffer or pyopencl Buffer) holds the
+frame as float32 [faces][16][N][N] (planes: albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12, env
+13-15); each output buffer given receives [3][N][N] float32. Returns once enqueued.)doc")
+        .def("network_input", [](PyPipeline& p, const ngi::Frame& frame, const PyModel* model, bool single_view) {
+            p.device->get("Pipeline.network_input");
+            const ngi::ModelConfig config = merge_config(model, single_view);
+            ngi::Tensor t = [&] {
+                py::gil_scoped_release release;
+                return p.pipeline.network_input(frame, config);
+            }();
+            return from_tensor(std::move(t));
+        }, py::arg("frame"), py::arg("model") = py::none(), py::arg("single_view") = false, R"doc(
+The generator's input for a frame (what `ngi merge` writes as input.npy): [1, 12, 2N, 4N] (surround) or
+[1, 10, N, N] (single view), channels as surround_input_channels() / single_view_input_channels(), values in the
+input range. With a model, its config decides; without one, the default surround layout (single_view=True: the
+front view only) and range [-1, 1].)doc")
+        .def("encode_lightmap", [](PyPipeline& p, const py::object& lightmap, const PyModel* model) {
+            ngi::Image img = to_image(lightmap, "Pipeline.encode_lightmap: lightmap");
+            p.device->get("Pipeline.encode_lightmap");
+            return from_tensor(p.pipeline.encode_lightmap(img, merge_config(model, false)));
+        }, py::arg("lightmap"), py::arg("model") = py::none(),
+           "A linear lightmap [3, H, W] as a training target [1, 3, H, W] in the output range (the model's, else "
+           "[-1, 1]): what `ngi merge` writes as target.npy for the frame's reference.")
+        .def("front_lightmap", [](PyPipeline& p, const py::object& output, const PyModel& model) {
+            FloatArray a = float_array(output, "Pipeline.front_lightmap: output");
+            expect_ndim(a, {4}, "Pipeline.front_lightmap: output", "[1, 3, H, W]");
+            ngi::Tensor t(std::vector<int>(a.shape(), a.shape() + 4));
+            std::memcpy(t.data.data(), a.data(), t.data.size() * sizeof(float));
+            p.device->get("Pipeline.front_lightmap");
+            return from_image(p.pipeline.front_lightmap(t, model.model.config()));
+        }, py::arg("output"), py::arg("model"),
+           "The front view's linear lightmap [3, N, N] from a generator output [1, 3, 2N, 4N] or [1, 3, N, N].")
+        .def("global_view", [](PyPipeline& p, const ngi::Frame& frame, const std::string& feature) {
+            for (ngi::Feature f : kFeatures)
+                if (feature == ngi::feature_name(f)) {
+                    p.device->get("Pipeline.global_view");
+                    return from_image(p.pipeline.global_view(frame, f));
+                }
+            throw py::value_error("Pipeline.global_view: unknown feature '" + feature + "'");
+        }, py::arg("frame"), py::arg("feature"), "One raw feature of the six faces merged into [C, 2N, 4N].")
+        .def_property_readonly("coord_map", [](const PyPipeline& p) {
+            return from_image(ngi::Image(p.pipeline.coord_map()));
+        }, "The (phi, theta) coordinate map [2, 2N, 4N], values in [0, 1].")
+        .def("tonemap", [](PyPipeline& p, const py::object& image, float exposure_ev, const std::string& curve,
+                           bool srgb) {
+            ngi::Image img = to_image(image, "Pipeline.tonemap: image");
+            p.device->get("Pipeline.tonemap");
+            return from_image(p.pipeline.tonemap(img, tonemap_options(exposure_ev, curve, srgb)));
+        }, py::arg("image"), py::arg("exposure_ev") = 0.0f, py::arg("curve") = "aces", py::arg("srgb") = true,
+           "A linear image to display values in [0, 1].");
+}
+
+}  // namespace ngi_py

@@ -1,0 +1,128 @@
+// ngi.Scene and ngi.Renderer: the voxel scenes and the OpenCL path tracer (docs/RENDERER.md).
+#include "common.hpp"
+#include "ngi/camera_path.hpp"
+#include "ngi/dataset.hpp"
+#include "ngi/render.hpp"
+#include "ngi/scene.hpp"
+
+namespace ngi_py {
+
+namespace {
+
+struct PyRenderer {
+    DeviceRef device;
+    std::shared_ptr<const ngi::VoxelScene> scene;
+    ngi::Renderer renderer;
+};
+
+// The pose of frame `frame` of the dataset camera path with `frames` frames, or an explicit one.
+ngi::CameraPose pose_of(const ngi::VoxelScene& scene, const py::object& position, const py::object& look,
+                        const py::object& up, int frame, int frames) {
+    if (frames < 1 || frame < 0 || frame >= frames)
+        throw py::value_error("Renderer: frame " + std::to_string(frame) + " is not in 0 .. frames - 1 = " +
+                              std::to_string(frames - 1));
+    if (position.is_none()) return ngi::dataset_camera_path(scene, frames, 25).at(float(frame));
+    ngi::CameraPose p;
+    p.position = vec3(position, "Renderer: position");
+    if (!look.is_none()) p.look = vec3(look, "Renderer: look");
+    if (!up.is_none()) p.up = vec3(up, "Renderer: up");
+    return p;
+}
+
+ngi::RenderSettings settings(const ngi::VoxelScene& scene, int n, int spp, int feature_spp, int bounces,
+                             bool reference, const std::optional<std::uint32_t>& seed, int frame) {
+    if (n < 1 || n > 8192) throw py::value_error("Renderer: n must be in 1 .. 8192");
+    if (spp < 1 || feature_spp < 1) throw py::value_error("Renderer: spp and feature_spp must be >= 1");
+    if (bounces < 0 || bounces > 1000) throw py::value_error("Renderer: bounces must be in 0 .. 1000");
+    ngi::RenderSettings rs;
+    rs.n = n;
+    rs.reference_spp = spp;
+    rs.feature_spp = feature_spp;
+    rs.max_bounces = bounces;
+    rs.reference = reference;
+    rs.seed = seed ? *seed : ngi::dataset_frame_seed(scene.name, frame);  // `ngi render --frame K`'s seed
+    return rs;
+}
+
+}  // namespace
+
+void register_render(py::module_& m) {
+    py::class_<ngi::VoxelScene, std::shared_ptr<ngi::VoxelScene>>(m, "Scene", R"doc(
+A voxel scene: Scene("room:seed=3") for a procedural family (room, street, cave, backlit, bleed, sculpture) or
+Scene("file.vox") for a MagicaVoxel file. 1 block = 1 metre, +y up (docs/RENDERER.md).)doc")
+        .def(py::init([](const py::object& spec) {
+                 const std::string s = py::isinstance<py::str>(spec) ? spec.cast<std::string>()
+                                                                      : path_string(spec, "Scene: spec");
+                 py::gil_scoped_release release;
+                 return std::make_shared<ngi::VoxelScene>(ngi::make_scene(s));
+             }),
+             py::arg("spec"))
+        .def_readonly("name", &ngi::VoxelScene::name)
+        .def_property_readonly("size", [](const ngi::VoxelScene& s) { return py::make_tuple(s.size.x, s.size.y, s.size.z); })
+        .def_property_readonly("solid_count", &ngi::VoxelScene::solid_count)
+        .def_readonly("default_time", &ngi::VoxelScene::default_time, "Hours of the day renders use by default.")
+        .def_static("families", &ngi::scene_families, "The procedural scene families.")
+        .def("__repr__", [](const ngi::VoxelScene& s) {
+            return "<ngi.Scene '" + s.name + "' " + std::to_string(s.size.x) + " x " + std::to_string(s.size.y) +
+                   " x " + std::to_string(s.size.z) + ">";
+        });
+
+    py::class_<PyRenderer, std::shared_ptr<PyRenderer>>(m, "Renderer", R"doc(
+The OpenCL voxel path tracer on one scene: Renderer(device, scene). Rendering is deterministic (same scene, pose,
+time, settings and seed: same image). A pose is either frame `frame` of the scene's dataset camera path of
+`frames` frames (what `ngi render --frame K` renders) or an explicit position (+ look, up).)doc")
+        .def(py::init([](const DeviceRef& device, std::shared_ptr<ngi::VoxelScene> scene) {
+                 const ngi::Device& dev = device->get("Renderer");
+                 py::gil_scoped_release release;
+                 return std::make_shared<PyRenderer>(PyRenderer{device, scene, ngi::Renderer(dev, *scene)});
+             }),
+             py::arg("device"), py::arg("scene"))
+        .def("render", [](PyRenderer& r, int n, int spp, int feature_spp, int bounces, bool reference,
+                          std::optional<float> time, int frame, int frames, const py::object& position,
+                          const py::object& look, const py::object& up, std::optional<std::uint32_t> seed) {
+            r.device->get("Renderer.render");
+            const ngi::VoxelScene& s = *r.scene;
+            const ngi::CameraPose pose = pose_of(s, position, look, up, frame, frames);
+            const ngi::RenderSettings rs = settings(s, n, spp, feature_spp, bounces, reference, seed, frame);
+            const float hours = time ? *time : s.default_time;
+            if (!(hours >= 0.0f && hours <= 48.0f)) throw py::value_error("Renderer.render: time must be in 0 .. 48 hours");
+            py::gil_scoped_release release;
+            return std::make_shared<ngi::Frame>(r.renderer.render(pose, ngi::lighting_at(hours, s.sun_azimuth), rs));
+        }, py::arg("n") = 128, py::arg("spp") = 64, py::arg("feature_spp") = 8, py::arg("bounces") = 8,
+           py::arg("reference") = true, py::arg("time") = py::none(), py::arg("frame") = 0, py::arg("frames") = 100,
+           py::arg("position") = py::none(), py::arg("look") = py::none(), py::arg("up") = py::none(),
+           py::arg("seed") = py::none(),
+           "A Frame: the six faces' features and (reference=True) the front view's path-traced reference lighting.")
+        .def("render_ao", [](PyRenderer& r, int n, int rays, float max_distance, int frame, int frames,
+                             const py::object& position, const py::object& look, const py::object& up,
+                             std::uint32_t seed) {
+            r.device->get("Renderer.render_ao");
+            const ngi::CameraPose pose = pose_of(*r.scene, position, look, up, frame, frames);
+            ngi::RenderSettings rs = settings(*r.scene, n, 1, 1, 0, false, seed, frame);
+            if (rays < 1) throw py::value_error("Renderer.render_ao: rays must be >= 1");
+            ngi::Image ao = [&] {
+                py::gil_scoped_release release;
+                return r.renderer.render_ao(pose, rs, rays, max_distance);
+            }();
+            return from_image(std::move(ao));
+        }, py::arg("n") = 256, py::arg("rays") = 256, py::arg("max_distance") = 4.0f, py::arg("frame") = 0,
+           py::arg("frames") = 100, py::arg("position") = py::none(), py::arg("look") = py::none(),
+           py::arg("up") = py::none(), py::arg("seed") = 1,
+           "Ambient occlusion of the front view [1, N, N]: the fraction of cosine-weighted rays that travel max_distance "
+           "metres unblocked (1 = open; 1 where no surface is seen).")
+        .def("render_geometry", [](PyRenderer& r, int n, float sigma, int frame, int frames, const py::object& position,
+                                   const py::object& look, const py::object& up) {
+            r.device->get("Renderer.render_geometry");
+            const ngi::CameraPose pose = pose_of(*r.scene, position, look, up, frame, frames);
+            ngi::RenderSettings rs = settings(*r.scene, n, 1, 1, 0, false, 1u, frame);
+            ngi::Image g = [&] {
+                py::gil_scoped_release release;
+                return r.renderer.render_geometry(pose, rs, sigma);
+            }();
+            return from_image(std::move(g));
+        }, py::arg("n") = 256, py::arg("sigma") = 1.5f, py::arg("frame") = 0, py::arg("frames") = 100,
+           py::arg("position") = py::none(), py::arg("look") = py::none(), py::arg("up") = py::none(),
+           "Object-space geometry of the front view [7, N, N]: smooth normal (3), voxel face normal (3), depth (1).");
+}
+
+}  // namespace ngi_py

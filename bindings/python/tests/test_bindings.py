@@ -1,0 +1,370 @@
+"""The Python bindings (ngi._ngi) against the library's other faces: the CLI, frame folders, pyopencl.
+
+Run by ctest as `python_bindings` (PYTHONPATH=<build>/python, NGI_CLI=<build>/ngi, NGI_TEST_DEVICE as the suite).
+The shipped models are the fixtures: their parity with PyTorch is the C++ suite's job; here the question is whether
+Python gets the same numbers as the C++ paths, and whether bad input becomes an exception instead of a crash.
+"""
+
+import ast
+import gc
+import os
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ngi
+
+REPO = Path(__file__).resolve().parents[3]
+MODELS = REPO / "models"
+CLI = os.environ.get("NGI_CLI")
+
+
+@pytest.fixture(scope="module")
+def dev():
+    return ngi.Device(os.environ.get("NGI_TEST_DEVICE", "cpu"))
+
+
+@pytest.fixture(scope="module")
+def surround(dev):
+    return ngi.Model(dev, MODELS / "surround.safetensors")
+
+
+@pytest.fixture(scope="module")
+def frame(dev):
+    # N = 64: the shipped generators have 7 levels, so the global view must be a multiple of 128 wide and high.
+    return ngi.Renderer(dev, ngi.Scene("room:seed=3")).render(n=64, spp=8, feature_spp=2, frame=5)
+
+
+@pytest.fixture(scope="module")
+def frame_dir(tmp_path_factory, frame):
+    d = tmp_path_factory.mktemp("frame") / "f"
+    ngi.write_frame(d, frame)
+    return d
+
+
+def run_cli(*args):
+    assert CLI, "NGI_CLI is not set (ctest sets it to the built ngi binary)"
+    proc = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+def test_version_and_devices():
+    assert ngi.__version__.count(".") == 2
+    devices = ngi.devices()
+    assert devices and all({"index", "platform", "name", "type"} <= set(d) for d in devices)
+
+
+def test_model_run_equals_cli_generate(dev, surround, tmp_path):
+    x = np.random.default_rng(1).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
+    np.save(tmp_path / "x.npy", x)
+    run_cli("generate", "--model", MODELS / "surround.safetensors", "--input", tmp_path / "x.npy",
+            "--output", tmp_path / "y.npy", "--device", os.environ.get("NGI_TEST_DEVICE", "cpu"))
+    y = surround.run(x)
+    assert y.shape == (1, 3, 128, 256) and y.dtype == np.float32
+    np.testing.assert_array_equal(y, np.load(tmp_path / "y.npy"))  # same kernels, same order: same bits
+
+
+def test_model_run_converts_other_layouts(surround):
+    x = np.random.default_rng(2).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
+    y = surround.run(x)
+    np.testing.assert_array_equal(surround.run(x.astype(np.float64)), y)       # float64: converted
+    fortran = np.asfortranarray(x)
+    np.testing.assert_array_equal(surround.run(fortran), y)                   # not C-contiguous: copied
+    sliced = np.concatenate([x, x], axis=3)[..., ::2]                          # strided view
+    np.testing.assert_array_equal(surround.run(sliced), surround.run(np.ascontiguousarray(sliced)))
+
+
+def test_mlp_points_and_pixels(dev):
+    m = ngi.Model(dev, MODELS / "ao_sculpture_16x8.safetensors")
+    x = np.random.default_rng(3).uniform(-1, 1, (1, 48, 5, 7)).astype(np.float32)
+    per_pixel = m.run(x)
+    points = m.run(np.ascontiguousarray(x[0].reshape(48, -1).T))              # [35, 48]
+    assert per_pixel.shape == (1, 1, 5, 7) and points.shape == (35, 1)
+    np.testing.assert_allclose(points[:, 0], per_pixel.reshape(-1), rtol=0, atol=1e-6)
+
+
+def test_pipeline_numpy_dict_equals_frame_folder_and_cli(dev, surround, frame, frame_dir, tmp_path):
+    pipe = ngi.Pipeline(dev, 64)
+    # The folder stores colours as half floats, so the dict is made from the frame as read back.
+    from_dict = pipe.run(surround, ngi.read_frame(frame_dir).to_dict(), outputs=["lightmap", "final", "display"])
+    from_folder = pipe.run(surround, frame_dir, outputs=["lightmap", "final", "display"])
+    from_frame = pipe.run(surround, ngi.read_frame(frame_dir), outputs=["lightmap", "final", "display"])
+    for k in ("lightmap", "final", "display"):
+        assert from_dict[k].shape == (3, 64, 64)
+        np.testing.assert_array_equal(from_dict[k], from_folder[k])
+        np.testing.assert_array_equal(from_dict[k], from_frame[k])
+    # The CLI writes the lightmap as float EXR: the same numbers.
+    run_cli("lightmap", "--frame", frame_dir, "--model", MODELS / "surround.safetensors", "--out", tmp_path / "lm",
+            "--device", os.environ.get("NGI_TEST_DEVICE", "cpu"))
+    cli_lightmap, names = ngi.read_exr(tmp_path / "lm" / "lightmap.exr")
+    assert names == ["R", "G", "B"]
+    np.testing.assert_allclose(cli_lightmap, from_dict["lightmap"], rtol=1e-3, atol=1e-6)  # EXR may store half
+
+
+def test_pipeline_single_view_from_front_face_only(dev, frame):
+    model = ngi.Model(dev, MODELS / "single_view.safetensors")
+    pipe = ngi.Pipeline(dev, 64)
+    full = pipe.run(model, frame.to_dict())["lightmap"]
+    front = {k: (v[:1] if isinstance(v, np.ndarray) and v.ndim >= 3 and v.shape[0] == 6 else v)
+             for k, v in frame.to_dict().items()}
+    np.testing.assert_array_equal(pipe.run(model, front)["lightmap"], full)
+
+
+def test_frame_round_trip(frame, frame_dir):
+    back = ngi.read_frame(frame_dir)
+    assert back.n == frame.n and back.look == pytest.approx(frame.look)
+    np.testing.assert_array_equal(back.feature("normal"), frame.feature("normal"))  # normals are stored as float
+    np.testing.assert_array_equal(back.reference, frame.reference)
+    again = ngi.Frame.from_dict(frame.to_dict())
+    np.testing.assert_array_equal(again.feature("depth"), frame.feature("depth"))
+
+
+def test_renderer_is_deterministic(dev):
+    r = ngi.Renderer(dev, ngi.Scene("sculpture:seed=1"))
+    a = r.render_ao(n=24, rays=16, frame=3)
+    np.testing.assert_array_equal(a, r.render_ao(n=24, rays=16, frame=3))
+    assert a.shape == (1, 24, 24) and 0 <= a.min() and a.max() <= 1
+    assert r.render_geometry(n=24, frame=3).shape == (7, 24, 24)
+
+
+def test_network_input_and_channels(dev, surround, frame):
+    pipe = ngi.Pipeline(dev, 64)
+    x = pipe.network_input(frame, surround)
+    assert x.shape == (1, 12, 128, 256)
+    assert list(ngi.surround_input_channels()) == surround.config["input_layout"]
+    lo, hi = surround.config["input_range"]
+    assert lo <= x.min() and x.max() <= hi
+    # The generator on that input, decoded, is exactly the one-call pipeline's lightmap.
+    lm = pipe.front_lightmap(surround.run(x), surround)
+    np.testing.assert_array_equal(lm, pipe.run(surround, frame)["lightmap"])
+    target = pipe.encode_lightmap(frame.reference, surround)
+    assert target.shape == (1, 3, 64, 64)
+
+
+def test_network_input_equals_ngi_merge(dev, frame, frame_dir, tmp_path):
+    pipe = ngi.Pipeline(dev, 64)
+    back = ngi.read_frame(frame_dir)
+    for single_view in (False, True):
+        out = tmp_path / f"merged{int(single_view)}"
+        run_cli("merge", "--frame", frame_dir, "--out", out, "--npy-only", *(["--single-view"] if single_view else []),
+                "--device", os.environ.get("NGI_TEST_DEVICE", "cpu"))
+        np.testing.assert_array_equal(pipe.network_input(back, single_view=single_view), np.load(out / "input.npy"))
+        np.testing.assert_array_equal(pipe.encode_lightmap(back.reference), np.load(out / "target.npy"))
+    with pytest.raises(ValueError, match="exclude"):
+        pipe.network_input(back, ngi.Model(dev, MODELS / "surround.safetensors"), single_view=True)
+
+
+def test_metrics_match_skimage(dev):
+    skm = pytest.importorskip("skimage.metrics")
+    rng = np.random.default_rng(4)
+    a = rng.uniform(0, 1, (3, 40, 37)).astype(np.float32)
+    b = np.clip(a + rng.normal(0, 0.1, a.shape), 0, 1).astype(np.float32)
+    m = ngi.compare_images(dev, a, b)
+    ref = skm.structural_similarity(a.astype(np.float64), b.astype(np.float64), gaussian_weights=True, sigma=1.5,
+                                    use_sample_covariance=False, data_range=1.0, channel_axis=0)
+    assert m["ssim"] == pytest.approx(ref, abs=1e-5)
+    assert m["mse"] == pytest.approx(skm.mean_squared_error(a.astype(np.float64), b.astype(np.float64)), rel=1e-5)
+    small = ngi.compare_images(dev, a[:, :8, :8], b[:, :8, :8])
+    assert small["ssim"] is None and "ssim_note" in small
+
+
+@pytest.mark.parametrize("ext", ["exr", "png", "npy"])
+def test_image_round_trip(tmp_path, ext):
+    img = np.random.default_rng(5).uniform(0, 1, (3, 9, 11)).astype(np.float32)
+    ngi.write_image(tmp_path / f"a.{ext}", img)
+    back = ngi.read_image(tmp_path / f"a.{ext}")
+    np.testing.assert_allclose(back, img, atol=0.5 / 255 + 1e-6 if ext == "png" else 0)
+
+
+# ---- bad input: exceptions with clear messages, never a crash -------------------------------------------------
+
+def test_bad_arrays(surround):
+    with pytest.raises(TypeError, match="floating-point"):
+        surround.run(np.zeros((1, 12, 128, 256), np.int32))
+    with pytest.raises(ValueError, match=r"\[1, 12, H, W\]"):
+        surround.run(np.zeros((1, 5, 128, 256), np.float32))
+    with pytest.raises(ValueError, match="expected shape"):
+        surround.run(np.zeros((12, 128, 256), np.float32))
+    with pytest.raises(ngi.InputError, match="2\\^num_downs"):
+        surround.run(np.zeros((1, 12, 100, 256), np.float32))
+    with pytest.raises(TypeError):
+        surround.run("not an array")
+
+
+def test_non_finite_inputs_are_sanitized_and_counted(surround):
+    x = np.random.default_rng(6).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
+    x[0, 0, 0, :3] = [np.nan, np.inf, -np.inf]
+    x[0, 1, 5, 5] = 3.4e38
+    y = surround.run(x)
+    assert surround.sanitized_inputs == 4 and np.isfinite(y).all()
+
+
+def test_bad_files_and_frames(dev, tmp_path):
+    with pytest.raises(ngi.InputError, match="nonexistent"):
+        ngi.Model(dev, tmp_path / "nonexistent.safetensors")
+    (tmp_path / "junk.safetensors").write_bytes(b"\x10\x00\x00\x00\x00\x00\x00\x00{not json}")
+    with pytest.raises(ngi.InputError, match="junk.safetensors"):
+        ngi.Model(dev, tmp_path / "junk.safetensors")
+    with pytest.raises(ngi.InputError):
+        ngi.read_frame(tmp_path)
+    with pytest.raises(ValueError, match="'normal'"):
+        ngi.Frame.from_dict({"albedo": np.zeros((6, 3, 8, 8), np.float32)})
+    with pytest.raises(ValueError, match="albedo"):
+        ngi.Frame.from_dict({"albedo": np.zeros((6, 2, 8, 8), np.float32)})
+    with pytest.raises(ngi.InputError, match="unknown"):
+        ngi.Scene("no_such_family")
+    with pytest.raises(ngi.InputError):
+        ngi.compare_images(dev, np.full((1, 16, 16), np.nan, np.float32), np.zeros((1, 16, 16), np.float32))
+
+
+def test_closed_device_refuses_every_object():
+    d = ngi.Device(os.environ.get("NGI_TEST_DEVICE", "cpu"))
+    m = ngi.Model(d, MODELS / "ao_sculpture_16x8.safetensors")
+    p = ngi.Pipeline(d, 8)
+    b = ngi.DeviceBuffer(d, 64)
+    with d:
+        pass  # leaving the block closes it
+    assert d.closed
+    for call in (lambda: m.run(np.zeros((3, 48), np.float32)), lambda: p.tonemap(np.zeros((3, 4, 4), np.float32)),
+                 lambda: b.download([4]), lambda: ngi.Model(d, MODELS / "ao_sculpture_16x8.safetensors"),
+                 lambda: d.finish()):
+        with pytest.raises(ngi.Error, match="was closed"):
+            call()
+
+
+# ---- pyopencl interop: the same context, no host copy ------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def cl_queue(dev):
+    cl = pytest.importorskip("pyopencl")
+    name, platform = dev.info["name"], dev.info["platform"]
+    for p in cl.get_platforms():
+        for d in p.get_devices():
+            if d.name == name and p.name == platform:
+                ctx = cl.Context([d])
+                return cl, ctx, cl.CommandQueue(ctx)
+    pytest.fail(f"pyopencl does not see the test device {name} ({platform})")
+
+
+def test_pyopencl_model_enqueue(cl_queue):
+    cl, ctx, queue = cl_queue
+    d = ngi.Device.from_pyopencl(queue)
+    m = ngi.Model(d, MODELS / "surround.safetensors")
+    x = np.random.default_rng(7).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
+    mf = cl.mem_flags
+    xin = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=x)
+    yout = cl.Buffer(ctx, mf.WRITE_ONLY, 3 * 128 * 256 * 4)
+    before = d.host_transfers()
+    m.enqueue(xin, yout, 128, 256)
+    queue.finish()
+    assert d.host_transfers() == before  # ngi moved nothing through the host
+    y = np.empty((1, 3, 128, 256), np.float32)
+    cl.enqueue_copy(queue, y, yout)
+    np.testing.assert_array_equal(y, m.run(x))
+
+
+def test_pyopencl_pipeline_enqueue(cl_queue, frame):
+    cl, ctx, queue = cl_queue
+    d = ngi.Device.from_pyopencl(queue)
+    m = ngi.Model(d, MODELS / "surround.safetensors")
+    pipe = ngi.Pipeline(d, 64)
+    fd = frame.to_dict()
+    planes = np.zeros((6, 16, 64, 64), np.float32)
+    for name, first in (("albedo", 0), ("normal", 3), ("depth", 6), ("direct", 7), ("emission", 10), ("env", 13)):
+        planes[:, first:first + fd[name].shape[1]] = fd[name]
+    mf = cl.mem_flags
+    pin = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=planes)
+    lm = cl.Buffer(ctx, mf.READ_WRITE, 3 * 64 * 64 * 4)
+    pipe.enqueue(m, pin, fd["look"], fd["up"], lightmap=lm)
+    queue.finish()
+    out = np.empty((3, 64, 64), np.float32)
+    cl.enqueue_copy(queue, out, lm)
+    np.testing.assert_array_equal(out, pipe.run(m, fd, outputs=["lightmap"])["lightmap"])
+    # A wrapped sub-range and an ngi-allocated buffer work the same way.
+    whole = ngi.DeviceBuffer.wrap(d, lm)
+    assert whole.nbytes == 3 * 64 * 64 * 4 and not whole.owned
+    np.testing.assert_array_equal(whole.download([3, 64, 64]), out)
+
+
+def test_pyopencl_buffer_of_another_context(cl_queue):
+    cl, ctx, queue = cl_queue
+    d = ngi.Device.from_pyopencl(queue)
+    other = cl.Context(ctx.devices)
+    m = ngi.Model(d, MODELS / "ao_sculpture_16x8.safetensors")
+    foreign = cl.Buffer(other, cl.mem_flags.READ_WRITE, 48 * 16 * 4)
+    mine = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 16 * 4)
+    with pytest.raises(ngi.InputError, match="another OpenCL context"):
+        m.enqueue(foreign, mine, 4, 4)
+    with pytest.raises(TypeError, match="int_ptr"):
+        m.enqueue(np.zeros(48 * 16, np.float32), mine, 4, 4)
+
+
+# ---- resources and the GIL ---------------------------------------------------------------------------------
+
+def rss_bytes():
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise RuntimeError("no VmRSS")
+
+
+def test_no_leak_over_1000_loads(dev):
+    path = MODELS / "ao_sculpture_16x8.safetensors"
+    x = np.zeros((4, 48), np.float32)
+    for _ in range(50):  # warm-up: program cache, allocator pools
+        ngi.Model(dev, path).run(x)
+    gc.collect()
+    before = rss_bytes()
+    for _ in range(1000):
+        ngi.Model(dev, path).run(x)
+    gc.collect()
+    growth = rss_bytes() - before
+    print(f"RSS growth over 1000 model loads + runs: {growth / 1e6:.2f} MB")
+    # One leaked model would keep ~22 KB of weights and buffers: 1000 of them ~22 MB. Allocator noise stays < 8 MB.
+    assert growth < 8e6, f"RSS grew by {growth / 1e6:.1f} MB over 1000 loads"
+
+
+def test_gil_is_released_during_long_calls(surround):
+    x = np.random.default_rng(8).uniform(-1, 1, (1, 12, 256, 512)).astype(np.float32)
+    surround.run(x)  # build the graph for this size first
+    start = time.perf_counter()
+    surround.run(x)
+    call = time.perf_counter() - start
+    ticks = []
+    t = threading.Thread(target=surround.run, args=(x,))
+    t.start()
+    while t.is_alive():
+        ticks.append(time.perf_counter())
+        time.sleep(0.001)
+    t.join()
+    gaps = np.diff(ticks) if len(ticks) > 1 else np.array([call])
+    # With the GIL held for the whole call this thread would stall for all of it; released, it keeps ticking.
+    assert len(ticks) >= 5 and gaps.max() < 0.5 * call, (len(ticks), gaps.max(), call)
+
+
+def test_type_stubs_match_the_module():
+    stub = ast.parse((Path(ngi.__file__).parent / "_ngi.pyi").read_text())
+    names = {n.name for n in stub.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))}
+    names |= {t.id for n in stub.body if isinstance(n, ast.AnnAssign) for t in [n.target]}
+    public = set(ngi._ngi.__all__) | {"__version__"}
+    assert names == public, f"missing in stub: {public - names}; not in module: {names - public}"
+    for cls in (n for n in stub.body if isinstance(n, ast.ClassDef)):
+        methods = {f.name for f in cls.body if isinstance(f, ast.FunctionDef)}
+        runtime = {a for a in dir(getattr(ngi, cls.name)) if not a.startswith("_")}
+        if not issubclass(getattr(ngi, cls.name), BaseException):
+            assert methods - {"__init__", "__enter__", "__exit__"} == runtime, cls.name
+
+
+def test_help_reads_well():
+    import pydoc
+    text = pydoc.render_doc(ngi.Pipeline, renderer=pydoc.plaintext)
+    assert "run(" in text and "one upload" in text
+    assert ngi.__doc__ and "ngi.Device" in ngi.__doc__
+    for name in ngi._ngi.__all__:
+        assert getattr(ngi, name).__doc__, f"ngi.{name} has no docstring"
