@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include <nlohmann/json.hpp>
 
@@ -38,15 +39,16 @@ ngi::Tensor tensor_from_image(const ngi::Image& img) {
     return t;
 }
 
-}  // namespace
+struct Options {
+    std::string frame, model_path, out_dir, device;
+    double radius = -1.0;  // < 0: the model's radius scaled to the image
+};
 
-int cmd_ao(int argc, char** argv) {
-    Args args(argc, argv, 2, {}, {"frame", "model", "out", "radius", "device"});
-    no_positionals(args);
-    const std::string frame = args.require("frame"), model_path = args.require("model"), out_dir = args.require("out");
-    const double radius = args.real("radius", -1.0, -1.0, 65536.0);  // -1: the model's radius scaled to the image
+int run(const Options& o) {
+    const std::string &frame = o.frame, &model_path = o.model_path, &out_dir = o.out_dir;
+    const double radius = o.radius;
     ngi::OutputFolder out(out_dir, "write", {"ao.npy", "ao.png", "compare.png", "metrics.json"});
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     ngi::AoNetwork net = ngi::AoNetwork::load(device, model_path);
     // The kind of normals the model was trained on (docs/CONVENTIONS.md section 15).
     const std::string normals_file = net.normals() == "face" ? "face_normal.npy" : "normal.npy";
@@ -110,6 +112,24 @@ int cmd_ao(int argc, char** argv) {
     out.commit();
     std::printf("written    %s\n", out_dir.c_str());
     return 0;
+}
+
+}  // namespace
+
+Run add_ao(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(
+        app, "ao", "AO of an AO frame folder (ngi ao-data) with a trained AO MLP",
+        "Writes ao.npy and ao.png and, when the folder holds the reference, compare.png (network | reference | "
+        "|difference|) and metrics.json over the object's pixels.");
+    add_path(*cmd, "--frame", o->frame, "DIR", "the AO frame folder (normal.npy or face_normal.npy)", true);
+    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained AO model", true);
+    add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
+    add_real(*cmd, "--radius", o->radius, -1.0, 65536.0, "PX",
+             "ring radius in pixels; 0: the seed's inference, negative: the model's radius scaled to the image",
+             "the model's");
+    add_device(*cmd, o->device);
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

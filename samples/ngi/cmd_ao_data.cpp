@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -85,24 +86,22 @@ ngi::Tensor planes(const ngi::Image& img, int first, int count) {
     return t;
 }
 
-}  // namespace
+struct Options {
+    std::string spec, out, device;
+    int views = 128, heldout = 32, n = 256, rays = 256;
+    double max_distance = 4.0, sigma = 1.5;
+};
 
-int cmd_ao_data(int argc, char** argv) {
-    Args args(argc, argv, 2, {},
-              {"scene", "out", "device", "views", "heldout-views", "n", "rays", "max-distance", "sigma"});
-    no_positionals(args);
-    const std::string spec = args.require("scene"), out = args.require("out");
-    const int views = args.integer("views", 128, 0, 100000);
-    const int heldout = args.integer("heldout-views", 32, 0, 100000);
+int run(const Options& o) {
+    const std::string &spec = o.spec, &out = o.out;
+    const int views = o.views, heldout = o.heldout, rays = o.rays;
     ngi::RenderSettings rs;
-    rs.n = args.integer("n", 256, 16, 4096);
-    const int rays = args.integer("rays", 256, 1, 1 << 20);
-    const float max_distance = float(args.real("max-distance", 4.0, 1e-3, 1e6));
-    const float sigma = float(args.real("sigma", 1.5, 0.0, ngi::Renderer::kMaxSmoothSigma));
+    rs.n = o.n;
+    const float max_distance = float(o.max_distance), sigma = float(o.sigma);
     std::error_code ec;
     if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
         throw ngi::InputError("ngi ao-data: " + out + " exists and is not a folder");
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const Sphere b = bounding_sphere(scene);
     ngi::Renderer renderer(device, scene);
@@ -163,6 +162,29 @@ int cmd_ao_data(int argc, char** argv) {
     std::printf("%d views (%d rendered now) of %s, N = %d, %d rays, max distance %g -> %s\n", total, rendered,
                 scene.name.c_str(), rs.n, rays, double(max_distance), out.c_str());
     return 0;
+}
+
+}  // namespace
+
+Run add_ao_data(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(
+        app, "ao-data", "seed 001's AO data: orbit views of one object",
+        "Per view: smooth normals, face normals, depth and the ray-traced AO (normal.npy, face_normal.npy, depth.npy, "
+        "ao.npy, view.json) in DIR/orbit/vNNNN (training) and DIR/heldout/vNNNN (evaluation). Resumable: finished "
+        "views are kept. Progress with an ETA on stderr.");
+    add_path(*cmd, "--scene", o->spec, "SPEC", "room|street|cave|backlit|bleed|sculpture[:seed=S], or a .vox file",
+             true);
+    add_path(*cmd, "--out", o->out, "DIR", "the data folder", true);
+    add_integer(*cmd, "--views", o->views, 0, 100000, "V", "views on the training orbit");
+    add_integer(*cmd, "--heldout-views", o->heldout, 0, 100000, "V", "views on the held-out orbit");
+    add_integer(*cmd, "--n", o->n, 16, 4096, "N", "image size in pixels (N x N)");
+    add_integer(*cmd, "--rays", o->rays, 1, 1 << 20, "R", "AO rays per pixel");
+    add_real(*cmd, "--max-distance", o->max_distance, 1e-3, 1e6, "DIST", "AO ray length");
+    add_real(*cmd, "--sigma", o->sigma, 0.0, double(ngi::Renderer::kMaxSmoothSigma), "S",
+             "Gaussian smoothing of the normals, in blocks (0: the face normals)");
+    add_device(*cmd, o->device);
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "commands.hpp"
@@ -18,14 +19,14 @@ std::string hms(double s) {
     return b;
 }
 
-}  // namespace
+struct Options {
+    std::string config_path, out, device;
+};
 
-int cmd_dataset(int argc, char** argv) {
-    Args args(argc, argv, 2, {}, {"config", "out", "device"});
-    no_positionals(args);
-    const std::string config_path = args.require("config"), out = args.require("out");
+int run(const Options& o) {
+    const std::string &config_path = o.config_path, &out = o.out;
     const ngi::DatasetConfig config = ngi::DatasetConfig::load(config_path);
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     const bool tty = isatty(STDERR_FILENO);
     auto last = std::chrono::steady_clock::now() - std::chrono::hours(1);
     std::fprintf(stderr, "dataset %s: %zu train + %zu test scenes, N = %d, %d spp reference, device %s\n",
@@ -49,6 +50,18 @@ int cmd_dataset(int argc, char** argv) {
     });
     std::printf("dataset written to %s\n", out.c_str());
     return 0;
+}
+
+}  // namespace
+
+Run add_dataset(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(app, "dataset", "render a train/test dataset from a JSON config (see configs/)",
+                                "Resumable: finished frames are kept. Progress with an ETA on stderr.");
+    add_path(*cmd, "--config", o->config_path, "FILE.json", "the dataset config", true);
+    add_path(*cmd, "--out", o->out, "DIR", "the dataset folder", true);
+    add_device(*cmd, o->device);
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <memory>
 
 #include "commands.hpp"
 #include "ngi/device.hpp"
@@ -7,15 +8,15 @@
 
 namespace ngi_cli {
 
+namespace {
+
 // Lists every OpenCL device, and (unless --no-check) opens each one and runs ngi's self-check on it: which GEMM
 // variant passed against the host reference, which were refused and why, and the driver's loop limit.
-int cmd_devices(int argc, char** argv) {
-    Args args(argc, argv, 2, {"no-check"}, {});
-    no_positionals(args);
+int run(bool no_check) {
     const auto devices = ngi::list_devices();
     if (devices.empty()) {
         std::printf("no OpenCL devices found (install an ICD, e.g. pocl-opencl-icd)\n");
-        return 1;
+        return kExitDevice;
     }
     int failed = 0;
     for (const auto& d : devices) {
@@ -28,7 +29,7 @@ int cmd_devices(int argc, char** argv) {
                     d.compute_units, d.max_work_group_size, d.local_mem_bytes / 1024,
                     d.local_mem_is_dedicated ? "dedicated" : "global", d.global_mem_bytes >> 20,
                     d.max_alloc_bytes >> 20, d.fp16 ? "yes" : "no");
-        if (args.has("no-check")) continue;
+        if (no_check) continue;
         try {
             const ngi::Device dev =
                 ngi::Device::open(std::to_string(d.platform_index) + ":" + std::to_string(d.device_index));
@@ -45,7 +46,18 @@ int cmd_devices(int argc, char** argv) {
             ++failed;
         }
     }
-    return failed ? 1 : 0;
+    return failed ? kExitDevice : kExitOk;
+}
+
+}  // namespace
+
+Run add_devices(CLI::App& app) {
+    auto no_check = std::make_shared<bool>(false);
+    CLI::App* cmd = add_command(app, "devices", "list OpenCL devices, their capabilities and ngi's self-check on each",
+                                "The self-check: the GEMM variant in use, the variants refused and why, the driver's "
+                                "loop limit. Exit code 3 when there is no device or a self-check fails.");
+    add_switch(*cmd, "--no-check", *no_check, "only list the devices: no self-check");
+    return [no_check] { return run(*no_check); };
 }
 
 }  // namespace ngi_cli

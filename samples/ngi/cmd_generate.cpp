@@ -1,21 +1,28 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <memory>
+#include <string>
 
 #include "commands.hpp"
 #include "ngi/model.hpp"
 
 namespace ngi_cli {
 
-int cmd_generate(int argc, char** argv) {
-    Args args(argc, argv, 2, {"profile"}, {"model", "input", "output", "device", "bn-mode", "dropout", "mlp-path"});
-    no_positionals(args);
-    const std::string model_path = args.require("model"), input_path = args.require("input"),
-                      output_path = args.require("output");
+namespace {
+
+struct Options {
+    std::string model_path, input_path, output_path, device;
+    bool profile = false;
+    ngi::ModelOptions model;  // "": the model's own setting
+};
+
+int run(const Options& o) {
+    const std::string &model_path = o.model_path, &input_path = o.input_path, &output_path = o.output_path;
     ngi::DeviceOptions dopt;
-    dopt.profiling = args.has("profile");
-    ngi::Device device = ngi::Device::open(args.get("device"), dopt);
-    ngi::ModelOptions mopt{args.get("bn-mode"), args.get("dropout"), args.get("mlp-path")};
+    dopt.profiling = o.profile;
+    ngi::Device device = ngi::Device::open(o.device, dopt);
+    const ngi::ModelOptions& mopt = o.model;
 
     auto t0 = std::chrono::steady_clock::now();
     ngi::Model model = ngi::Model::load(device, model_path, mopt);
@@ -49,7 +56,7 @@ int cmd_generate(int argc, char** argv) {
         std::fprintf(stderr, "ngi generate: warning: %d of %zu input values were NaN, infinite or outside the model's "
                      "input range [%g, %g] and were replaced (NaN -> 0, others clamped to the range)\n",
                      info.sanitized_inputs, x.data.size(), double(c.input_range[0]), double(c.input_range[1]));
-    if (args.has("profile")) {
+    if (o.profile) {
         double total = 0;
         for (const auto& l : info.layers) total += l.ms;
         std::printf("\n%-28s %-22s %10s %10s %9s\n", "node", "kind", "ms", "GFLOP", "GFLOP/s");
@@ -59,6 +66,26 @@ int cmd_generate(int argc, char** argv) {
         std::printf("%-28s %-22s %10.3f\n", "total (device time)", "", total);
     }
     return 0;
+}
+
+}  // namespace
+
+Run add_generate(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(app, "generate", "run a generator or an mlp on a NumPy float32 tensor",
+                                "A generator takes an NCHW tensor with N = 1; an mlp takes one point per pixel "
+                                "([1, C, H, W]) or per row ([N, C]).");
+    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the model", true);
+    add_path(*cmd, "--input", o->input_path, "X.npy", "the input tensor", true);
+    add_path(*cmd, "--output", o->output_path, "Y.npy", "the output tensor to write", true);
+    add_device(*cmd, o->device);
+    add_switch(*cmd, "--profile", o->profile, "also print the device time of every layer");
+    add_choice(*cmd, "--bn-mode", o->model.bn_mode, {"running", "per_image"},
+               "batch norm statistics: running (the trained ones) or per_image", "the model's");
+    add_choice(*cmd, "--dropout", o->model.dropout, {"off", "seeded"}, "dropout at inference", "the model's");
+    add_choice(*cmd, "--mlp-path", o->model.mlp_path, {"fused", "dense"}, "an mlp's kernels (mlp models only)",
+               "fused when the network fits the device");
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -1,6 +1,8 @@
 // ngi lightmap: a frame folder + a trained generator -> the front view's GI lightmap and final image, and, when
 // the frame has a path-traced reference, a side-by-side comparison and metrics.
 #include <cstdio>
+#include <memory>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
@@ -19,28 +21,24 @@ namespace {
 // The library's JSON form (non-finite values as null with a note, docs/CONVENTIONS.md section 11).
 nlohmann::json metrics_json(const ngi::ImageMetrics& m) { return nlohmann::json::parse(ngi::to_json(m)); }
 
-}  // namespace
+// "WxH" with W and H in 1..16384, or false.
+bool parse_size(const std::string& s, int& width, int& height) {
+    const auto x = s.find('x');
+    return x != std::string::npos && parse_integer(s.substr(0, x), 1, 16384, width) &&
+           parse_integer(s.substr(x + 1), 1, 16384, height);
+}
 
-int cmd_lightmap(int argc, char** argv) {
-    Args args(argc, argv, 2, {}, {"frame", "model", "out", "size", "device"});
-    no_positionals(args);
-    const std::string frame_dir = args.require("frame"), model_path = args.require("model"),
-                      out_dir = args.require("out");
+struct Options {
+    std::string frame_dir, model_path, out_dir, size, device;
+};
+
+int run(const Options& o) {
+    const std::string &frame_dir = o.frame_dir, &model_path = o.model_path, &out_dir = o.out_dir;
     int width = 0, height = 0;  // 0: the frame's face size
-    if (args.has("size")) {
-        const std::string s = args.get("size");
-        const auto x = s.find('x');
-        try {
-            if (x == std::string::npos) throw UsageError("");
-            width = Args::parse_int(s.substr(0, x), "", 1, 16384);
-            height = Args::parse_int(s.substr(x + 1), "", 1, 16384);
-        } catch (const UsageError&) {
-            throw UsageError("--size must be WxH with W and H in 1..16384, e.g. 512x512, got '" + s + "'");
-        }
-    }
+    if (!o.size.empty()) parse_size(o.size, width, height);  // checked by the option
     // Checked before the model runs: an output folder this command may not replace is refused up front.
     ngi::OutputFolder out(out_dir, "write", {"lightmap.exr", "final.png", "compare.png", "metrics.json"});
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     ngi::Model model = ngi::Model::load(device, model_path);
     const ngi::Frame frame = ngi::read_frame(frame_dir);  // the reference, if any, has the face size
     if (!width) width = height = frame.n;
@@ -103,6 +101,29 @@ int cmd_lightmap(int argc, char** argv) {
                 width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
                 ngi::shape_string(input_shape).c_str(), stats.total_nonfinite());
     return 0;
+}
+
+}  // namespace
+
+Run add_lightmap(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(app, "lightmap", "a frame folder + a trained generator -> the front view's GI lightmap",
+                                "Writes lightmap.exr and final.png and, when the frame has a reference, compare.png "
+                                "(direct only | network | reference) and metrics.json.");
+    add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render)", true);
+    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained generator", true);
+    add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
+    cmd->add_option("--size", o->size, "the size of the written images, W and H in 1..16384 [default: the face size]")
+        ->type_name("WxH")
+        ->check(CLI::Validator(
+            [](std::string& s) {
+                int w = 0, h = 0;
+                return parse_size(s, w, h) ? std::string()
+                                           : "must be WxH with W and H in 1..16384, e.g. 512x512, got '" + s + "'";
+            },
+            ""));
+    add_device(*cmd, o->device);
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -1,6 +1,7 @@
 // ngi merge: a frame folder -> the global view of every feature, the coordinate map and the network input; with
 // a reference, the training target (the reference encoded as the generator should output it).
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,23 +14,23 @@
 
 namespace ngi_cli {
 
-int cmd_merge(int argc, char** argv) {
-    Args args(argc, argv, 2, {"single-view", "npy-only"}, {"frame", "out", "mode", "model", "device"});
-    no_positionals(args);
-    const std::string frame_dir = args.require("frame"), out_dir = args.require("out");
-    if (args.has("single-view") && args.has("model")) throw UsageError("--single-view and --model exclude each other");
-    ngi::GlobalViewMode mode{};
-    try {
-        mode = ngi::global_view_mode_from_name(args.get("mode", "thesis"));
-    } catch (const ngi::InputError& e) {
-        throw UsageError(std::string("--mode: ") + e.what());
-    }
+namespace {
+
+struct Options {
+    std::string frame_dir, out_dir, mode = "thesis", model, device;
+    const CLI::Option* model_given = nullptr;
+    bool single_view = false, npy_only = false;
+};
+
+int run(const Options& o) {
+    const std::string &frame_dir = o.frame_dir, &out_dir = o.out_dir;
+    const ngi::GlobalViewMode mode = ngi::global_view_mode_from_name(o.mode);  // checked by the option
     // Checked before any work: an output folder this command may not replace is refused up front.
     std::vector<std::string> owned = {"coord.exr", "input.npy", "target.npy"};
     for (int f = 0; f < ngi::kFeatureCount; ++f)
         owned.push_back(std::string("globalview_") + ngi::feature_name(ngi::Feature(f)) + ".exr");
     ngi::OutputFolder out(out_dir, "write", owned);
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     ngi::FrameReadStats read_stats;
     const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);
     ngi::SurroundPipeline pipeline(device, frame.n, mode);
@@ -37,16 +38,16 @@ int cmd_merge(int argc, char** argv) {
     // The network input follows a model's config when one is given, else the default surround layout (or the
     // front view only with --single-view).
     ngi::ModelConfig config;
-    if (args.has("model")) {
-        config = ngi::Model::load(device, args.get("model")).config();
-    } else if (args.has("single-view")) {
+    if (o.model_given->count()) {
+        config = ngi::Model::load(device, o.model).config();
+    } else if (o.single_view) {
         config.input_nc = 10;
         config.input_layout = ngi::single_view_input_channels();
     } else {
         config.input_nc = 12;
         config.input_layout = ngi::surround_input_channels();
     }
-    const bool views_wanted = !args.has("npy-only");
+    const bool views_wanted = !o.npy_only;
     // Compute everything before writing anything: a bad frame leaves no partial output.
     std::vector<std::pair<std::string, ngi::Image>> views;
     for (int f = 0; views_wanted && f < ngi::kFeatureCount; ++f) {
@@ -84,6 +85,30 @@ int cmd_merge(int argc, char** argv) {
                     ngi::shape_string(target.shape).c_str(), ngi::lumination_transfer_name(pipeline.transfer()),
                     config.output_range[0], config.output_range[1]);
     return 0;
+}
+
+}  // namespace
+
+Run add_merge(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(
+        app, "merge", "a frame folder -> the global view of every feature, coord.exr and the network input",
+        "Writes globalview_<feature>.exr, coord.exr, the network input input.npy and, when the frame has a reference, "
+        "the training target target.npy (--npy-only: only the .npy files).");
+    add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render)", true);
+    add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
+    add_choice(*cmd, "--mode", o->mode, {"thesis", "equirect"}, "the global view's layout");
+    CLI::Option* model = add_path(*cmd, "--model", o->model, "M.safetensors",
+                                  "lay the network input out as this model's config says [default: the surround "
+                                  "layout, 12 channels]",
+                                  false);
+    CLI::Option* single = add_switch(*cmd, "--single-view", o->single_view,
+                                     "the network input of the front view only (10 channels); not with --model");
+    single->excludes(model);
+    add_switch(*cmd, "--npy-only", o->npy_only, "write only input.npy (and target.npy), no .exr");
+    add_device(*cmd, o->device);
+    o->model_given = model;
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "commands.hpp"
@@ -15,27 +16,40 @@ namespace ngi_cli {
 // (ngi::to_json). JSON has no infinity or NaN: a psnr or ssim that is not a finite number is printed as null with a
 // "psnr_note" / "ssim_note" saying why (identical images: psnr +infinity; --range 0: both undefined; images
 // smaller than 11x11: no SSIM).
-int cmd_metrics(int argc, char** argv) {
-    Args args(argc, argv, 2, {}, {"range", "device"});
-    if (args.positional().size() != 2) throw UsageError("expected two image files (.exr, .png or .npy)");
+namespace {
+
+struct Options {
+    std::string a, b, device;
     double range = 1.0;
-    try {
-        range = args.real("range", 1.0, 0.0, std::numeric_limits<double>::max());
-    } catch (const UsageError&) {
-        throw UsageError("--range needs a finite number >= 0, got '" + args.get("range") + "'");
-    }
-    const ngi::Image a = ngi::read_image(args.positional()[0]);
-    const ngi::Image b = ngi::read_image(args.positional()[1]);
+};
+
+int run(const Options& o) {
+    const ngi::Image a = ngi::read_image(o.a);
+    const ngi::Image b = ngi::read_image(o.b);
     auto dims = [](const ngi::Image& i) {
         return std::to_string(i.width) + "x" + std::to_string(i.height) + "x" + std::to_string(i.channels);
     };
     if (a.width != b.width || a.height != b.height || a.channels != b.channels)
-        throw ngi::InputError(args.positional()[0] + " is " + dims(a) + " but " + args.positional()[1] + " is " +
-                              dims(b) + " (width x height x channels); the images must match");
-    ngi::Device device = ngi::Device::open(args.get("device"));
-    const ngi::ImageMetrics m = ngi::compare_images(device, a, b, range);
+        throw ngi::InputError(o.a + " is " + dims(a) + " but " + o.b + " is " + dims(b) +
+                              " (width x height x channels); the images must match");
+    ngi::Device device = ngi::Device::open(o.device);
+    const ngi::ImageMetrics m = ngi::compare_images(device, a, b, o.range);
     std::printf("%s\n", ngi::to_json(m).c_str());
     return 0;
+}
+
+}  // namespace
+
+Run add_metrics(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = add_command(app, "metrics", "MSE, PSNR and SSIM of two images (.exr/.png/.npy) as JSON",
+                                "psnr is null for identical images, psnr and ssim are null for --range 0, ssim is null "
+                                "for images smaller than 11x11; a note says why.");
+    cmd->add_option("A", o->a, "the first image (.exr, .png or .npy)")->required();
+    cmd->add_option("B", o->b, "the second image, of the same size and channel count")->required();
+    add_real(*cmd, "--range", o->range, 0.0, std::numeric_limits<double>::max(), "R", "the data range");
+    add_device(*cmd, o->device);
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 #include "commands.hpp"
@@ -15,29 +16,31 @@
 
 namespace ngi_cli {
 
-int cmd_render(int argc, char** argv) {
-    Args args(argc, argv, 2, {"no-reference"},
-              {"scene", "out", "device", "frame", "face", "spp", "feature-spp", "bounces", "path-frames", "time",
-               "preview"});
-    no_positionals(args);
-    const std::string spec = args.require("scene"), out = args.require("out");
-    // Every option is checked before the (possibly long) render. The limits are those of a dataset config.
+namespace {
+
+struct Options {
+    std::string spec, out, device, preview;
     ngi::RenderSettings rs;
-    rs.n = args.integer("face", rs.n, 1, 8192);
-    rs.reference_spp = args.integer("spp", rs.reference_spp, 1, 1 << 20);
-    rs.feature_spp = args.integer("feature-spp", rs.feature_spp, 1, 1 << 20);
-    rs.max_bounces = args.integer("bounces", rs.max_bounces, 0, 1000);
-    rs.reference = !args.has("no-reference");
-    const int frames = args.integer("path-frames", 100, 1, 1000000);
-    const int frame = args.integer("frame", 0, 0, frames - 1);
-    const std::string preview = args.get("preview");
-    if (args.has("preview") && preview.empty()) throw UsageError("option --preview needs a non-empty value");
+    bool no_reference = false;
+    int frames = 100, frame = 0;
+    double time = -1.0;  // -1: not given, the scene's default time
+};
+
+int run(const Options& o) {
+    const std::string &spec = o.spec, &out = o.out, &preview = o.preview;
+    // Every option is checked before the (possibly long) render, most of them by the options themselves.
+    ngi::RenderSettings rs = o.rs;
+    rs.reference = !o.no_reference;
+    const int frames = o.frames, frame = o.frame;
+    if (frame > frames - 1)
+        throw UsageError("--frame needs an integer in 0.." + std::to_string(frames - 1) + " (--path-frames " +
+                         std::to_string(frames) + "), got '" + std::to_string(frame) + "'");
     if (std::error_code ec; !preview.empty() && std::filesystem::exists(preview, ec) &&
                             !std::filesystem::is_regular_file(preview, ec))  // found before the render, not after
         throw ngi::InputError("write " + preview + ": exists and is not a regular file; refusing to replace it");
-    const double time = args.real("time", -1.0, 0.0, 48.0);  // -1: absent, the scene's default time
+    const double time = o.time;
     ngi::check_frame_folder_target(out);  // before the render, not after
-    ngi::Device device = ngi::Device::open(args.get("device"));
+    ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const float hours = time < 0.0 ? scene.default_time : float(time);
     // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene.
@@ -89,6 +92,32 @@ int cmd_render(int argc, char** argv) {
                     rs.max_bounces, st.reference_ms, st.reference_rays * 1e-6, st.reference_rel_stderr);
     std::printf("total      %.1f ms, %.2f Mrays/s -> %s\n", ms, rays / (ms * 1e3), out.c_str());
     return 0;
+}
+
+}  // namespace
+
+Run add_render(CLI::App& app) {
+    auto o = std::make_shared<Options>();
+    ngi::RenderSettings& rs = o->rs;
+    CLI::App* cmd = add_command(app, "render", "path-trace one frame folder of a scene",
+                                "The features of the six faces and the front view's reference lighting; the camera "
+                                "and the seed of frame K of the scene in a dataset.");
+    add_path(*cmd, "--scene", o->spec, "SPEC",
+             "room|street|cave|backlit|bleed|sculpture[:seed=S], or a .vox file", true);
+    add_path(*cmd, "--out", o->out, "DIR", "the frame folder to write", true);
+    // The limits are those of a dataset config.
+    add_integer(*cmd, "--frame", o->frame, 0, 999999, "K", "the frame of the camera path, below --path-frames");
+    add_integer(*cmd, "--face", rs.n, 1, 8192, "N", "face size in pixels");
+    add_integer(*cmd, "--spp", rs.reference_spp, 1, 1 << 20, "S", "samples per pixel of the reference");
+    add_real(*cmd, "--time", o->time, 0.0, 48.0, "HOURS", "time of day", "the scene's");
+    add_device(*cmd, o->device);
+    add_integer(*cmd, "--feature-spp", rs.feature_spp, 1, 1 << 20, "F", "samples per pixel of the direct feature");
+    add_integer(*cmd, "--bounces", rs.max_bounces, 0, 1000, "B", "indirect bounces of the reference");
+    add_integer(*cmd, "--path-frames", o->frames, 1, 1000000, "P", "frames of the scene's camera path");
+    add_switch(*cmd, "--no-reference", o->no_reference, "render the features only");
+    add_nonempty(*cmd, "--preview", o->preview, "PNG",
+                 "also write the front view's final image (reference x albedo + emission + env) as an sRGB PNG");
+    return [o] { return run(*o); };
 }
 
 }  // namespace ngi_cli

@@ -1,23 +1,18 @@
-// The ngi sample's commands; one file each (cmd_<name>.cpp). Each returns the process exit code.
+// The ngi sample's commands; one file each (cmd_<name>.cpp). Each adds its subcommand and options to the app and
+// returns what runs it once the command line is parsed; that returns the process exit code.
 #pragma once
-#include "args.hpp"
+#include "options.hpp"
 
 namespace ngi_cli {
 
-struct Command {
-    const char* name;
-    const char* synopsis;
-    int (*run)(int argc, char** argv);  // argv[0] = "ngi", argv[1] = command name
-};
-
-int cmd_devices(int argc, char** argv);
-int cmd_generate(int argc, char** argv);
-int cmd_metrics(int argc, char** argv);
-int cmd_merge(int argc, char** argv);
-int cmd_lightmap(int argc, char** argv);
-int cmd_render(int argc, char** argv);
-int cmd_dataset(int argc, char** argv);
-int cmd_ao_data(int argc, char** argv);
-int cmd_ao(int argc, char** argv);
+Run add_devices(CLI::App& app);
+Run add_generate(CLI::App& app);
+Run add_metrics(CLI::App& app);
+Run add_merge(CLI::App& app);
+Run add_lightmap(CLI::App& app);
+Run add_render(CLI::App& app);
+Run add_dataset(CLI::App& app);
+Run add_ao_data(CLI::App& app);
+Run add_ao(CLI::App& app);
 
 }  // namespace ngi_cli

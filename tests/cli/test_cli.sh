@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # End-to-end CLI checks (ctest cli_end_to_end): render a tiny frame, merge it, run a generator on it; then the
 # bad-input cases must fail with exit code 1 (bad options: 2), name the offending file or option, never reach the
-# "unexpected error" catch-all, and leave no output (not even a partial folder on a full disk) behind.
+# "unexpected error" catch-all, and leave no output (not even a partial folder on a full disk) behind. The CLI
+# conventions too: --version, --help of each command, one-line usage errors.
 # Usage: test_cli.sh NGI_BINARY WORK_DIR
 set -euo pipefail
 ngi=$1 work=$2
 rm -rf "$work" && mkdir -p "$work"
 # A 6-level pix2pix generator from PyTorch (random weights): the CLI's plumbing, not the model, is under test.
-/usr/bin/python3 "$(dirname "$0")/../parity/make_parity.py" --out "$work/parity" > "$work/parity.log" 2>&1
+# The script imports the Python package ngi of the build tree (<build>/python; ctest sets PYTHONPATH to it).
+PYTHONPATH=${PYTHONPATH:-$(dirname "$ngi")/python} /usr/bin/python3 "$(dirname "$0")/../parity/make_parity.py" \
+    --out "$work/parity" > "$work/parity.log" 2>&1
 model=$work/parity/pix2pix_running.safetensors
 fail() { echo "FAILED: $*" >&2; exit 1; }
 
@@ -93,6 +96,42 @@ expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/fram
 expect=--range;       expect_usage range_nan "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range nan
 expect=--mode;        expect_usage mode_bad "$ngi" merge --frame "$work/frame" --mode cubic --out "$work/out_mode_bad"
 
+# ---- CLI conventions: --version, --help per command, one-line usage errors (exit 2), missing files (exit 1).
+version=$(sed -n 's/^project(ngi VERSION \([0-9.]*\) .*/\1/p' "$(dirname "$0")/../../CMakeLists.txt")
+[ -n "$version" ] || fail "--version: no project version in CMakeLists.txt"
+out=$("$ngi" --version) || fail "ngi --version: exit code $?"
+[ "$out" = "ngi $version" ] || fail "ngi --version printed '$out', expected 'ngi $version'"
+for help in "--help" "help"; do
+  "$ngi" $help > "$work/help.out" || fail "ngi $help: exit code $?"
+  for word in devices generate metrics merge lightmap render dataset ao-data "exit codes" "3 device failure"; do
+    grep -q -- "$word" "$work/help.out" || fail "ngi $help does not mention $word: $(cat "$work/help.out")"
+  done
+done
+"$ngi" render --help > "$work/render_help.out" || fail "ngi render --help: exit code $?"
+grep -q -- "--spp" "$work/render_help.out" || fail "ngi render --help does not mention --spp"
+grep -q -- "default 64" "$work/render_help.out" || fail "ngi render --help does not give --spp's default"
+! grep -q -- "--model" "$work/render_help.out" || fail "ngi render --help shows other commands' options"
+"$ngi" help lightmap > "$work/lightmap_help.out" || fail "ngi help lightmap: exit code $?"
+grep -q -- "--size" "$work/lightmap_help.out" && ! grep -q -- "--spp" "$work/lightmap_help.out" ||
+  fail "ngi help lightmap: $(cat "$work/lightmap_help.out")"
+"$ngi" merge --help | grep -q "thesis|equirect" || fail "ngi merge --help does not list --mode's values"
+# A usage error is one line naming the option and where the options are listed, not the whole usage.
+expect=--bogus; expect_usage bogus "$ngi" render --bogus 1
+[ "$(wc -l < "$work/bogus.err")" -eq 1 ] || fail "bogus: more than one line: $(cat "$work/bogus.err")"
+grep -q "run 'ngi render --help' for the options" "$work/bogus.err" || fail "bogus: no pointer to --help: $(cat "$work/bogus.err")"
+! grep -q -- "lightmap\|--model" "$work/bogus.err" || fail "bogus: printed other commands' usage: $(cat "$work/bogus.err")"
+expect="--spp: needs an integer"; expect_usage spp_abc "$ngi" render --spp abc
+expect="--spp: needs an integer"; expect_usage spp_hex "$ngi" render --scene room:seed=1 --spp 0x10 --out "$work/out_spp_hex"
+expect=--spp;         expect_usage spp_missing "$ngi" render --scene room:seed=1 --out "$work/out_spp_missing" --spp
+expect=--out;         expect_usage out_missing "${render[@]}"
+expect=--scene;       expect_usage scene_empty "$ngi" render --scene "" --out "$work/out_scene_empty"
+expect=--no-reference; expect_usage flag_value "${render[@]}" --no-reference=1 --out "$work/out_flag_value"
+expect=--bn-mode;     expect_usage bn_mode "$ngi" generate --model "$model" --input "$work/merged/input.npy" --output "$work/out_bn_mode.npy" --bn-mode train
+expect="unknown command 'bogus'"; expect_usage bogus_command "$ngi" bogus
+expect="unknown command 'bogus'"; expect_usage help_bogus "$ngi" help bogus
+expect=nonexistent.png
+expect_failure missing_file "$ngi" metrics "$work/nonexistent.png" "$work/lm/final.png"
+
 # ---- A reference.exr that is not the face size is refused, naming the file and both sizes.
 "$ngi" render --scene room:seed=1 --face 16 --spp 1 --feature-spp 1 --out "$work/frame16" > /dev/null
 cp -r "$work/frame" "$work/badref" && cp "$work/frame16/reference.exr" "$work/badref/reference.exr"
@@ -133,7 +172,8 @@ expect_failure render_foreign "${render[@]}" --out "$work/merged"
 no_unexpected render_foreign
 for name in stdout_full preview_dir time_nan time_inf time_range path_frames path_frames_overflow face_suffix spp_zero frame_range \
             unknown_option spp_twice stray size_bad size_zero range_nan mode_bad badref_merge badref_lightmap dir_model dir_input \
-            dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign; do
+            dir_config zero_model zero_input zero_config dev_full_output out_is_file out_foreign bogus spp_abc spp_hex \
+            spp_missing out_missing scene_empty flag_value bn_mode bogus_command help_bogus missing_file; do
   no_unexpected $name
 done
 
