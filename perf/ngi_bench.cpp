@@ -3,8 +3,13 @@
 //   ngi_bench gemm [--device D] [--repeats R]          GEMM GFLOP/s at 1024^3 and at the thesis generator's
 //                                                       layer shapes (conv: M=Cout, N=HWout, K=Cin*16;
 //                                                       transposed conv: M=Cout*16, N=HWin, K=Cin)
-//   ngi_bench tune [--device D]                         try GEMM parameter sets (each checked against a
-//                                                       reference first, CLBlast style) and rank them
+//   ngi_bench tune [--device D] [--max N] [--write-db kernels/gemm_tuning.json]
+//                                                       try GEMM parameter sets (each checked against a
+//                                                       reference first; failing to build or launch = rejected,
+//                                                       CLBlast style) and rank them; --max: the first N of the
+//                                                       space only (slow devices); --write-db: add or replace
+//                                                       this device's entry in the tuning database
+//                                                       (platform + vendor + device + driver) with the winner
 //   ngi_bench mlp --model M.safetensors [--width 1920 --height 1080] [--path fused|dense] [--ao] [--repeats R]
 //                                                       a per-pixel MLP over W x H pixels, device in, device out
 //                                                       (Model::enqueue): median ms and GFLOP/s (2 x MACs); --ao:
@@ -18,6 +23,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -27,6 +35,7 @@
 #include "ngi/model.hpp"
 #include "ops/gemm.hpp"
 #include "ops/gemm_selfcheck.hpp"
+#include "ops/gemm_tuning.hpp"
 
 using namespace ngi;
 using namespace ngi::detail;
@@ -158,7 +167,9 @@ int run_tune(int argc, char** argv) {
     Device d = Device::open(arg(argc, argv, "--device"));
     // Every candidate passes the library's own self-check (small and realistic problems against a host
     // reference) before it is timed: a variant the device computes wrongly never reaches the table.
-    const std::vector<GemmParams> space = gemm_tuning_space(d.info());
+    std::vector<GemmParams> space = gemm_tuning_space(d.info());
+    if (const int max = std::stoi(arg(argc, argv, "--max", "0")); max > 0 && std::size_t(max) < space.size())
+        space.resize(std::size_t(max));  // the database's current choice stays first
     const GemmShape shapes[] = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
     json results = json::array();
     for (const auto& p : space) {
@@ -181,6 +192,37 @@ int run_tune(int argc, char** argv) {
         return a.value("geomean_gflops", 0.0) > b.value("geomean_gflops", 0.0);
     });
     std::printf("%s\n", json{{"device", device_json(d, gemm_params_for(d.info()))}, {"ranked", results}}.dump(2).c_str());
+    if (const std::string db_path = arg(argc, argv, "--write-db"); !db_path.empty()) {
+        if (results.empty() || !results[0].contains("geomean_gflops"))
+            throw Error("tune: no candidate passed the check on " + d.info().name + "; " + db_path + " left unchanged");
+        const DeviceInfo& i = d.info();
+        GemmTuningEntry e;
+        e.platform = i.platform_name;
+        e.vendor = i.vendor;
+        e.device = i.name;
+        e.driver = i.driver_version;
+        e.params = parse_gemm_params(results[0]["params"].get<std::string>());
+        double current = 0;  // the entry the database gave this device before, measured in the same run
+        for (const auto& r : results)
+            if (r["params"] == space.front().to_string()) current = r.value("geomean_gflops", 0.0);
+        char note[256];
+        std::snprintf(note, sizeof note, "ngi_bench tune: geomean %.1f GFLOP/s over 1024^3, down1, up2 (the previous "
+                      "choice %s: %.1f), %zu candidates checked", results[0]["geomean_gflops"].get<double>(),
+                      space.front().to_string().c_str(), current, space.size());
+        e.note = note;
+        std::ifstream in(db_path);
+        if (!in) throw InputError("tune: cannot read " + db_path);
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string tmp = db_path + ".tmp";
+        {
+            std::ofstream out(tmp);
+            out << gemm_tuning_with(text, e);
+            if (!out.flush()) throw InputError("tune: cannot write " + tmp);
+        }
+        std::filesystem::rename(tmp, db_path);
+        std::fprintf(stderr, "tune: %s -> %s in %s (rebuild to compile it in)\n", i.name.c_str(),
+                     e.params.to_string().c_str(), db_path.c_str());
+    }
     return 0;
 }
 

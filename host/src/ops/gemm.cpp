@@ -1,7 +1,6 @@
 #include "ops/gemm.hpp"
 
 #include <cstdio>
-#include <cstdlib>
 
 #include "ngi/error.hpp"
 
@@ -31,22 +30,6 @@ GemmParams parse_gemm_params(const std::string& s) {
         throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1[,UNROLL] with MR 1..16, VW in "
                          "{1,2,4,8,16}, NV 1..8, KU 1..16, L0,L1 1..1024, UNROLL 0 or 1");
     if (n == 6) p.unroll = 1;
-    return p;
-}
-
-// The per-device table (CLBlast style: vendor/type first, then a default). Entries are measured by
-// perf/ngi_bench --tune; see docs/PERFORMANCE.md.
-GemmParams gemm_params_for(const DeviceInfo& info) {
-    if (const char* e = std::getenv("NGI_GEMM"); e && *e) return parse_gemm_params(e);
-    GemmParams p;
-    if (info.is_cpu) {
-        // PoCL on x86: 6x32 tiles in 12 explicit 16-wide vectors (AVX-512 registers); 4 tiles per work-group
-        // amortize PoCL's per-work-group cost on skinny layers (measured in docs/PERFORMANCE.md).
-        p = {6, 16, 2, 1, 1, 4};
-    } else {
-        // GPUs: many small tiles per work-group so a warp/wavefront is full. Not tuned on real hardware yet.
-        p = {4, 4, 1, 1, 16, 16};
-    }
     return p;
 }
 

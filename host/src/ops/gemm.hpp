@@ -8,7 +8,7 @@
 
 namespace ngi::detail {
 
-// Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for() (the table), overridable with
+// Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for() (the tuning database), overridable with
 // NGI_GEMM="MR,VW,NV,KU,L0,L1[,UNROLL]" for tuning, and checked on the device before use (ops/gemm_selfcheck.hpp).
 struct GemmParams {
     int mr = 8, vw = 16, nv = 2, ku = 1;
@@ -19,6 +19,7 @@ struct GemmParams {
     std::string to_string() const;
 };
 
+// The device's knob set: $NGI_GEMM if set, else the tuning database's best match (ops/gemm_tuning.hpp).
 GemmParams gemm_params_for(const DeviceInfo& info);
 GemmParams parse_gemm_params(const std::string& s);  // "MR,VW,NV,KU,L0,L1[,UNROLL]"; throws InputError
 bool operator==(const GemmParams& a, const GemmParams& b);

@@ -1,0 +1,42 @@
+// The GEMM tuning database (CLBlast style): per-device knob sets measured by `ngi_bench tune` and compiled into the
+// library (kernels/gemm_tuning.json, embedded at build time). Lookup goes from the most specific entry that matches
+// the device (platform + vendor + device name + driver) to the least (device type, then the default), so a device
+// nobody tuned still gets its type's starting point. Every choice is then confirmed by the self-check
+// (ops/gemm_selfcheck.hpp) before a model uses it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "ngi/device.hpp"
+#include "ops/gemm.hpp"
+
+namespace ngi::detail {
+
+struct GemmTuningEntry {
+    // Fields that must equal the device's (empty = any): DeviceInfo::platform_name, vendor, name, driver_version,
+    // and the type ("cpu", "gpu", "other").
+    std::string platform, vendor, device, driver, type;
+    GemmParams params;
+    std::string note;     // where the numbers came from (tool, date, what was measured)
+    int specificity() const;  // device > driver > vendor > platform > type; 0 = the default: the lookup prefers the highest
+    bool matches(const DeviceInfo& info) const;
+};
+
+// Parses the database (JSON: {"entries": [{"match": {...}, "params": "MR,VW,...", "note": "..."}]}); `name` names it
+// in errors. Every entry's params are validated (parse_gemm_params); an unknown match key is an error.
+std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, const std::string& name);
+
+// The database compiled into this library.
+const std::vector<GemmTuningEntry>& gemm_tuning_database();
+
+// The most specific entry matching `info` (ties: the first in the file), or nullptr.
+const GemmTuningEntry* find_gemm_tuning(const std::vector<GemmTuningEntry>& db, const DeviceInfo& info);
+
+// "cpu", "gpu" or "other".
+std::string device_type_name(const DeviceInfo& info);
+
+// The database as JSON text with `entry` added, replacing an entry with the same match fields (what
+// `ngi_bench tune --write-db` writes back to kernels/gemm_tuning.json).
+std::string gemm_tuning_with(const std::string& json_text, const GemmTuningEntry& entry);
+
+}  // namespace ngi::detail
