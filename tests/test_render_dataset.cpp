@@ -1,4 +1,5 @@
 // Dataset configs and the resumable, deterministic dataset writer.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -138,6 +139,52 @@ TEST_CASE("dataset: frame folders, resumable and deterministic", "[render][oclgr
     CHECK(fs::exists(out / "test" / "backlit_seed2" / "0000" / "camera.json"));
     CHECK_FALSE(fs::exists(out / "test" / "backlit_seed2" / "0001"));
     CHECK(test::slurp((out / "dataset.json").string()) != stored);
+}
+
+TEST_CASE("dataset: shards render disjoint frames whose union is the single-process dataset", "[render]") {
+    const fs::path single = work_dir() / "shard_single", sharded = work_dir() / "shard_3";
+    fs::remove_all(single);
+    fs::remove_all(sharded);
+    const DatasetConfig cfg = DatasetConfig::load(write_config("shards.json", R"({
+        "n": 8, "feature_spp": 1, "reference_spp": 2, "frames_per_scene": 3, "keyframe_interval": 2,
+        "train": [{"family": "bleed", "seeds": [1]}, {"scene": "room:seed=2", "frames": 2}],
+        "test": [{"scene": "backlit:seed=2", "frames": 2}]})"));
+    render_dataset(test::device(), cfg, single.string());
+    // A shard needs the prepared folder (what rank 0 does first), and refuses one of another config.
+    CHECK_THROWS_WITH(render_dataset(test::device(), cfg, sharded.string(), {}, DatasetShard{1, 3}),
+                      Catch::Contains("same config"));
+    CHECK_THROWS_AS(render_dataset(test::device(), cfg, sharded.string(), {}, DatasetShard{3, 3}), InputError);
+    prepare_dataset(cfg, sharded.string());
+    CHECK(count_dataset_frames(cfg, sharded.string()) == std::pair<int, int>(0, 7));
+    int rendered = 0;
+    for (int k : {2, 0, 1}) {  // any order: the shards are independent
+        std::vector<DatasetProgress> seen;
+        render_dataset(test::device(), cfg, sharded.string(), [&](const DatasetProgress& p) { seen.push_back(p); },
+                       DatasetShard{k, 3});
+        REQUIRE_FALSE(seen.empty());
+        CHECK(seen.back().frames_total == (k == 0 ? 3 : 2));  // frames k, k + 3, k + 6 of 7
+        rendered += seen.back().frames_rendered;
+        if (k == 2) {  // only its own frames: ordinals 2 (bleed 0002) and 5 (backlit 0000)
+            CHECK(fs::exists(sharded / "train" / "bleed_seed1" / "0002" / "camera.json"));
+            CHECK(fs::exists(sharded / "test" / "backlit_seed2" / "0000" / "camera.json"));
+            CHECK_FALSE(fs::exists(sharded / "train" / "bleed_seed1" / "0000"));
+            CHECK_FALSE(fs::exists(sharded / "train" / "room_seed2"));  // no frame of its: not even the folder
+            CHECK(count_dataset_frames(cfg, sharded.string()).first == 2);
+        }
+    }
+    CHECK(rendered == 7);
+    // Byte for byte the same files as one process.
+    std::vector<std::string> a, b;
+    for (const auto& e : fs::recursive_directory_iterator(single)) a.push_back(fs::relative(e.path(), single).string());
+    for (const auto& e : fs::recursive_directory_iterator(sharded)) b.push_back(fs::relative(e.path(), sharded).string());
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    REQUIRE(a == b);
+    for (const auto& rel : a)
+        if (fs::is_regular_file(single / rel)) {
+            INFO(rel);
+            CHECK(test::slurp((single / rel).string()) == test::slurp((sharded / rel).string()));
+        }
 }
 
 TEST_CASE("dataset: the whole config is validated before anything is written", "[render]") {

@@ -4,6 +4,7 @@
 # Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser). Python side (parity oracle,
 # training, perf baseline): Debian's python3-torch/numpy/skimage/matplotlib/tqdm, and OpenBLAS so PyTorch's BLAS is
 # not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest.
+# Distributed dataset rendering (ngi-dataset-mpi): OpenMPI.
 # Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
 # simulator), clang-15 + libFuzzer (fuzz targets).
 set -euo pipefail
@@ -13,6 +14,7 @@ packages=(
   catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev
   python3-torch python3-numpy python3-skimage python3-matplotlib python3-tqdm libopenblas0-pthread
   pybind11-dev python3-dev python3-pyopencl python3-pytest
+  libopenmpi-dev openmpi-bin
   mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
 )
 missing=()

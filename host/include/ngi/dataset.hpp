@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ngi/camera_path.hpp"
@@ -66,7 +67,26 @@ struct DatasetProgress {
 // frame: the global settings may differ only while no frame exists, a scene entry only while its folder holds no
 // frame (e.g. a corrected test entry after a run that stopped on it). Otherwise InputError naming what differs and
 // what to delete (the scene folder, or the whole dataset) or to use another output folder.
+//
+// Several processes (MPI ranks, ngi-dataset-mpi) render one dataset together: prepare_dataset() once (rank 0),
+// then render_dataset() in every process with its DatasetShard. Frames are numbered over the whole dataset (train
+// scenes, then test scenes, in config order, frame 0 first) and frame k belongs to shard k % count, so the split is
+// deterministic for any count and the union of the shards is exactly the single-process dataset, bit for bit
+// (every frame's seed comes from its scene and index, never from who renders it). A shard writes only its own
+// frames, removes only its own frames' leftover temporaries, and writes scene.json of the scenes it has frames in
+// (every writer writes the same bytes, atomically).
+struct DatasetShard {
+    int index = 0, count = 1;  // this process's shard, of `count`
+    bool owns(long long frame_ordinal) const { return frame_ordinal % count == index; }
+};
+// Validates the config and every scene, creates out_dir and writes (or checks) dataset.json: everything
+// render_dataset does before it renders, so that shards started afterwards find a dataset folder that matches.
+void prepare_dataset(const DatasetConfig& config, const std::string& out_dir);
+// progress counts this shard's frames only (frames_total = the shard's share).
 void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
-                    const std::function<void(const DatasetProgress&)>& progress = {});
+                    const std::function<void(const DatasetProgress&)>& progress = {}, const DatasetShard& shard = {});
+// Frames of the dataset already finished on disk (a camera.json in the frame folder), and all of them: what a
+// coordinator reports while the shards run.
+std::pair<int, int> count_dataset_frames(const DatasetConfig& config, const std::string& out_dir);
 
 }  // namespace ngi

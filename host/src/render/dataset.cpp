@@ -280,8 +280,7 @@ void check_stored_config(const fs::path& out, const json& stored, const json& wa
 
 }  // namespace
 
-void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
-                    const std::function<void(const DatasetProgress&)>& progress) {
+void prepare_dataset(const DatasetConfig& config, const std::string& out_dir) {
     const fs::path out(out_dir);
     validate_scenes(config);
     const json wanted = to_json(config);
@@ -312,80 +311,151 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
         if (ec) throw InputError("dataset: cannot create " + out_dir + ": " + ec.message());
         detail::write_file_atomic(cfg_path.string(), cfg);
     }
+}
 
-    DatasetProgress p;
-    auto frames_of = [&](const DatasetScene& s) { return s.frames > 0 ? s.frames : config.frames_per_scene; };
-    for (const auto* split : {&config.train, &config.test})
-        for (const auto& s : *split) p.frames_total += frames_of(s);
+namespace {
 
+int frames_of(const DatasetConfig& config, const DatasetScene& s) {
+    return s.frames > 0 ? s.frames : config.frames_per_scene;
+}
+
+// Every scene of the dataset with its split and the ordinal of its first frame (the shard numbering).
+struct SceneSlot {
+    const char* split;
+    const DatasetScene* entry;
+    long long first;
+};
+std::vector<SceneSlot> scene_slots(const DatasetConfig& config) {
+    std::vector<SceneSlot> slots;
+    long long ordinal = 0;
     const std::pair<const char*, const std::vector<DatasetScene>*> splits[] = {{"train", &config.train},
                                                                                 {"test", &config.test}};
     for (const auto& [split_name, scenes] : splits)
         for (const DatasetScene& entry : *scenes) {
-            const int frames = frames_of(entry);
-            const fs::path dir = out / split_name / dataset_scene_folder(entry.spec);
-            fs::create_directories(dir, ec);  // (a folder without frames: a rerun may still change this entry)
-            if (ec) throw InputError("dataset: cannot create " + dir.string() + ": " + ec.message());
-            p.scene = dir.filename().string();
-            // Leftovers of a killed run: write_frame's temporary folders never become frames; remove them.
-            for (const auto& e : fs::directory_iterator(dir, ec))
-                if (e.path().filename().string().find(".tmp-") != std::string::npos) fs::remove_all(e.path(), ec);
-            auto done = [&](int f) { return fs::exists(dir / frame_name(f) / "camera.json"); };
-            int missing = 0;
-            for (int f = 0; f < frames; ++f) missing += !done(f);
-            if (missing == 0 && fs::exists(dir / "scene.json")) {
-                p.frames_done += frames;
-                p.frames_skipped += frames;
+            slots.push_back({split_name, &entry, ordinal});
+            ordinal += frames_of(config, entry);
+        }
+    return slots;
+}
+
+}  // namespace
+
+std::pair<int, int> count_dataset_frames(const DatasetConfig& config, const std::string& out_dir) {
+    int done = 0, total = 0;
+    for (const SceneSlot& slot : scene_slots(config)) {
+        const fs::path dir = fs::path(out_dir) / slot.split / dataset_scene_folder(slot.entry->spec);
+        const int frames = frames_of(config, *slot.entry);
+        total += frames;
+        std::error_code ec;
+        for (int f = 0; f < frames; ++f) done += fs::exists(dir / frame_name(f) / "camera.json", ec);
+    }
+    return {done, total};
+}
+
+void render_dataset(const Device& device, const DatasetConfig& config, const std::string& out_dir,
+                    const std::function<void(const DatasetProgress&)>& progress, const DatasetShard& shard) {
+    if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count)
+        throw InputError("dataset: shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count) +
+                         " does not exist");
+    const fs::path out(out_dir);
+    // One process: prepare here. Several: the coordinator prepared the folder; check that it matches this
+    // process's config (a shard never writes dataset.json, so shards cannot race on it).
+    if (shard.count == 1) prepare_dataset(config, out_dir);
+    else {
+        validate_scenes(config);
+        const fs::path cfg_path = out / "dataset.json";
+        std::error_code ec;
+        if (!fs::exists(cfg_path, ec) || detail::read_file(cfg_path.string()) != to_json(config).dump(2) + "\n")
+            throw InputError("dataset: " + cfg_path.string() + " is missing or holds another config than this "
+                             "shard's: every process of a distributed run must be given the same config");
+    }
+
+    const std::vector<SceneSlot> slots = scene_slots(config);
+    DatasetProgress p;
+    for (const SceneSlot& slot : slots)
+        for (int f = 0; f < frames_of(config, *slot.entry); ++f) p.frames_total += shard.owns(slot.first + f);
+
+    std::error_code ec;
+    for (const SceneSlot& slot : slots) {
+        const DatasetScene& entry = *slot.entry;
+        const int frames = frames_of(config, entry);
+        auto mine = [&](int f) { return shard.owns(slot.first + f); };
+        int my_frames = 0;
+        for (int f = 0; f < frames; ++f) my_frames += mine(f);
+        if (my_frames == 0) continue;
+        const fs::path dir = out / slot.split / dataset_scene_folder(entry.spec);
+        fs::create_directories(dir, ec);  // (a folder without frames: a rerun may still change this entry)
+        if (ec) throw InputError("dataset: cannot create " + dir.string() + ": " + ec.message());
+        p.scene = dir.filename().string();
+        // Leftovers of a killed run: write_frame's temporary folders (<frame>.tmp-*) never become frames; remove
+        // those of this shard's frames (another shard's may be in progress right now).
+        for (const auto& e : fs::directory_iterator(dir, ec)) {
+            const std::string name = e.path().filename().string();
+            const auto tmp = name.find(".tmp-");
+            if (tmp == std::string::npos) continue;
+            const std::string stem = name.substr(0, tmp);
+            const bool frame_tmp = !stem.empty() && stem.size() <= 9 &&
+                                   stem.find_first_not_of("0123456789") == std::string::npos;
+            if (frame_tmp ? !mine(std::stoi(stem)) : shard.count > 1) continue;  // another shard's, maybe in progress
+            fs::remove_all(e.path(), ec);
+        }
+        auto done = [&](int f) { return fs::exists(dir / frame_name(f) / "camera.json"); };
+        int missing = 0;
+        for (int f = 0; f < frames; ++f) missing += mine(f) && !done(f);
+        if (missing == 0 && fs::exists(dir / "scene.json")) {
+            p.frames_done += my_frames;
+            p.frames_skipped += my_frames;
+            if (progress) progress(p);
+            continue;
+        }
+
+        const VoxelScene scene = make_scene(entry.spec);
+        const CameraPath path = dataset_camera_path(scene, frames, config.keyframe_interval);
+        DatasetScene times = entry;
+        if (times.time_start < 0) times.time_start = times.time_end = scene.default_time;
+        json info = {{"spec", scene.name}, {"split", slot.split}, {"frames", frames},
+                     {"size", {scene.size.x, scene.size.y, scene.size.z}}, {"sun_azimuth", scene.sun_azimuth},
+                     {"keyframe_interval", path.interval}};
+        json keys = json::array(), per_frame = json::array();
+        for (const auto& k : path.keys)
+            keys.push_back({{"position", vec(k.position)},
+                            {"orientation_wxyz", {k.orientation.w, k.orientation.x, k.orientation.y, k.orientation.z}}});
+        for (int f = 0; f < frames; ++f) {
+            const CameraPose pose = path.at(float(f));
+            per_frame.push_back({{"frame", f}, {"time", dataset_frame_time(times, f, frames)},
+                                 {"seed", dataset_frame_seed(scene.name, f)}, {"position", vec(pose.position)},
+                                 {"look", vec(pose.look)}, {"up", vec(pose.up)}});
+        }
+        info["keyframes"] = keys;
+        info["frame_info"] = per_frame;
+        detail::write_file_atomic((dir / "scene.json").string(), info.dump(1) + "\n");
+
+        Renderer renderer(device, scene);
+        for (int f = 0; f < frames; ++f) {
+            if (!mine(f)) continue;
+            if (done(f)) {
+                ++p.frames_done;
+                ++p.frames_skipped;
                 if (progress) progress(p);
                 continue;
             }
-
-            const VoxelScene scene = make_scene(entry.spec);
-            const CameraPath path = dataset_camera_path(scene, frames, config.keyframe_interval);
-            DatasetScene times = entry;
-            if (times.time_start < 0) times.time_start = times.time_end = scene.default_time;
-            json info = {{"spec", scene.name}, {"split", split_name}, {"frames", frames},
-                         {"size", {scene.size.x, scene.size.y, scene.size.z}}, {"sun_azimuth", scene.sun_azimuth},
-                         {"keyframe_interval", path.interval}};
-            json keys = json::array(), per_frame = json::array();
-            for (const auto& k : path.keys)
-                keys.push_back({{"position", vec(k.position)},
-                                {"orientation_wxyz", {k.orientation.w, k.orientation.x, k.orientation.y, k.orientation.z}}});
-            for (int f = 0; f < frames; ++f) {
-                const CameraPose pose = path.at(float(f));
-                per_frame.push_back({{"frame", f}, {"time", dataset_frame_time(times, f, frames)},
-                                     {"seed", dataset_frame_seed(scene.name, f)}, {"position", vec(pose.position)},
-                                     {"look", vec(pose.look)}, {"up", vec(pose.up)}});
-            }
-            info["keyframes"] = keys;
-            info["frame_info"] = per_frame;
-            detail::write_file_atomic((dir / "scene.json").string(), info.dump(1) + "\n");
-
-            Renderer renderer(device, scene);
-            for (int f = 0; f < frames; ++f) {
-                if (done(f)) {
-                    ++p.frames_done;
-                    ++p.frames_skipped;
-                    if (progress) progress(p);
-                    continue;
-                }
-                const auto t0 = std::chrono::steady_clock::now();
-                RenderSettings rs = config.render;
-                rs.seed = dataset_frame_seed(scene.name, f);
-                rs.reference = true;
-                rs.reference_face = Face::Front;
-                RenderStats stats;
-                const Frame frame = renderer.render(path.at(float(f)),
-                                                    lighting_at(dataset_frame_time(times, f, frames), scene.sun_azimuth),
-                                                    rs, &stats);
-                write_frame((dir / frame_name(f)).string(), frame);
-                ++p.frames_done;
-                ++p.frames_rendered;
-                p.rendered_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                p.last_rel_stderr = stats.reference_rel_stderr;
-                if (progress) progress(p);
-            }
+            const auto t0 = std::chrono::steady_clock::now();
+            RenderSettings rs = config.render;
+            rs.seed = dataset_frame_seed(scene.name, f);
+            rs.reference = true;
+            rs.reference_face = Face::Front;
+            RenderStats stats;
+            const Frame frame = renderer.render(path.at(float(f)),
+                                                lighting_at(dataset_frame_time(times, f, frames), scene.sun_azimuth),
+                                                rs, &stats);
+            write_frame((dir / frame_name(f)).string(), frame);
+            ++p.frames_done;
+            ++p.frames_rendered;
+            p.rendered_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            p.last_rel_stderr = stats.reference_rel_stderr;
+            if (progress) progress(p);
         }
+    }
 }
 
 }  // namespace ngi
