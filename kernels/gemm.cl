@@ -15,6 +15,10 @@
 //   KU  k-loop unroll factor (1..16; Kpad is a multiple of KU)
 //   UNROLL  1: the MR x NV x KU micro-kernel is unrolled by the preprocessor (default);
 //           0: it is written as loops with #pragma unroll, left to the compiler.
+//   KWG  0: this kernel (gemm_packed), operands read straight from global memory (CPUs);
+//        > 0: gemm_local below, the GPU-shaped variant: a work-group of L0 x L1 work-items stages K chunks of KWG
+//        packed rows of its A and B panels in __local memory (L0, L1 = the work-group shape, also -D defines).
+//        A program is built with one of the two kernels, never both (Mesa compiles unrolled bodies slowly).
 // Why UNROLL exists: #pragma unroll is a hint. Mesa's OpenCL path (clc -> SPIR-V -> NIR) does not honour it for
 // large bodies, and llvmpipe (gallivm) stops *every* loop of a kernel silently after 65,535 iterations in total
 // per invocation (LP_MAX_TGSI_LOOP_ITERATIONS). With loops left in, one k step costs 1 + NV + MR*(1 + NV)
@@ -35,6 +39,9 @@
 #endif
 #ifndef UNROLL
 #define UNROLL 1
+#endif
+#ifndef KWG
+#define KWG 0
 #endif
 #define NR (VW * NV)
 
@@ -128,6 +135,7 @@
     }
 #endif
 
+#if KWG == 0
 __kernel void gemm_packed(const int M, const int N, const int Kpad,
                           __global const float* restrict ap, __global const float* restrict bp, const int b_off,
                           __global float* restrict c, const int c_off, const int ldc,
@@ -187,3 +195,189 @@ __kernel void gemm_packed(const int M, const int N, const int Kpad,
     }
 #endif
 }
+
+#else  // KWG > 0
+
+// gemm_local: the GPU-shaped variant. Same packed operands (im2col_packed and pack_a are unchanged), same register
+// micro-kernel and epilogue; the operands reach the micro-kernel through __local memory.
+//
+// A work-group of L0 x L1 work-items computes an (L0*MR) x (L1*NR) block of C: work-item (l0, l1) owns the tile
+// of A panel mp = group0*L0 + l0 and B panel np = group1*L1 + l1. Per chunk of KWG packed k rows:
+//   1. copy: the block's L0 A-panel chunks (KWG*MR contiguous floats of Ap each) and L1 B-panel chunks (KWG*NR
+//      each) go to __local memory. The flat work-item index flat = l1*L0 + l0 walks each span, so consecutive
+//      work-items read consecutive floats (coalesced). Local memory holds the chunk k-major, al[kk][l0*MR + r]
+//      and bl[kk][l1*NR + n], so at a k step the work-items of a warp read neighbouring addresses or the same one
+//      (a broadcast), not addresses KWG*MR apart (one bank);
+//   2. barrier; every work-item runs the micro-kernel over the chunk from local memory; barrier.
+// Edges: slots of panels past the last one (edge work-groups) and of rows k >= Kpad (the last chunk when KWG does
+// not divide Kpad) are zero-filled, and the micro-kernel stops at the last real row of the chunk. No work-item
+// returns early: every one reaches every barrier (a return before the loop would be barrier divergence, undefined
+// behaviour that oclgrind reports); only the epilogue masks m >= M, n >= N.
+// Local memory: (L0*MR + L1*NR) * KWG floats; the host refuses a knob set beyond CL_DEVICE_LOCAL_MEM_SIZE.
+// Loop iterations per work-item (llvmpipe's 65,535 limit, above) with UNROLL=1:
+//   ceil(Kpad/KWG) * (1 + ceil(A_PER/A_CU) + ceil(B_PER/B_CU)) + Kpad/KU + the epilogue's (as gemm_packed),
+// A_PER = ceil(KWG*MR/L1), B_PER = ceil(KWG*NR/L0) copies per work-item and chunk, A_CU, B_CU = up to 16 of
+// them unrolled per iteration. K = 8192 with 4,4,1,1,16,16,1,16: 512 * 3 + 8192 = 9,728 (gemm_packed: 8,192);
+// with 8,8,1,1,4,4,1,32: 256 * (1 + 4 + 4) + 8192 = 10,496.
+#ifndef L0
+#define L0 1
+#endif
+#ifndef L1
+#define L1 1
+#endif
+#if KWG % KU != 0
+#error "KWG must be a multiple of KU"
+#endif
+#define WG_ITEMS (L0 * L1)
+#define A_SPAN (KWG * MR)        // one A panel's chunk: contiguous in Ap
+#define B_SPAN (KWG * NR)
+#define A_BLOCK (L0 * A_SPAN)    // the work-group's chunk of A, in floats of local memory
+#define B_BLOCK (L1 * B_SPAN)
+#define A_PER ((A_BLOCK + WG_ITEMS - 1) / WG_ITEMS)  // copies per work-item and chunk
+#define B_PER ((B_BLOCK + WG_ITEMS - 1) / WG_ITEMS)
+#if A_PER >= 16
+#define A_CU 16
+#elif A_PER >= 8
+#define A_CU 8
+#elif A_PER >= 4
+#define A_CU 4
+#elif A_PER >= 2
+#define A_CU 2
+#else
+#define A_CU 1
+#endif
+#if B_PER >= 16
+#define B_CU 16
+#elif B_PER >= 8
+#define B_CU 8
+#elif B_PER >= 4
+#define B_CU 4
+#elif B_PER >= 2
+#define B_CU 2
+#else
+#define B_CU 1
+#endif
+// A copy index can pass the block only where the work-items do not divide it or the unrolled groups overshoot.
+#if (A_BLOCK % WG_ITEMS) || (A_PER % A_CU)
+#define A_IN(f) ((f) < A_BLOCK)
+#else
+#define A_IN(f) 1
+#endif
+#if (B_BLOCK % WG_ITEMS) || (B_PER % B_CU)
+#define B_IN(f) ((f) < B_BLOCK)
+#else
+#define B_IN(f) 1
+#endif
+
+// Copy number x of this work-item: flat index f = flat + x*WG_ITEMS into the block, panel i = f / SPAN, offset
+// w = f % SPAN = kk*MR + r inside the panel's chunk (contiguous in global memory), stored k-major in local memory.
+#define COPY_A(x)                                                                                      \
+    {                                                                                                  \
+        const int f = flat + (x) * WG_ITEMS;                                                              \
+        if (A_IN(f)) {                                                                                 \
+            const int i = f / A_SPAN, w = f - i * A_SPAN, kk = w / MR;                                 \
+            float v = 0.0f;                                                                            \
+            if (mp0 + i < a_panels && k0 + kk < Kpad) v = ap[((size_t)(mp0 + i) * Kpad + k0) * MR + w]; \
+            al[kk * (L0 * MR) + i * MR + (w - kk * MR)] = v;                                           \
+        }                                                                                              \
+    }
+#define COPY_B(x)                                                                                        \
+    {                                                                                                    \
+        const int f = flat + (x) * WG_ITEMS;                                                                \
+        if (B_IN(f)) {                                                                                   \
+            const int i = f / B_SPAN, w = f - i * B_SPAN, kk = w / NR;                                   \
+            float v = 0.0f;                                                                              \
+            if (np0 + i < b_panels && k0 + kk < Kpad) v = bsrc[((size_t)(np0 + i) * Kpad + k0) * NR + w]; \
+            bl[kk * (L1 * NR) + i * NR + (w - kk * NR)] = v;                                             \
+        }                                                                                                \
+    }
+
+#if UNROLL
+#define COPY_A_AT(u) COPY_A(x + (u))
+#define COPY_B_AT(u) COPY_B(x + (u))
+// One k step from local memory: rows of the chunk are L0*MR (A) and L1*NR (B) floats apart.
+#define LLOAD_B(u, j) bv[j] = VLOAD(b + (u) * (L1 * NR) + (j) * VW);
+#define LSTEP(u) { vtype bv[NV]; FOR_VECS(LLOAD_B, u) FOR_ROWS(FMA_ROW) a += L0 * MR; }
+#endif
+
+__kernel __attribute__((reqd_work_group_size(L0, L1, 1)))
+void gemm_local(const int M, const int N, const int Kpad,
+                __global const float* restrict ap, __global const float* restrict bp, const int b_off,
+                __global float* restrict c, const int c_off, const int ldc,
+                __global const float* restrict scale, __global const float* restrict shift,
+                const int act, const float alpha) {
+    __local float al[A_BLOCK];  // al[kk * (L0*MR) + l0*MR + r]
+    __local float bl[B_BLOCK];  // bl[kk * (L1*NR) + l1*NR + n]
+    const int l0 = get_local_id(0), l1 = get_local_id(1);
+    const int flat = l1 * L0 + l0;  // consecutive work-items (local id 0 fastest) copy consecutive floats
+    const int mp = get_global_id(0), np = get_global_id(1);  // this work-item's panels: may be past the last one
+    const int mp0 = get_group_id(0) * L0, np0 = get_group_id(1) * L1;
+    const int a_panels = (M + MR - 1) / MR, b_panels = (N + NR - 1) / NR;
+    __global const float* bsrc = bp + b_off;
+
+    vtype acc[MR][NV];
+#if UNROLL
+    FOR_ROWS(ZERO_ROW)
+#else
+#pragma unroll
+    for (int i = 0; i < MR; ++i)
+#pragma unroll
+        for (int j = 0; j < NV; ++j) acc[i][j] = (vtype)(0.0f);
+#endif
+
+    for (int k0 = 0; k0 < Kpad; k0 += KWG) {
+#if UNROLL
+        for (int x = 0; x < A_PER; x += A_CU) { NGI_CAT(REP_K, A_CU)(COPY_A_AT) }
+        for (int x = 0; x < B_PER; x += B_CU) { NGI_CAT(REP_K, B_CU)(COPY_B_AT) }
+#else
+#pragma unroll
+        for (int x = 0; x < A_PER; ++x) COPY_A(x)
+#pragma unroll
+        for (int x = 0; x < B_PER; ++x) COPY_B(x)
+#endif
+        barrier(CLK_LOCAL_MEM_FENCE);
+        const int rows = min(KWG, Kpad - k0);  // a multiple of KU (so are KWG and Kpad); less in a partial chunk
+        __local const float* a = al + l0 * MR;
+        __local const float* b = bl + l1 * NR;
+#if UNROLL
+        for (int kk = 0; kk < rows; kk += KU) {
+            FOR_STEPS(LSTEP)
+            b += KU * (L1 * NR);
+        }
+#else
+        for (int kk = 0; kk < rows; kk += KU) {
+#pragma unroll
+            for (int u = 0; u < KU; ++u) {
+                vtype bv[NV];
+#pragma unroll
+                for (int j = 0; j < NV; ++j) bv[j] = VLOAD(b + j * VW);
+#pragma unroll
+                for (int i = 0; i < MR; ++i) {
+                    const vtype av = (vtype)(a[i]);
+#pragma unroll
+                    for (int j = 0; j < NV; ++j) acc[i][j] = fma(av, bv[j], acc[i][j]);
+                }
+                a += L0 * MR;
+                b += L1 * NR;
+            }
+        }
+#endif
+        barrier(CLK_LOCAL_MEM_FENCE);  // the next chunk's copy overwrites what this one read
+    }
+
+    // Epilogue, as gemm_packed's: work-items past the last panel store nothing.
+#if UNROLL
+    FOR_ROWS(STORE_ROW)
+#else
+#pragma unroll
+    for (int i = 0; i < MR; ++i) {
+        const int m = mp * MR + i;
+        if (m >= M) break;
+        const float s = scale[m], t = shift[m];
+        __global float* row = c + c_off + (size_t)m * ldc + np * NR;
+#pragma unroll
+        for (int j = 0; j < NV; ++j) STORE_VEC(acc[i][j], j);
+    }
+#endif
+}
+#endif  // KWG

@@ -113,7 +113,9 @@ TEST_CASE("conv_transpose2d matches the naive reference on random shapes", "[con
 TEST_CASE("every GEMM parameter set in the tuning space gives the same convolution", "[gemm]") {
     std::mt19937 rng(3);
     const Case k{19, 9, 13, 21, 4, 4, 2, 1, 0, 2};
-    for (const char* s : {"1,1,1,1,1,1", "4,4,1,1,4,4", "6,8,2,2,1,1", "8,16,2,1,1,1", "3,16,1,4,2,1", "16,4,3,1,1,2"})
+    // ... and gemm_local (KWG > 0, the GPU-shaped kernel) on the same packed layouts im2col_packed writes.
+    for (const char* s : {"1,1,1,1,1,1", "4,4,1,1,4,4", "6,8,2,2,1,1", "8,16,2,1,1,1", "3,16,1,4,2,1", "16,4,3,1,1,2",
+                          "4,4,1,1,8,8,1,16", "3,2,2,2,4,4,0,6"})
         for (bool t : {false, true}) check_case(k, t, rng, parse_gemm_params(s));
 }
 

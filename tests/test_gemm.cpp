@@ -5,6 +5,7 @@
 // beyond K ~ 1,000-3,000 (a 65,535-iteration loop limiter, docs/RELIABILITY.md), which shapes of a few dozen
 // never showed.
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <string>
 #include <catch2/catch.hpp>
@@ -242,4 +243,191 @@ TEST_CASE("GEMM self-check: NGI_SELFCHECK chooses the full or the small problem 
     CHECK_THROWS_WITH(gemm_selfcheck_problems(), Catch::Contains("NGI_SELFCHECK") && Catch::Contains("tiny"));
     if (old) ::setenv("NGI_SELFCHECK", saved.c_str(), 1);
     else ::unsetenv("NGI_SELFCHECK");
+}
+
+// --- gemm_local: the GPU-shaped variant (KWG > 0): work-groups of exactly L0 x L1 work-items stage K chunks of their
+// A and B panels in local memory (kernels/gemm.cl). Same packed layouts, same tolerance as gemm_packed: the sum is
+// the same fma chain in the same k order, only read from local memory.
+
+namespace {
+
+// Knob sets that cover gemm_local's edges: square, tall and wide work-groups (8x8, 4x16, 16x16, 2x8), VW 2..8 and
+// NV 1..2, KU 2 (chunks of whole unroll steps), a KWG that is not a power of two, MR 3 (blocks no shape divides),
+// copies that do not divide among the work-items, both UNROLL forms.
+std::vector<GemmParams> local_variants() {
+    std::vector<GemmParams> v;
+    for (const char* k : {"4,4,1,1,8,8,1,16", "2,2,2,1,4,16,1,8", "8,8,1,1,4,4,0,32", "3,4,2,2,2,8,1,12",
+                          "4,4,1,1,16,16,1,16"})
+        v.push_back(parse_gemm_params(k));
+    return v;
+}
+
+// Shapes around one knob set's block (L0 MR) x (L1 NR) and chunk KWG: one less, equal and one more, several
+// blocks with a remainder, K = 1, a single output, skinny rows and columns.
+std::vector<std::array<int, 3>> local_edge_shapes(const GemmParams& p) {
+    const int bm = p.local0 * p.mr, bn = p.local1 * p.nr(), kc = p.kwg;
+    return {{1, 1, 1},           {1, 300, 1},         {300, 1, 7},          {bm - 1, bn + 1, kc + 1},
+            {bm, bn, kc},        {bm + 1, bn - 1, 2 * kc - 1}, {2 * bm + 3, 3, 3 * kc + 5}, {5, 2 * bn + 7, kc - 1},
+            {64, 1031, 192}};
+}
+
+}  // namespace
+
+TEST_CASE("GEMM local-memory variant: matches the reference at random, odd, tiny and skinny shapes",
+          "[gemm][local]") {
+    std::mt19937 rng(23);
+    std::uniform_int_distribution<int> D(1, 150), A(0, 4);
+    for (const GemmParams& p : local_variants()) {
+        REQUIRE(p.kwg > 0);
+        auto shapes = local_edge_shapes(p);
+        for (int i = 0; i < 6; ++i) shapes.push_back({D(rng), D(rng), D(rng)});
+        for (const auto& s : shapes) {
+            const int act = A(rng);
+            INFO("GEMM M" << s[0] << " N" << s[1] << " K" << s[2] << " act " << act << " knobs " << p.to_string());
+            CHECK(gemm_error(p, s[0], s[1], s[2], act, rng) <= 1.0);
+        }
+    }
+}
+
+TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192", "[gemm][local][realistic]") {
+    // K = 8192 is where a loop limiter shows (llvmpipe: 65,535 iterations per work-item; the UNROLL=1 kernel runs
+    // ~10,000 there, kernels/gemm.cl); the UNROLL=0 set may exceed it, which the self-check must then catch.
+    std::mt19937 rng(24);
+    const int shapes[][3] = {{32, 1031, 192}, {256, 37, 4096}, {64, 9, 8192}, {1024, 65, 512}};
+    for (const GemmParams& p : local_variants())
+        for (const auto& s : shapes) {
+            std::ostringstream shape;
+            shape << "M" << s[0] << " N" << s[1] << " K" << s[2];
+            expect_correct_or_known_limit(p, gemm_error(p, s[0], s[1], s[2], 2, rng), shape.str());
+        }
+}
+
+TEST_CASE("GEMM local-memory variant: knobs parse and print; sets the device cannot run are refused with numbers",
+          "[gemm][local]") {
+    const GemmParams p = parse_gemm_params("4,4,1,1,16,16,1,16");
+    CHECK(p.kwg == 16);
+    CHECK(p.to_string() == "4,4,1,1,16,16,1,16");
+    CHECK(parse_gemm_params(p.to_string()) == p);
+    CHECK(p.local_mem_bytes() == std::size_t(16 * 4 + 16 * 4) * 16 * 4);  // 8 KiB
+    CHECK_THAT(p.defines(), Catch::Contains("-DKWG=16") && Catch::Contains("-DL0=16") && Catch::Contains("-DL1=16"));
+    // KWG 0 (or left out) is gemm_packed, printed and built exactly as before the knob existed.
+    const GemmParams q = parse_gemm_params("6,16,2,1,1,4");
+    CHECK(q.kwg == 0);
+    CHECK(q.local_mem_bytes() == 0);
+    CHECK(q.to_string() == "6,16,2,1,1,4,1");
+    CHECK(parse_gemm_params("6,16,2,1,1,4,1,0") == q);
+    CHECK(q.defines() == "-DMR=6 -DVW=16 -DNV=2 -DKU=1 -DUNROLL=1");
+    GemmParams r = p;
+    r.kwg = 32;
+    CHECK_FALSE(r == p);
+
+    CHECK_THROWS_WITH(parse_gemm_params("4,4,1,4,8,8,1,10"), Catch::Contains("KWG 10 is not a multiple of KU 4"));
+    CHECK_THROWS_AS(parse_gemm_params("4,4,1,1,8,8,1,-16"), InputError);
+    CHECK_THROWS_AS(parse_gemm_params("4,4,1,1,8,8,1,16,2"), InputError);
+    CHECK_THROWS_WITH(parse_gemm_params("4,4,1,1,64,32,1,16"), Catch::Contains("2048 work-items"));
+
+    // Local memory beyond the device's: Gemm refuses it naming the numbers, and the self-check gives that as the
+    // variant's reason (a variant the database or NGI_GEMM names can therefore never fail at launch).
+    auto& c = test::ctx();
+    const GemmParams big = parse_gemm_params("16,16,8,1,32,32,1,1024");  // (512 + 4096) x 1024 x 4 B = 18.9 MB
+    const std::size_t have = c.info().local_mem_bytes;
+    REQUIRE(big.local_mem_bytes() > have);
+    CHECK_THROWS_WITH(Gemm(c, big), Catch::Contains("local memory") &&
+                                        Catch::Contains(std::to_string(big.local_mem_bytes())) &&
+                                        Catch::Contains(std::to_string(have)));
+    const GemmVerdict v = check_gemm_variant(c, big, {{37, 101, 133}});
+    CHECK_FALSE(v.ok);
+    CHECK_THAT(v.reason, Catch::Contains("CL_DEVICE_LOCAL_MEM_SIZE"));
+}
+
+TEST_CASE("GEMM local-memory variant: in the tuning space where it fits; the fallback chain ends on gemm_packed",
+          "[gemm][local]") {
+    const GemmParams pref = parse_gemm_params("4,4,1,1,16,16,0,16");
+    const auto chain = gemm_fallback_chain(pref);
+    REQUIRE(chain.size() >= 4);
+    CHECK(chain[0] == pref);
+    CHECK(chain[1] == parse_gemm_params("4,4,1,1,16,16,1,16"));
+    CHECK(chain[2] == parse_gemm_params("4,4,1,1,16,16,1"));  // the same tiles without local memory or barriers
+    CHECK(chain.back() == parse_gemm_params("1,1,1,1,1,1,1"));
+    for (std::size_t i = 2; i < chain.size(); ++i) CHECK(chain[i].kwg == 0);
+
+    DeviceInfo gpu;
+    gpu.is_gpu = true;
+    gpu.local_mem_bytes = 32768;
+    gpu.max_work_group_size = 256;
+    int local = 0;
+    for (const GemmParams& p : gemm_tuning_space(gpu))
+        if (p.kwg > 0) {
+            ++local;
+            CHECK(p.local_mem_bytes() <= gpu.local_mem_bytes);
+            CHECK(p.local0 * p.local1 <= 256);
+        }
+    CHECK(local >= 8);
+    // A device without local memory is never offered one, nor a CPU, whose "local" memory is ordinary memory
+    // (CL_GLOBAL, as PoCL reports). The space's first entry is the database's current choice for the device type,
+    // kept whatever it is so the tuner compares against it, with its loop form (the GPU entry uses local memory;
+    // the self-check rejects it on such a device and falls back).
+    gpu.local_mem_bytes = 0;
+    const auto no_local = gemm_tuning_space(gpu);
+    CHECK(no_local.front() == gemm_params_for(gpu));
+    for (std::size_t i = 1; i < no_local.size(); ++i)
+        if (no_local[i].kwg != 0) {  // only the current choice's own loop form (unroll 0) may keep local memory
+            GemmParams q = no_local[i];
+            q.unroll = no_local.front().unroll;
+            CHECK(q == no_local.front());
+        }
+    DeviceInfo cpu;
+    cpu.is_cpu = true;
+    cpu.local_mem_bytes = 2 << 20;
+    cpu.max_work_group_size = 4096;
+    for (const GemmParams& p : gemm_tuning_space(cpu)) CHECK(p.kwg == 0);
+}
+
+TEST_CASE("GEMM local-memory variant: a fixed-shape kernel, launched at L0 x L1 whatever limit is reported",
+          "[gemm][local]") {
+    // gemm_local's local arrays are sized for exactly L0 x L1 work-items (reqd_work_group_size), so Context::launch
+    // must not halve its work-group as it does for gemm_packed when a driver reports a lower limit (rusticl
+    // reports 32). A halved launch would fail (CL_INVALID_WORK_GROUP_SIZE) or leave slots uncopied.
+    auto& c = test::ctx();
+    const GemmParams p = parse_gemm_params("4,4,1,1,8,8,1,16");
+    Kernel k = c.kernel("gemm", "gemm_local", p.defines());
+    CHECK(k.fixed_local());
+    k.limit_work_group(32);
+    CHECK_FALSE(c.kernel("gemm", "gemm_packed", parse_gemm_params("4,4,1,1,8,8,1").defines()).fixed_local());
+
+    std::mt19937 rng(25);
+    const int M = 45, N = 70, K = 37;
+    auto a = test::random_vector(std::size_t(M) * K, rng, -0.2f, 0.2f);
+    auto b = test::random_vector(std::size_t(K) * N, rng);
+    auto scale = test::random_vector(M, rng, 0.5f, 1.5f), shift = test::random_vector(M, rng);
+    Buffer ab = test::upload(pack_a(a.data(), M, K, K, p)), bb = test::upload(pack_b(b.data(), K, N, N, p));
+    Buffer sb = test::upload(scale), tb = test::upload(shift), cb = c.alloc(std::size_t(M) * N * 4, "C");
+    k.args(M, N, padded_k(K, p), ab, bb, 0, cb, 0, N, sb, tb, 0, 0.0f);
+    const std::size_t global[2] = {std::size_t((M + 3) / 4), std::size_t((N + 3) / 4)}, wg[2] = {8, 8};
+    c.launch(k, 2, global, wg);
+    CHECK(test::worst_ratio(test::download(cb, std::size_t(M) * N), ref_gemm(M, N, K, a, b, scale, shift, 0), 1e-4,
+                            1e-4) <= 1.0);
+}
+
+// For the oclgrind stage (tools/ci/oclgrind.sh: --data-races --check-api --uninitialized): work-groups at the M and
+// N edges (panels past the last one), a partial last K chunk and K = 1, through both UNROLL forms, KU 2 and the GPU
+// starting set (16 x 16 work-items). Barrier divergence, a local-memory race between the copy and the micro-kernel,
+// or a read of a local slot no work-item wrote are diagnostics there.
+TEST_CASE("GEMM local-memory variant: edge work-groups and a partial K chunk at small shapes",
+          "[gemm][local][oclgrind]") {
+    std::mt19937 rng(26);
+    struct Case {
+        const char* knobs;
+        int m, n, k;
+    };
+    // 2,2,2,1,4,4,1,8: blocks of 8 x 16; M 13 = 7 panels (2 groups, the last with one panel past the end), N 21 =
+    // 6 panels (2 groups, two past), K 11 = a chunk of 8 and a partial one of 3. 3,2,1,2,4,2,0,4 (loops, KU 2):
+    // M 14 = 5 panels in groups of 4, N 9 = 5 panels in groups of 2, Kpad 10 = chunks of 4, 4 and 2.
+    const Case cases[] = {{"2,2,2,1,4,4,1,8", 13, 21, 11}, {"2,2,2,1,4,4,1,8", 1, 1, 1},
+                          {"3,2,1,2,4,2,0,4", 14, 9, 9},     {"4,4,1,1,16,16,1,16", 5, 63, 45}};
+    for (const Case& cs : cases) {
+        const GemmParams p = parse_gemm_params(cs.knobs);
+        INFO("GEMM M" << cs.m << " N" << cs.n << " K" << cs.k << " knobs " << p.to_string());
+        CHECK(gemm_error(p, cs.m, cs.n, cs.k, 2, rng) <= 1.0);
+    }
 }

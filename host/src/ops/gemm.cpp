@@ -7,13 +7,24 @@
 namespace ngi::detail {
 
 std::string GemmParams::defines() const {
-    return "-DMR=" + std::to_string(mr) + " -DVW=" + std::to_string(vw) + " -DNV=" + std::to_string(nv) +
-           " -DKU=" + std::to_string(ku) + " -DUNROLL=" + std::to_string(unroll);
+    std::string d = "-DMR=" + std::to_string(mr) + " -DVW=" + std::to_string(vw) + " -DNV=" + std::to_string(nv) +
+                    " -DKU=" + std::to_string(ku) + " -DUNROLL=" + std::to_string(unroll);
+    // gemm_local: the work-group shape sizes its local arrays (reqd_work_group_size). gemm_packed's defines stay
+    // as they were, so its cached programs and self-check verdicts stay valid.
+    if (kwg > 0)
+        d += " -DKWG=" + std::to_string(kwg) + " -DL0=" + std::to_string(local0) + " -DL1=" + std::to_string(local1);
+    return d;
 }
 
 std::string GemmParams::to_string() const {
-    return std::to_string(mr) + "," + std::to_string(vw) + "," + std::to_string(nv) + "," + std::to_string(ku) +
-           "," + std::to_string(local0) + "," + std::to_string(local1) + "," + std::to_string(unroll);
+    std::string s = std::to_string(mr) + "," + std::to_string(vw) + "," + std::to_string(nv) + "," +
+                    std::to_string(ku) + "," + std::to_string(local0) + "," + std::to_string(local1) + "," +
+                    std::to_string(unroll);
+    if (kwg > 0) {  // gemm_packed's sets print as before the knob existed
+        s += ',';     // (not s += "," + ...: GCC 12 warns -Wrestrict on it, PR105329)
+        s += std::to_string(kwg);
+    }
+    return s;
 }
 
 bool operator==(const GemmParams& a, const GemmParams& b) { return a.to_string() == b.to_string(); }
@@ -21,15 +32,22 @@ bool operator==(const GemmParams& a, const GemmParams& b) { return a.to_string()
 GemmParams parse_gemm_params(const std::string& s) {
     GemmParams p;
     char tail = 0;
-    const int n = std::sscanf(s.c_str(), "%d,%d,%d,%d,%d,%d,%d%c", &p.mr, &p.vw, &p.nv, &p.ku, &p.local0, &p.local1,
-                              &p.unroll, &tail);
-    if ((n != 6 && n != 7) || p.mr < 1 || p.mr > 16 ||
+    const int n = std::sscanf(s.c_str(), "%d,%d,%d,%d,%d,%d,%d,%d%c", &p.mr, &p.vw, &p.nv, &p.ku, &p.local0,
+                              &p.local1, &p.unroll, &p.kwg, &tail);
+    if ((n < 6 || n > 8) || p.mr < 1 || p.mr > 16 ||
         !(p.vw == 1 || p.vw == 2 || p.vw == 4 || p.vw == 8 || p.vw == 16) || p.nv < 1 || p.nv > 8 || p.ku < 1 ||
         p.ku > 16 || p.local0 < 1 || p.local1 < 1 || p.local0 > 1024 || p.local1 > 1024 ||
-        !(p.unroll == 0 || p.unroll == 1))
-        throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1[,UNROLL] with MR 1..16, VW in "
-                         "{1,2,4,8,16}, NV 1..8, KU 1..16, L0,L1 1..1024, UNROLL 0 or 1");
+        !(p.unroll == 0 || p.unroll == 1) || p.kwg < 0 || p.kwg > 1024)
+        throw InputError("GEMM parameters '" + s + "': expected MR,VW,NV,KU,L0,L1[,UNROLL[,KWG]] with MR 1..16, VW "
+                         "in {1,2,4,8,16}, NV 1..8, KU 1..16, L0,L1 1..1024, UNROLL 0 or 1, KWG 0..1024");
     if (n == 6) p.unroll = 1;
+    if (n < 8) p.kwg = 0;
+    if (p.kwg % p.ku != 0)  // a chunk holds whole unroll steps
+        throw InputError("GEMM parameters '" + s + "': KWG " + std::to_string(p.kwg) + " is not a multiple of KU " +
+                         std::to_string(p.ku));
+    if (p.kwg > 0 && std::size_t(p.local0) * std::size_t(p.local1) > 1024)
+        throw InputError("GEMM parameters '" + s + "': the local-memory kernel (KWG > 0) runs work-groups of exactly "
+                         "L0 x L1 = " + std::to_string(p.local0 * p.local1) + " work-items; at most 1024");
     return p;
 }
 
@@ -51,9 +69,36 @@ std::vector<float> pack_b(const float* b, int K, int N, int ld, const GemmParams
     return out;
 }
 
-// The work-group shape L0 x L1 is a performance knob only (no local memory, no barriers): where the compiled
-// kernel allows fewer work-items (CL_KERNEL_WORK_GROUP_SIZE; rusticl reports 32), Context::launch halves it.
-Gemm::Gemm(Context& ctx, const GemmParams& p) : p_(p), kernel_(ctx.kernel("gemm", "gemm_packed", p.defines())) {}
+namespace {
+
+// A gemm_local knob set must fit the device before it is built: its local arrays are sized at compile time, and
+// its work-group shape is part of the algorithm, so Context::launch runs it as it is.
+const GemmParams& fits_device(const Context& ctx, const GemmParams& p) {
+    if (p.kwg == 0) return p;
+    const DeviceInfo& info = ctx.info();
+    if (p.local_mem_bytes() > info.local_mem_bytes)
+        throw InputError("GEMM parameters " + p.to_string() + ": the local-memory kernel needs (L0 " +
+                         std::to_string(p.local0) + " x MR " + std::to_string(p.mr) + " + L1 " +
+                         std::to_string(p.local1) + " x NR " + std::to_string(p.nr()) + ") x KWG " +
+                         std::to_string(p.kwg) + " x 4 = " + std::to_string(p.local_mem_bytes()) +
+                         " bytes of local memory; " + info.name + " has " + std::to_string(info.local_mem_bytes) +
+                         " (CL_DEVICE_LOCAL_MEM_SIZE)");
+    const std::size_t items = std::size_t(p.local0) * std::size_t(p.local1);
+    if (items > info.max_work_group_size)
+        throw InputError("GEMM parameters " + p.to_string() + ": the local-memory kernel runs work-groups of exactly "
+                         "L0 x L1 = " + std::to_string(items) + " work-items; " + info.name + " allows " +
+                         std::to_string(info.max_work_group_size) + " (CL_DEVICE_MAX_WORK_GROUP_SIZE)");
+    return p;
+}
+
+}  // namespace
+
+// gemm_packed (KWG 0): the work-group shape L0 x L1 is a performance knob only (no local memory, no barriers):
+// where the compiled kernel allows fewer work-items (CL_KERNEL_WORK_GROUP_SIZE; rusticl reports 32),
+// Context::launch halves it. gemm_local (KWG > 0) is compiled with reqd_work_group_size(L0, L1, 1), which makes
+// it a fixed-shape kernel (Kernel::fixed_local): launched at exactly L0 x L1, never halved.
+Gemm::Gemm(Context& ctx, const GemmParams& p)
+    : p_(fits_device(ctx, p)), kernel_(ctx.kernel("gemm", p.kwg > 0 ? "gemm_local" : "gemm_packed", p.defines())) {}
 
 cl_event Gemm::enqueue(Context& ctx, int M, int N, int K, cl_mem ap, cl_mem bp, std::size_t b_off, cl_mem c, std::size_t c_off, int ldc,
                        cl_mem scale, cl_mem shift, Act act, bool want_event) {

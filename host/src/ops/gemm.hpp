@@ -9,19 +9,29 @@
 namespace ngi::detail {
 
 // Kernel knobs; see kernels/gemm.cl. Chosen per device by gemm_params_for() (the tuning database), overridable with
-// NGI_GEMM="MR,VW,NV,KU,L0,L1[,UNROLL]" for tuning, and checked on the device before use (ops/gemm_selfcheck.hpp).
+// NGI_GEMM="MR,VW,NV,KU,L0,L1[,UNROLL[,KWG]]" for tuning, and checked on the device before use
+// (ops/gemm_selfcheck.hpp).
 struct GemmParams {
     int mr = 8, vw = 16, nv = 2, ku = 1;
     int local0 = 1, local1 = 1;  // work-group shape (tiles per work-group along m, n)
     int unroll = 1;              // 1: micro-kernel unrolled by the preprocessor; 0: loops + #pragma unroll
+    // K chunk of the GPU-shaped kernel gemm_local (operands staged in local memory by work-groups of exactly
+    // local0 x local1); 0: gemm_packed, operands read from global memory, work-group shape free.
+    int kwg = 0;
     int nr() const { return vw * nv; }
+    // Local memory gemm_local needs: (L0 MR + L1 NR) KWG floats (0 for gemm_packed).
+    std::size_t local_mem_bytes() const {
+        return std::size_t(local0 * mr + local1 * nr()) * std::size_t(kwg) * sizeof(float);
+    }
     std::string defines() const;
-    std::string to_string() const;
+    std::string to_string() const;  // "MR,VW,NV,KU,L0,L1,UNROLL", with ",KWG" appended when kwg > 0
 };
 
 // The device's knob set: $NGI_GEMM if set, else the tuning database's best match (ops/gemm_tuning.hpp).
 GemmParams gemm_params_for(const DeviceInfo& info);
-GemmParams parse_gemm_params(const std::string& s);  // "MR,VW,NV,KU,L0,L1[,UNROLL]"; throws InputError
+// "MR,VW,NV,KU,L0,L1[,UNROLL[,KWG]]" (UNROLL 1, KWG 0 when left out); throws InputError. The device-dependent
+// limits of a KWG > 0 set (local memory, work-group size) are checked by Gemm's constructor.
+GemmParams parse_gemm_params(const std::string& s);
 bool operator==(const GemmParams& a, const GemmParams& b);
 
 // K rounded up so every packed panel has whole unroll steps.
@@ -41,6 +51,8 @@ inline std::size_t packed_b_floats(int K, int N, const GemmParams& p) {
 
 class Gemm {
 public:
+    // Builds gemm_packed (p.kwg == 0) or gemm_local (p.kwg > 0). Throws InputError when a gemm_local set does not
+    // fit the device (local memory, work-group size): the self-check reports that as the variant's reason.
     Gemm(Context& ctx, const GemmParams& p);
     const GemmParams& params() const { return p_; }
     // C[m][n] (at c_off, row stride ldc) = act(scale[m] * (A B)[m][n] + shift[m]).

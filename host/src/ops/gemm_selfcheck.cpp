@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <utility>
 
 namespace ngi::detail {
 namespace {
@@ -130,6 +131,12 @@ std::vector<GemmParams> gemm_fallback_chain(const GemmParams& preferred) {
         p.nv = std::min(8, p.nv * 2);
         add(p);
     }
+    if (preferred.kwg > 0) {  // gemm_local refused (local memory, barriers, a driver): its tiles from global memory
+        GemmParams g = preferred;
+        g.unroll = 1;
+        g.kwg = 0;
+        add(g);
+    }
     add({4, 4, 1, 1, preferred.local0, preferred.local1, 1});
     add({4, 4, 1, 1, 1, 1, 1});
     add({1, 1, 1, 1, 1, 1, 1});  // the scalar kernel: one output per work-item
@@ -152,6 +159,19 @@ std::vector<GemmParams> gemm_tuning_space(const DeviceInfo& info) {
                 for (int nv : {1, 2})
                     for (int ku : {1, 4}) add({mr, vw, nv, ku, 1, mr <= 8 ? 4 : 1, 1});
     }
+    // The GPU-shaped kernel gemm_local: (l MR) x (l NR) blocks of C per work-group, K chunks of KWG staged in local
+    // memory, where that memory is the device's own (GPUs; CPUs report CL_GLOBAL: there it is ordinary memory plus
+    // barriers, 9-30x slower on PoCL, docs/PERFORMANCE.md) and the set fits it and the fixed work-group shape.
+    if (info.is_gpu || info.local_mem_is_dedicated)
+        for (int mr : {2, 4, 8})
+            for (const auto& [vw, nv] : {std::pair{2, 1}, std::pair{4, 1}, std::pair{4, 2}})
+                for (int l : {8, 16})
+                    for (int kwg : {16, 32}) {
+                        const GemmParams p{mr, vw, nv, 1, l, l, 1, kwg};
+                        if (p.local_mem_bytes() <= info.local_mem_bytes &&
+                            std::size_t(l) * std::size_t(l) <= info.max_work_group_size)
+                            add(p);
+                    }
     for (const auto& p : gemm_fallback_chain(space.front())) add(p);
     GemmParams rolled = space.front();
     rolled.unroll = 0;  // the loop-and-pragma form, kept as a knob (and as the rusticl loop-limiter regression)

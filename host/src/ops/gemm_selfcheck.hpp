@@ -39,10 +39,12 @@ std::vector<GemmProblem> gemm_selfcheck_problems();
 GemmVerdict check_gemm_variant(Context& ctx, const GemmParams& p, const std::vector<GemmProblem>& problems);
 
 // preferred, then the same tile with preprocessor unrolling, narrower vectors (VW halved, NV doubled: the same
-// NR), a 4x4 tile, and the scalar 1x1 kernel last.
+// NR), for a gemm_local preferred (KWG > 0) the same tile on gemm_packed (no local memory, no barriers), a 4x4
+// tile, and the scalar 1x1 kernel last.
 std::vector<GemmParams> gemm_fallback_chain(const GemmParams& preferred);
 
-// Every knob set the tuner tries on this kind of device (perf/ngi_bench tune), the table's choice first.
+// Every knob set the tuner tries on this kind of device (perf/ngi_bench tune), the table's choice first; gemm_local
+// sets (KWG > 0) on GPUs and devices with dedicated local memory, where they fit it.
 std::vector<GemmParams> gemm_tuning_space(const DeviceInfo& info);
 
 struct GemmSelection {
