@@ -189,16 +189,21 @@ def run_merge(frame_dir, out_dir, layout, device=None):
 class MergeCache:
     """input.npy / target.npy of every frame, made by run_merge, cached under cache_dir."""
 
-    def __init__(self, cache_dir, layout, device=None, jobs=1, log=sys.stderr):
+    def __init__(self, cache_dir, layout, device=None, jobs=1, log=sys.stderr, read_only=False):
+        """read_only: open a cache another process prepared (the other ranks of a distributed run), writing nothing."""
         check_layout(layout)
         self.dir = Path(cache_dir)
         self.layout = layout
         self.device = device
         self.jobs = max(1, int(jobs))
         self.log = log
-        self.dir.mkdir(parents=True, exist_ok=True)
         info = {"format": CACHE_FORMAT, "layout": layout, "channels": channels(layout)}
         info_path = self.dir / "cache.json"
+        if read_only:
+            if not info_path.is_file() or json.loads(info_path.read_text()) != info:
+                raise RuntimeError(f"{info_path}: no prepared {layout} merge cache (rank 0 prepares it)")
+            return
+        self.dir.mkdir(parents=True, exist_ok=True)
         if info_path.is_file():
             old = json.loads(info_path.read_text())
             if old != info:
@@ -277,6 +282,14 @@ class MergeCache:
         return {"merged": len(todo), "reused": len(cached)}
 
 
+    def check(self, dataset_dir, frames):
+        """Read-only: every frame has a fresh entry (what prepare() leaves behind); raises otherwise."""
+        stale = [rel for rel in frames if not self._fresh(Path(dataset_dir) / rel, rel)]
+        if stale:
+            raise RuntimeError(f"merge cache {self.dir}: {len(stale)} frames not prepared, e.g. {stale[0]}")
+        return {"merged": 0, "reused": len(frames)}
+
+
 class FrameDataset(torch.utils.data.Dataset):
     """(input [C, H, W], target [3, N, N], name) per frame, read from the merge cache (float32, as ngi wrote)."""
 
@@ -296,12 +309,14 @@ class FrameDataset(torch.utils.data.Dataset):
         return torch.from_numpy(x), torch.from_numpy(y), self.frames[i]
 
 
-def load_split(dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr):
+def load_split(dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_frames=0, log=sys.stderr,
+               prepare=True):
     """The FrameDataset of one split (max_frames: an evenly spread subset), merged (or reused) through the cache;
-    returns (dataset, n, merge stats)."""
+    returns (dataset, n, merge stats). prepare=False: only open a cache another process prepared (the ranks other
+    than 0 of a distributed run, after rank 0's prepare and a barrier): no merge, no write, no ngi device."""
     frames = select_frames(list_frames(dataset_dir, split), max_frames)
-    cache = MergeCache(cache_dir, layout, device=device, jobs=jobs, log=log)
-    stats = cache.prepare(dataset_dir, frames)
+    cache = MergeCache(cache_dir, layout, device=device, jobs=jobs, log=log, read_only=not prepare)
+    stats = cache.prepare(dataset_dir, frames) if prepare else cache.check(dataset_dir, frames)
     ds = FrameDataset(cache, frames)
     _, y = ds.arrays(0)
     return ds, int(y.shape[-1]), stats

@@ -13,6 +13,10 @@ the network against the direct-only baseline):
 
     PYTHONPATH=build/python /usr/bin/python3 training/evaluate.py --model M.safetensors --dataset DATA \\
         --split test --out DIR
+
+Under torchrun (`/usr/bin/python3 -m torch.distributed.run --nproc_per_node W training/evaluate.py ...`) the
+frames are split round robin over the W ranks and rank 0 writes the merged summary.json and per_frame.json,
+identical to a single process's.
 """
 
 import argparse
@@ -29,6 +33,7 @@ import torch
 import ngi.reference_models as reference_models
 
 import data
+import distributed
 import networks
 import ngi_paths
 
@@ -42,21 +47,28 @@ def decode(v):
         return np.where(e < 1.0, np.minimum(e / np.maximum(1.0 - e, 1e-300), LIGHT_MAX), LIGHT_MAX)
 
 
-def heldout_scores(state_dict, cfg, dataset, n, bn_mode, dropout="off", dropout_seed=0, max_frames=0):
-    """Scores (see the module doc) of generator weights `state_dict` on a FrameDataset, averaged over frames."""
-    g = networks.inference_generator(state_dict, data.input_nc(cfg["layout"]), 3, cfg["ngf"], cfg["num_downs"],
-                                     dropout=dropout, dropout_seed=dropout_seed)
+def heldout_scores(state_dict, cfg, dataset, n, bn_mode, dropout="off", dropout_seed=0, max_frames=0, dist=None):
+    """Scores (see the module doc) of generator weights `state_dict` on a FrameDataset, averaged over frames.
+    dist (distributed.Dist, collective): the frames are split round robin over the ranks and the per-frame scores
+    gathered and summed in frame order, so every rank gets exactly what one process computes."""
+    d = dist or distributed.Dist()
+    g = networks.inference_generator({k: v.cpu() for k, v in state_dict.items()}, data.input_nc(cfg["layout"]), 3,
+                                     cfg["ngf"], cfg["num_downs"], dropout=dropout, dropout_seed=dropout_seed)
     reference_models.set_bn_mode(g, bn_mode)
     count = len(dataset) if not max_frames else min(max_frames, len(dataset))
-    l1 = mse_enc = mse_lin = 0.0
+    mine = []
     with torch.no_grad():
-        for i in range(count):
+        for i in d.shard(range(count)):
             x, y, _ = dataset[i]
             out = data.crop_front(g(x[None]), n, cfg["layout"])[0].numpy().astype(np.float64)
             y = y.numpy().astype(np.float64)
-            l1 += np.abs(out - y).mean()
-            mse_enc += (((out - y) / 2.0) ** 2).mean()
-            mse_lin += ((decode(out) - decode(y)) ** 2).mean()
+            mine.append((np.abs(out - y).mean(), (((out - y) / 2.0) ** 2).mean(),
+                         ((decode(out) - decode(y)) ** 2).mean()))
+    l1 = mse_enc = mse_lin = 0.0
+    for a, b, c in d.unshard(d.all_gather(mine), count):
+        l1 += a
+        mse_enc += b
+        mse_lin += c
     l1, mse_enc, mse_lin = l1 / count, mse_enc / count, mse_lin / count
     return {"frames": count, "l1": l1, "psnr_enc": 10 * math.log10(1.0 / mse_enc) if mse_enc > 0 else None,
             "mse_linear": mse_lin}
@@ -101,24 +113,32 @@ def run_lightmap(ngi, frame_dir, model, dest, device=None, resume=False):
 
 
 def evaluate_with_ngi(ngi, model, dataset_dir, split, out_dir, max_frames=0, device=None, log=sys.stderr,
-                      resume=False, on_frame=None):
+                      resume=False, on_frame=None, dist=None):
     """`ngi lightmap` on every frame of a split (or max_frames spread evenly over it) into out_dir/<frame>/, then
     out_dir/summary.json and per_frame.json. resume: frames whose metrics.json exists are not run again.
-    on_frame(k, total, rel, seconds) replaces the per-frame log line (seconds is None for a resumed frame)."""
+    on_frame(k, total, rel, seconds) replaces the per-frame log line (seconds is None for a resumed frame).
+    dist (distributed.Dist, collective): rank r runs the frames r, r + W, ... (each frame folder is written by one
+    rank); rank 0 gathers the metrics, puts them back in frame order and alone writes summary.json and
+    per_frame.json, the same files one process writes. Every rank returns the summary."""
+    d = dist or distributed.Dist()
     frames = data.select_frames(data.list_frames(dataset_dir, split), max_frames)
     out_dir = Path(out_dir)
-    per_frame = {}
-    for k, rel in enumerate(frames):
-        per_frame[rel], seconds = run_lightmap(ngi, Path(dataset_dir) / rel, model, out_dir / rel, device, resume)
+    mine = []
+    for k, rel in enumerate(d.shard(frames)):
+        metrics, seconds = run_lightmap(ngi, Path(dataset_dir) / rel, model, out_dir / rel, device, resume)
+        mine.append(metrics)
         if on_frame:
             on_frame(k + 1, len(frames), rel, seconds)
         else:
-            print(f"lightmap {k + 1}/{len(frames)} {rel}", file=log, flush=True)
+            who = f"rank {d.rank}: " if d.enabled else ""
+            print(f"{who}lightmap {d.rank + k * d.world + 1}/{len(frames)} {rel}", file=log, flush=True)
+    per_frame = dict(zip(frames, d.unshard(d.all_gather(mine), len(frames))))
     summary = {"model": str(model), "dataset": str(dataset_dir), "split": split, "frames": len(frames)}
     summary.update(summarize(list(per_frame.values())))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out_dir / "per_frame.json").write_text(json.dumps(per_frame, indent=1) + "\n")
+    if d.main:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        (out_dir / "per_frame.json").write_text(json.dumps(per_frame, indent=1) + "\n")
     return summary
 
 
@@ -133,8 +153,14 @@ def main():
     ap.add_argument("--device", help="ngi --device")
     ap.add_argument("--resume", action="store_true", help="keep frames whose OUT/<frame>/metrics.json exists")
     args = ap.parse_args()
-    summary = evaluate_with_ngi(ngi_paths.find_ngi(args.ngi), args.model, args.dataset, args.split, args.out,
-                                args.max_frames, args.device, resume=args.resume)
+    d = distributed.init()  # under torchrun: the frames split over the ranks, one merged JSON (rank 0)
+    try:
+        summary = evaluate_with_ngi(ngi_paths.find_ngi(args.ngi), args.model, args.dataset, args.split, args.out,
+                                    args.max_frames, args.device, resume=args.resume, dist=d)
+    finally:
+        d.close()
+    if not d.main:
+        return
     print(f"{'':12s} {'final_ldr (SSIM / MSE / PSNR)':>36s}   {'lightmap_linear (SSIM / PSNR)':>30s}")
     for who in ("network", "direct_only"):
         f, l = summary[who]["final_ldr"], summary[who]["lightmap_linear"]

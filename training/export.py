@@ -83,10 +83,13 @@ def main(argv=None):
                                     dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
                                     source=f"ngi training/train.py, run {run.resolve().name}, step {state['step']}")
     steps = state["step"]
+    samples = state.get("samples", steps)  # checkpoints from before the effective batch: one image per step
     config["training"] = {
         "layout": cfg["layout"],
         "steps": steps,
-        "epochs": steps / state["frames"],
+        "samples": samples,
+        "effective_batch": state.get("effective_batch", 1),
+        "epochs": samples / state["frames"],
         "frames": state["frames"],
         "frames_digest": state["frames_digest"],
         "wall_seconds": round(state["train_seconds"], 1),
@@ -115,7 +118,7 @@ def main(argv=None):
             raise RuntimeError(f"{tmp}: tensor {name} differs after the round trip")
     tmp.replace(out)
     print(f"exported {out}: {cfg['layout']}, ngf {cfg['ngf']}, num_downs {cfg['num_downs']}, bn_mode {bn_mode}, "
-          f"dropout {args.dropout}, step {steps} ({steps / state['frames']:.1f} epochs), "
+          f"dropout {args.dropout}, step {steps} ({samples / state['frames']:.1f} epochs), "
           f"{len(tensors)} tensors", file=sys.stderr)
     return 0
 

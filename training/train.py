@@ -10,15 +10,29 @@ losses per step, eval lines every eval_every steps). Running the same command ag
 bit for bit (same machine and thread count); --steps S extends or shortens a run. A progress bar with ETA
 (tqdm, with the smoothed losses) goes to stderr.
 
+Distributed (data parallel, PyTorch's DistributedDataParallel; training/README.md "Distributed training and
+evaluation"):
+
+    /usr/bin/python3 training/torchrun.py --standalone --nproc_per_node 2 training/train.py ...   (= torchrun)
+
+Each rank forwards its own images one at a time (per-image BatchNorm, batch_size stays 1) and DDP averages the
+gradients over the ranks: one optimizer step sees an effective batch of world_size x accumulate images. Rank 0
+prepares the merge cache, writes run.json, log.jsonl and the checkpoints and shows the progress bar; the other
+ranks only read. Checkpoints hold the plain (non-DDP) state_dicts and every rank's RNG state: any world size
+resumes them, and the same one bit for bit; a different effective batch is refused unless --allow-batch-change.
+
 Config keys (JSON; training/configs/*.json): layout ("surround" | "single_view"), ngf, num_downs, dropout
-(bool, pix2pix's nn.Dropout(0.5) in training), ndf, d_layers, lambda_l1, lr, beta1, beta2, steps,
-decay_steps (linear decay of lr to 0 over the last decay_steps), seed, checkpoint_every, keep_every,
-eval_every, eval_frames, threads (0 = all cores), train_split, eval_split, max_frames (0 = all), cache_dir
+(bool, pix2pix's nn.Dropout(0.5) in training), ndf, d_layers, lambda_l1, lr, beta1, beta2, steps (optimizer
+steps), decay_steps (linear decay of lr to 0 over the last decay_steps), seed, checkpoint_every, keep_every,
+eval_every, eval_frames, threads (per rank; 0 = PyTorch's default, which torchrun sets to 1 per rank),
+accumulate (images per optimizer step per rank, each forwarded alone, gradients averaged; default 1),
+batch_size (must be 1), train_split, eval_split, max_frames (0 = all), cache_dir
 (null = DATA/merge_cache/<layout>), merge_jobs, comment.
 """
 
 import argparse
 import json
+import math
 import signal
 import sys
 import time
@@ -30,6 +44,7 @@ from tqdm import tqdm
 
 import checkpoint
 import data
+import distributed
 import evaluate
 import gan
 import networks
@@ -37,13 +52,14 @@ import ngi_paths
 
 DEFAULTS = {
     "layout": "surround", "ngf": 32, "num_downs": 8, "dropout": True, "ndf": 32, "d_layers": 3,
-    "lambda_l1": 100.0, "lr": 2e-4, "beta1": 0.5, "beta2": 0.999, "batch_size": 1,
+    "lambda_l1": 100.0, "lr": 2e-4, "beta1": 0.5, "beta2": 0.999, "batch_size": 1, "accumulate": 1,
     "steps": 20000, "decay_steps": 0, "seed": 1, "checkpoint_every": 500, "keep_every": 5000,
     "eval_every": 0, "eval_frames": 20, "threads": 0, "train_split": "train", "eval_split": "test",
     "max_frames": 0, "cache_dir": None, "merge_jobs": 1, "comment": "",
 }
 # Keys that may change when a run is resumed (they do not change what a step computes).
-RESUMABLE_CHANGES = {"steps", "checkpoint_every", "keep_every", "eval_every", "eval_frames", "threads",
+# accumulate may change as long as the effective batch (world size x accumulate) stays (train() checks that).
+RESUMABLE_CHANGES = {"accumulate", "steps", "checkpoint_every", "keep_every", "eval_every", "eval_frames", "threads",
                      "merge_jobs", "comment", "cache_dir"}
 
 
@@ -58,7 +74,10 @@ def load_config(path, overrides):
     cfg.update({k: v for k, v in overrides.items() if v is not None})
     data.check_layout(cfg["layout"])
     if cfg["batch_size"] != 1:
-        raise ValueError("batch_size must be 1 (pix2pix's setting; per-image BatchNorm at inference relies on it)")
+        raise ValueError("batch_size must be 1 (pix2pix's setting; per-image BatchNorm at inference relies on it); "
+                         "for more images per step use accumulate or more ranks (each image is normalized alone)")
+    if not isinstance(cfg["accumulate"], int) or cfg["accumulate"] < 1:
+        raise ValueError("accumulate must be an integer >= 1")
     if cfg["decay_steps"] < 0 or cfg["decay_steps"] > cfg["steps"]:
         raise ValueError("decay_steps must be in [0, steps]")
     return cfg
@@ -83,8 +102,9 @@ def epoch_order(seed, epoch, count):
 class StopSignal:
     """First SIGINT/SIGTERM: finish the step, save a checkpoint, exit. Second: stop at once."""
 
-    def __init__(self):
+    def __init__(self, quiet=False):
         self.signum = None
+        self.quiet = quiet
         self.old = {s: signal.signal(s, self.handler) for s in (signal.SIGINT, signal.SIGTERM)}
 
     def handler(self, signum, frame):
@@ -92,8 +112,9 @@ class StopSignal:
             self.restore()
             raise KeyboardInterrupt
         self.signum = signum
-        print(f"\n{signal.Signals(signum).name}: saving a checkpoint after this step "
-              "(again to stop at once)", file=sys.stderr, flush=True)
+        if not self.quiet:
+            print(f"\n{signal.Signals(signum).name}: saving a checkpoint after this step "
+                  "(again to stop at once)", file=sys.stderr, flush=True)
 
     def restore(self):
         for s, h in self.old.items():
@@ -114,6 +135,39 @@ def rewrite_log(path, max_step):
     data.write_text_atomic(path, "".join(line + "\n" for line in kept))
 
 
+LOSS_KEYS = ("G_GAN", "G_L1", "D_real", "D_fake")
+
+
+class SampleOrder:
+    """Global sample j (0, 1, 2, ... over the whole run) -> frame index: epoch j // L in epoch_order's order. Step s
+    of an effective batch B covers samples [samples_before, samples_before + B); rank r takes the positions r,
+    r + W, ..., r + (A - 1) W of it (W ranks, A = accumulate). The sequence does not depend on W or A, so a run
+    resumed with another world size (same B) sees the same frames in the same steps."""
+
+    def __init__(self, seed, count):
+        self.seed, self.count = seed, count
+        self.orders = {}
+
+    def __call__(self, j):
+        epoch, k = divmod(j, self.count)
+        if epoch not in self.orders:
+            if len(self.orders) > 2:
+                self.orders.pop(min(self.orders))
+            self.orders[epoch] = epoch_order(self.seed, epoch, self.count)
+        return int(self.orders[epoch][k])
+
+
+def rng_state(device):
+    return {"cpu": torch.get_rng_state(),
+            "cuda": torch.cuda.get_rng_state(device) if device.type == "cuda" else None}
+
+
+def set_rng_state(state, device):
+    torch.set_rng_state(state["cpu"])
+    if device.type == "cuda" and state.get("cuda") is not None:
+        torch.cuda.set_rng_state(state["cuda"], device)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--config", help="training config JSON (training/configs/)")
@@ -124,22 +178,49 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, help="override the config's steps")
     ap.add_argument("--seed", type=int, help="override the config's seed")
     ap.add_argument("--checkpoint-every", type=int, help="override the config's checkpoint_every")
-    ap.add_argument("--threads", type=int, help="override the config's threads")
+    ap.add_argument("--threads", type=int, help="override the config's threads (per rank)")
+    ap.add_argument("--accumulate", type=int, help="override the config's accumulate (images per step per rank)")
+    ap.add_argument("--allow-batch-change", action="store_true",
+                    help="resume with another effective batch (world size x accumulate) than the checkpoint's")
+    ap.add_argument("--merge-only", action="store_true", help="prepare the merge cache and exit")
     args = ap.parse_args(argv)
-
-    cfg = load_config(args.config, {"steps": args.steps, "seed": args.seed,
+    cfg = load_config(args.config, {"steps": args.steps, "seed": args.seed, "accumulate": args.accumulate,
                                     "checkpoint_every": args.checkpoint_every, "threads": args.threads})
+    d = distributed.init()
+    try:
+        return train(args, cfg, d)
+    finally:
+        d.close()
+
+
+def train(args, cfg, d):
+    """The training loop of one rank (d: distributed.Dist; a plain single process is rank 0 of 1)."""
+    batch = d.world * cfg["accumulate"]
     run = Path(args.run)
     ckpt_dir = run / "checkpoints"
     latest = ckpt_dir / "latest.pt"
-    resume = checkpoint.load(latest) if latest.is_file() else None
+    found = d.all_gather(latest.is_file())
+    if len(set(found)) > 1:
+        raise SystemExit(f"{latest}: present on some ranks only ({found}); the run folder must be on a file system "
+                         "every rank sees")
+    resume = checkpoint.load(latest) if found[0] else None
     if resume is not None:
         old = resume["config"]
-        changed = sorted(k for k in set(old) | set(cfg) if old.get(k) != cfg.get(k) and k not in RESUMABLE_CHANGES)
+        changed = sorted(k for k in set(old) | set(cfg) if old.get(k, DEFAULTS.get(k)) != cfg.get(k)
+                         and k not in RESUMABLE_CHANGES)
         if changed:
             raise SystemExit(f"{run}: the checkpoint was trained with other settings: "
                              + ", ".join(f"{k} {old.get(k)!r} -> {cfg.get(k)!r}" for k in changed)
                              + " (use another --run folder)")
+        old_batch = resume.get("effective_batch", 1)
+        if old_batch != batch and not args.allow_batch_change:
+            raise SystemExit(
+                f"{run}: the checkpoint was trained with an effective batch of {old_batch} images per step "
+                f"({resume.get('world_size', 1)} rank(s) x accumulate {resume.get('accumulate', 1)}); this run has "
+                f"{batch} ({d.world} rank(s) x accumulate {cfg['accumulate']}). Resume with ranks x accumulate = "
+                f"{old_batch} (e.g. --accumulate {max(1, old_batch // d.world)} with {d.world} rank(s)"
+                + ("" if old_batch % d.world == 0 else f", which does not divide: use {old_batch} ranks or 1") + "), "
+                "or pass --allow-batch-change to continue with the new batch (the schedule stays in steps)")
 
     if cfg["threads"]:
         torch.set_num_threads(cfg["threads"])
@@ -147,88 +228,142 @@ def main(argv=None):
     ngi = ngi_paths.find_ngi(args.ngi)
     dataset_dir = Path(args.dataset).resolve()
     cache_dir = Path(cfg["cache_dir"]) if cfg["cache_dir"] else data.default_cache_dir(dataset_dir, cfg["layout"])
-    train_set, n, merge_stats = data.load_split(dataset_dir, cfg["train_split"], cfg["layout"], cache_dir,
-                                                device=args.device, jobs=cfg["merge_jobs"],
-                                                max_frames=cfg["max_frames"])
-    eval_set = None
-    if cfg["eval_every"]:
-        eval_set, _, _ = data.load_split(dataset_dir, cfg["eval_split"], cfg["layout"], cache_dir,
-                                         device=args.device, jobs=cfg["merge_jobs"], max_frames=cfg["eval_frames"])
+
+    def load(split, max_frames, prepare):
+        return data.load_split(dataset_dir, split, cfg["layout"], cache_dir, device=args.device,
+                               jobs=cfg["merge_jobs"], max_frames=max_frames, prepare=prepare)
+
+    # Rank 0 merges what the cache lacks; the other ranks wait, then only read it (nobody writes the same entry).
+    if d.main:
+        train_set, n, merge_stats = load(cfg["train_split"], cfg["max_frames"], True)
+        eval_set = load(cfg["eval_split"], cfg["eval_frames"], True)[0] if cfg["eval_every"] else None
+    d.barrier()
+    if not d.main:
+        train_set, n, merge_stats = load(cfg["train_split"], cfg["max_frames"], False)
+        eval_set = load(cfg["eval_split"], cfg["eval_frames"], False)[0] if cfg["eval_every"] else None
+    if args.merge_only:
+        if d.main:
+            print(f"merge cache {cache_dir}: {len(train_set)} train frames ({merge_stats['merged']} merged, "
+                  f"{merge_stats['reused']} cached)" + (f", {len(eval_set)} eval frames" if eval_set else ""),
+                  file=sys.stderr)
+        return 0
     check_sizes(cfg, n)
     digest = data.frame_list_digest(train_set.frames)
     if resume is not None and resume["frames_digest"] != digest:
         raise SystemExit(f"{run}: the checkpoint was trained on another frame list ({resume['frames']} frames)")
 
     torch.manual_seed(cfg["seed"])
-    model = gan.Pix2Pix(cfg, n)
-    step, train_seconds = 0, 0.0
+    model = gan.Pix2Pix(cfg, n, device=d.device)
+    step, train_seconds, samples = 0, 0.0, 0
     if resume is not None:
         model.load_state_dict(resume["model"])
-        torch.set_rng_state(resume["torch_rng"])
         step, train_seconds = resume["step"], resume["train_seconds"]
+        samples = resume.get("samples", step)  # runs from before the effective batch: one image per step
+        states = resume.get("rng_ranks") or [{"cpu": resume["torch_rng"]}]
+        if len(states) == d.world or d.main:
+            set_rng_state(states[d.rank], d.device)  # bit-exact resume at the same world size
+        else:
+            torch.manual_seed(distributed.rank_seed(cfg["seed"], d.rank, step))
+    elif not d.main:
+        # Rank r > 0 draws its own dropout masks; rank 0 keeps the run's stream (a single process is unchanged).
+        torch.manual_seed(distributed.rank_seed(cfg["seed"], d.rank, 0))
+    model.distribute(d)
 
-    run.mkdir(parents=True, exist_ok=True)
+    log_path = run / "log.jsonl"
     run_info = {"config": cfg, "dataset": str(dataset_dir), "dataset_config": data.read_dataset_config(dataset_dir),
                 "n": n, "frames": len(train_set), "frames_digest": digest, "ngi": ngi,
                 "generator_parameters": networks.parameter_count(model.G),
-                "discriminator_parameters": networks.parameter_count(model.D), "torch": torch.__version__}
-    data.write_text_atomic(run / "run.json", json.dumps(run_info, indent=1) + "\n")
-    log_path = run / "log.jsonl"
-    rewrite_log(log_path, step)
+                "discriminator_parameters": networks.parameter_count(model.D), "torch": torch.__version__,
+                "world_size": d.world, "accumulate": cfg["accumulate"], "effective_batch": batch,
+                "backend": d.backend, "threads_per_rank": torch.get_num_threads()}
+    if d.main:  # the other ranks never write into the run folder
+        run.mkdir(parents=True, exist_ok=True)
+        data.write_text_atomic(run / "run.json", json.dumps(run_info, indent=1) + "\n")
+        rewrite_log(log_path, step)
+        h, w = data.input_hw(n, cfg["layout"])
+        print(f"train {cfg['layout']}: {len(train_set)} frames ({merge_stats['merged']} merged, "
+              f"{merge_stats['reused']} cached), input [1, {data.input_nc(cfg['layout'])}, {h}, {w}], "
+              f"G {run_info['generator_parameters'] / 1e6:.2f} M, D {run_info['discriminator_parameters'] / 1e6:.2f} M "
+              f"parameters, {torch.get_num_threads()} threads"
+              + (f" per rank, {d.world} ranks ({d.backend})" if d.enabled else "")
+              + f"; effective batch {batch} ({d.world} x accumulate {cfg['accumulate']}); "
+              + (f"resuming at step {step} ({samples} samples)" if resume is not None else "from scratch")
+              + f", {cfg['steps']} steps", file=sys.stderr, flush=True)
 
-    h, w = data.input_hw(n, cfg["layout"])
-    print(f"train {cfg['layout']}: {len(train_set)} frames ({merge_stats['merged']} merged, "
-          f"{merge_stats['reused']} cached), input [1, {data.input_nc(cfg['layout'])}, {h}, {w}], "
-          f"G {run_info['generator_parameters'] / 1e6:.2f} M, D {run_info['discriminator_parameters'] / 1e6:.2f} M "
-          f"parameters, {torch.get_num_threads()} threads; "
-          + (f"resuming at step {step}" if resume is not None else "from scratch")
-          + f", {cfg['steps']} steps", file=sys.stderr, flush=True)
+    def save(paths):
+        """Collective: every rank hands over its RNG state, rank 0 writes the checkpoint files."""
+        states = d.all_gather(rng_state(d.device))
+        if not d.main:
+            return
+        state = {"model": model.state_dict(), "step": step, "samples": samples, "torch_rng": states[0]["cpu"],
+                 "rng_ranks": states, "train_seconds": train_seconds, "config": cfg, "n": n,
+                 "frames": len(train_set), "frames_digest": digest, "dataset": str(dataset_dir),
+                 "world_size": d.world, "accumulate": cfg["accumulate"], "effective_batch": batch}
+        for path in paths:
+            checkpoint.save(path, state)
 
-    def save(path):
-        checkpoint.save(path, {"model": model.state_dict(), "step": step, "torch_rng": torch.get_rng_state(),
-                               "train_seconds": train_seconds, "config": cfg, "n": n, "frames": len(train_set),
-                               "frames_digest": digest, "dataset": str(dataset_dir)})
-
-    stop = StopSignal()
-    progress = tqdm(total=cfg["steps"], initial=step, unit="step", **ngi_paths.progress_options())
+    order = SampleOrder(cfg["seed"], len(train_set))
+    positions = [d.rank + d.world * a for a in range(cfg["accumulate"])]
+    stop = StopSignal(quiet=not d.main)
+    progress = tqdm(total=cfg["steps"], initial=step, unit="step", disable=not d.main,
+                    **ngi_paths.progress_options())
     shown = {}  # the losses on the bar, smoothed
     exit_code = 0
+    ran = False
+    log = open(log_path, "a") if d.main else None
     try:
-        with open(log_path, "a") as log:
-            while step < cfg["steps"]:
-                t0 = time.monotonic()
-                epoch, k = divmod(step, len(train_set))
-                x, y, _ = train_set[int(epoch_order(cfg["seed"], epoch, len(train_set))[k])]
-                losses = model.step(x[None], y[None], step)
-                step += 1
-                train_seconds += time.monotonic() - t0
-                log.write(json.dumps({"step": step, **losses, "seconds": round(train_seconds, 3)}) + "\n")
-                if cfg["eval_every"] and (step % cfg["eval_every"] == 0 or step == cfg["steps"]):
-                    scores = evaluate.heldout_scores(model.G.state_dict(), cfg, eval_set, n, "per_image")
+        while step < cfg["steps"]:
+            ran = True
+            t0 = time.monotonic()
+            items = [train_set[order(samples + p)] for p in positions]
+            sums = model.step([x[None] for x, _, _ in items], [y[None] for _, y, _ in items], step)
+            # One small allreduce: the losses' sums over the effective batch, and whether any rank got a signal
+            # (all ranks then stop after the same step).
+            reduced = d.all_reduce_sum([sums[k] for k in LOSS_KEYS] + [float(stop.signum is not None)])
+            losses = {k: reduced[i].item() / batch for i, k in enumerate(LOSS_KEYS)}
+            losses["lr"] = sums["lr"]
+            stopping = reduced[-1].item() > 0
+            bad = [k for k, v in losses.items() if not math.isfinite(v)]
+            if bad:
+                raise FloatingPointError(f"step {step}: non-finite losses {bad}: {losses}")
+            step += 1
+            samples += batch
+            train_seconds += time.monotonic() - t0
+            scores = None
+            if cfg["eval_every"] and (step % cfg["eval_every"] == 0 or step == cfg["steps"]):
+                scores = evaluate.heldout_scores(model.G.state_dict(), cfg, eval_set, n, "per_image", dist=d)
+            if d.main:
+                log.write(json.dumps({"step": step, **losses, "samples": samples, "batch": batch,
+                                      "seconds": round(train_seconds, 3)}) + "\n")
+                if scores is not None:
                     log.write(json.dumps({"step": step, "eval": scores}) + "\n")
                 log.flush()
-                for k in ("G_GAN", "G_L1", "D_real", "D_fake"):
-                    if k in losses:
-                        shown[k] = losses[k] if k not in shown else 0.9 * shown[k] + 0.1 * losses[k]
+                for k in LOSS_KEYS:
+                    shown[k] = losses[k] if k not in shown else 0.9 * shown[k] + 0.1 * losses[k]
                 progress.set_postfix({k: f"{v:.4g}" for k, v in shown.items()}, refresh=False)
                 progress.update(step - progress.n)
-                if step % cfg["checkpoint_every"] == 0 or step == cfg["steps"] or stop.signum is not None:
-                    log.flush()
-                    save(latest)
-                    if cfg["keep_every"] and step % cfg["keep_every"] == 0:
-                        save(ckpt_dir / f"step_{step:08d}.pt")
-                if stop.signum is not None:
+            if step % cfg["checkpoint_every"] == 0 or step == cfg["steps"] or stopping:
+                paths = [latest]
+                if cfg["keep_every"] and step % cfg["keep_every"] == 0:
+                    paths.append(ckpt_dir / f"step_{step:08d}.pt")
+                save(paths)
+            if stopping:
+                if d.main:
                     print(f"stopped at step {step}; checkpoint {latest} (run the same command to resume)",
                           file=sys.stderr)
-                    exit_code = 128 + stop.signum
-                    break
+                exit_code = 128 + (stop.signum or signal.SIGTERM)
+                break
     finally:
         stop.restore()
         progress.close()
+        if log is not None:
+            log.close()
     if exit_code == 0:
-        if step >= cfg["steps"] and not latest.is_file():
-            save(latest)
-        print(f"done: {step} steps, {train_seconds:.0f} s of training; checkpoint {latest}", file=sys.stderr)
+        if not ran and resume is None:
+            save([latest])
+        if d.main:
+            print(f"done: {step} steps ({samples} samples), {train_seconds:.0f} s of training; checkpoint {latest}",
+                  file=sys.stderr)
     return exit_code
 
 
