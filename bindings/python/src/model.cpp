@@ -60,6 +60,12 @@ py::array_t<float> run_nchw(PyModel& pm, const FloatArray& x) {
 
 }  // namespace
 
+// An ngi.AoNetwork: the network plus the device state it was made on (to refuse use after close()).
+struct PyAo {
+    DeviceRef device;
+    ngi::AoNetwork net;
+};
+
 void register_model(py::module_& m) {
     py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
 A model file loaded on a device: a generator (pix2pix_unet, deepillumination) or an mlp (docs/MODEL_FORMAT.md).
@@ -128,24 +134,26 @@ Device.finish() waits (or pyopencl's queue.finish() on a Device.from_pyopencl de
                    " from '" + pm.path + "'>";
         });
 
-    py::class_<ngi::AoNetwork, std::shared_ptr<ngi::AoNetwork>>(m, "AoNetwork", R"doc(
+    py::class_<PyAo, std::shared_ptr<PyAo>>(m, "AoNetwork", R"doc(
 Seed 001's ambient-occlusion MLP (docs/RESULTS_AO.md): AoNetwork(device, path); run(normals [3, H, W],
 radius_px=-1) -> accessibility [1, H, W] in [0, 1] (1 = open; radius -1: the training radius scaled to H).)doc")
         .def(py::init([](const DeviceRef& device, const py::object& path) {
                  const std::string p = path_string(path, "AoNetwork: path");
                  const ngi::Device& dev = device->get("AoNetwork");
                  py::gil_scoped_release release;
-                 return std::make_shared<ngi::AoNetwork>(ngi::AoNetwork::load(dev, p));
+                 return std::make_shared<PyAo>(PyAo{device, ngi::AoNetwork::load(dev, p)});
              }),
              py::arg("device"), py::arg("path"))
-        .def_property_readonly("normals", &ngi::AoNetwork::normals, "'smooth' or 'face': the normals it was trained on.")
-        .def("radius_for", &ngi::AoNetwork::radius_for, py::arg("height"))
-        .def("run", [](ngi::AoNetwork& net, const py::object& normals, float radius_px) {
+        .def_property_readonly("normals", [](const PyAo& a) { return a.net.normals(); },
+                               "'smooth' or 'face': the normals it was trained on.")
+        .def("radius_for", [](const PyAo& a, int height) { return a.net.radius_for(height); }, py::arg("height"))
+        .def("run", [](PyAo& a, const py::object& normals, float radius_px) {
+            a.device->get("AoNetwork.run");
             ngi::Image n = to_image(normals, "AoNetwork.run: normals");
             if (n.channels != 3) throw py::value_error("AoNetwork.run: normals: expected [3, H, W]");
             ngi::Image ao = [&] {
                 py::gil_scoped_release release;
-                return net.run(n, radius_px);
+                return a.net.run(n, radius_px);
             }();
             return from_image(std::move(ao));
         }, py::arg("normals"), py::arg("radius_px") = -1.0f);

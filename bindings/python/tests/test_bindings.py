@@ -225,12 +225,14 @@ def test_bad_files_and_frames(dev, tmp_path):
 def test_closed_device_refuses_every_object():
     d = ngi.Device(os.environ.get("NGI_TEST_DEVICE", "cpu"))
     m = ngi.Model(d, MODELS / "ao_sculpture_16x8.safetensors")
+    ao = ngi.AoNetwork(d, MODELS / "ao_sculpture_16x8.safetensors")
     p = ngi.Pipeline(d, 8)
     b = ngi.DeviceBuffer(d, 64)
     with d:
         pass  # leaving the block closes it
     assert d.closed
     for call in (lambda: m.run(np.zeros((3, 48), np.float32)), lambda: p.tonemap(np.zeros((3, 4, 4), np.float32)),
+                 lambda: ao.run(np.zeros((3, 4, 4), np.float32)),
                  lambda: b.download([4]), lambda: ngi.Model(d, MODELS / "ao_sculpture_16x8.safetensors"),
                  lambda: d.finish()):
         with pytest.raises(ngi.Error, match="was closed"):
