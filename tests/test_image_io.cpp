@@ -1,6 +1,11 @@
 // Image files: OpenEXR (half/float, 1..N channels), PNG (8-bit round trips; 16-bit and palette files from an
 // independent hand-made encoder below), .npy, dispatch by extension, and bad input: missing, wrong-format and
 // truncated files must give an InputError naming the file, and a failing write must leave nothing behind.
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -8,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "io_test_support.hpp"
 #include "ngi/error.hpp"
@@ -175,6 +181,51 @@ TEST_CASE("EXR: the image is the display window; pixels outside the data window 
                 const bool inside = sx >= 0 && sx < 5 && sy >= 0 && sy < 4;
                 CHECK(r.at(c, y, x) == (inside ? img.at(c, sy, sx) : 0.0f));
             }
+}
+
+TEST_CASE("EXR: a data window far from the origin reads without pointer overflow", "[io]") {
+    // OpenEXR addresses pixels from a base pointer (min.x + min.y * width) pixels before the buffer. With the window
+    // at y = 1e9 (OpenEXR's own limit is about 1.07e9) and 65,536 pixels wide that is 2.6e14 bytes: below every heap
+    // address, so computing it as a pointer wrapped around (undefined behaviour; the fuzzer found it, UBSan reports
+    // it in the sanitize stage).
+    TempDir dir("exr-far");
+    const int w = 65536, y0 = 1000000000, x0 = -7;
+    Imf::Header header(Imath::Box2i({x0, y0}, {x0 + w - 1, y0}), Imath::Box2i({x0, y0}, {x0 + w - 1, y0}));
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    header.compression() = Imf::NO_COMPRESSION;  // the reader's size check wants bytes behind the pixels
+    std::vector<float> px(w);
+    for (int i = 0; i < w; ++i) px[std::size_t(i)] = float(i % 251);
+    {
+        Imf::OutputFile out((dir / "far.exr").c_str(), header);
+        Imf::FrameBuffer fb;
+        // Written with OpenEXR's own convention, from an integer address: the test must not do what it tests against.
+        const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(px.data()) -
+                                    (std::uintptr_t(std::intptr_t(x0)) + std::uintptr_t(y0) * std::uintptr_t(w)) * 4u;
+        fb.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base), sizeof(float), sizeof(float) * w));
+        out.setFrameBuffer(fb);
+        out.writePixels(1);
+    }
+    const ngi::Image r = ngi::read_exr(dir / "far.exr");
+    REQUIRE(r.width == w);
+    REQUIRE(r.height == 1);
+    CHECK(r.data == px);
+    // The fuzzer's input itself (a mutated header: a data window at 1.85e8 with garbage beyond): refused cleanly.
+    const unsigned char fuzz[] = {
+        0x76, 0x2f, 0x31, 0x01, 0x02, 0x00, 0x00, 0x00, 0x63, 0x68, 0x61, 0x6e, 0x6e, 0x65, 0x6c, 0x73, 0x00, 0x63,
+        0x68, 0x6c, 0x69, 0x73, 0x74, 0x00, 0x37, 0x00, 0x00, 0x00, 0x42, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x47, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x52, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x63, 0x6f, 0x6d, 0x70, 0x72, 0x65, 0x73,
+        0x73, 0x69, 0x6f, 0x6e, 0x00, 0x63, 0x6f, 0x6d, 0x70, 0x72, 0x65, 0x73, 0x73, 0x69, 0x6f, 0x6e, 0x00, 0x01,
+        0x00, 0x00, 0x00, 0x05, 0x64, 0x61, 0x74, 0x61, 0x57, 0x69, 0x6e, 0x64, 0x6f, 0x77, 0x00, 0x62, 0x6f, 0x78,
+        0x32, 0x69, 0x00, 0x10, 0x00, 0x00, 0x00, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x29,
+        0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x02, 0x00, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b, 0x0b,
+        0x0b, 0x0b, 0x0b, 0x0b, 0x00, 0x00, 0x00, 0x00, 0x00, 0x32, 0x69, 0x00, 0x10, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x63, 0x6f, 0x6d, 0x70, 0x72, 0x65, 0x73, 0x73, 0x69, 0x6f, 0x6e, 0x00,
+        0x63, 0x6f, 0x6d, 0x70, 0x06, 0x36, 0xbe, 0xcd, 0x37,
+    };
+    ngi::test::spit(dir / "fuzz.exr", std::string(reinterpret_cast<const char*>(fuzz), sizeof fuzz));
+    CHECK_THROWS_AS(ngi::read_exr(dir / "fuzz.exr"), ngi::InputError);
 }
 
 TEST_CASE("EXR half: finite values beyond the half range clamp, NaN and Inf are kept", "[io]") {

@@ -305,9 +305,15 @@ Image detail::decode_exr(const std::string& bytes, const std::string& path, std:
         std::vector<float> data(plane * names.size());
         Imf::FrameBuffer fb;
         for (std::size_t c = 0; c < names.size(); ++c) {
-            // OpenEXR addresses pixel (x, y) at base + x * xStride + y * yStride with absolute coordinates.
-            char* base = reinterpret_cast<char*>(data.data() + c * plane) -
-                         (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * dw_w) * std::ptrdiff_t(sizeof(float));
+            // OpenEXR addresses pixel (x, y) at base + x * xStride + y * yStride with absolute coordinates, so base
+            // lies (min.x + min.y * width) pixels before the plane: far outside any object for a data window that
+            // starts at 10^8 (the fuzzer's find). Pointer arithmetic that leaves its object is undefined behaviour;
+            // the offset is applied to the address as an unsigned integer (wrapping is defined), and OpenEXR's own
+            // arithmetic brings every pixel it writes back inside the plane.
+            const std::uintptr_t offset = (std::uintptr_t(std::intptr_t(dw.min.x)) +
+                                           std::uintptr_t(std::intptr_t(dw.min.y)) * std::uintptr_t(dw_w)) *
+                                          sizeof(float);
+            char* base = reinterpret_cast<char*>(reinterpret_cast<std::uintptr_t>(data.data() + c * plane) - offset);
             fb.insert(names[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * std::size_t(dw_w)));
         }
         file.setFrameBuffer(fb);
