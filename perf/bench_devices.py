@@ -36,7 +36,8 @@ REPO = Path(__file__).resolve().parent.parent
 
 def benchmarks(build, repeats):
     """name -> argv (without --device) of each benchmark."""
-    bench, models = build / "perf" / "ngi_bench", REPO / "models"
+    # Models by their path relative to the repository (the benchmarks run there): the JSON names no machine path.
+    bench, models = build.resolve() / "perf" / "ngi_bench", Path("models")
     r = str(repeats)
     return {
         "gemm": [bench, "gemm", "--repeats", r],
@@ -45,9 +46,9 @@ def benchmarks(build, repeats):
         "generator_1024x512": [bench, "generator", "--model", models / "surround.safetensors", "--width", "1024",
                                "--height", "512", "--repeats", r],
         "mlp_ao_1080p": [bench, "mlp", "--ao", "--model", models / "ao_sculpture_16x8.safetensors", "--repeats", r],
-        "frame_n64": [build / "perf" / "frame_bench", "--model", models / "surround.safetensors", "--n", "64",
+        "frame_n64": [build.resolve() / "perf" / "frame_bench", "--model", models / "surround.safetensors", "--n", "64",
                       "--runs", r],
-        "render_n64": [build / "perf" / "render_bench", "--n", "64", "--spp", "16", "--scenes", "room:seed=1"],
+        "render_n64": [build.resolve() / "perf" / "render_bench", "--n", "64", "--spp", "16", "--scenes", "room:seed=1"],
     }
 
 
@@ -144,7 +145,7 @@ def main(argv=None):
             bar.set_description(f"{index} {name}")
             t0 = time.monotonic()
             cmd = [str(c) for c in runs[name]] + ["--device", index]
-            proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+            proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO)
             if proc.returncode != 0:
                 result = {"error": f"exit {proc.returncode}: {proc.stderr.strip()[-2000:]}"}
             else:
