@@ -654,3 +654,226 @@ __kernel void pt_geometry(SCENE_ARGS, __global const float* cam, int face, int n
     store3(q, 3, npix, nf);
     q[(size_t)6 * npix] = h.t * dot(d, look);
 }
+
+// ---- voxel radiance field (seed 004): docs/VOXEL_FIELD.md; host side renderer.cpp (render_voxel_field) --------
+// Per surface voxel (kernels/voxel_compact.cl made the list): probe[V][3] the probe point, shade_normal[V][3] the
+// unit normal at it (normalize(probe - centre): the voxel's Eq. 3 normal except at creases, docs/VOXEL_FIELD.md),
+// cells[V] = (x, y, z, exposed-face mask). One work-item per voxel (per voxel face in vf_face_lighting).
+// Random numbers: pcg4d of (block id, sample, seed ^ salt): a voxel's values do not depend on the other voxels, the
+// work-group size or the split of its samples over launches. Every kernel takes samples [first, last) of its count
+// and keeps running sums in its output between launches (llvmpipe's loop limit), finishing in the last launch.
+
+#define VF_SALT_SH 0x3c6ef372u
+#define VF_SALT_SUN 0xa54ff53au
+#define VF_SALT_DIRECT 0x510e527fu
+#define VF_SALT_LIGHTING 0x9b05688cu
+#define VF_SALT_FACE 0x1f83d9abu
+#define VF_SH 27  // coefficients per voxel: [channel][9] (docs/CONVENTIONS.md section 14)
+
+static inline int vf_block_id(int4 c, int sx, int sy) { return c.x + sx * (c.y + sy * c.z); }
+
+// Sun visibility: vis[i] = the fraction of `count` rays from the probe point toward uniform points of the sun's
+// cone that meet no block (the voxel itself included). The host skips it when the sun is off.
+__kernel void vf_sun_visibility(SCENE_ARGS, __global const float* probe, __global const int4* cells, int nvox,
+                                int count, int first, int last, uint seed, __global float* vis,
+                                __global uint* rays_out) {
+    const int i = get_global_id(0);
+    if (i >= nvox) return;
+    MAKE_SCENE(s);
+    const float3 p = vload3(i, probe);
+    uint rays = first > 0 ? rays_out[i] : 0u;
+    float open = first > 0 ? vis[i] : 0.0f;
+    const float3 sd = lv(light, L_SUN_DIR);
+    const float cmax = light[L_SUN_COS];
+    float3 t, b;
+    onb(sd, &t, &b);
+    Rng r;
+    r.a = (uint)vf_block_id(cells[i], sx, sy); r.c = seed ^ VF_SALT_SUN;
+    for (int k = first; k < last; ++k) {
+        r.b = (uint)k; r.n = 0;
+        const float2 u = rng2(&r);
+        const float z = 1.0f - u.x * (1.0f - cmax), sr = sqrt(fmax(0.0f, 1.0f - z * z)), phi = 2.0f * M_PI_F * u.y;
+        const float3 w = t * (sr * cos(phi)) + b * (sr * sin(phi)) + sd * z;
+        if (trace(&s, p, w, T_INF, &rays).mat == 0) open += 1.0f;
+    }
+    vis[i] = last >= count ? open / (float)count : open;
+    rays_out[i] = rays;
+}
+
+// SH projection of the radiance arriving at the probe point: directions j = a + m b of M = m^2 strata
+// (cell (a, b) of (u, v) jittered; z = 1 - 2u, phi = 2 pi v, pole +z, phi = atan2(y, x)); per direction L(w) = sky
+// radiance (sun disc excluded) on a miss, 0 on the voxel itself, emission + albedo * (one lighting_sample with
+// max_bounces - 1 further bounces) on another block. sh[i][c][k] accumulates L_c(w_j) Y_k(w_j); the last launch
+// scales by 4 pi / M and adds the sun as a delta, E_sun * vis[i] * Y_k(sun direction).
+__kernel void vf_sh(SCENE_ARGS, __global const float* probe, __global const int4* cells, int nvox, int m,
+                    int first, int last, int max_bounces, int rr_start, uint seed, __global const float* sun_vis,
+                    __global float* sh, __global uint* rays_out) {
+    const int i = get_global_id(0);
+    if (i >= nvox) return;
+    MAKE_SCENE(s);
+    const int id = vf_block_id(cells[i], sx, sy);
+    const float3 p = vload3(i, probe);
+    __global float* out = sh + (size_t)i * VF_SH;
+    uint rays = first > 0 ? rays_out[i] : 0u;
+    float acc[VF_SH];
+    for (int k = 0; k < VF_SH; ++k) acc[k] = first > 0 ? out[k] : 0.0f;
+    const int total = m * m;
+    const float inv_m = 1.0f / (float)m;
+    // The first hit is path vertex 1 of the reference's estimator: its Russian roulette starts one bounce earlier.
+    const int inner_rr = max(rr_start - 1, 0);
+    Rng r;
+    r.a = (uint)id; r.c = seed ^ VF_SALT_SH;
+    float Y[9];
+    for (int j = first; j < last; ++j) {
+        r.b = (uint)j; r.n = 0;
+        const float2 u = rng2(&r);
+        const int b = j / m, a = j - b * m;
+        const float z = 1.0f - 2.0f * (((float)a + u.x) * inv_m);
+        const float phi = 2.0f * M_PI_F * (((float)b + u.y) * inv_m);
+        const float sr = sqrt(fmax(0.0f, 1.0f - z * z));
+        const float3 w = (float3)(sr * cos(phi), sr * sin(phi), z);
+        const Hit h = trace(&s, p, w, T_INF, &rays);
+        float3 L = (float3)(0.0f);
+        if (h.mat == 0) {
+            L = sky_radiance(light, w);
+        } else if (vf_block_id((int4)(h.cell, 0), sx, sy) != id) {
+            L = mats[2 * h.mat + 1].xyz;
+            if (max_bounces > 0)
+                L += mats[2 * h.mat].xyz * lighting_sample(&s, hit_origin(p, w, &h), face_normal(h.face),
+                                                           max_bounces - 1, inner_rr, &r, &rays);
+        }
+        sh9(w.x, w.y, w.z, Y);
+        for (int k = 0; k < 9; ++k) {
+            acc[k] += L.x * Y[k];
+            acc[9 + k] += L.y * Y[k];
+            acc[18 + k] += L.z * Y[k];
+        }
+    }
+    if (last >= total) {
+        const float3 sd = lv(light, L_SUN_DIR), E = lv(light, L_SUN_E) * sun_vis[i];
+        const float scale = 4.0f * M_PI_F / (float)total;
+        sh9(sd.x, sd.y, sd.z, Y);
+        for (int k = 0; k < 9; ++k) {
+            acc[k] = acc[k] * scale + E.x * Y[k];
+            acc[9 + k] = acc[9 + k] * scale + E.y * Y[k];
+            acc[18 + k] = acc[18 + k] * scale + E.z * Y[k];
+        }
+    }
+    for (int k = 0; k < VF_SH; ++k) out[k] = acc[k];
+    rays_out[i] = rays;
+}
+
+// Lighting at the probe point with the shading normal: the mean of spp lighting_samples with max_bounces bounces
+// (0: the "direct" output). out[i][3].
+__kernel void vf_probe_lighting(SCENE_ARGS, __global const float* probe, __global const float* shade_normal,
+                                __global const int4* cells, int nvox, int spp, int first, int last, int max_bounces,
+                                int rr_start, uint seed, __global float* out, __global uint* rays_out) {
+    const int i = get_global_id(0);
+    if (i >= nvox) return;
+    MAKE_SCENE(s);
+    const float3 p = vload3(i, probe), n = vload3(i, shade_normal);
+    uint rays = first > 0 ? rays_out[i] : 0u;
+    float3 sum = first > 0 ? vload3(i, out) : (float3)(0.0f);
+    Rng r;
+    r.a = (uint)vf_block_id(cells[i], sx, sy); r.c = seed ^ (max_bounces == 0 ? VF_SALT_DIRECT : VF_SALT_LIGHTING);
+    for (int k = first; k < last; ++k) {
+        r.b = (uint)k; r.n = 0;
+        sum += lighting_sample(&s, p, n, max_bounces, rr_start, &r, &rays);
+    }
+    vstore3(last >= spp ? sum / (float)spp : sum, i, out);
+    rays_out[i] = rays;
+}
+
+// Lighting of each exposed face: the mean of spp lighting_samples at uniform random points of the face (lifted
+// RAY_OFFSET off it) with its normal; 0 for faces that are not exposed. out[i][face][3]; global size 6 V.
+__kernel void vf_face_lighting(SCENE_ARGS, __global const int4* cells, int nvox, int spp, int first, int last,
+                               int max_bounces, int rr_start, uint seed, __global float* out, __global uint* rays_out) {
+    const int g = get_global_id(0);
+    if (g >= 6 * nvox) return;
+    MAKE_SCENE(s);
+    const int i = g / 6, f = g - 6 * i;
+    const int4 c = cells[i];
+    if (((c.w >> f) & 1) == 0) {
+        vstore3((float3)(0.0f), g, out);
+        rays_out[g] = 0u;
+        return;
+    }
+    const float3 n = face_normal(f);
+    uint rays = first > 0 ? rays_out[g] : 0u;
+    float3 sum = first > 0 ? vload3(g, out) : (float3)(0.0f);
+    Rng r;
+    r.a = (uint)(6 * vf_block_id(c, sx, sy) + f); r.c = seed ^ VF_SALT_FACE;
+    for (int k = first; k < last; ++k) {
+        r.b = (uint)k; r.n = 0;
+        const float3 q = face_point(c.xyz, f, rng2(&r)) + n * RAY_OFFSET;
+        sum += lighting_sample(&s, q, n, max_bounces, rr_start, &r, &rays);
+    }
+    vstore3(last >= spp ? sum / (float)spp : sum, g, out);
+    rays_out[g] = rays;
+}
+
+// True when the segment a -> b crosses no solid block other than the blocks with linear ids ia and ib (3D DDA,
+// as trace(); the parts outside the grid are air).
+static inline int vf_segment_clear(__global const uchar* grid, int3 dims, float3 a, float3 b, int ia, int ib) {
+    float3 d = b - a;
+    const float len = length(d);
+    if (!(len > 0.0f)) return 1;
+    d /= len;
+    const float3 inv = (float3)(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
+    const float3 ta = -a * inv, tb = (convert_float3(dims) - a) * inv;
+    const float3 lo = fmin(ta, tb), hi = fmax(ta, tb);
+    const float t_end = fmin(fmin(fmin(hi.x, hi.y), hi.z), len);
+    const float t = fmax(fmax(fmax(lo.x, lo.y), lo.z), 0.0f);
+    if (t > t_end) return 1;  // the segment misses the grid
+    int3 c = clamp(convert_int3(floor(a + d * t)), (int3)(0), dims - 1);
+    const int3 step = (int3)(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
+    const float3 delta = fabs(inv);
+    // Scalar compares (1 for true): see trace_crossing on oclgrind and vector selects.
+    float3 next = (convert_float3(c + (int3)(step.x > 0, step.y > 0, step.z > 0)) - a) * inv;
+    const int sx = dims.x, sxy = dims.x * dims.y;
+    int idx = c.x + sx * c.y + sxy * c.z;
+    const int max_steps = dims.x + dims.y + dims.z + 3;
+    for (int i = 0; i < max_steps; ++i) {
+        if (grid[idx] != 0 && idx != ia && idx != ib) return 0;
+        float tn;
+        if (next.x < next.y && next.x < next.z) {
+            tn = next.x; c.x += step.x; idx += step.x; next.x += delta.x;
+            if ((uint)c.x >= (uint)dims.x) return 1;
+        } else if (next.y < next.z) {
+            tn = next.y; c.y += step.y; idx += step.y * sx; next.y += delta.y;
+            if ((uint)c.y >= (uint)dims.y) return 1;
+        } else {
+            tn = next.z; c.z += step.z; idx += step.z * sxy; next.z += delta.z;
+            if ((uint)c.z >= (uint)dims.z) return 1;
+        }
+        if (tn >= t_end) return 1;
+    }
+    return 1;
+}
+
+// Visibility mask: bit b of word w of row i (mask[i * words + w]) = the segment between the probe points of voxels
+// i and j = 32 w + b is clear (vf_segment_clear, always traced from the lower index to the higher, so the mask is
+// symmetric bit for bit); the diagonal and bits past the last voxel are 0. Bits [bit_first, bit_last) of each word
+// per launch (llvmpipe's loop limit), OR-ed into the word. global size (V, words): work-item (i, w).
+__kernel void vf_visibility(__global const uchar* grid, int sx, int sy, int sz, __global const float* probe,
+                            __global const int4* cells, int nvox, int words, int bit_first, int bit_last,
+                            __global uint* mask) {
+    const int i = get_global_id(0), w = get_global_id(1);
+    if (i >= nvox || w >= words) return;
+    const int3 dims = (int3)(sx, sy, sz);
+    __global uint* q = mask + (size_t)i * words + w;
+    uint bits = bit_first > 0 ? *q : 0u;
+    const float3 p_i = vload3(i, probe);
+    const int id = vf_block_id(cells[i], sx, sy);
+    for (int b = bit_first; b < bit_last; ++b) {
+        const int j = 32 * w + b;
+        if (j >= nvox) break;
+        if (j == i) continue;
+        const float3 pj = vload3(j, probe);
+        const int jd = vf_block_id(cells[j], sx, sy);
+        const int clear = i < j ? vf_segment_clear(grid, dims, p_i, pj, id, jd)
+                                : vf_segment_clear(grid, dims, pj, p_i, jd, id);
+        if (clear) bits |= 1u << b;
+    }
+    *q = bits;
+}

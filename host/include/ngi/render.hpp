@@ -7,6 +7,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -16,6 +17,11 @@
 #include "ngi/scene.hpp"
 
 namespace ngi {
+
+// Seed 004's voxel radiance field (defined in ngi/voxel_field.hpp; include that to call the methods below).
+struct SurfaceVoxels;
+struct VoxelFieldSettings;
+struct VoxelField;
 
 // A distant sun: a disc of uniform radiance subtending `angular_radius` around `direction`.
 struct Sun {
@@ -113,6 +119,18 @@ public:
     // estimate (the sample variance / spp, per channel), for error bars.
     Image render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,
                            Image* variance = nullptr, RenderStats* stats = nullptr);
+
+    // Seed 004's ground truth for the surface voxels of this renderer's scene (surface_voxels() of the same scene):
+    // per voxel the SH projection (bands 0-2, RGB) of the incident radiance at its probe point, the direct and full
+    // lighting there and the full lighting of each exposed face (docs/VOXEL_FIELD.md). Deterministic in
+    // settings.seed. Throws InputError for voxels of another grid size and for settings out of range.
+    VoxelField render_voxel_field(const SurfaceVoxels& voxels, const Lighting& lighting,
+                                  const VoxelFieldSettings& settings);
+
+    // Visibility between the voxels' probe points: uint32 words [V][ceil(V / 32)], bit j % 32 of word j / 32 of row i
+    // set when the segment from probe i to probe j crosses no solid block other than voxels i and j themselves.
+    // Symmetric, diagonal 0. Throws InputError beyond kMaxVisibilityVoxels voxels.
+    std::vector<std::uint32_t> voxel_visibility(const SurfaceVoxels& voxels);
 
 private:
     struct Impl;
