@@ -44,7 +44,8 @@ std::string vox_error(const std::string& path) {
 }  // namespace
 
 TEST_CASE("procedural families: deterministic per seed, distinct, lit as described", "[render]") {
-    REQUIRE(scene_families() == std::vector<std::string>{"room", "street", "cave", "backlit", "bleed", "sculpture"});
+    REQUIRE(scene_families() == std::vector<std::string>{"room", "street", "cave", "backlit", "bleed", "sculpture",
+                                                         "cornell", "cornell_pink"});
     for (const auto& fam : scene_families()) {
         INFO(fam);
         const VoxelScene a = generate_scene(fam, 3), b = generate_scene(fam, 3), c = generate_scene(fam, 4);
@@ -62,8 +63,23 @@ TEST_CASE("procedural families: deterministic per seed, distinct, lit as describ
         }
         if (fam == "room" || fam == "street" || fam == "bleed") CHECK(lamp);
         if (fam == "backlit") CHECK_FALSE(lamp);  // lit only through its opening
-        if (fam == "cave") CHECK(emitter);
+        if (fam == "cave" || fam == "cornell" || fam == "cornell_pink") CHECK(emitter);
+        if (fam == "cornell" || fam == "cornell_pink") CHECK(a.size == glm::ivec3(40));  // one grid for the family
     }
+}
+
+TEST_CASE("cornell_pink is cornell of the same seed with a pink back wall and one more box", "[render]") {
+    const VoxelScene a = generate_scene("cornell", 5), b = generate_scene("cornell_pink", 5);
+    REQUIRE(a.size == b.size);
+    const glm::vec3 back_a = a.palette[a.at({20, 20, 0})].albedo, back_b = b.palette[b.at({20, 20, 0})].albedo;
+    CHECK(std::abs(back_a.r - back_a.b) < 0.1f);  // white
+    CHECK(back_b.r > back_b.g + 0.2f);                       // pink
+    std::size_t only_b = 0;
+    for (std::size_t i = 0; i < a.voxels.size(); ++i) {
+        REQUIRE((a.voxels[i] == 0 || b.voxels[i] != 0));  // everything of cornell is there
+        only_b += a.voxels[i] == 0 && b.voxels[i] != 0;
+    }
+    CHECK(only_b >= 4 * 4 * 4 / 2);  // the extra box (at least 4^3 blocks, perhaps partly inside another)
 }
 
 TEST_CASE("scene specs", "[render]") {

@@ -58,6 +58,8 @@ struct VoxelScene {
 //   backlit  a room lit only through a large opening behind the camera (the camera looks away from it)
 //   bleed    a room with strongly coloured walls and blocks in sunlight through a skylight (colour bleeding)
 //   sculpture  one free-standing smooth object (metaballs, a torus, dents) in a 64^3 grid: per-object networks (AO)
+//   cornell    seed 004's voxel Cornell boxes: a closed 40^3 box (red, green, white walls), 1-2 ceiling panels, a
+//              skylight for the sun, 2-4 coloured boxes; cornell_pink: one more box and a pink back wall (its test)
 const std::vector<std::string>& scene_families();
 VoxelScene generate_scene(const std::string& family, std::uint32_t seed);
 

@@ -1,4 +1,4 @@
-// Seeded procedural voxel scenes (families: room, street, cave, backlit, bleed). Deterministic across platforms:
+// Seeded procedural voxel scenes (families: room, street, cave, backlit, bleed, sculpture, cornell, cornell_pink). Deterministic across platforms:
 // std::mt19937 is fully specified; distributions are our own (the standard ones are implementation-defined).
 #include <algorithm>
 #include <cmath>
@@ -439,10 +439,56 @@ VoxelScene sculpture(std::uint32_t seed) {
     return s;
 }
 
+// ---- cornell: seed 004's voxel Cornell boxes (one fixed grid, so per-voxel networks see one coordinate frame) ----
+// A closed 40^3 box of 1-block walls: red -x wall, green +x wall, white floor, ceiling and back; 1-2 emissive panels
+// in the ceiling (always on), a skylight the sun falls through at the default time (its patch of sunlight on the
+// floor or the walls is the "directional light's shadow" of the seed's scenes), and 2-4 boxes of random size,
+// place and colour standing on the floor. cornell_pink is the seed's test scene: the same generator plus one more
+// object, with the back wall turned pink.
+constexpr int kCornellSize = 40;
+
+VoxelScene cornell(std::uint32_t seed, bool pink) {
+    Rand r(seed, 7);
+    const int N = kCornellSize;
+    VoxelScene s({N, N, N}, pink ? "cornell_pink" : "cornell");
+    const std::uint8_t white = add(s, r, kWhite);
+    s.fill({0, 0, 0}, {N, N, N}, white);
+    s.fill({1, 1, 1}, {N - 1, N - 1, N - 1}, 0);
+    s.fill({0, 1, 1}, {1, N - 1, N - 1}, add(s, r, glm::vec3(0.63f, 0.07f, 0.05f)));  // red -x wall
+    s.fill({N - 1, 1, 1}, {N, N - 1, N - 1}, add(s, r, glm::vec3(0.12f, 0.45f, 0.09f)));  // green +x wall
+    const int sw = r.irange(5, 8), sd = r.irange(5, 8);  // the skylight
+    const int sx = r.irange(4, N - 4 - sw), sz = r.irange(4, N - 4 - sd);
+    s.fill({sx, N - 1, sz}, {sx + sw, N, sz + sd}, 0);
+    for (int k = 0, n = r.irange(1, 2); k < n; ++k) {  // emissive ceiling panels, away from the skylight
+        const glm::vec3 e = glm::vec3(40.0f, 37.0f, 32.0f) * r.range(0.7f, 1.3f);
+        const std::uint8_t m = add(s, r, glm::vec3(0.8f), e);
+        const int pw = r.irange(2, 4), pd = r.irange(2, 4);
+        for (int tries = 0; tries < 50; ++tries) {
+            const int px = r.irange(2, N - 2 - pw), pz = r.irange(2, N - 2 - pd);
+            if (px + pw > sx - 1 && px < sx + sw + 1 && pz + pd > sz - 1 && pz < sz + sd + 1) continue;
+            s.fill({px, N - 2, pz}, {px + pw, N - 1, pz + pd}, m);
+            break;
+        }
+    }
+    for (int k = 0, n = r.irange(2, 4) + (pink ? 1 : 0); k < n; ++k) {  // boxes on the floor
+        const int w = r.irange(4, 11), h = r.irange(4, 16), d = r.irange(4, 11);
+        const glm::ivec3 lo(r.irange(2, N - 2 - w), 1, r.irange(2, N - 2 - d));
+        s.fill(lo, lo + glm::ivec3(w, h, d), add(s, r, r.pick(kWool)));
+    }
+    // Last, so that cornell_pink:seed=S is cornell:seed=S plus these changes (the random sequence is shared).
+    if (pink) s.fill({1, 1, 0}, {N - 1, N - 1, 1}, add(s, r, glm::vec3(0.85f, 0.42f, 0.58f)));  // pink -z wall
+    set_region(s, glm::vec3(3.0f, 4.0f, 26.0f), glm::vec3(N - 3.0f, N - 8.0f, N - 3.0f));
+    s.camera.look = glm::vec3(0.0f, 0.0f, -1.0f);  // toward the back wall, as the classic view
+    s.default_time = r.range(11.5f, 13.0f);
+    s.sun_azimuth = r.range(0.0f, glm::two_pi<float>());
+    return s;
+}
+
 }  // namespace
 
 const std::vector<std::string>& scene_families() {
-    static const std::vector<std::string> f = {"room", "street", "cave", "backlit", "bleed", "sculpture"};
+    static const std::vector<std::string> f = {"room",  "street",    "cave",   "backlit",
+                                               "bleed", "sculpture", "cornell", "cornell_pink"};
     return f;
 }
 
@@ -454,6 +500,8 @@ VoxelScene generate_scene(const std::string& family, std::uint32_t seed) {
     else if (family == "backlit") s = backlit(seed);
     else if (family == "bleed") s = bleed(seed);
     else if (family == "sculpture") s = sculpture(seed);
+    else if (family == "cornell") s = cornell(seed, false);
+    else if (family == "cornell_pink") s = cornell(seed, true);
     else throw InputError("unknown scene family '" + family + "'");
     s.name = family + ":seed=" + std::to_string(seed);
     return s;
