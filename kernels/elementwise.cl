@@ -42,3 +42,25 @@ __kernel void sanitize_inplace(__global float* restrict x, const int x_off, cons
     else if (v > above) { x[x_off + i] = hi; atomic_inc(bad_count); }
     else if (v < below) { x[x_off + i] = lo; atomic_inc(bad_count); }
 }
+
+// Per-channel affine into a planar tensor: y[y_off + c * n + i] = scale[c] * x(i, c) + shift[c], where item i's
+// channel c of x is at x_off + i * item_stride + c * channel_stride (points [n][C]: {C, 1}; planar [C][n]: {1, n};
+// docs/CONVENTIONS.md section 13), so a point list is transposed on the way. Model families standardize raw inputs
+// with it (voxel_sh: x' = 2 (x - lo) / (hi - lo) - 1). Nothing is clamped: NaN stays NaN and overflow gives +-Inf,
+// for the guard (sanitize_inplace) that runs on y next to replace and count them.
+__kernel void channel_affine_planar(__global const float* restrict x, const int x_off, const int item_stride,
+                                    const int channel_stride, const int channels, const int n,
+                                    __global const float* restrict scale, __global const float* restrict shift,
+                                    __global float* restrict y, const int y_off) {
+    const int i = get_global_id(0), c = get_global_id(1);
+    if (i >= n || c >= channels) return;
+    const float v = x[x_off + (size_t)i * item_stride + (size_t)c * channel_stride];
+    y[y_off + (size_t)c * n + i] = scale[c] * v + shift[c];
+}
+
+// x += y over n floats (residual connections: h = h + f(h)). x and y do not overlap.
+__kernel void add_inplace(__global float* restrict x, const int x_off, __global const float* restrict y,
+                          const int y_off, const int n) {
+    const int i = get_global_id(0);
+    if (i < n) x[x_off + i] += y[y_off + i];
+}

@@ -40,3 +40,33 @@ __kernel void set_broadcast_concat(__global const float* restrict x, const int c
     if (i >= n || k >= cx + cp) return;
     y[(size_t)i * (cx + cp) + k] = k < cx ? x[(size_t)i * cx + k] : pooled[(size_t)set_of[i] * cp + (k - cx)];
 }
+
+// Planar set pooling over one set, or a chunk of one: pooled[pooled_off + c] = max or mean over the items
+// i in [lo, hi) of x[x_off + c * ld + i] (x planar [C][ld], the dense layers' layout). One work-group of LOCAL
+// work-items per channel, the same stride-then-tree as set_pool. A set too long for one launch's loop budget
+// (Context::loop_limit) is pooled in chunks: `accumulate` combines the chunk with what pooled already holds (max:
+// fmax; mean: adds the chunk's sum / count, where count is the size of the whole set). An empty set pools to 0.
+__kernel __attribute__((reqd_work_group_size(LOCAL, 1, 1)))
+void set_pool_planar(__global const float* restrict x, const int x_off, const int ld, const int lo, const int hi,
+                     const int count, const int mode, const int accumulate, __global float* restrict pooled,
+                     const int pooled_off) {
+    __local float part[LOCAL];
+    const int lid = get_local_id(0), c = get_group_id(1);
+    __global const float* row = x + x_off + (size_t)c * ld;
+    float acc = mode == POOL_MAX ? -INFINITY : 0.0f;
+    for (int i = lo + lid; i < hi; i += LOCAL) {
+        const float v = row[i];
+        acc = mode == POOL_MAX ? fmax(acc, v) : acc + v;
+    }
+    part[lid] = acc;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int w = LOCAL / 2; w > 0; w /= 2) {
+        if (lid < w) part[lid] = mode == POOL_MAX ? fmax(part[lid], part[lid + w]) : part[lid] + part[lid + w];
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    if (lid == 0) {
+        float v = count <= 0 ? 0.0f : mode == POOL_MAX ? part[0] : part[0] / (float)count;
+        if (accumulate && count > 0) v = mode == POOL_MAX ? fmax(pooled[pooled_off + c], v) : pooled[pooled_off + c] + v;
+        pooled[pooled_off + c] = v;
+    }
+}

@@ -252,3 +252,112 @@ def make_config(family, *, bn_mode, input_nc=12, output_nc=3, ngf=64, num_downs=
         "output_range": VALUE_RANGE,
         "source": source,
     }
+
+
+# --------------------------------------------------------------------------
+# Family voxel_sh (seed 004): per-voxel SH coefficients from raw voxel attributes
+# --------------------------------------------------------------------------
+
+VOXEL_SH_ARCHITECTURES = ("mlp", "set", "resnet")
+VOXEL_SH_INPUTS = 10    # x, y, z, albedo rgb, emission rgb, voxel id
+VOXEL_SH_OUTPUTS = 27   # SH bands 0-2 x RGB, [3][9]
+VOXEL_SH_INPUT_LAYOUT = ("x", "y", "z", "albedo.r", "albedo.g", "albedo.b",
+                         "emission.r", "emission.g", "emission.b", "id")
+_VOXEL_SH_MAX_WIDTH = 4096
+
+
+def voxel_sh_shapes(config):
+    """Tensor name -> shape of a voxel_sh network (docs/MODEL_FORMAT.md "voxel_sh"), in file order."""
+    arch = config["architecture"]
+    shapes = {}
+
+    def linear(prefix, fan_in, fan_out):
+        shapes[prefix + ".weight"] = (fan_out, fan_in)
+        shapes[prefix + ".bias"] = (fan_out,)
+
+    if arch == "mlp":
+        widths = [VOXEL_SH_INPUTS] + list(config["hidden"]) + [VOXEL_SH_OUTPUTS]
+        for i in range(len(widths) - 1):
+            linear(f"layers.{i}", widths[i], widths[i + 1])
+    elif arch == "set":
+        phi = [VOXEL_SH_INPUTS] + list(config["phi"])
+        for i in range(len(phi) - 1):
+            linear(f"phi.{i}", phi[i], phi[i + 1])
+        rho = [3 * phi[-1]] + list(config["rho"]) + [VOXEL_SH_OUTPUTS]  # [h | max | mean]
+        for i in range(len(rho) - 1):
+            linear(f"rho.{i}", rho[i], rho[i + 1])
+    elif arch == "resnet":
+        linear("input", VOXEL_SH_INPUTS, config["width"])
+        for i in range(config["blocks"]):
+            linear(f"blocks.{i}", config["width"], config["width"])
+        linear("output", config["width"], VOXEL_SH_OUTPUTS)
+    else:
+        raise ConversionError(f"voxel_sh architecture must be one of {VOXEL_SH_ARCHITECTURES}, got {arch!r}")
+    return shapes
+
+
+def make_voxel_sh_config(architecture, *, grid, input_lo, input_hi, output_mean, output_std, hidden=None,
+                         phi=None, rho=None, width=None, blocks=None, source="", training=None):
+    """Validate and return the config of a voxel_sh model file. Widths: `hidden` (mlp), `phi` and `rho` (set),
+    `width` and `blocks` (resnet); the other architectures' must stay None."""
+    if architecture not in VOXEL_SH_ARCHITECTURES:
+        raise ConversionError(f"architecture must be one of {VOXEL_SH_ARCHITECTURES}, got {architecture!r}")
+
+    def width_list(name, value, lo_len, hi_len):
+        value = [int(v) for v in value] if value is not None else None
+        if value is None or not lo_len <= len(value) <= hi_len or not all(1 <= v <= _VOXEL_SH_MAX_WIDTH for v in value):
+            raise ConversionError(f"{name} must be {lo_len}..{hi_len} widths in 1..{_VOXEL_SH_MAX_WIDTH}, got {value!r}")
+        return value
+
+    def floats(name, value, n, nonnegative=False):
+        v = np.asarray(value, dtype=np.float64).reshape(-1)
+        if v.shape != (n,) or not np.isfinite(v).all() or (np.abs(v) > 1e30).any() or (nonnegative and (v < 0).any()):
+            raise ConversionError(f"{name} must be {n} finite numbers{' >= 0' if nonnegative else ''}, got {value!r}")
+        return [float(x) for x in v]
+
+    grid = [int(g) for g in grid]
+    if len(grid) != 3 or not all(1 <= g <= 65536 for g in grid) or grid[0] * grid[1] * grid[2] > 2 ** 24:
+        raise ConversionError(f"grid must be [X, Y, Z] in 1..65536 with X Y Z <= 2^24, got {grid!r}")
+    lo, hi = floats("input_lo", input_lo, VOXEL_SH_INPUTS), floats("input_hi", input_hi, VOXEL_SH_INPUTS)
+    for k, (a, b) in enumerate(zip(lo, hi)):
+        if b < a or (b > a and 2.0 / (b - a) > 1e30):
+            raise ConversionError(f"input channel {k}: lo {a}, hi {b}; needs lo == hi or 2e-30 <= hi - lo")
+    config = {"format_version": FORMAT_VERSION, "family": "voxel_sh", "architecture": architecture,
+              "input_nc": VOXEL_SH_INPUTS, "output_nc": VOXEL_SH_OUTPUTS, "grid": grid,
+              "input_layout": list(VOXEL_SH_INPUT_LAYOUT), "input_lo": lo, "input_hi": hi,
+              "output_mean": floats("output_mean", output_mean, VOXEL_SH_OUTPUTS),
+              "output_std": floats("output_std", output_std, VOXEL_SH_OUTPUTS, nonnegative=True)}
+    given = {"hidden": hidden, "phi": phi, "rho": rho, "width": width, "blocks": blocks}
+    own = {"mlp": ("hidden",), "set": ("phi", "rho"), "resnet": ("width", "blocks")}[architecture]
+    stray = [k for k, v in given.items() if v is not None and k not in own]
+    if stray:
+        raise ConversionError(f"{stray} do not apply to architecture {architecture!r}")
+    if architecture == "mlp":
+        config["hidden"] = width_list("hidden", hidden, 1, 64)
+    elif architecture == "set":
+        config["phi"] = width_list("phi", phi, 1, 16)
+        config["rho"] = width_list("rho", rho, 1, 16)
+    else:
+        config["width"] = width_list("width", None if width is None else [width], 1, 1)[0]
+        if blocks is None or not 0 <= int(blocks) <= 256:
+            raise ConversionError(f"blocks must be in 0..256, got {blocks!r}")
+        config["blocks"] = int(blocks)
+    config["source"] = source
+    if training is not None:
+        config["training"] = training
+    return config
+
+
+def write_voxel_sh_model(path, tensors, config, half=False):
+    """write_model for a voxel_sh config: the tensors must be exactly voxel_sh_shapes(config) (names and shapes);
+    they are written in that order."""
+    shapes = voxel_sh_shapes(config)
+    missing = [k for k in shapes if k not in tensors]
+    extra = [k for k in tensors if k not in shapes]
+    if missing or extra:
+        raise ConversionError(f"voxel_sh {config['architecture']}: missing tensors {missing}, unexpected {extra}")
+    for name, shape in shapes.items():
+        got = tuple(np.shape(tensors[name].detach().cpu().numpy() if hasattr(tensors[name], "detach") else tensors[name]))
+        if got != shape:
+            raise ConversionError(f"tensor '{name}' is {list(got)}, expected {list(shape)}")
+    write_model(path, {name: tensors[name] for name in shapes}, config, half=half)

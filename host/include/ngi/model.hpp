@@ -16,7 +16,7 @@ namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh"
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;
@@ -41,6 +41,22 @@ struct ModelConfig {
     int encoding_bands = 0, encoding_first_exponent = 0;  // bands = 0: no encoding
     bool encoding_pi = true, encoding_include_input = true;
     std::string encoding_order = "band";  // "band" (NeRF, Neural GI Eq. 3) | "component" (tiny-cuda-nn)
+
+    // family "voxel_sh" (seed 004): the 27 SH coefficients ([3][9], docs/CONVENTIONS.md section 14) of the light
+    // each occupied voxel receives, from its 10 raw attributes (docs/MODEL_FORMAT.md "voxel_sh"). Model::run takes
+    // [V, 10] and returns [V, 27] in lighting units: the standardization below runs on the device.
+    struct VoxelSh {
+        std::string architecture;                 // "mlp" | "set" | "resnet"
+        int grid[3] = {0, 0, 0};                  // X, Y, Z of the scenes it was trained on
+        std::vector<int> hidden;                  // mlp: hidden widths (tanh); then linear -> 27
+        std::vector<int> phi, rho;                // set: per-voxel phi widths (tanh); rho's hidden widths (tanh)
+        int width = 0, blocks = 0;                // resnet: width W, residual blocks h = h + tanh(W h + b)
+        std::vector<double> input_lo, input_hi;   // [10]: x' = 2 (x - lo) / (hi - lo) - 1 (0 where hi == lo)
+        std::vector<double> output_mean, output_std;  // [27]: y = mean + std * y'
+        // The per-voxel inputs hold absolute positions and ids: throws InputError naming both sizes unless
+        // (x, y, z) is the training grid.
+        void check_grid(int x, int y, int z) const;
+    } voxel_sh;
 };
 
 // Overrides of the file's settings; an empty string keeps the file's value.
@@ -77,13 +93,16 @@ public:
     const ModelConfig& config() const;
     // input: [1, input_nc, H, W] with H and W multiples of 2^num_downs. Returns [1, output_nc, H, W].
     // Family "mlp": [1, input_nc, H, W] (per pixel) -> [1, output_nc, H, W], or [N, input_nc] -> [N, output_nc].
+    // Family "voxel_sh": [V, 10] raw voxel attributes (one scene) -> [V, 27] SH coefficients.
     // The graph for each new H x W is built and planned on first use and reused afterwards.
     Tensor run(const Tensor& input, RunInfo* info = nullptr);
 
     // Device in, device out, asynchronous: `input` holds [1, input_nc, height, width] float32 (NCHW) from byte 0,
     // `output` receives [1, output_nc, height, width]; both at least that large and on this model's device
-    // (InputError otherwise). Returns once enqueued on the device's in-order queue: no host transfer, nothing
-    // waited for (Device::finish() or Device::marker() wait). `input` is only read (the guard works on a copy).
+    // (InputError otherwise). Families "mlp" and "voxel_sh" take height x width items, planar (voxel_sh: [10, V]
+    // -> [27, V] for one scene of V = height x width voxels). Returns once enqueued on the device's in-order queue:
+    // no host transfer, nothing waited for (Device::finish() or Device::marker() wait). `input` is only read (the
+    // guard works on a copy).
     void enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int height, int width);
     // Input values the guard replaced in the last enqueue() (see RunInfo::sanitized_inputs). Blocks: it reads a
     // counter back from the device.

@@ -6,6 +6,7 @@
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
 #include "models/mlp_model.hpp"
+#include "models/voxel_sh_model.hpp"
 #include "models/model_access.hpp"
 #include "ops/gemm_selfcheck.hpp"
 
@@ -19,6 +20,8 @@ struct Model::Impl {
     detail::Graph* last = nullptr;  // of the last enqueue (its sanitize counter)
     std::unique_ptr<detail::MlpRunner> mlp;  // family "mlp" (instead of ops and graphs)
     bool mlp_enqueued = false;
+    std::unique_ptr<detail::VoxelShRunner> voxel_sh;  // family "voxel_sh" (instead of ops and graphs)
+    bool voxel_sh_enqueued = false;
 
     // The graph for an input of h x w, built, planned and allocated on first use.
     detail::Graph& graph(int h, int w) {
@@ -45,11 +48,18 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     if (meta == file.metadata.end())
         throw InputError("load model " + path + ": no __metadata__[\"ngi\"] architecture config; convert the "
                          "checkpoint with python3 -m ngi.convert (docs/MODEL_FORMAT.md)");
-    ModelConfig cfg = detail::parse_model_config(meta->second, path);
+    ModelConfig cfg = detail::is_voxel_sh_config(meta->second) ? detail::parse_voxel_sh_config(meta->second, path)
+                                                                : detail::parse_model_config(meta->second, path);
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false});
+    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false});
     auto& ctx = ngi::detail::context_of(device);
+    if (cfg.family == "voxel_sh") {
+        if (!options.mlp_path.empty())
+            throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is voxel_sh");
+        impl->voxel_sh = std::make_unique<detail::VoxelShRunner>(ctx, cfg, file, path, detail::gemm_selection(ctx).params);
+        return Model(std::move(impl));
+    }
     if (cfg.family == "mlp") {
         impl->mlp = std::make_unique<detail::MlpRunner>(ctx, detail::mlp_spec(cfg, file, path),
                                                         detail::gemm_selection(ctx).params, options.mlp_path,
@@ -74,6 +84,10 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
     if (impl_->mlp) {
         impl_->mlp_enqueued = false;
         return impl_->mlp->run(ngi::detail::context_of(impl_->device), input, info);
+    }
+    if (impl_->voxel_sh) {
+        impl_->voxel_sh_enqueued = false;
+        return impl_->voxel_sh->run(ngi::detail::context_of(impl_->device), input, info);
     }
     if (input.shape.size() != 4 || input.shape[0] != 1 || input.shape[1] != c.input_nc)
         throw InputError("run model: input tensor is " + shape_string(input.shape) + ", expected [1, " +
@@ -103,6 +117,7 @@ void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem
                           int height, int width) {
     Model::Impl& im = *model.impl_;
     if (im.mlp) throw InputError("the surround pipeline runs image generators; this model is an mlp");
+    if (im.voxel_sh) throw InputError("the surround pipeline runs image generators; this model is a voxel_sh network");
     Graph& g = im.graph(height, width);
     g.enqueue(context_of(im.device), in, in_offset, out, out_offset);
     im.last = &g;
@@ -141,6 +156,18 @@ void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int h
         impl_->mlp_enqueued = true;
         return;
     }
+    if (impl_->voxel_sh) {
+        if (height < 1 || width < 1 || double(height) * width > double(1 << 30))
+            throw InputError("enqueue model: " + std::to_string(height) + "x" + std::to_string(width) +
+                             " voxels are not in 1 .. 2^30");
+        const std::size_t items = std::size_t(height) * std::size_t(width) * sizeof(float);
+        check_device_buffer(input, impl_->device, items * std::size_t(c.input_nc), false, "input");
+        check_device_buffer(output, impl_->device, items * std::size_t(c.output_nc), true, "output");
+        impl_->voxel_sh->enqueue(ngi::detail::context_of(impl_->device), input.opencl_mem(), output.opencl_mem(),
+                                 height * width);
+        impl_->voxel_sh_enqueued = true;
+        return;
+    }
     const int step = 1 << c.num_downs;
     if (height < step || width < step || height % step || width % step)
         throw InputError("enqueue model: input " + std::to_string(height) + "x" + std::to_string(width) +
@@ -153,6 +180,8 @@ void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int h
 
 int Model::sanitized_inputs() {
     if (impl_->mlp) return impl_->mlp_enqueued ? impl_->mlp->sanitized_count(ngi::detail::context_of(impl_->device)) : 0;
+    if (impl_->voxel_sh)
+        return impl_->voxel_sh_enqueued ? impl_->voxel_sh->sanitized_count(ngi::detail::context_of(impl_->device)) : 0;
     return impl_->last ? impl_->last->sanitized_count(detail::context_of(impl_->device)) : 0;
 }
 

@@ -6,12 +6,15 @@ namespace ngi::detail {
 
 namespace {
 const std::size_t kLocal[1] = {64};
+const std::size_t kLocal2[2] = {64, 1};
 }
 
 Elementwise::Elementwise(Context& ctx)
     : act_(ctx.kernel("elementwise", "activate_inplace")),
       dropout_(ctx.kernel("elementwise", "dropout_seeded")),
       sanitize_(ctx.kernel("elementwise", "sanitize_inplace")),
+      affine_(ctx.kernel("elementwise", "channel_affine_planar")),
+      add_(ctx.kernel("elementwise", "add_inplace")),
       counter_(ctx.alloc(sizeof(int), "sanitize counter")) {}
 
 cl_event Elementwise::activate(Context& ctx, const View& x, Act act, bool want_event) {
@@ -48,6 +51,25 @@ int Elementwise::sanitized_count(Context& ctx) {
     int bad = 0;
     ctx.read(counter_, 0, sizeof bad, &bad, "sanitize counter");
     return bad;
+}
+
+cl_event Elementwise::channel_affine(Context& ctx, cl_mem x, std::size_t x_off, int item_stride, int channel_stride,
+                                     int channels, int n, cl_mem scale, cl_mem shift, cl_mem y, std::size_t y_off,
+                                     bool want_event) {
+    if (n <= 0 || channels <= 0) return nullptr;
+    affine_.args(x, int(x_off), item_stride, channel_stride, channels, n, scale, shift, y, int(y_off));
+    const std::size_t g[2] = {std::size_t(n), std::size_t(channels)};
+    return ctx.launch(affine_, 2, g, kLocal2, want_event);
+}
+
+cl_event Elementwise::add(Context& ctx, const View& x, const View& y, bool want_event) {
+    if (x.shape.size() != y.shape.size())
+        throw InputError("add: shapes " + to_string(x.shape) + " and " + to_string(y.shape) + " differ");
+    const int n = int(x.shape.size());
+    if (n <= 0) return nullptr;
+    add_.args(x.mem, int(x.offset), y.mem, int(y.offset), n);
+    const std::size_t g[1] = {std::size_t(n)};
+    return ctx.launch(add_, 1, g, kLocal, want_event);
 }
 
 }  // namespace ngi::detail

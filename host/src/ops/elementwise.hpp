@@ -20,9 +20,17 @@ public:
     // by sanitized_count() (which blocks), so a caller can read it after its own work instead of stalling here.
     void sanitize(Context& ctx, const View& x, float lo, float hi);
     int sanitized_count(Context& ctx);
+    // y (planar [channels][n] from y_off floats) = scale[c] * x + shift[c], with item i's channel c of x at
+    // x_off + i * item_stride + c * channel_stride floats (a point list [n][C] is {C, 1}: transposed on the way).
+    // scale and shift hold `channels` floats. NaN stays NaN and overflow gives +-Inf: sanitize y afterwards.
+    cl_event channel_affine(Context& ctx, cl_mem x, std::size_t x_off, int item_stride, int channel_stride,
+                            int channels, int n, cl_mem scale, cl_mem shift, cl_mem y, std::size_t y_off,
+                            bool want_event = false);
+    // x += y (same shape, no overlap): a residual connection.
+    cl_event add(Context& ctx, const View& x, const View& y, bool want_event = false);
 
 private:
-    Kernel act_, dropout_, sanitize_;
+    Kernel act_, dropout_, sanitize_, affine_, add_;
     Buffer counter_;
 };
 

@@ -1,5 +1,8 @@
 #include "ops/set_pool.hpp"
 
+#include <algorithm>
+#include <limits>
+
 namespace ngi::detail {
 
 namespace {
@@ -8,7 +11,8 @@ constexpr int kPoolLocal = 64;  // must match -DLOCAL
 
 SetPool::SetPool(Context& ctx)
     : pool_(ctx.kernel("set_pool", "set_pool", "-DLOCAL=" + std::to_string(kPoolLocal))),
-      broadcast_(ctx.kernel("set_pool", "set_broadcast_concat", "-DLOCAL=" + std::to_string(kPoolLocal))) {}
+      broadcast_(ctx.kernel("set_pool", "set_broadcast_concat", "-DLOCAL=" + std::to_string(kPoolLocal))),
+      pool_planar_(ctx.kernel("set_pool", "set_pool_planar", "-DLOCAL=" + std::to_string(kPoolLocal))) {}
 
 cl_event SetPool::pool(Context& ctx, cl_mem x, int channels, cl_mem first, int sets, PoolMode mode, cl_mem pooled,
                        bool want_event) {
@@ -26,6 +30,29 @@ cl_event SetPool::broadcast_concat(Context& ctx, cl_mem x, int cx, cl_mem pooled
     broadcast_.args(x, cx, pooled, cp, set_of, n, y);
     const std::size_t g[2] = {std::size_t(n), std::size_t(cx + cp)};
     return ctx.launch(broadcast_, 2, g, l, want_event);
+}
+
+void SetPool::pool_planar(Context& ctx, cl_mem x, std::size_t x_off, int channels, int ld, int begin, int end,
+                          PoolMode mode, cl_mem pooled, std::size_t pooled_off, int max_items_per_launch) {
+    if (channels <= 0) return;
+    if (begin < 0 || end < begin || end > ld)
+        throw InputError("set pool: items [" + std::to_string(begin) + ", " + std::to_string(end) +
+                         ") are not within a row of " + std::to_string(ld));
+    // Per work-item: one strided pass over its share of the chunk, then log2(kPoolLocal) tree steps; keep the
+    // chunk's pass below the loop limit with room for the tree.
+    long chunk = std::numeric_limits<int>::max();
+    if (const long limit = ctx.loop_limit(); limit > 0) chunk = std::max(1L, limit - 64) * kPoolLocal;
+    if (max_items_per_launch > 0) chunk = std::min<long>(chunk, max_items_per_launch);
+    const int count = end - begin;
+    const std::size_t g[2] = {std::size_t(kPoolLocal), std::size_t(channels)};
+    const std::size_t l[2] = {std::size_t(kPoolLocal), 1};
+    int lo = begin;
+    do {
+        const int hi = int(std::min<long>(end, lo + chunk));
+        pool_planar_.args(x, int(x_off), ld, lo, hi, count, int(mode), int(lo != begin), pooled, int(pooled_off));
+        ctx.launch(pool_planar_, 2, g, l);
+        lo = hi;
+    } while (lo < end);
 }
 
 }  // namespace ngi::detail

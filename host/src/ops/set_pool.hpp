@@ -17,9 +17,15 @@ public:
     // y [n][cx + cp] = [x[i] | pooled[set_of[i]]].
     cl_event broadcast_concat(Context& ctx, cl_mem x, int cx, cl_mem pooled, int cp, cl_mem set_of, int n, cl_mem y,
                               bool want_event = false);
+    // Planar layout, one set: pooled[pooled_off + c] = max or mean over the items [begin, end) of channel c of x
+    // ([channels][ld] from x_off floats; ld >= end). An empty set pools to 0. The items are split over several
+    // launches when one launch would exceed the device's loop limit (Context::loop_limit), or beyond
+    // max_items_per_launch when that is > 0 (tests force the split with it).
+    void pool_planar(Context& ctx, cl_mem x, std::size_t x_off, int channels, int ld, int begin, int end,
+                     PoolMode mode, cl_mem pooled, std::size_t pooled_off, int max_items_per_launch = 0);
 
 private:
-    Kernel pool_, broadcast_;
+    Kernel pool_, broadcast_, pool_planar_;
 };
 
 }  // namespace ngi::detail

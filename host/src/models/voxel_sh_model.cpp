@@ -1,0 +1,436 @@
+#include "models/voxel_sh_model.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "models/unet.hpp"  // kModelFormatVersion
+
+namespace ngi {
+
+void ModelConfig::VoxelSh::check_grid(int x, int y, int z) const {
+    if (x != grid[0] || y != grid[1] || z != grid[2])
+        throw InputError("voxel_sh model: the scene's grid is " + std::to_string(x) + "x" + std::to_string(y) + "x" +
+                         std::to_string(z) + ", the model was trained on " + std::to_string(grid[0]) + "x" +
+                         std::to_string(grid[1]) + "x" + std::to_string(grid[2]) +
+                         " (its inputs hold absolute positions and voxel ids): use a model trained for this grid");
+}
+
+namespace detail {
+
+namespace {
+
+constexpr int kMaxWidth = 4096;
+constexpr int kMaxHiddenLayers = 64, kMaxSetLayers = 16, kMaxBlocks = 256;
+constexpr int kMaxGridSide = 65536;
+constexpr long long kMaxGridCells = 1LL << 24;  // voxel ids are exact in float32 up to 2^24
+constexpr double kMaxStat = 1e30;
+const std::size_t kPackLocal[1] = {64};  // im2col_packed, as Conv2d launches it
+const char* const kArchitectures[] = {"mlp", "set", "resnet"};
+const char* const kDefaultLayout[kVoxelShInputs] = {"x", "y", "z", "albedo.r", "albedo.g", "albedo.b",
+                                                    "emission.r", "emission.g", "emission.b", "id"};
+
+bool grow(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
+    if (b.bytes() >= bytes) return false;
+    b.reset();
+    b = ctx.alloc(bytes, what);
+    return true;
+}
+
+Buffer upload(Context& ctx, const std::vector<float>& v, const char* what) {
+    Buffer b = ctx.alloc(std::max<std::size_t>(v.size(), 1) * sizeof(float), what);
+    if (!v.empty()) ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
+    return b;
+}
+
+}  // namespace
+
+bool is_voxel_sh_config(const std::string& text) {
+    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    return j.is_object() && j.contains("family") && j["family"].is_string() && j["family"] == "voxel_sh";
+}
+
+ModelConfig parse_voxel_sh_config(const std::string& text, const std::string& path) {
+    const std::string what = "load model " + path + ": metadata 'ngi': ";
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(what + "malformed JSON: " + e.what());
+    }
+    auto fail = [&](const std::string& key, const std::string& rule) -> InputError {
+        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
+        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 160));
+    };
+    // Integers are checked before conversion (get<int> would truncate 2^32 + 4 to 4).
+    auto is_int_in = [](const nlohmann::json& v, long long lo, long long hi) {
+        if (!v.is_number_integer()) return false;
+        if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(LLONG_MAX)) return false;
+        const long long x = v.get<long long>();
+        return x >= lo && x <= hi;
+    };
+    auto integer = [&](const char* key, long long lo, long long hi) {
+        if (!j.contains(key) || !is_int_in(j[key], lo, hi))
+            throw fail(key, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+        return int(j[key].get<long long>());
+    };
+    auto widths = [&](const char* key, std::size_t min_len, std::size_t max_len) {
+        const std::string rule = "a list of " + std::to_string(min_len) + ".." + std::to_string(max_len) +
+                                 " layer widths, integers in 1.." + std::to_string(kMaxWidth);
+        if (!j.contains(key) || !j[key].is_array() || j[key].size() < min_len || j[key].size() > max_len)
+            throw fail(key, rule);
+        std::vector<int> w;
+        for (const auto& v : j[key]) {
+            if (!is_int_in(v, 1, kMaxWidth)) throw fail(key, rule);
+            w.push_back(int(v.get<long long>()));
+        }
+        return w;
+    };
+    auto numbers = [&](const char* key, std::size_t n, double lo) {
+        const std::string rule = "a list of " + std::to_string(n) + " finite numbers in [" +
+                                 (lo == 0 ? std::string("0") : "-1e30") + ", 1e30]";
+        if (!j.contains(key) || !j[key].is_array() || j[key].size() != n) throw fail(key, rule);
+        std::vector<double> v;
+        for (const auto& x : j[key]) {
+            if (!x.is_number()) throw fail(key, rule);
+            const double d = x.get<double>();
+            if (!std::isfinite(d) || d < lo || d > kMaxStat) throw fail(key, rule);
+            v.push_back(d);
+        }
+        return v;
+    };
+
+    if (!j.is_object()) throw InputError(what + "the config is not a JSON object");
+    ModelConfig c;
+    c.json = text;
+    c.family = "voxel_sh";
+    if (j.contains("format_version") && j["format_version"].is_number_integer() &&
+        j["format_version"].get<long long>() > kModelFormatVersion)
+        throw InputError(what + "field 'format_version' is " + j["format_version"].dump() +
+                         ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
+                         "): update ngi");
+    if (j.contains("format_version")) integer("format_version", 1, kModelFormatVersion);
+    c.input_nc = kVoxelShInputs;
+    c.output_nc = kVoxelShOutputs;
+    if (j.contains("input_nc")) integer("input_nc", kVoxelShInputs, kVoxelShInputs);
+    if (j.contains("output_nc")) integer("output_nc", kVoxelShOutputs, kVoxelShOutputs);
+
+    ModelConfig::VoxelSh& v = c.voxel_sh;
+    if (!j.contains("architecture") || !j["architecture"].is_string() ||
+        std::none_of(std::begin(kArchitectures), std::end(kArchitectures),
+                     [&](const char* a) { return j["architecture"] == a; }))
+        throw fail("architecture", "one of \"mlp\", \"set\", \"resnet\"");
+    v.architecture = j["architecture"].get<std::string>();
+
+    const std::string grid_rule = "[X, Y, Z], three integers in 1.." + std::to_string(kMaxGridSide) +
+                                  " with X Y Z <= 2^24 (voxel ids exact in float32)";
+    if (!j.contains("grid") || !j["grid"].is_array() || j["grid"].size() != 3) throw fail("grid", grid_rule);
+    long long cells = 1;
+    for (int k = 0; k < 3; ++k) {
+        if (!is_int_in(j["grid"][k], 1, kMaxGridSide)) throw fail("grid", grid_rule);
+        v.grid[k] = int(j["grid"][k].get<long long>());
+        cells *= v.grid[k];
+    }
+    if (cells > kMaxGridCells) throw fail("grid", grid_rule);
+
+    v.input_lo = numbers("input_lo", kVoxelShInputs, -kMaxStat);
+    v.input_hi = numbers("input_hi", kVoxelShInputs, -kMaxStat);
+    for (int k = 0; k < kVoxelShInputs; ++k) {
+        const double span = v.input_hi[k] - v.input_lo[k];
+        // hi == lo: a constant channel, standardized to 0. Otherwise 2 / span must be a float.
+        if (span < 0 || (span > 0 && 2.0 / span > kMaxStat))
+            throw InputError(what + "fields 'input_lo', 'input_hi': channel " + std::to_string(k) + " has lo " +
+                             std::to_string(v.input_lo[k]) + ", hi " + std::to_string(v.input_hi[k]) +
+                             "; needs lo == hi or 2e-30 <= hi - lo");
+    }
+    v.output_mean = numbers("output_mean", kVoxelShOutputs, -kMaxStat);
+    v.output_std = numbers("output_std", kVoxelShOutputs, 0.0);
+
+    // The width fields of the architecture; those of another one are refused (a file that says both is ambiguous).
+    std::set<std::string> arch_keys;
+    if (v.architecture == "mlp") {
+        v.hidden = widths("hidden", 1, kMaxHiddenLayers);
+        arch_keys = {"hidden"};
+    } else if (v.architecture == "set") {
+        v.phi = widths("phi", 1, kMaxSetLayers);
+        v.rho = widths("rho", 1, kMaxSetLayers);
+        arch_keys = {"phi", "rho"};
+    } else {
+        v.width = integer("width", 1, kMaxWidth);
+        v.blocks = integer("blocks", 0, kMaxBlocks);
+        arch_keys = {"width", "blocks"};
+    }
+    for (const char* k : {"hidden", "phi", "rho", "width", "blocks"})
+        if (j.contains(k) && !arch_keys.count(k))
+            throw InputError(what + "field '" + k + "' does not belong to architecture \"" + v.architecture + "\"");
+
+    if (j.contains("input_layout")) {
+        const nlohmann::json& l = j["input_layout"];
+        const std::string rule = "a list of 10 strings (the attribute names), or empty";
+        if (!l.is_array() || (!l.empty() && l.size() != std::size_t(kVoxelShInputs))) throw fail("input_layout", rule);
+        for (const auto& s : l) {
+            if (!s.is_string()) throw fail("input_layout", rule);
+            c.input_layout.push_back(s.get<std::string>());
+        }
+    }
+    if (c.input_layout.empty()) c.input_layout.assign(std::begin(kDefaultLayout), std::end(kDefaultLayout));
+    if (j.contains("source")) {
+        if (!j["source"].is_string()) throw fail("source", "a string");
+        c.source = j["source"].get<std::string>();
+    }
+    if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
+    static const char* const kKnown[] = {"format_version", "family", "architecture", "input_nc", "output_nc", "grid",
+                                         "input_lo", "input_hi", "output_mean", "output_std", "hidden", "phi", "rho",
+                                         "width", "blocks", "input_layout", "source", "training", "required"};
+    if (j.contains("required")) {
+        const nlohmann::json& r = j["required"];
+        if (!r.is_array()) throw fail("required", "a list of field names");
+        for (const auto& name : r) {
+            if (!name.is_string()) throw fail("required", "a list of field names");
+            const std::string n = name.get<std::string>();
+            if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return n == k; }))
+                throw InputError(what + "field 'required' lists '" + n.substr(0, 80) +
+                                 "', which this reader does not know: the file needs a newer ngi");
+        }
+    }
+    return c;
+}
+
+// ---- one dense layer --------------------------------------------------------------------------------------
+
+VoxelShDense::VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
+                           const std::vector<float>& scale, const std::vector<float>& shift, Act act)
+    : in_(in),
+      out_(out),
+      act_(act),
+      gemm_(ctx, p),
+      pack_(ctx.kernel("im2col", "im2col_packed", "-DNR=" + std::to_string(p.nr()))) {
+    if (weight.size() != std::size_t(in) * out || (!scale.empty() && int(scale.size()) != out) ||
+        (!shift.empty() && int(shift.size()) != out))
+        throw Error("voxel_sh dense layer: inconsistent sizes");
+    ap_ = upload(ctx, pack_a(weight.data(), out, in, in, p), "voxel_sh packed weights");
+    scale_ = upload(ctx, scale.empty() ? std::vector<float>(out, 1.0f) : scale, "voxel_sh scale");
+    shift_ = upload(ctx, shift.empty() ? std::vector<float>(out, 0.0f) : shift, "voxel_sh shift");
+    weight_bytes_ = ap_.bytes() + scale_.bytes() + shift_.bytes();
+}
+
+std::size_t VoxelShDense::scratch_floats(int n) const { return packed_b_floats(in_, n, gemm_.params()); }
+
+void VoxelShDense::enqueue(Context& ctx, cl_mem x, std::size_t x_off, int n, cl_mem y, std::size_t y_off,
+                           cl_mem scratch, cl_mem shift) {
+    const GemmParams& p = gemm_.params();
+    // x as a [in, 1, n] image through a 1 x 1 im2col: a plain pack of the [in][n] matrix into B panels.
+    pack_.args(x, int(x_off), in_, 1, n, 1, 1, 1, 0, 1, n, padded_k(in_, p), scratch, 0, int(Activation::None), 0.0f);
+    const std::size_t g[1] = {round_up(std::size_t(n), std::size_t(p.nr()))};
+    ctx.launch(pack_, 1, g, kPackLocal);
+    gemm_.enqueue(ctx, out_, n, in_, ap_.get(), scratch, 0, y, y_off, n, scale_.get(), shift ? shift : shift_.get(),
+                  act_);
+}
+
+// ---- the runner -------------------------------------------------------------------------------------------
+
+VoxelShRunner::VoxelShRunner(Context& ctx, const ModelConfig& config, const SafetensorsFile& file,
+                             const std::string& path, const GemmParams& gemm)
+    : cfg_(config.voxel_sh), elementwise_(ctx), pool_(ctx) {
+    const std::string where = "load model " + path + ": ";
+    std::set<std::string> used;
+    auto tensor = [&](const std::string& name, int rows, int cols) -> const std::vector<float>& {
+        auto t = file.tensors.find(name);
+        if (t == file.tensors.end())
+            throw InputError(where + "tensor '" + name + "' is missing (voxel_sh " + cfg_.architecture + ")");
+        const std::vector<int> want = cols > 0 ? std::vector<int>{rows, cols} : std::vector<int>{rows};
+        if (t->second.shape != want)
+            throw InputError(where + "tensor '" + name + "' is " + shape_string(t->second.shape) + ", expected " +
+                             shape_string(want));
+        for (std::size_t i = 0; i < t->second.data.size(); ++i)
+            if (!std::isfinite(t->second.data[i]))
+                throw InputError(where + "tensor '" + name + "': value " + std::to_string(i) + " is not finite");
+        used.insert(name);
+        return t->second.data;
+    };
+    // Output de-standardization folded into the last layer's epilogue: y = std (W h + b) + mean.
+    auto output_layer = [&](const std::string& prefix, int in) {
+        const std::vector<float>& w = tensor(prefix + ".weight", kVoxelShOutputs, in);
+        const std::vector<float>& b = tensor(prefix + ".bias", kVoxelShOutputs, 0);
+        std::vector<float> scale(kVoxelShOutputs), shift(kVoxelShOutputs);
+        for (int k = 0; k < kVoxelShOutputs; ++k) {
+            scale[k] = float(cfg_.output_std[k]);
+            shift[k] = float(cfg_.output_std[k] * double(b[k]) + cfg_.output_mean[k]);
+        }
+        layers_.emplace_back(ctx, gemm, in, kVoxelShOutputs, w, scale, shift, Act::none());
+    };
+    auto hidden_layer = [&](const std::string& prefix, int in, int out) {
+        layers_.emplace_back(ctx, gemm, in, out, tensor(prefix + ".weight", out, in), std::vector<float>{},
+                             tensor(prefix + ".bias", out, 0), Act::tanh());
+    };
+
+    int in = kVoxelShInputs;
+    widest_ = kVoxelShOutputs;
+    if (cfg_.architecture == "mlp") {
+        for (std::size_t i = 0; i < cfg_.hidden.size(); ++i) {
+            hidden_layer("layers." + std::to_string(i), in, cfg_.hidden[i]);
+            in = cfg_.hidden[i];
+        }
+        output_layer("layers." + std::to_string(cfg_.hidden.size()), in);
+    } else if (cfg_.architecture == "set") {
+        for (std::size_t i = 0; i < cfg_.phi.size(); ++i) {
+            hidden_layer("phi." + std::to_string(i), in, cfg_.phi[i]);
+            in = cfg_.phi[i];
+        }
+        // rho.0 reads [h | max | mean] (3P wide). The pooled part is the same for every voxel of the scene, so
+        // rho.0 = W[:, :P] h + (W[:, P:] pooled + b): the second term, one [rho0, 2P] x [2P, 1] product per
+        // scene, becomes the per-scene bias of a P-wide layer (a third of the multiply-adds of the concat).
+        const int p = in, r0 = cfg_.rho[0];
+        const std::vector<float>& w = tensor("rho.0.weight", r0, 3 * p);
+        std::vector<float> local(std::size_t(r0) * p), global(std::size_t(r0) * 2 * p);
+        for (int o = 0; o < r0; ++o) {
+            std::copy_n(w.begin() + std::size_t(o) * 3 * p, p, local.begin() + std::size_t(o) * p);
+            std::copy_n(w.begin() + std::size_t(o) * 3 * p + p, 2 * p, global.begin() + std::size_t(o) * 2 * p);
+        }
+        layers_.emplace_back(ctx, gemm, 2 * p, r0, global, std::vector<float>{}, tensor("rho.0.bias", r0, 0),
+                             Act::none());
+        layers_.emplace_back(ctx, gemm, p, r0, local, std::vector<float>{}, std::vector<float>{}, Act::tanh());
+        in = r0;
+        for (std::size_t i = 1; i < cfg_.rho.size(); ++i) {
+            hidden_layer("rho." + std::to_string(i), in, cfg_.rho[i]);
+            in = cfg_.rho[i];
+        }
+        output_layer("rho." + std::to_string(cfg_.rho.size()), in);
+    } else {
+        hidden_layer("input", in, cfg_.width);
+        for (int i = 0; i < cfg_.blocks; ++i) hidden_layer("blocks." + std::to_string(i), cfg_.width, cfg_.width);
+        output_layer("output", cfg_.width);
+    }
+    for (const VoxelShDense& l : layers_) widest_ = std::max({widest_, l.in(), l.out()});
+    for (const auto& [name, t] : file.tensors)
+        if (!used.count(name))
+            throw InputError(where + "tensor '" + name + "' is not part of this voxel_sh " + cfg_.architecture +
+                             " network");
+
+    // x' = s x + t with s = 2 / (hi - lo), t = -2 lo / (hi - lo) - 1 (0 and 0 for a constant channel).
+    std::vector<float> s(kVoxelShInputs, 0.0f), t(kVoxelShInputs, 0.0f);
+    for (int k = 0; k < kVoxelShInputs; ++k) {
+        const double span = cfg_.input_hi[k] - cfg_.input_lo[k];
+        if (span > 0) {
+            s[k] = float(2.0 / span);
+            t[k] = float(-2.0 * cfg_.input_lo[k] / span - 1.0);
+        }
+    }
+    in_scale_ = upload(ctx, s, "voxel_sh input scale");
+    in_shift_ = upload(ctx, t, "voxel_sh input shift");
+}
+
+std::size_t VoxelShRunner::weight_bytes() const {
+    std::size_t b = in_scale_.bytes() + in_shift_.bytes();
+    for (const VoxelShDense& l : layers_) b += l.weight_bytes();
+    return b;
+}
+
+void VoxelShRunner::reserve(Context& ctx, int n) {
+    if (n <= capacity_) return;
+    std::size_t scratch = 0;
+    for (const VoxelShDense& l : layers_) scratch = std::max(scratch, l.scratch_floats(n));
+    // Offsets and sizes reach the kernels as int.
+    if (std::size_t(widest_) * std::size_t(n) > std::size_t(INT_MAX) || scratch > std::size_t(INT_MAX))
+        throw InputError("voxel_sh model: " + std::to_string(n) + " voxels are too many for one run of a network " +
+                         std::to_string(widest_) + " wide (at most " + std::to_string(INT_MAX / widest_) + ")");
+    const std::size_t f = sizeof(float), items = std::size_t(n);
+    std_.reset();
+    a_.reset();
+    b_.reset();
+    scratch_.reset();
+    std_ = ctx.alloc(kVoxelShInputs * items * f, "voxel_sh standardized input");
+    a_ = ctx.alloc(std::size_t(widest_) * items * f, "voxel_sh activations");
+    b_ = ctx.alloc(std::size_t(widest_) * items * f, "voxel_sh activations");
+    scratch_ = ctx.alloc(scratch * f, "voxel_sh packed input");
+    if (cfg_.architecture == "set" && !pooled_) {
+        pooled_ = ctx.alloc(2 * std::size_t(cfg_.phi.back()) * f, "voxel_sh pooled features");
+        bias_ = ctx.alloc(std::size_t(cfg_.rho[0]) * f, "voxel_sh per-scene bias");
+    }
+    capacity_ = n;
+}
+
+void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y) {
+    reserve(ctx, n);
+    cl_mem xs = std_.get(), a = a_.get(), b = b_.get(), scratch = scratch_.get();
+    elementwise_.channel_affine(ctx, x, 0, item_stride, channel_stride, kVoxelShInputs, n, in_scale_.get(),
+                                in_shift_.get(), xs, 0);
+    elementwise_.sanitize(ctx, View{xs, 0, Shape{kVoxelShInputs, 1, n}}, -kVoxelShInputBound, kVoxelShInputBound);
+    // Layers first .. last-1 ping-pong between a and b starting from `in`; the last writes y. Returns the buffer
+    // the chain's last hidden layer wrote.
+    auto chain = [&](std::size_t first, std::size_t end, cl_mem in, bool to_y) {
+        for (std::size_t l = first; l < end; ++l) {
+            const bool last = to_y && l + 1 == end;
+            cl_mem out = last ? y : (in == a ? b : a);
+            layers_[l].enqueue(ctx, in, 0, n, out, 0, scratch);
+            in = out;
+        }
+        return in;
+    };
+    if (cfg_.architecture == "mlp") {
+        chain(0, layers_.size(), xs, true);
+    } else if (cfg_.architecture == "resnet") {
+        layers_[0].enqueue(ctx, xs, 0, n, a, 0, scratch);
+        const Shape hidden{cfg_.width, 1, n};
+        for (int i = 1; i <= cfg_.blocks; ++i) {
+            layers_[i].enqueue(ctx, a, 0, n, b, 0, scratch);  // b = tanh(W a + bias)
+            elementwise_.add(ctx, View{a, 0, hidden}, View{b, 0, hidden});
+        }
+        layers_.back().enqueue(ctx, a, 0, n, y, 0, scratch);
+    } else {
+        const std::size_t phis = cfg_.phi.size();
+        const int p = cfg_.phi.back();
+        cl_mem h = chain(0, phis, xs, false);
+        cl_mem other = h == a ? b : a;
+        pool_.pool_planar(ctx, h, 0, p, n, 0, n, PoolMode::Max, pooled_.get(), 0);
+        pool_.pool_planar(ctx, h, 0, p, n, 0, n, PoolMode::Mean, pooled_.get(), std::size_t(p));
+        layers_[phis].enqueue(ctx, pooled_.get(), 0, 1, bias_.get(), 0, scratch);              // W_g pooled + b
+        layers_[phis + 1].enqueue(ctx, h, 0, n, other, 0, scratch, bias_.get());               // tanh(W_l h + that)
+        chain(phis + 2, layers_.size(), other, true);
+    }
+}
+
+void VoxelShRunner::enqueue(Context& ctx, cl_mem in, cl_mem out, int n) {
+    if (n < 1 || n > (1 << 30)) throw InputError("voxel_sh model: " + std::to_string(n) + " voxels (1 .. 2^30)");
+    forward(ctx, in, 1, n, n, out);
+}
+
+Tensor VoxelShRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
+    const auto& s = x.shape;
+    if (s.size() != 2 || s[1] != kVoxelShInputs)
+        throw InputError("run model: input tensor is " + shape_string(s) +
+                         ", a voxel_sh model takes [V, 10] (x, y, z, albedo rgb, emission rgb, voxel id per voxel)");
+    if (x.data.size() != Tensor::element_count(s))
+        throw InputError("run model: input tensor has " + std::to_string(x.data.size()) + " values for shape " +
+                         shape_string(s));
+    const int n = s[0];
+    if (n < 1 || n > (1 << 30)) throw InputError("run model: " + std::to_string(n) + " voxels (1 .. 2^30)");
+    const std::size_t in_bytes = x.data.size() * sizeof(float);
+    const std::size_t out_bytes = std::size_t(kVoxelShOutputs) * std::size_t(n) * sizeof(float);
+    grow(ctx, raw_, in_bytes, "voxel_sh input");
+    grow(ctx, out_, out_bytes, "voxel_sh output");
+    ctx.write(raw_, 0, in_bytes, x.data.data(), "voxel_sh input");
+    forward(ctx, raw_.get(), kVoxelShInputs, 1, n, out_.get());  // the point list is transposed by the affine
+    std::vector<float> planar(std::size_t(kVoxelShOutputs) * n);
+    ctx.read(out_, 0, out_bytes, planar.data(), "voxel_sh output");
+    Tensor y({n, kVoxelShOutputs});
+    for (int i = 0; i < n; ++i)
+        for (int c = 0; c < kVoxelShOutputs; ++c)
+            y.data[std::size_t(i) * kVoxelShOutputs + c] = planar[std::size_t(c) * n + i];
+    if (info) {
+        info->sanitized_inputs = elementwise_.sanitized_count(ctx);
+        info->layers.clear();
+        info->weight_bytes = weight_bytes();
+        info->scratch_bytes = scratch_.bytes();
+        info->arena_bytes = raw_.bytes() + out_.bytes() + std_.bytes() + a_.bytes() + b_.bytes() + pooled_.bytes() +
+                            bias_.bytes();
+        info->naive_bytes = info->arena_bytes;
+    }
+    return y;
+}
+
+}  // namespace detail
+}  // namespace ngi

@@ -1,0 +1,88 @@
+// The "voxel_sh" model family (seed 004, docs/MODEL_FORMAT.md "voxel_sh"): its metadata fields, its tensors, and
+// the runner Model uses for it. Per occupied voxel of one scene: 10 raw attributes in, 27 SH coefficients out.
+//
+// Everything runs on the device in the planar [C, V] layout of the packed GEMM: the input standardization (a
+// per-channel affine, transposing a point list on the way) and the guard, the dense layers (im2col pack + GEMM,
+// bias and activation in the GEMM epilogue), the residual adds, the set pooling, and the output de-standardization
+// (folded into the last layer's epilogue: y = std * (W h) + (std * b + mean)). No host round trip between layers.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "models/safetensors.hpp"
+#include "ngi/model.hpp"
+#include "ops/elementwise.hpp"
+#include "ops/gemm.hpp"
+#include "ops/set_pool.hpp"
+
+namespace ngi::detail {
+
+constexpr int kVoxelShInputs = 10;   // x, y, z, albedo rgb, emission rgb, voxel id (seed 004 Eq. 2)
+constexpr int kVoxelShOutputs = 27;  // SH bands 0-2 x RGB, [3][9]
+// Standardized inputs beyond +-this (a raw value some 10^6 training ranges outside it, +-Inf, FLT_MAX) are replaced
+// by it, NaN by 0 (the middle of the training range), and counted (RunInfo::sanitized_inputs). Far above any real
+// input, and small enough that the first layer's sums stay finite (docs/MODEL_FORMAT.md "voxel_sh"). Keep in sync
+// with training/voxel_sh/networks.py INPUT_BOUND.
+constexpr float kVoxelShInputBound = 1e6f;
+
+// True when the metadata JSON `text` is an object whose "family" is "voxel_sh" (anything else, malformed JSON
+// included, is left to parse_model_config and its messages).
+bool is_voxel_sh_config(const std::string& text);
+// The config of a voxel_sh file; InputError naming the file and the field for every violation.
+ModelConfig parse_voxel_sh_config(const std::string& text, const std::string& path);
+
+// One dense layer over planar items on the packed GEMM: y[out][n] = act(scale * (W x) + shift), x [in][n] and
+// y [out][n] with row stride n. W in nn.Linear's [out][in] layout; empty scale = 1, empty shift = 0. The shift can be
+// replaced per call by a device buffer (the set network's per-scene bias).
+class VoxelShDense {
+public:
+    VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
+                 const std::vector<float>& scale, const std::vector<float>& shift, Act act);
+    int in() const { return in_; }
+    int out() const { return out_; }
+    std::size_t scratch_floats(int n) const;  // the packed input
+    std::size_t weight_bytes() const { return weight_bytes_; }
+    void enqueue(Context& ctx, cl_mem x, std::size_t x_off, int n, cl_mem y, std::size_t y_off, cl_mem scratch,
+                 cl_mem shift = nullptr);
+
+private:
+    int in_, out_;
+    Act act_;
+    Gemm gemm_;
+    Kernel pack_;
+    Buffer ap_, scale_, shift_;
+    std::size_t weight_bytes_ = 0;
+};
+
+class VoxelShRunner {
+public:
+    // Checks every tensor of the file against the config (names, shapes, finite values; nothing extra).
+    VoxelShRunner(Context& ctx, const ModelConfig& config, const SafetensorsFile& file, const std::string& path,
+                  const GemmParams& gemm);
+    // Host in, host out: [V, 10] raw attributes -> [V, 27].
+    Tensor run(Context& ctx, const Tensor& input, RunInfo* info);
+    // Device in, device out, planar from byte 0: in [10, n], out [27, n]. The input is only read.
+    void enqueue(Context& ctx, cl_mem in, cl_mem out, int n);
+    int sanitized_count(Context& ctx) { return elementwise_.sanitized_count(ctx); }
+    std::size_t weight_bytes() const;
+
+private:
+    // x: item i's channel c at i * item_stride + c * channel_stride floats; y: planar [27][n].
+    void forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y);
+    void reserve(Context& ctx, int n);  // the intermediate buffers for n items
+
+    ModelConfig::VoxelSh cfg_;
+    Elementwise elementwise_;
+    SetPool pool_;
+    // mlp: hidden..., output. set: phi..., rho global part (pooled -> bias), rho local part, rho..., output.
+    // resnet: input, blocks..., output.
+    std::vector<VoxelShDense> layers_;
+    Buffer in_scale_, in_shift_;
+    int widest_ = 0;    // the widest layer: a_ and b_ hold widest_ x capacity_ floats
+    int capacity_ = 0;  // items the buffers below hold
+    Buffer std_, a_, b_, scratch_, pooled_, bias_;  // standardized input, ping-pong, packed input, set network
+    Buffer raw_, out_;                              // run(): the host's point list, the planar output
+};
+
+}  // namespace ngi::detail
