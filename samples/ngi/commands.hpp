@@ -14,5 +14,7 @@ Run add_render(CLI::App& app);
 Run add_dataset(CLI::App& app);
 Run add_ao_data(CLI::App& app);
 Run add_ao(CLI::App& app);
+Run add_voxel_data(CLI::App& app);
+Run add_probe_gi(CLI::App& app);
 
 }  // namespace ngi_cli

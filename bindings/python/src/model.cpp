@@ -1,4 +1,4 @@
-// ngi.Model: a model file (generator or mlp) loaded on a device, run on NumPy arrays or on device buffers.
+// ngi.Model: a model file (generator, mlp or voxel_sh) loaded on a device, run on NumPy arrays or on device buffers.
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
@@ -14,7 +14,10 @@ py::dict config_dict(const ngi::ModelConfig& c) {
     d["family"] = c.family;
     d["input_nc"] = c.input_nc;
     d["output_nc"] = c.output_nc;
-    if (c.family != "mlp") {
+    if (c.family == "voxel_sh") {
+        d["architecture"] = c.voxel_sh.architecture;
+        d["grid"] = py::make_tuple(c.voxel_sh.grid[0], c.voxel_sh.grid[1], c.voxel_sh.grid[2]);
+    } else if (c.family != "mlp") {
         d["ngf"] = c.ngf;
         d["num_downs"] = c.num_downs;
         d["bn_mode"] = c.bn_mode;
@@ -68,7 +71,8 @@ struct PyAo {
 
 void register_model(py::module_& m) {
     py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
-A model file loaded on a device: a generator (pix2pix_unet, deepillumination) or an mlp (docs/MODEL_FORMAT.md).
+A model file loaded on a device: a generator (pix2pix_unet, deepillumination), an mlp or a voxel_sh field network
+(docs/MODEL_FORMAT.md).
 
 Model(device, path, bn_mode=None, dropout=None, mlp_path=None): the options override the file's settings
 ("running" | "per_image"; "off" | "seeded"; "fused" | "dense"). Weights are packed and uploaded once; the graph for
@@ -92,7 +96,8 @@ each input size is built on first use.)doc")
         .def("run", [](PyModel& pm, const py::object& input) -> py::array_t<float> {
             FloatArray x = float_array(input, "Model.run: input");
             const ngi::ModelConfig& c = pm.model.config();
-            const bool mlp = c.family == "mlp";
+            // Per-item families take point lists [N, C] too (voxel_sh: [V, 10], one scene's voxels).
+            const bool mlp = c.family == "mlp" || c.family == "voxel_sh";
             expect_ndim(x, mlp ? std::initializer_list<int>{2, 4} : std::initializer_list<int>{4}, "Model.run: input",
                         mlp ? "[1, C, H, W] or [N, C]" : "[1, C, H, W]");
             if (x.ndim() == 4) {
