@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -114,6 +115,16 @@ int run(Options o) {
     const std::vector<float> direct = read_field(o.field, "direct.npy", {V, 3});
     const std::vector<float> voxel_lighting = read_field(o.field, "lighting.npy", {V, 3});
 
+    // The surround generator, if asked for, is loaded (and its size rule checked) before the long render.
+    std::optional<ngi::Model> surround;
+    if (!o.surround_model.empty()) {
+        surround.emplace(ngi::Model::load(device, o.surround_model));
+        const int k = surround->config().num_downs;  // global view 2N x 4N: 2N must be divisible by 2^num_downs
+        if (k < 1 || k > 12 || (2 * o.rs.n) % (1 << k) != 0)
+            throw UsageError("--face " + std::to_string(o.rs.n) + ": the surround model " + o.surround_model +
+                             " needs 2N divisible by 2^" + std::to_string(k) + " (N a multiple of " +
+                             std::to_string(k >= 1 && k <= 12 ? (1 << k) / 2 : 0) + ")");
+    }
     // The view: frame K of the scene's dataset camera path (as ngi render), rendered with its reference.
     const ngi::CameraPath path = ngi::dataset_camera_path(scene, o.frames, 25);
     const ngi::CameraPose pose = path.at(float(o.frame));
@@ -217,11 +228,10 @@ int run(Options o) {
             if (phys) methods.back().extra["visibility_ms"] = vis_ms;
         }
     }
-    if (!o.surround_model.empty()) {  // the thesis generator on the same view (its six faces are rendered)
-        ngi::Model model = ngi::Model::load(device, o.surround_model);
-        pipeline.run(model, frame, true, false, false);  // warm-up: program builds
+    if (surround) {  // the thesis generator on the same view (its six faces are rendered)
+        pipeline.run(*surround, frame, true, false, false);  // warm-up: program builds
         const auto tg = Clock::now();
-        ngi::FrameImages im = pipeline.run(model, frame, true, false, false);
+        ngi::FrameImages im = pipeline.run(*surround, frame, true, false, false);
         const double ms = ms_since(tg);
         methods.push_back({"surround_generator", "the thesis generator " + o.surround_model, std::move(im.lightmap),
                            {}, ms, 0.0});
@@ -290,9 +300,13 @@ Run add_probe_gi(CLI::App& app) {
     add_path(*cmd, "--scene", o->spec, "SPEC", "the scene (a procedural family[:seed=S] or a .vox file)", true);
     add_path(*cmd, "--field", o->field, "DIR", "the scene's ngi voxel-data folder (same time of day)", true);
     add_path(*cmd, "--out", o->out, "DIR", "the folder to write", true);
-    cmd->add_option("--model", o->models, "a trained voxel_sh model (repeatable)")->type_name("M.safetensors");
+    // Repeatable (the app's default refuses a repeated option): every occurrence adds one.
+    cmd->add_option("--model", o->models, "a trained voxel_sh model (repeatable)")
+        ->type_name("M.safetensors")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     cmd->add_option("--sh", o->sh_files, "another SH field [V,27] to shade, e.g. a baseline (repeatable)")
-        ->type_name("NAME=FILE.npy");
+        ->type_name("NAME=FILE.npy")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     add_nonempty(*cmd, "--surround-model", o->surround_model, "M.safetensors",
                  "also run a thesis generator on the view, for comparison");
     add_integer(*cmd, "--ltf-bounces", o->ltf_bounces, 0, 64, "T", "bounces of both LTF variants (0: no LTF)");

@@ -53,7 +53,8 @@ std::string stray_or_repeated(const CLI::App& app, const CLI::App* cmd) {
     }
     if (cmd)
         for (const CLI::Option* o : cmd->get_options())
-            if (o->count() > 1) return "option " + o->get_name() + " given twice";
+            if (o->count() > 1 && o->get_multi_option_policy() != CLI::MultiOptionPolicy::TakeAll)
+                return "option " + o->get_name() + " given twice";  // TakeAll: a repeatable option (probe-gi --model)
     return "";
 }
 

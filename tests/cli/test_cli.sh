@@ -103,7 +103,7 @@ out=$("$ngi" --version) || fail "ngi --version: exit code $?"
 [ "$out" = "ngi $version" ] || fail "ngi --version printed '$out', expected 'ngi $version'"
 for help in "--help" "help"; do
   "$ngi" $help > "$work/help.out" || fail "ngi $help: exit code $?"
-  for word in devices generate metrics merge lightmap render dataset ao-data "exit codes" "3 device failure"; do
+  for word in devices generate metrics merge lightmap render dataset ao-data voxel-data probe-gi "exit codes" "3 device failure"; do
     grep -q -- "$word" "$work/help.out" || fail "ngi $help does not mention $word: $(cat "$work/help.out")"
   done
 done
@@ -268,5 +268,48 @@ expect=normal.npy
 expect_failure ao_missing "$ngi" ao --frame "$work/missing" --model "$ao_model" --out "$work/out_ao_missing"
 expect=--radius
 expect_usage ao_radius "$ngi" ao --frame "$work/aod/heldout/v0000" --model "$ao_model" --out "$work/out_ao_radius" --radius nan
+
+# ---- seed 004's voxel field: per-voxel ground truth of a small scene, then frames lit from it.
+"$ngi" voxel-data --scene room:seed=1 --out "$work/vd" --directions 16 --samples 4 --bounces 1 > /dev/null
+for f in attributes.npy sh.npy normal.npy probe.npy exposed.npy direct.npy lighting.npy face_lighting.npy scene.json; do
+  [ -s "$work/vd/$f" ] || fail "ngi voxel-data did not write $f"
+done
+/usr/bin/python3 - "$work/vd" <<'PY' || fail "ngi voxel-data: inconsistent outputs"
+import json, sys
+import numpy as np
+d = sys.argv[1]
+meta = json.load(open(d + "/scene.json"))
+V = meta["voxels"]
+shapes = {"attributes": (V, 10), "sh": (V, 27), "normal": (V, 3), "probe": (V, 3), "exposed": (V,), "direct": (V, 3),
+          "lighting": (V, 3), "face_lighting": (V, 6, 3)}
+for name, shape in shapes.items():
+    a = np.load(f"{d}/{name}.npy")
+    assert a.shape == shape and np.isfinite(a).all(), (name, a.shape, shape)
+assert V > 100 and meta["grid"] == [20, 8, 24], meta
+PY
+"$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --out "$work/pg" --face 16 --spp 4 --ltf-bounces 2 > /dev/null
+for f in metrics.json reference.exr final_reference.png lightmap_pt_sh.exr final_ltf_physical.png compare_direct.png \
+         field_ltf_as_written.npy field_ltf_physical.npy; do
+  [ -s "$work/pg/$f" ] || fail "ngi probe-gi did not write $f"
+done
+/usr/bin/python3 -c "
+import json, sys
+m = json.load(open(sys.argv[1]))['methods']
+assert set(m) == {'direct', 'pt_voxel_lighting', 'pt_sh', 'ltf_as_written', 'ltf_physical'}, sorted(m)
+assert all(v['final_ldr']['ssim'] is not None for v in m.values()), m
+assert m['ltf_physical']['field_ms'] > 0 and len(m['ltf_physical']['energy_per_iterate']) == 3, m['ltf_physical']
+" "$work/pg/metrics.json" || fail "ngi probe-gi metrics: $(head -c 2000 "$work/pg/metrics.json")"
+voxel_model=$(dirname "$0")/../../models/voxel_sh_set.safetensors
+expect="trained for a 40x40x40 grid"  # the shipped field networks know the Cornell boxes' grid only
+expect_failure probe_grid "$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --model "$voxel_model" --face 16 \
+  --spp 4 --ltf-bounces 0 --out "$work/out_probe_grid"
+no_unexpected probe_grid
+expect="not those of room:seed=1 at 23"  # the lamps are on at night: another emission attribute
+expect_failure probe_field "$ngi" probe-gi --scene room:seed=1 --time 23 --field "$work/vd" --face 16 --spp 4 \
+  --out "$work/out_probe_field"
+expect=--sh
+expect_usage probe_sh "$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --sh nameless --out "$work/out_probe_sh"
+expect=--directions
+expect_usage voxel_dirs "$ngi" voxel-data --scene room:seed=1 --out "$work/out_voxel_dirs" --directions 0
 
 echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

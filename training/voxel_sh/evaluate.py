@@ -13,7 +13,7 @@ Methods
 Metrics per test scene
   sh_mse_std        mean squared error of the 27 coefficients standardized by the TRAINING statistics (per
                     coefficient mean and std): seed 004's Table 1 "MSE" in comparable units
-  face_rel_mse      sum over exposed faces of (E_pred - E_true)^2 / sum E_true^2, lighting units (irradiance / pi);
+  face_rel_mse      sum over exposed faces toward the grid's interior of (E_pred - E_true)^2 / sum E_true^2, lighting units (irradiance / pi);
                     E_pred from the SH at the face normal (cosine lobe), or the per-voxel lighting for the LTF;
                     E_true = the path-traced lighting of that face (face_lighting.npy)
   probe_rel_mse     the same at the probe point, toward the voxel's shading normal, against lighting.npy
@@ -111,6 +111,8 @@ def main(argv=None):
                     help="per test scene (same order), an ngi probe-gi output folder with field_ltf_*.npy, or '-'")
     ap.add_argument("--devices", nargs="+", default=["pocl"], help="OpenCL devices to time the models on")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--baselines", help="also write each test scene's mean_position SH here as "
+                                        "mean_position_<scene folder>.npy (for ngi probe-gi --sh)")
     args = ap.parse_args(argv)
 
     train = data.load_scenes(args.train)
@@ -132,7 +134,14 @@ def main(argv=None):
         centres = scene.attributes[:, :3].astype(np.float64)
         shading_normal = probe_pts - centres
         shading_normal /= np.linalg.norm(shading_normal, axis=1, keepdims=True)
-        mask = np.stack([(exposed >> f) & 1 for f in range(6)], 1).astype(bool)
+        # Faces toward the grid's interior only: a one-block wall on the border (the Cornell boxes fill the grid)
+        # also has an outer face, lit by the sky outside, which its probe (on the inner side) does not represent and
+        # no camera inside the grid sees.
+        cells = np.floor(centres).astype(np.int64)
+        grid = np.array(scene.grid)
+        inward = np.stack([cells[:, f // 2] + (1 - 2 * (f % 2)) for f in range(6)], 1)
+        inside = (inward >= 0) & (inward < grid[np.arange(6) // 2])
+        mask = np.stack([(exposed >> f) & 1 for f in range(6)], 1).astype(bool) & inside
         true_sh = scene.sh.astype(np.float64)
         methods = {}
 
@@ -156,6 +165,9 @@ def main(argv=None):
                 extra={"note": "a second independent estimate: sh_mse_std / 2 is the noise of one estimate"})
         base, hits = mean_position_baseline(train, scene.attributes)
         add("mean_position", base, extra={"voxels_with_same_cell_in_training": hits})
+        if args.baselines:
+            Path(args.baselines).mkdir(parents=True, exist_ok=True)
+            np.save(Path(args.baselines) / f"mean_position_{folder.name}.npy", base.astype(np.float32))
         for path in args.models:
             times = {}
             pred = None

@@ -142,7 +142,7 @@ def write_card(path, run, result):
         f"{r['wall_seconds']:.1f} s with evaluation",
         f"- **Standardized MSE** (all voxels x 27 coefficients; seed 004 Table 1's unit): train "
         f"{_fmt(r['train_mse'])}, test {_fmt(r['test_mse'])}",
-        f"- **File**: {r['out']} ({'F16' if c['half'] else 'F32'} weights)",
+        f"- **File**: {Path(r['out']).name} ({'F16' if c['half'] else 'F32'} weights)",
         "",
     ]
     Path(path).write_text("\n".join(lines))
