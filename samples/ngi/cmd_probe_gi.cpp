@@ -195,7 +195,11 @@ int run(Options o) {
         const ngi::ModelConfig& c = model.config();
         if (c.family != "voxel_sh")
             throw ngi::InputError("load model " + model_path + ": family " + c.family + ", ngi probe-gi needs voxel_sh");
-        c.voxel_sh.check_grid(scene.size.x, scene.size.y, scene.size.z);  // InputError naming both sizes
+        try {
+            c.voxel_sh.check_grid(scene.size.x, scene.size.y, scene.size.z);  // InputError naming both sizes
+        } catch (const ngi::InputError& e) {
+            throw ngi::InputError("model " + model_path + " on " + scene.name + ": " + e.what());
+        }
         ngi::Tensor in({V, ngi::kVoxelAttributes});
         in.data = voxels.attributes;
         model.run(in);  // the first run builds the programs and the graph: not what a frame costs

@@ -300,7 +300,7 @@ assert all(v['final_ldr']['ssim'] is not None for v in m.values()), m
 assert m['ltf_physical']['field_ms'] > 0 and len(m['ltf_physical']['energy_per_iterate']) == 3, m['ltf_physical']
 " "$work/pg/metrics.json" || fail "ngi probe-gi metrics: $(head -c 2000 "$work/pg/metrics.json")"
 voxel_model=$(dirname "$0")/../../models/voxel_sh_set.safetensors
-expect="trained for a 40x40x40 grid"  # the shipped field networks know the Cornell boxes' grid only
+expect="voxel_sh_set.safetensors on room:seed=1: voxel_sh model: the scene's grid is 20x8x24, the model was trained on 40x40x40"
 expect_failure probe_grid "$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --model "$voxel_model" --face 16 \
   --spp 4 --ltf-bounces 0 --out "$work/out_probe_grid"
 no_unexpected probe_grid
