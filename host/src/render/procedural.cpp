@@ -441,8 +441,8 @@ VoxelScene sculpture(std::uint32_t seed) {
 
 // ---- cornell: seed 004's voxel Cornell boxes (one fixed grid, so per-voxel networks see one coordinate frame) ----
 // A closed 40^3 box of 1-block walls: red -x wall, green +x wall, white floor, ceiling and back; 1-2 emissive panels
-// in the ceiling (always on), a skylight the sun falls through at the default time (its patch of sunlight on the
-// floor or the walls is the "directional light's shadow" of the seed's scenes), and 2-4 boxes of random size,
+// in the ceiling (always on) at random places, a fixed skylight the sun falls through at the default time (its patch
+// of sunlight on the floor is the "directional light's shadow" of the seed's scenes), and 2-4 boxes of random size,
 // place and colour standing on the floor. cornell_pink is the seed's test scene: the same generator plus one more
 // object, with the back wall turned pink.
 constexpr int kCornellSize = 40;
@@ -456,8 +456,10 @@ VoxelScene cornell(std::uint32_t seed, bool pink) {
     s.fill({1, 1, 1}, {N - 1, N - 1, N - 1}, 0);
     s.fill({0, 1, 1}, {1, N - 1, N - 1}, add(s, r, glm::vec3(0.63f, 0.07f, 0.05f)));  // red -x wall
     s.fill({N - 1, 1, 1}, {N, N - 1, N - 1}, add(s, r, glm::vec3(0.12f, 0.45f, 0.09f)));  // green +x wall
-    const int sw = r.irange(5, 8), sd = r.irange(5, 8);  // the skylight
-    const int sx = r.irange(4, N - 4 - sw), sz = r.irange(4, N - 4 - sd);
+    // The skylight and the sun are the same in every box (the seed's scenes share their lights' setup; a per-voxel
+    // network has no input that could tell it where the sun is): at noon the sun stands 70 degrees high toward
+    // -x -z, so its light falls through the opening onto the floor around (20..26, 1, 20..26).
+    const int sw = 6, sd = 6, sx = 10, sz = 10;
     s.fill({sx, N - 1, sz}, {sx + sw, N, sz + sd}, 0);
     for (int k = 0, n = r.irange(1, 2); k < n; ++k) {  // emissive ceiling panels, away from the skylight
         const glm::vec3 e = glm::vec3(40.0f, 37.0f, 32.0f) * r.range(0.7f, 1.3f);
@@ -479,8 +481,8 @@ VoxelScene cornell(std::uint32_t seed, bool pink) {
     if (pink) s.fill({1, 1, 0}, {N - 1, N - 1, 1}, add(s, r, glm::vec3(0.85f, 0.42f, 0.58f)));  // pink -z wall
     set_region(s, glm::vec3(3.0f, 4.0f, 26.0f), glm::vec3(N - 3.0f, N - 8.0f, N - 3.0f));
     s.camera.look = glm::vec3(0.0f, 0.0f, -1.0f);  // toward the back wall, as the classic view
-    s.default_time = r.range(11.5f, 13.0f);
-    s.sun_azimuth = r.range(0.0f, glm::two_pi<float>());
+    s.default_time = 12.0f;
+    s.sun_azimuth = 1.25f * glm::pi<float>();
     return s;
 }
 
