@@ -8,6 +8,8 @@ write leaves the previous checkpoint intact.
 """
 
 import os
+import signal
+import sys
 import tempfile
 from pathlib import Path
 
@@ -44,3 +46,26 @@ def load(path):
     if state.get("format") != FORMAT:
         raise ValueError(f"{path}: checkpoint format {state.get('format')}, expected {FORMAT}")
     return state
+
+
+class StopSignal:
+    """First SIGINT/SIGTERM: finish the step, save a checkpoint, exit. Second: stop at once.
+    Shared by training/train.py and training/voxel_sh/train.py."""
+
+    def __init__(self, quiet=False):
+        self.signum = None
+        self.quiet = quiet
+        self.old = {s: signal.signal(s, self.handler) for s in (signal.SIGINT, signal.SIGTERM)}
+
+    def handler(self, signum, frame):
+        if self.signum is not None:
+            self.restore()
+            raise KeyboardInterrupt
+        self.signum = signum
+        if not self.quiet:
+            print(f"\n{signal.Signals(signum).name}: saving a checkpoint after this step "
+                  "(again to stop at once)", file=sys.stderr, flush=True)
+
+    def restore(self):
+        for s, h in self.old.items():
+            signal.signal(s, h)

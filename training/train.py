@@ -99,28 +99,6 @@ def epoch_order(seed, epoch, count):
     return np.random.default_rng([seed, epoch]).permutation(count)
 
 
-class StopSignal:
-    """First SIGINT/SIGTERM: finish the step, save a checkpoint, exit. Second: stop at once."""
-
-    def __init__(self, quiet=False):
-        self.signum = None
-        self.quiet = quiet
-        self.old = {s: signal.signal(s, self.handler) for s in (signal.SIGINT, signal.SIGTERM)}
-
-    def handler(self, signum, frame):
-        if self.signum is not None:
-            self.restore()
-            raise KeyboardInterrupt
-        self.signum = signum
-        if not self.quiet:
-            print(f"\n{signal.Signals(signum).name}: saving a checkpoint after this step "
-                  "(again to stop at once)", file=sys.stderr, flush=True)
-
-    def restore(self):
-        for s, h in self.old.items():
-            signal.signal(s, h)
-
-
 def rewrite_log(path, max_step):
     """Keep the log lines of steps <= max_step (a resumed run repeats the steps after its checkpoint)."""
     if not path.is_file():
@@ -304,7 +282,7 @@ def train(args, cfg, d):
 
     order = SampleOrder(cfg["seed"], len(train_set))
     positions = [d.rank + d.world * a for a in range(cfg["accumulate"])]
-    stop = StopSignal(quiet=not d.main)
+    stop = checkpoint.StopSignal(quiet=not d.main)
     progress = tqdm(total=cfg["steps"], initial=step, unit="step", disable=not d.main,
                     **ngi_paths.progress_options())
     shown = {}  # the losses on the bar, smoothed

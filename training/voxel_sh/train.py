@@ -23,10 +23,8 @@ written to --out (F32, or F16 with --half) through ngi.model_file and the model 
 import argparse
 import json
 import math
-import os
 import signal
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -38,6 +36,11 @@ import data
 import export
 import networks
 
+# training/checkpoint.py (atomic checkpoint writes, the Ctrl-C handler) is shared with the generator trainer. Appended,
+# not prepended: this folder's data.py must stay the one `import data` finds.
+sys.path.append(str(Path(__file__).resolve().parents[1]))
+import checkpoint  # noqa: E402
+
 # Keys of the run config that may change when a run is resumed (they do not change what a step computes).
 RESUMABLE = {"steps", "log_every", "checkpoint_every", "threads"}
 
@@ -48,42 +51,6 @@ def progress_options():
     interval = 0.25 if tty else 30.0
     return {"file": sys.stderr, "mininterval": interval, "maxinterval": max(10.0, interval), "ascii": not tty,
             "dynamic_ncols": tty}
-
-
-def save_atomic(path, state):
-    """torch.save to a temporary file in the same folder, fsync, rename: a crash keeps the previous checkpoint."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(state, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-class StopSignal:
-    """First SIGINT/SIGTERM: finish the step, save a checkpoint, exit. Second: stop at once."""
-
-    def __init__(self):
-        self.signum = None
-        self.old = {s: signal.signal(s, self.handler) for s in (signal.SIGINT, signal.SIGTERM)}
-
-    def handler(self, signum, frame):
-        if self.signum is not None:
-            self.restore()
-            raise KeyboardInterrupt
-        self.signum = signum
-        print(f"\n{signal.Signals(signum).name}: saving a checkpoint after this step (again to stop at once)",
-              file=sys.stderr, flush=True)
-
-    def restore(self):
-        for s, h in self.old.items():
-            signal.signal(s, h)
 
 
 def scene_order(seed, epoch, count):
@@ -133,7 +100,7 @@ def write_card(path, run, result):
         f"({sum(v for _, v in run['train_scenes']):,} voxels): {', '.join(n for n, _ in run['train_scenes'])}; "
         f"test {len(run['test_scenes'])} scenes ({sum(v for _, v in run['test_scenes']):,} voxels): "
         f"{', '.join(n for n, _ in run['test_scenes']) or '-'}",
-        f"- **Standardization**: inputs to [-1, 1] by the training scenes' min / max, coefficients by their mean / std "
+        "- **Standardization**: inputs to [-1, 1] by the training scenes' min / max, coefficients by their mean / std "
         "(stored in the model file, applied by ngi on the device)",
         f"- **Training**: {r['step']} steps (one scene per step), Adam lr {c['lr']}, loss MSE + {c['weight_decay']} "
         f"||W||^2 (Eq. 31, weights only, explicit in the loss), seed {c['seed']}, {run['threads']} threads, "
@@ -225,7 +192,7 @@ def main(argv=None):
     rewrite_log(log_path, step)
 
     def save():
-        save_atomic(ckpt, {"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
+        checkpoint.save(ckpt, {"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
                            "train_seconds": train_seconds, "torch_rng": torch.get_rng_state(), "config": config,
                            "stats": stats.to_dict(), "grid": list(grid), "train_scenes": run["train_scenes"],
                            "test_scenes": run["test_scenes"]})
@@ -235,7 +202,7 @@ def main(argv=None):
           f"{'x'.join(map(str, grid))}; {torch.get_num_threads()} threads; "
           + (f"resuming at step {step}" if step else "from scratch") + f", {a.steps} steps",
           file=sys.stderr, flush=True)
-    stop = StopSignal()
+    stop = checkpoint.StopSignal()
     bar = tqdm(total=a.steps, initial=min(step, a.steps), unit="step", desc=f"voxel_sh {a.arch}",
                **progress_options())
     wall0 = time.monotonic()
