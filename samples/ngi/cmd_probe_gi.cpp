@@ -47,11 +47,11 @@ bool valid_name(const std::string& s) {
     });
 }
 
-// A .npy of the field folder, of exactly `shape`.
-std::vector<float> read_field(const std::string& dir, const std::string& file, const std::vector<int>& shape) {
-    const ngi::Tensor t = ngi::read_npy(dir + "/" + file);
+// A .npy of exactly `shape` (a field of this scene's voxels).
+std::vector<float> read_field(const std::string& path, const std::vector<int>& shape) {
+    const ngi::Tensor t = ngi::read_npy(path);
     if (t.shape != shape)
-        throw ngi::InputError(dir + "/" + file + ": shape " + ngi::shape_string(t.shape) + ", this scene needs " +
+        throw ngi::InputError(path + ": shape " + ngi::shape_string(t.shape) + ", this scene needs " +
                               ngi::shape_string(shape));
     return t.data;
 }
@@ -107,13 +107,13 @@ int run(Options o) {
     const int V = int(voxels.size());
 
     // The field folder must be this scene's, at this time: its attributes are compared value for value.
-    const std::vector<float> attributes = read_field(o.field, "attributes.npy", {V, ngi::kVoxelAttributes});
+    const std::vector<float> attributes = read_field(o.field + "/attributes.npy", {V, ngi::kVoxelAttributes});
     if (attributes != voxels.attributes)
         throw ngi::InputError(o.field + ": its voxel attributes are not those of " + scene.name + " at " +
                               std::to_string(hours) + " h (another scene, time or grid)");
-    const std::vector<float> sh_pt = read_field(o.field, "sh.npy", {V, 27});
-    const std::vector<float> direct = read_field(o.field, "direct.npy", {V, 3});
-    const std::vector<float> voxel_lighting = read_field(o.field, "lighting.npy", {V, 3});
+    const std::vector<float> sh_pt = read_field(o.field + "/sh.npy", {V, 27});
+    const std::vector<float> direct = read_field(o.field + "/direct.npy", {V, 3});
+    const std::vector<float> voxel_lighting = read_field(o.field + "/lighting.npy", {V, 3});
 
     // The surround generator, if asked for, is loaded (and its size rule checked) before the long render.
     std::optional<ngi::Model> surround;
@@ -183,13 +183,7 @@ int run(Options o) {
     shade("pt_sh", "path-traced SH-27 of each voxel (the ground truth the networks learn)", sh_pt,
           ngi::VoxelFieldKind::Sh, -1);
     for (const auto& [name, file] : sh_files)
-    {
-        const ngi::Tensor t = ngi::read_npy(file);
-        if (t.shape != std::vector<int>{V, 27})
-            throw ngi::InputError(file + ": shape " + ngi::shape_string(t.shape) + ", " + scene.name + " needs " +
-                                  ngi::shape_string({V, 27}));
-        shade(name, "SH field from " + file, t.data, ngi::VoxelFieldKind::Sh, -1);
-    }
+        shade(name, "SH field from " + file, read_field(file, {V, 27}), ngi::VoxelFieldKind::Sh, -1);
     for (const std::string& model_path : o.models) {
         ngi::Model model = ngi::Model::load(device, model_path);
         const ngi::ModelConfig& c = model.config();

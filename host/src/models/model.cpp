@@ -48,8 +48,7 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     if (meta == file.metadata.end())
         throw InputError("load model " + path + ": no __metadata__[\"ngi\"] architecture config; convert the "
                          "checkpoint with python3 -m ngi.convert (docs/MODEL_FORMAT.md)");
-    ModelConfig cfg = detail::is_voxel_sh_config(meta->second) ? detail::parse_voxel_sh_config(meta->second, path)
-                                                                : detail::parse_model_config(meta->second, path);
+    ModelConfig cfg = detail::parse_model_config(meta->second, path);  // every family, the JSON parsed once
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
     auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false});

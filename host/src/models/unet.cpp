@@ -7,6 +7,7 @@
 
 #include "graph/nodes.hpp"
 #include "models/mlp_model.hpp"
+#include "models/voxel_sh_model.hpp"
 
 namespace ngi::detail {
 
@@ -116,6 +117,11 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         throw InputError(what + "malformed JSON: " + e.what());
     }
     if (!j.is_object()) throw InputError(what + "the config is not a JSON object");
+    if (j.contains("family") && j["family"].is_string() && j["family"] == "voxel_sh") {
+        ModelConfig c = parse_voxel_sh_config(j, path);  // its own fields and rules (models/voxel_sh_model.cpp)
+        c.json = text;
+        return c;
+    }
     // Every field is checked for its JSON type and range before conversion (get<int> would silently truncate
     // 2^32 + 4 to 4, get<float> turns 1e300 into inf); the ranges are those of docs/MODEL_FORMAT.md.
     auto fail = [&](const std::string& key, const std::string& rule) -> InputError {
@@ -158,7 +164,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const std::string s = j[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             if (std::string(key) == "family")  // the most common mistake gets the most specific message
-                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp)");
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh)");
             throw fail(key, rule);
         }
         return s;

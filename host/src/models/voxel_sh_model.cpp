@@ -48,19 +48,9 @@ Buffer upload(Context& ctx, const std::vector<float>& v, const char* what) {
 
 }  // namespace
 
-bool is_voxel_sh_config(const std::string& text) {
-    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-    return j.is_object() && j.contains("family") && j["family"].is_string() && j["family"] == "voxel_sh";
-}
-
-ModelConfig parse_voxel_sh_config(const std::string& text, const std::string& path) {
+ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::string& path) {
     const std::string what = "load model " + path + ": metadata 'ngi': ";
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(what + "malformed JSON: " + e.what());
-    }
+    nlohmann::json j = metadata;  // a copy: the checks below look fields up with operator[] (null when missing)
     auto fail = [&](const std::string& key, const std::string& rule) -> InputError {
         const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
         return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 160));
@@ -104,8 +94,7 @@ ModelConfig parse_voxel_sh_config(const std::string& text, const std::string& pa
     };
 
     if (!j.is_object()) throw InputError(what + "the config is not a JSON object");
-    ModelConfig c;
-    c.json = text;
+    ModelConfig c;  // c.json (the text as stored) is set by parse_model_config, which parsed it
     c.family = "voxel_sh";
     if (j.contains("format_version") && j["format_version"].is_number_integer() &&
         j["format_version"].get<long long>() > kModelFormatVersion)

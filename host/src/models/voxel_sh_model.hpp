@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "models/safetensors.hpp"
 #include "ngi/model.hpp"
 #include "ops/elementwise.hpp"
@@ -26,11 +28,9 @@ constexpr int kVoxelShOutputs = 27;  // SH bands 0-2 x RGB, [3][9]
 // with training/voxel_sh/networks.py INPUT_BOUND.
 constexpr float kVoxelShInputBound = 1e6f;
 
-// True when the metadata JSON `text` is an object whose "family" is "voxel_sh" (anything else, malformed JSON
-// included, is left to parse_model_config and its messages).
-bool is_voxel_sh_config(const std::string& text);
-// The config of a voxel_sh file; InputError naming the file and the field for every violation.
-ModelConfig parse_voxel_sh_config(const std::string& text, const std::string& path);
+// The config of a voxel_sh file from its parsed metadata object (parse_model_config parses the JSON once and hands
+// the "voxel_sh" family here); InputError naming the file and the field for every violation.
+ModelConfig parse_voxel_sh_config(const nlohmann::json& j, const std::string& path);
 
 // One dense layer over planar items on the packed GEMM: y[out][n] = act(scale * (W x) + shift), x [in][n] and
 // y [out][n] with row stride n. W in nn.Linear's [out][in] layout; empty scale = 1, empty shift = 0. The shift can be
