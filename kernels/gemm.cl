@@ -19,6 +19,8 @@
 //        > 0: gemm_local below, the GPU-shaped variant: a work-group of L0 x L1 work-items stages K chunks of KWG
 //        packed rows of its A and B panels in __local memory (L0, L1 = the work-group shape, also -D defines).
 //        A program is built with one of the two kernels, never both (Mesa compiles unrolled bodies slowly).
+//   IMPLICIT  1: gemm_conv below instead, the implicit-GEMM convolution (B read from a padded image; -DTH -DTW:
+//             its taps when at most 4, else 0 for runtime tap loops); KWG must be 0. host/src/ops/conv_implicit.cpp.
 // Why UNROLL exists: #pragma unroll is a hint. Mesa's OpenCL path (clc -> SPIR-V -> NIR) does not honour it for
 // large bodies, and llvmpipe (gallivm) stops *every* loop of a kernel silently after 65,535 iterations in total
 // per invocation (LP_MAX_TGSI_LOOP_ITERATIONS). With loops left in, one k step costs 1 + NV + MR*(1 + NV)
@@ -42,6 +44,9 @@
 #endif
 #ifndef KWG
 #define KWG 0
+#endif
+#ifndef IMPLICIT
+#define IMPLICIT 0
 #endif
 #define NR (VW * NV)
 
@@ -135,7 +140,142 @@
     }
 #endif
 
-#if KWG == 0
+#if IMPLICIT
+// gemm_conv: implicit-GEMM convolution. B is never materialized: it is read from xp, a zero-padded (and for
+// strides > 1 polyphase-split) copy of the input that conv_pad (kernels/im2col.cl) writes: C planes, channel
+// stride CS, row stride ROW. The convolution is then stride 1 with th x tw taps over xp:
+//   out[m][q][r] = sum_{c, ty, tx} A[m][(c*TH + ty)*TW + tx] * xp[c*CS + (q + ty)*ROW + r + tx],
+// so for a tile of NR outputs of one row, B's k-th row is NR contiguous floats at a channel offset plus a tap
+// offset - the same vector loads as a packed panel, unaligned. Two tilings (host/src/ops/conv_implicit.cpp):
+//   TPR = 0 (linear): xp is planar (CS = PH*ROW) and tiles run over n = q*ROW + r on the padded grid, crossing
+//        rows: the columns r >= OW are computed and dropped (junk). Suits narrow layers.
+//   TPR > 0 (rows): TPR tiles per output row, tile np at row np / TPR; xp is row-interleaved (CS = row length,
+//        ROW = C * CS), so consecutive channels of a tile's rows are neighbours in memory (a steady stream the
+//        prefetcher follows, not one page per channel). Lanes r >= OW are junk.
+// Junk lanes read whatever lies next (another row or channel, or the zeroed slack after xp): always initialized,
+// never stored. K = C*TH*TW; A is packed with Kpad = K (KU plays no role).
+// Output element (m, q, r) goes to y[y_off + m*y_plane + q*SY*ldy + r*SX]: SY = SX = 1 for a convolution, the
+// stride for one phase of a transposed convolution, whose offset is folded into y_off.
+// Taps that fit in the knob set's KU (at most 4; the U-Net's 2 x 2 with KU 4; -DTH -DTW > 0) are expanded by the
+// preprocessor, one micro-kernel step each: as a loop they measured 10-15% slower on PoCL. Otherwise (-DTH=0
+// -DTW=0) runtime loops over th x tw hold one step, and every geometry shares one program per knob set: an
+// expanded program is minutes of compilation on Mesa. Loop iterations per work-item: C (expanded) or C * (1 + th * (1 + tw)), plus the epilogue's (llvmpipe
+// stops loops at 65,535; the host checks, ops/conv_implicit.cpp).
+#define TOFF(t) (((t) / TW) * ROW + (t) % TW)
+#if UNROLL
+#define CLOAD_B(off, j) bv[j] = VLOAD(bc + (off) + (j) * VW);
+#define CSTEP(off) { vtype bv[NV]; FOR_VECS(CLOAD_B, off) FOR_ROWS(FMA_ROW) a += MR; }
+#define CSTORE(i, j) CSTORE_VEC(acc[i][j], j)
+#define CSTORE_ROW(i)                                                      \
+    if (mp * MR + (i) < M) {                                               \
+        const int m = mp * MR + (i);                                       \
+        const float s = scale[m], t = shift[m];                            \
+        __global float* row = y + y_off + (size_t)m * y_plane;             \
+        FOR_VECS(CSTORE, i)                                                \
+    }
+#endif
+// Lane e = j*VW + l of the tile is output (q, r): row tiles stay in row q0 (r = r0 + e); linear tiles wrap
+// at ROW (a division per lane, in narrow layers only). Lanes with r >= OW or q >= OH are junk. No per-lane table in
+// private memory: Mesa's compiler stalled for over 20 minutes on a dynamically indexed int[NR] here.
+#define CSTORE_VEC(x, j)                                                                \
+    {                                                                                   \
+        TO_LANES(x, v)                                                                  \
+        for (int l = 0; l < VW; ++l) {                                                  \
+            const int e = (j) * VW + l;                                                 \
+            int qq = q0, rr = r0 + e;                                                   \
+            if (TPR == 0) {                                                             \
+                qq = (base + e) / ROW;                                                  \
+                rr = base + e - qq * ROW;                                               \
+            }                                                                           \
+            if (qq < OH && rr < OW)                                                     \
+                row[qq * SY * ldy + rr * SX] = ngi_activate(fma(v[l], s, t), act, alpha); \
+        }                                                                               \
+    }
+
+__kernel void gemm_conv(const int M, const int C, const int Kpad,
+                        __global const float* restrict ap, const int a_off,
+                        __global const float* restrict xp, const int xp_off,
+                        const int CS, const int ROW, const int th, const int tw, const int TPR, const int OH,
+                        const int OW,
+                        __global float* restrict y, const int y_off, const int y_plane, const int ldy, const int SY,
+                        const int SX, __global const float* restrict scale, __global const float* restrict shift,
+                        const int act, const float alpha) {
+    const int mp = get_global_id(0);
+    const int np = get_global_id(1);
+    int q0, r0, base;  // the tile's first lane: output row and column, offset in xp
+    if (TPR > 0) {
+        q0 = np / TPR;
+        r0 = (np - q0 * TPR) * NR;
+        base = q0 * ROW + r0;
+    } else {
+        base = np * NR;
+        q0 = base / ROW;
+        r0 = base - q0 * ROW;
+    }
+    if (mp * MR >= M || q0 >= OH) return;
+    __global const float* a = ap + a_off + (size_t)mp * Kpad * MR;
+    __global const float* bc = xp + xp_off + base;
+
+    vtype acc[MR][NV];
+#if UNROLL
+    FOR_ROWS(ZERO_ROW)
+    for (int c = 0; c < C; ++c) {
+#if TH > 0
+        CSTEP(TOFF(0))
+#if TH * TW > 1
+        CSTEP(TOFF(1))
+#endif
+#if TH * TW > 2
+        CSTEP(TOFF(2))
+#endif
+#if TH * TW > 3
+        CSTEP(TOFF(3))
+#endif
+#else
+        for (int ty = 0; ty < th; ++ty)
+            for (int tx = 0; tx < tw; ++tx) CSTEP(ty * ROW + tx)
+#endif
+        bc += CS;
+    }
+#else
+#pragma unroll
+    for (int i = 0; i < MR; ++i)
+#pragma unroll
+        for (int j = 0; j < NV; ++j) acc[i][j] = (vtype)(0.0f);
+    for (int c = 0; c < C; ++c) {
+#pragma unroll
+        for (int u = 0; u < th * tw; ++u) {
+            vtype bv[NV];
+#pragma unroll
+            for (int j = 0; j < NV; ++j) bv[j] = VLOAD(bc + (u / tw) * ROW + u % tw + j * VW);
+#pragma unroll
+            for (int i = 0; i < MR; ++i) {
+                const vtype av = (vtype)(a[i]);
+#pragma unroll
+                for (int j = 0; j < NV; ++j) acc[i][j] = fma(av, bv[j], acc[i][j]);
+            }
+            a += MR;
+        }
+        bc += CS;
+    }
+#endif
+
+#if UNROLL
+    FOR_ROWS(CSTORE_ROW)
+#else
+#pragma unroll
+    for (int i = 0; i < MR; ++i) {
+        const int m = mp * MR + i;
+        if (m >= M) break;
+        const float s = scale[m], t = shift[m];
+        __global float* row = y + y_off + (size_t)m * y_plane;
+#pragma unroll
+        for (int j = 0; j < NV; ++j) CSTORE_VEC(acc[i][j], j);
+    }
+#endif
+}
+
+#elif KWG == 0
 __kernel void gemm_packed(const int M, const int N, const int Kpad,
                           __global const float* restrict ap, __global const float* restrict bp, const int b_off,
                           __global float* restrict c, const int c_off, const int ldc,

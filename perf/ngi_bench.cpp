@@ -14,6 +14,11 @@
 //                                                       a per-pixel MLP over W x H pixels, device in, device out
 //                                                       (Model::enqueue): median ms and GFLOP/s (2 x MACs); --ao:
 //                                                       the whole AO network (ring gather + MLP + clamp)
+//   ngi_bench conv [--device D] [--repeats R] [--width 1024 --height 512] [--only up1,down3] [--path implicit]
+//                                                       the thesis generator's 16 convolution layers, each through
+//                                                       both paths (im2col / col2im and the implicit GEMM), device
+//                                                       time per kernel (median of R profiled runs): before/after
+//                                                       per layer
 //   ngi_bench generator --model M.safetensors [--width 1024 --height 512] [--repeats R] [--device D]
 //                                                       whole-model wall time (median) + per-op device time
 //
@@ -33,6 +38,7 @@
 
 #include "ngi/ao.hpp"
 #include "ngi/model.hpp"
+#include "ops/conv.hpp"
 #include "ops/gemm.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/gemm_tuning.hpp"
@@ -159,6 +165,117 @@ int run_gemm(int argc, char** argv) {
     }
     out["generator_layers"] = layers;
     out["generator_gemm_total"] = {{"gflop", flop / 1e9}, {"ms", ms}, {"gflops", flop / (ms * 1e-3) / 1e9}};
+    std::printf("%s\n", out.dump(2).c_str());
+    return 0;
+}
+
+// One layer of the thesis generator as a convolution (ngi_bench conv).
+struct ConvLayer {
+    std::string name;
+    bool transposed;
+    int cin, cout, h, w;  // input
+    Activation in_act, out_act;
+};
+
+std::vector<ConvLayer> generator_conv_layers(int width, int height) {
+    std::vector<ConvLayer> s;
+    int c = 12, h = height, w = width;
+    const int inner[8] = {64, 128, 256, 512, 512, 512, 512, 512};
+    for (int i = 0; i < 8; ++i) {  // pix2pix: LeakyReLU before every down-conv but the first
+        s.push_back({"down" + std::to_string(i), false, c, inner[i], h, w,
+                     i == 0 ? Activation::None : Activation::LeakyReLU, Activation::None});
+        c = inner[i], h /= 2, w /= 2;
+    }
+    for (int i = 7; i >= 0; --i) {  // ReLU before every up-conv; tanh after the outermost
+        const int cin = i == 7 ? inner[i] : 2 * inner[i], cout = i == 0 ? 3 : inner[i - 1];
+        s.push_back({"up" + std::to_string(i), true, cin, cout, h, w, Activation::ReLU,
+                     i == 0 ? Activation::Tanh : Activation::None});
+        h *= 2, w *= 2;
+    }
+    return s;
+}
+
+int run_conv(int argc, char** argv) {
+    Device d = Device::open(arg(argc, argv, "--device"), DeviceOptions{true});
+    Context& ctx = ngi::detail::context_of(d);
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "5"));
+    const int width = std::stoi(arg(argc, argv, "--width", "1024")), height = std::stoi(arg(argc, argv, "--height", "512"));
+    const GemmParams p = gemm_params_for(d.info());
+    const GemmParams conv_p = conv_params_for(d.info(), p);  // the implicit path's set ($NGI_CONV_GEMM, the database)
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> u(-0.05f, 0.05f);
+    json layers = json::array();
+    double total[2] = {0, 0};
+    const std::string only = "," + arg(argc, argv, "--only") + ",";  // e.g. --only up1,down3
+    for (const auto& l : generator_conv_layers(width, height)) {
+        if (only != ",," && only.find("," + l.name + ",") == std::string::npos) continue;
+        const ConvSpec spec{l.cin, l.cout, {4, 4, 2, 1}, {l.in_act, 0.2f}, {l.out_act, 0.2f}};
+        std::vector<float> weight(std::size_t(l.cin) * l.cout * 16), x(std::size_t(l.cin) * l.h * l.w);
+        for (auto& v : weight) v = u(rng);
+        for (auto& v : x) v = 20 * u(rng);
+        const Shape in{l.cin, l.h, l.w};
+        Buffer xb = ctx.alloc(x.size() * 4, "bench x");
+        ctx.write(xb, 0, x.size() * 4, x.data(), "bench x");
+        json row = {{"name", l.name}, {"cin", l.cin}, {"cout", l.cout}, {"in_h", l.h}, {"in_w", l.w}};
+        double gflop = 0;
+        int path_index = 0;
+        for (ConvPath path : {ConvPath::im2col, ConvPath::implicit}) {
+            const std::string want = arg(argc, argv, "--path");  // im2col | implicit: that path only
+            if (!want.empty() && want != (path == ConvPath::im2col ? "im2col" : "implicit")) {
+                ++path_index;
+                continue;
+            }
+            const char* path_name = path == ConvPath::im2col ? "im2col" : "implicit";
+            auto measure = [&](auto& op) {
+                const Shape out = op.output_shape(in);
+                gflop = 2.0 * l.cin * l.cout * 16 * (l.transposed ? double(in.h) * in.w : double(out.h) * out.w) / 1e9;
+                Buffer yb = ctx.alloc(out.size() * 4, "bench y");
+                Buffer sb = ctx.alloc(std::max<std::size_t>(1, op.scratch_floats(in)) * 4, "bench scratch");
+                std::vector<std::vector<double>> kernel_ms;  // [kernel position][run]
+                std::vector<double> totals;
+                for (int r = -1; r < repeats; ++r) {  // r = -1: warm-up
+                    std::vector<cl_event> ev;
+                    op.enqueue(ctx, View{xb.get(), 0, in}, View{yb.get(), 0, out}, sb.get(), 0, &ev);
+                    ctx.finish();
+                    double sum = 0;
+                    for (std::size_t k = 0; k < ev.size(); ++k) {
+                        cl_ulong t0 = 0, t1 = 0;
+                        clGetEventProfilingInfo(ev[k], CL_PROFILING_COMMAND_START, sizeof t0, &t0, nullptr);
+                        clGetEventProfilingInfo(ev[k], CL_PROFILING_COMMAND_END, sizeof t1, &t1, nullptr);
+                        clReleaseEvent(ev[k]);
+                        if (r < 0) continue;
+                        if (kernel_ms.size() <= k) kernel_ms.resize(k + 1);
+                        kernel_ms[k].push_back((t1 - t0) * 1e-6);
+                        sum += (t1 - t0) * 1e-6;
+                    }
+                    if (r >= 0) totals.push_back(sum);
+                }
+                json kernels = json::array();
+                for (auto& k : kernel_ms) kernels.push_back(median(k));
+                const double med = median(totals);
+                total[path_index] += med;
+                row[path_name] = {{"ms", med}, {"gflops", gflop / (med * 1e-3)}, {"kernels_ms", kernels},
+                                  {"scratch_mib", op.scratch_floats(in) * 4.0 / 1048576.0},
+                                  {"implicit", op.implicit()}};
+            };
+            if (l.transposed) {
+                ConvTranspose2d op(ctx, p, spec, weight.data(), {}, path, conv_p);
+                measure(op);
+            } else {
+                Conv2d op(ctx, p, spec, weight.data(), {}, path, conv_p);
+                measure(op);
+            }
+            ++path_index;
+        }
+        row["gflop"] = gflop;
+        for (const char* path_name : {"im2col", "implicit"})
+            if (row.contains(path_name))
+                std::fprintf(stderr, "%-6s %-8s %8.2f ms\n", l.name.c_str(), path_name, row[path_name]["ms"].get<double>());
+        layers.push_back(row);
+    }
+    json out = {{"device", device_json(d, p)}, {"conv_params", conv_p.to_string()}, {"repeats", repeats},
+                {"width", width}, {"height", height},
+                {"layers", layers}, {"total_ms", {{"im2col", total[0]}, {"implicit", total[1]}}}};
     std::printf("%s\n", out.dump(2).c_str());
     return 0;
 }
@@ -342,12 +459,13 @@ int main(int argc, char** argv) {
         if (cmd == "gemm") return run_gemm(argc, argv);
         if (cmd == "tune") return run_tune(argc, argv);
         if (cmd == "generator") return run_generator(argc, argv);
+        if (cmd == "conv") return run_conv(argc, argv);
         if (cmd == "mlp") return run_mlp(argc, argv);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "ngi_bench %s: error: %s\n", cmd.c_str(), e.what());
         return 1;
     }
-    std::fprintf(stderr, "usage: ngi_bench gemm|tune|generator|mlp [options]  (see the comment at the top of "
+    std::fprintf(stderr, "usage: ngi_bench gemm|tune|conv|generator|mlp [options]  (see the comment at the top of "
                          "perf/ngi_bench.cpp)\n");
     return 2;
 }

@@ -1,6 +1,8 @@
 // conv2d and conv_transpose2d (im2col / pack + packed GEMM + epilogue / col2im) against the naive reference,
 // over random shapes: odd sizes, 1x1 spatial, channel counts and pixel counts that are not tile multiples.
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <catch2/catch.hpp>
 
 #include "ops/conv.hpp"
@@ -18,7 +20,8 @@ struct Case {
 };
 
 std::vector<float> run_conv(const Case& k, const std::vector<float>& x, const std::vector<float>& w,
-                            const ChannelAffine& aff, bool transposed, Shape& out, const GemmParams& gp) {
+                            const ChannelAffine& aff, bool transposed, Shape& out, const GemmParams& gp,
+                            ConvPath path, bool* implicit) {
     auto& c = test::ctx();
     ConvSpec spec{k.c, k.co, {k.kh, k.kw, k.s, k.p}, {Activation(k.in_act), 0.2f}, {Activation(k.act), 0.2f}};
     Shape in{k.c, k.h, k.w};
@@ -33,23 +36,35 @@ std::vector<float> run_conv(const Case& k, const std::vector<float>& x, const st
         Buffer sb = c.alloc((scratch_n + 5) * sizeof(float), "scratch");
         op.enqueue(c, View{xb.get(), 0, in}, View{yb.get(), 7, out}, sb.get(), 5);
         y = test::download(yb, out.size(), 7);
+        *implicit = op.implicit();
     };
     if (transposed) {
-        ConvTranspose2d op(c, gp, spec, w.data(), aff);
+        ConvTranspose2d op(c, gp, spec, w.data(), aff, path);
         go(op);
     } else {
-        Conv2d op(c, gp, spec, w.data(), aff);
+        Conv2d op(c, gp, spec, w.data(), aff, path);
         go(op);
     }
     return y;
 }
 
-void check_case(const Case& k, bool transposed, std::mt19937& rng, const GemmParams& gp) {
+// The path a case takes when asked for the implicit one: exact geometry (S divides the kernel; transposed: also
+// K - 2P = S), an input activation conv_pad applies, and a gemm_packed knob set (the test shapes are far below
+// any loop limit).
+bool implicit_expected(const Case& k, bool transposed, const GemmParams& gp) {
+    if (gp.kwg > 0 || k.in_act > 2 || k.kh % k.s || k.kw % k.s) return false;
+    return !transposed || (k.kh - 2 * k.p == k.s && k.kw - 2 * k.p == k.s);
+}
+
+// Checks one case through one path; returns whether the op took the implicit path.
+bool check_case(const Case& k, bool transposed, std::mt19937& rng, const GemmParams& gp,
+                ConvPath path = ConvPath::automatic) {
     auto x = test::random_vector(std::size_t(k.c) * k.h * k.w, rng);
     auto w = test::random_vector(std::size_t(k.c) * k.co * k.kh * k.kw, rng, -0.5f, 0.5f);
     ChannelAffine aff{test::random_vector(k.co, rng, 0.5f, 1.5f), test::random_vector(k.co, rng)};
     Shape out;
-    auto y = run_conv(k, x, w, aff, transposed, out, gp);
+    bool implicit = false;
+    auto y = run_conv(k, x, w, aff, transposed, out, gp, path, &implicit);
     int oh = 0, ow = 0;
     auto ref = transposed ? ref::conv_transpose2d(x, k.c, k.h, k.w, w, k.co, k.kh, k.kw, k.s, k.p, aff.scale, aff.shift,
                                                   k.in_act, k.act, 0.2, oh, ow)
@@ -58,12 +73,21 @@ void check_case(const Case& k, bool transposed, std::mt19937& rng, const GemmPar
     INFO((transposed ? "conv_transpose2d" : "conv2d") << " C" << k.c << " " << k.h << "x" << k.w << " -> Co" << k.co
                                                       << " k" << k.kh << "x" << k.kw << " s" << k.s << " p" << k.p
                                                       << " in_act " << k.in_act << " act " << k.act << " gemm "
-                                                      << gp.to_string());
+                                                      << gp.to_string() << (implicit ? " implicit" : " im2col"));
     REQUIRE(out.h == oh);
     REQUIRE(out.w == ow);
     // fp32 accumulation over K = C*KH*KW terms in a different order than the double reference:
     // observed error is ~1e-6 relative; 1e-4 leaves room without hiding an indexing bug (those are O(1)).
     CHECK(test::worst_ratio(y, ref, 1e-4, 1e-4) <= 1.0);
+    if (path == ConvPath::im2col) CHECK_FALSE(implicit);
+    if (path == ConvPath::implicit) CHECK(implicit == implicit_expected(k, transposed, gp));
+    return implicit;
+}
+
+// Both paths for one case.
+void check_both_paths(const Case& k, bool transposed, std::mt19937& rng, const GemmParams& gp) {
+    check_case(k, transposed, rng, gp, ConvPath::im2col);
+    check_case(k, transposed, rng, gp, ConvPath::implicit);
 }
 
 }  // namespace
@@ -79,13 +103,13 @@ TEST_CASE("conv2d matches the naive reference on random shapes", "[conv2d]") {
         {5, 1, 1, 7, 3, 3, 1, 1, 0, 4},       // 1x1 input, sigmoid
         {4, 11, 6, 3, 5, 3, 3, 2, 0, 2},      // non-square kernel, stride 3
     };
-    for (const auto& k : fixed) check_case(k, false, rng, gp);
+    for (const auto& k : fixed) check_both_paths(k, false, rng, gp);
     std::uniform_int_distribution<int> C(1, 40), S(1, 23), K(1, 5), ST(1, 3), A(0, 4);
     for (int i = 0; i < 12; ++i) {
         Case k{C(rng), S(rng), S(rng), C(rng), K(rng), K(rng), ST(rng), 0, A(rng) % 3, A(rng)};
         k.p = std::min(k.kh, k.kw) / 2;
         if (k.h + 2 * k.p < k.kh || k.w + 2 * k.p < k.kw) continue;
-        check_case(k, false, rng, gp);
+        check_both_paths(k, false, rng, gp);
     }
 }
 
@@ -100,13 +124,13 @@ TEST_CASE("conv_transpose2d matches the naive reference on random shapes", "[con
         {3, 5, 4, 6, 5, 5, 3, 2, 2, 4},    // k5 s3 p2
         {6, 4, 4, 2, 3, 2, 1, 0, 0, 1},    // non-square kernel, stride 1
     };
-    for (const auto& k : fixed) check_case(k, true, rng, gp);
+    for (const auto& k : fixed) check_both_paths(k, true, rng, gp);
     std::uniform_int_distribution<int> C(1, 40), S(1, 17), K(1, 5), ST(1, 3), A(0, 4);
     for (int i = 0; i < 12; ++i) {
         Case k{C(rng), S(rng), S(rng), C(rng), K(rng), K(rng), ST(rng), 0, A(rng) % 3, A(rng)};
         k.p = std::min(k.kh, k.kw) / 2;
         if ((k.h - 1) * k.s - 2 * k.p + k.kh < 1 || (k.w - 1) * k.s - 2 * k.p + k.kw < 1) continue;
-        check_case(k, true, rng, gp);
+        check_both_paths(k, true, rng, gp);
     }
 }
 
@@ -129,7 +153,137 @@ TEST_CASE("conv2d and conv_transpose2d at small odd shapes, GPU and CPU knob set
     const Case conv[] = {{5, 7, 9, 6, 3, 3, 1, 1, 0, 2}, {5, 7, 9, 3, 4, 4, 2, 1, 2, 3}};
     const Case up[] = {{5, 7, 9, 3, 4, 4, 2, 1, 1, 0}, {5, 3, 5, 2, 3, 3, 2, 1, 0, 4}};
     for (const GemmParams& gp : sets) {
-        for (const Case& k : conv) check_case(k, false, rng, gp);
-        for (const Case& k : up) check_case(k, true, rng, gp);
+        for (const Case& k : conv) check_case(k, false, rng, gp, ConvPath::im2col);
+        for (const Case& k : up) check_case(k, true, rng, gp, ConvPath::im2col);
+    }
+    // The implicit path with the sets it runs with: the CPU entry and the GPU entry's tiles on gemm_packed (it has
+    // no local-memory form). Not every fallback: each is another program, and Mesa compiles them slowly.
+    DeviceInfo gpu, cpu;
+    gpu.is_gpu = true;
+    cpu.is_cpu = true;
+    for (GemmParams gp : {gemm_params_for(gpu), gemm_params_for(cpu)}) {
+        gp.kwg = 0;
+        for (const Case& k : conv) check_case(k, false, rng, gp, ConvPath::implicit);
+        for (const Case& k : up) check_case(k, true, rng, gp, ConvPath::implicit);
+    }
+}
+
+// The implicit GEMM's geometries (ops/conv_implicit.hpp): every stride that divides the kernel, polyphase splits of
+// 2, 3 and 4, 1 to 9 taps, odd sizes, spatial sizes below a tile (the junk columns of one partial tile), a 1 x 1
+// input, channel counts below and above MR, and outputs at an offset inside a bigger buffer (run_conv).
+TEST_CASE("implicit-GEMM convolution: exact geometries at odd sizes, against the naive reference",
+          "[conv2d][conv_transpose2d][implicit]") {
+    std::mt19937 rng(23);
+    GemmParams gp = gemm_params_for(test::device().info());
+    gp.kwg = 0;  // a gemm_local set (GPUs): its tiles on gemm_packed, the kernel family the implicit path uses
+    const std::vector<Case> conv = {
+        {12, 64, 128, 16, 4, 4, 2, 1, 0, 2},  // the U-Net's first layer, shrunk
+        {7, 13, 11, 9, 4, 4, 2, 1, 2, 0},     // odd sizes: the last row's polyphase planes are short
+        {5, 9, 7, 10, 2, 2, 2, 0, 1, 1},      // k2 s2 p0: one tap over 4 planes
+        {3, 10, 14, 8, 6, 6, 2, 2, 0, 3},     // k6 s2 p2: 3 x 3 taps
+        {4, 11, 13, 9, 3, 3, 3, 1, 1, 0},     // k3 s3: a 3 x 3 polyphase split, one tap
+        {6, 17, 9, 11, 3, 3, 1, 1, 2, 4},     // k3 s1 p1: padding only
+        {9, 5, 3, 12, 1, 1, 1, 0, 1, 0},      // k1: a plain copy as B
+        {5, 2, 2, 9, 4, 4, 2, 1, 2, 3},       // 2 x 2 -> 1 x 1
+        {3, 1, 1, 8, 3, 3, 1, 1, 0, 0},       // 1 x 1 input
+        {2, 6, 10, 3, 4, 2, 2, 1, 0, 0},      // non-square kernel, Cout < MR
+    };
+    for (const auto& k : conv) check_both_paths(k, false, rng, gp);
+    const std::vector<Case> up = {
+        {16, 4, 8, 12, 4, 4, 2, 1, 1, 0},  // the U-Net's up-convolution
+        {7, 3, 5, 9, 4, 4, 2, 1, 0, 3},    // odd sizes
+        {9, 1, 1, 10, 4, 4, 2, 1, 1, 2},   // 1 x 1 bottleneck -> 2 x 2
+        {5, 6, 7, 8, 2, 2, 2, 0, 2, 0},    // k2 s2 p0: one tap per phase, no padding
+        {4, 5, 6, 9, 6, 6, 2, 2, 0, 1},    // k6 s2 p2: 3 x 3 taps per phase
+        {3, 4, 5, 8, 8, 8, 4, 2, 1, 0},    // k8 s4 p2: 16 phases of 2 x 2 taps
+        {6, 7, 3, 9, 3, 3, 1, 1, 0, 4},    // k3 s1 p1: one phase, a flipped 3 x 3 convolution
+        {5, 3, 4, 11, 3, 3, 3, 0, 1, 0},   // k3 s3 p0: 9 phases of one tap
+        {6, 5, 9, 3, 4, 4, 2, 1, 1, 3},    // Cout 3 < MR: the automatic choice leaves it to im2col
+    };
+    for (const auto& k : up) check_both_paths(k, true, rng, gp);
+    // The automatic choice: implicit where exact and Cout >= MR, im2col for the 3-channel output layer.
+    if (!std::getenv("NGI_CONV")) {
+        CHECK(check_case({16, 4, 8, 12, 4, 4, 2, 1, 1, 0}, true, rng, gp) == (12 >= gp.mr));
+        CHECK_FALSE(check_case({6, 5, 9, 3, 4, 4, 2, 1, 1, 3}, true, rng, gp));
+        CHECK_FALSE(check_case({5, 6, 7, 4, 3, 3, 2, 1, 0, 0}, true, rng, gp));  // k3 s2: not exact
+    }
+}
+
+// Extremes through the implicit path: HDR inputs (>= 65504, the fp16 limit), a constant input, and a saturating
+// output activation. The padded copy must not turn any of them into NaN, and the junk columns must stay out.
+TEST_CASE("implicit-GEMM convolution: HDR and constant inputs stay finite and exact", "[conv2d][implicit]") {
+    auto& c = test::ctx();
+    GemmParams gp = gemm_params_for(test::device().info());
+    gp.kwg = 0;  // as above
+    const ConvSpec spec{3, 8, {4, 4, 2, 1}, {Activation::LeakyReLU, 0.2f}, {Activation::Tanh, 0.0f}};
+    std::vector<float> w(3 * 8 * 16, 0.01f);
+    Conv2d op(c, gp, spec, w.data(), {}, ConvPath::implicit);
+    REQUIRE(op.implicit());
+    const Shape in{3, 9, 11};
+    for (float value : {70000.0f, -70000.0f, 1.0f}) {
+        std::vector<float> x(in.size(), value);
+        Buffer xb = test::upload(x);
+        const Shape out = op.output_shape(in);
+        Buffer yb = c.alloc(out.size() * sizeof(float), "y");
+        Buffer sb = c.alloc(op.scratch_floats(in) * sizeof(float), "scratch");
+        op.enqueue(c, View{xb.get(), 0, in}, View{yb.get(), 0, out}, sb.get(), 0);
+        const auto y = test::download(yb, out.size(), 0);
+        int oh = 0, ow = 0;
+        const auto ref = ref::conv2d(x, 3, 9, 11, w, 8, 4, 4, 2, 1, std::vector<float>(8, 1.0f),
+                                     std::vector<float>(8, 0.0f), 2, 3, 0.2, oh, ow);
+        for (float v : y) REQUIRE(std::isfinite(v));
+        CHECK(test::worst_ratio(y, ref, 1e-4, 1e-4) <= 1.0);
+    }
+}
+
+// Both tilings of gemm_conv (ops/conv_implicit.cpp): whole rows of tiles over a row-interleaved copy, and linear
+// tiles over a planar one, forced through NGI_CONV_TILES at widths below, at and above a tile, so each tiling meets
+// rows of one partial tile, exact multiples and a remainder (junk lanes read the neighbouring row or the slack).
+// Small enough for the oclgrind stage with the GPU set (NR 4), which reports any read past the zeroed slack.
+TEST_CASE("implicit-GEMM convolution: row and linear tilings agree with the reference",
+          "[conv2d][conv_transpose2d][implicit][oclgrind]") {
+    std::mt19937 rng(29);
+    GemmParams gp = gemm_params_for(test::device().info());
+    gp.kwg = 0;
+    const int nr = gp.nr();
+    const std::vector<Case> conv = {{5, 10, 2 * nr, 9, 4, 4, 2, 1, 2, 0},       // OW = nr: one exact tile a row
+                                    {4, 7, 2 * nr + 6, 10, 4, 4, 2, 1, 0, 2},   // OW = nr + 3: a remainder
+                                    {3, 9, 13, 9, 3, 3, 1, 1, 1, 0}};           // OW = 13 < nr
+    const std::vector<Case> up = {{6, 5, nr, 9, 4, 4, 2, 1, 1, 0},              // each phase one tile a row
+                                  {5, 3, nr + 5, 8, 4, 4, 2, 1, 1, 3},          // a remainder
+                                  {4, 4, 7, 9, 2, 2, 2, 0, 0, 0}};              // narrow
+    for (const char* tiling : {"rows", "linear"}) {
+        INFO("NGI_CONV_TILES=" << tiling);
+        setenv("NGI_CONV_TILES", tiling, 1);
+        for (const auto& k : conv) check_case(k, false, rng, gp, ConvPath::implicit);
+        for (const auto& k : up) check_case(k, true, rng, gp, ConvPath::implicit);
+    }
+    unsetenv("NGI_CONV_TILES");
+}
+
+// pack_panels (PackB): the B operand of 1 x 1 convolutions, the im2col path's transposed convolutions and dense
+// layers, against the host pack with the activation applied, for every activation (the slope fast path and the
+// general one), K and N that are not multiples of KU and NR, at an offset on both sides.
+TEST_CASE("pack_panels matches the host pack for every activation", "[conv_transpose2d][gemm][oclgrind]") {
+    auto& c = test::ctx();
+    std::mt19937 rng(31);
+    for (const char* s : {"8,16,2,4,1,4,1", "4,4,1,1,16,16", "3,2,2,2,1,1"}) {
+        const GemmParams gp = parse_gemm_params(s);
+        PackB pack(c, gp);
+        for (const auto& [K, N] : {std::pair{7, 45}, std::pair{1, 1}, std::pair{13, 2 * gp.nr() + 1}}) {
+            const auto x = test::random_vector(std::size_t(K) * N, rng, -3.0f, 3.0f);
+            for (int act = 0; act <= 4; ++act) {
+                std::vector<float> activated(x.size());
+                for (std::size_t i = 0; i < x.size(); ++i) activated[i] = float(ref::activate(x[i], act, 0.2));
+                const auto want = pack_b(activated.data(), K, N, N, gp);
+                Buffer xb = c.alloc((x.size() + 3) * sizeof(float), "x");
+                c.write(xb, 3 * sizeof(float), x.size() * sizeof(float), x.data(), "x");
+                Buffer bb = c.alloc((want.size() + 5) * sizeof(float), "bp");
+                pack.enqueue(c, xb.get(), 3, K, N, bb.get(), 5, {Activation(act), 0.2f});
+                const auto got = test::download(bb, want.size(), 5);
+                INFO("knobs " << s << " K " << K << " N " << N << " act " << act);
+                CHECK(test::worst_ratio(got, want, 1e-6, 1e-6) <= 1.0);
+            }
+        }
     }
 }

@@ -72,6 +72,25 @@ TEST_CASE("GEMM tuning database: broken entries are refused with the entry named
     refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1"}, {"match": {}, "params": "4,4,1,1,1,1"}]})",
             "same match");
     refused(R"({"entries": [{"match": {"vendor": ""}, "params": "1,1,1,1,1,1"}]})", "non-empty");
+    refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": "4,4,1,1,8,8,1,16"}]})",
+            "no local-memory variant");
+    refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": 8}]})", "conv_params");
+    refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": "8,3,1,1,1,1"}]})", "entry 0");
+}
+
+TEST_CASE("GEMM tuning database: the implicit convolution's knob set, where an entry has one", "[gemm][tuning]") {
+    const auto db = parse_gemm_tuning(R"({"entries": [
+      {"match": {}, "params": "1,1,1,1,1,1"},
+      {"match": {"type": "cpu"}, "params": "6,16,2,1,1,4", "conv_params": "8,16,3,1,1,4"}]})", "test");
+    REQUIRE(db.size() == 2);
+    CHECK_FALSE(db[0].conv_params.has_value());
+    REQUIRE(db[1].conv_params.has_value());
+    CHECK(db[1].conv_params->to_string() == "8,16,3,1,1,4,1");
+    // The shipped database: this device's selection carries a conv set that passes the same self-check.
+    const GemmSelection& sel = gemm_selection(test::ctx());
+    INFO("GEMM " << sel.params.to_string() << ", convolution " << sel.conv_params.to_string());
+    CHECK(sel.conv_params.kwg == 0);
+    CHECK(check_gemm_variant(test::ctx(), sel.conv_params, gemm_selfcheck_problems()).ok);
 }
 
 TEST_CASE("GEMM tuning database: the shipped one parses, has a default, and its choice passes the self-check",

@@ -68,8 +68,8 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     if (!options.mlp_path.empty())
         throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is " + cfg.family);
     try {
-        impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file,
-                                           detail::gemm_selection(ngi::detail::context_of(device)).params);
+        const detail::GemmSelection& gemm = detail::gemm_selection(ngi::detail::context_of(device));
+        impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params);
     } catch (const InputError& e) {
         throw InputError(std::string(e.what()) + " (file " + path + ")");
     }

@@ -52,7 +52,9 @@ struct UNetOps {
 // Every expected tensor present with its shape, no unexpected ones, bn_mode / dropout known: InputError otherwise.
 // build_unet_ops calls it first; it needs no device (the fuzz target fuzz_safetensors calls it directly).
 void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file);
-UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm);
+// gemm: the GEMM knob set (im2col path); conv_gemm: the implicit convolution's (GemmSelection::conv_params).
+UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
+                       const GemmParams& conv_gemm);
 std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width);
 
 }  // namespace ngi::detail

@@ -28,7 +28,6 @@ constexpr int kMaxHiddenLayers = 64, kMaxSetLayers = 16, kMaxBlocks = 256;
 constexpr int kMaxGridSide = 65536;
 constexpr long long kMaxGridCells = 1LL << 24;  // voxel ids are exact in float32 up to 2^24
 constexpr double kMaxStat = 1e30;
-const std::size_t kPackLocal[1] = {64};  // im2col_packed, as Conv2d launches it
 const char* const kArchitectures[] = {"mlp", "set", "resnet"};
 const char* const kDefaultLayout[kVoxelShInputs] = {"x", "y", "z", "albedo.r", "albedo.g", "albedo.b",
                                                     "emission.r", "emission.g", "emission.b", "id"};
@@ -196,7 +195,7 @@ VoxelShDense::VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, c
       out_(out),
       act_(act),
       gemm_(ctx, p),
-      pack_(ctx.kernel("im2col", "im2col_packed", "-DNR=" + std::to_string(p.nr()))) {
+      pack_(ctx, p) {
     if (weight.size() != std::size_t(in) * out || (!scale.empty() && int(scale.size()) != out) ||
         (!shift.empty() && int(shift.size()) != out))
         throw Error("voxel_sh dense layer: inconsistent sizes");
@@ -210,11 +209,7 @@ std::size_t VoxelShDense::scratch_floats(int n) const { return packed_b_floats(i
 
 void VoxelShDense::enqueue(Context& ctx, cl_mem x, std::size_t x_off, int n, cl_mem y, std::size_t y_off,
                            cl_mem scratch, cl_mem shift) {
-    const GemmParams& p = gemm_.params();
-    // x as a [in, 1, n] image through a 1 x 1 im2col: a plain pack of the [in][n] matrix into B panels.
-    pack_.args(x, int(x_off), in_, 1, n, 1, 1, 1, 0, 1, n, padded_k(in_, p), scratch, 0, int(Activation::None), 0.0f);
-    const std::size_t g[1] = {round_up(std::size_t(n), std::size_t(p.nr()))};
-    ctx.launch(pack_, 1, g, kPackLocal);
+    pack_.enqueue(ctx, x, x_off, in_, n, scratch, 0, Act::none());  // the [in][n] matrix into B panels
     gemm_.enqueue(ctx, out_, n, in_, ap_.get(), scratch, 0, y, y_off, n, scale_.get(), shift ? shift : shift_.get(),
                   act_);
 }

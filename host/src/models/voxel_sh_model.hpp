@@ -50,7 +50,7 @@ private:
     int in_, out_;
     Act act_;
     Gemm gemm_;
-    Kernel pack_;
+    PackB pack_;
     Buffer ap_, scale_, shift_;
     std::size_t weight_bytes_ = 0;
 };

@@ -100,6 +100,17 @@ const GemmParams& fits_device(const Context& ctx, const GemmParams& p) {
 Gemm::Gemm(Context& ctx, const GemmParams& p)
     : p_(fits_device(ctx, p)), kernel_(ctx.kernel("gemm", p.kwg > 0 ? "gemm_local" : "gemm_packed", p.defines())) {}
 
+PackB::PackB(Context& ctx, const GemmParams& p)
+    : p_(p), kernel_(ctx.kernel("im2col", "pack_panels", "-DNR=" + std::to_string(p.nr()))) {}
+
+cl_event PackB::enqueue(Context& ctx, cl_mem x, std::size_t x_off, int K, int N, cl_mem bp, std::size_t bp_off,
+                        Act act, bool want_event) {
+    static const std::size_t local[2] = {16, 1};  // fixed: PoCL compiles one work-group function per local size
+    kernel_.args(x, int(x_off), K, N, padded_k(K, p_), bp, int(bp_off), int(act.kind), act.alpha);
+    const std::size_t global[2] = {std::size_t(padded_k(K, p_)), std::size_t((N + p_.nr() - 1) / p_.nr())};
+    return ctx.launch(kernel_, 2, global, local, want_event);
+}
+
 cl_event Gemm::enqueue(Context& ctx, int M, int N, int K, cl_mem ap, cl_mem bp, std::size_t b_off, cl_mem c, std::size_t c_off, int ldc,
                        cl_mem scale, cl_mem shift, Act act, bool want_event) {
     kernel_.args(M, N, padded_k(K, p_), ap, bp, int(b_off), c, int(c_off), ldc, scale, shift, int(act.kind), act.alpha);

@@ -49,6 +49,19 @@ inline std::size_t packed_b_floats(int K, int N, const GemmParams& p) {
     return round_up(std::size_t(N), std::size_t(p.nr())) * std::size_t(padded_k(K, p));
 }
 
+// Packs a row-major K x N matrix (at x_off) on the device into Bp panels at bp_off, the input activation applied
+// on the way (pack_panels in kernels/im2col.cl): the B operand of a 1 x 1 convolution or a dense layer.
+class PackB {
+public:
+    PackB(Context& ctx, const GemmParams& p);
+    cl_event enqueue(Context& ctx, cl_mem x, std::size_t x_off, int K, int N, cl_mem bp, std::size_t bp_off, Act act,
+                     bool want_event = false);
+
+private:
+    GemmParams p_;
+    Kernel kernel_;
+};
+
 class Gemm {
 public:
     // Builds gemm_packed (p.kwg == 0) or gemm_local (p.kwg > 0). Throws InputError when a gemm_local set does not

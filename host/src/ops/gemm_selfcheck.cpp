@@ -1,4 +1,5 @@
 #include "ops/gemm_selfcheck.hpp"
+#include "ops/gemm_tuning.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -222,6 +223,18 @@ const GemmSelection& gemm_selection(Context& ctx) {
             std::fprintf(stderr, "ngi: %s: GEMM variant %s rejected by the self-check: %s; using %s\n",
                          ctx.info().name.c_str(), p.to_string().c_str(), v.reason.c_str(),
                          sel.params.to_string().c_str());
+        // The convolution's own knob set runs the same micro-kernel (gemm_conv shares gemm_packed's macros), so
+        // the same check vets its tile shape on this device; a rejected set falls back to the GEMM's.
+        sel.conv_params = conv_params_for(ctx.info(), sel.params);
+        if (!(sel.conv_params == sel.params)) {
+            if (const GemmVerdict v = cached_check(ctx, sel.conv_params); !v.ok) {
+                std::fprintf(stderr, "ngi: %s: convolution knob set %s rejected by the self-check: %s; using %s\n",
+                             ctx.info().name.c_str(), sel.conv_params.to_string().c_str(), v.reason.c_str(),
+                             sel.params.to_string().c_str());
+                sel.rejected.emplace_back(sel.conv_params, v);
+                sel.conv_params = sel.params;
+            }
+        }
         return sel;
     });
 }

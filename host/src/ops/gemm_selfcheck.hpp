@@ -50,6 +50,8 @@ std::vector<GemmParams> gemm_tuning_space(const DeviceInfo& info);
 struct GemmSelection {
     GemmParams params;
     std::vector<std::pair<GemmParams, GemmVerdict>> rejected;
+    // The implicit convolution's knob set (conv_params_for), checked like the GEMM's; params if it was rejected.
+    GemmParams conv_params;
 };
 
 using GemmChecker = std::function<GemmVerdict(Context&, const GemmParams&)>;

@@ -79,6 +79,16 @@ std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, con
         } catch (const InputError& err) {
             throw InputError(where + ": " + err.what());
         }
+        if (j.contains("conv_params")) {
+            try {
+                if (!j["conv_params"].is_string()) throw InputError("conv_params must be a string \"MR,VW,...\"");
+                e.conv_params = parse_gemm_params(j["conv_params"].get<std::string>());
+                if (e.conv_params->kwg > 0)
+                    throw InputError("conv_params: the implicit convolution has no local-memory variant (KWG 0)");
+            } catch (const InputError& err) {
+                throw InputError(where + ": " + err.what());
+            }
+        }
         if (j.contains("note") && j["note"].is_string()) e.note = j["note"].get<std::string>();
         for (const auto& prev : out)
             if (match_json(prev) == match_json(e)) throw InputError(where + ": a second entry with the same match");
@@ -109,6 +119,18 @@ GemmParams gemm_params_for(const DeviceInfo& info) {
     if (const char* e = std::getenv("NGI_GEMM"); e && *e) return parse_gemm_params(e);
     if (const GemmTuningEntry* t = find_gemm_tuning(gemm_tuning_database(), info)) return t->params;
     return GemmParams{};  // unreachable with the shipped database: it has a default entry (tested)
+}
+
+GemmParams conv_params_for(const DeviceInfo& info, const GemmParams& gemm) {
+    if (const char* e = std::getenv("NGI_CONV_GEMM"); e && *e) {
+        GemmParams p = parse_gemm_params(e);
+        if (p.kwg > 0) throw InputError(std::string("NGI_CONV_GEMM='") + e + "': the implicit convolution has no "
+                                        "local-memory variant (KWG must be 0)");
+        return p;
+    }
+    if (const GemmTuningEntry* t = find_gemm_tuning(gemm_tuning_database(), info); t && t->conv_params)
+        return *t->conv_params;
+    return gemm;
 }
 
 std::string gemm_tuning_with(const std::string& json_text, const GemmTuningEntry& entry) {

@@ -4,6 +4,7 @@
 // nobody tuned still gets its type's starting point. Every choice is then confirmed by the self-check
 // (ops/gemm_selfcheck.hpp) before a model uses it.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct GemmTuningEntry {
     // and the type ("cpu", "gpu", "other").
     std::string platform, vendor, device, driver, type;
     GemmParams params;
+    // The implicit-GEMM convolution's knob set (gemm_conv, ops/conv_implicit.hpp) where it was tuned apart: its B
+    // operand comes from a padded image, not a packed panel, and prefers other tiles. Unset: `params`.
+    std::optional<GemmParams> conv_params;
     std::string note;     // where the numbers came from (tool, date, what was measured)
     int specificity() const;  // device > driver > vendor > platform > type; 0 = the default: the lookup prefers the highest
     bool matches(const DeviceInfo& info) const;
@@ -31,6 +35,10 @@ const std::vector<GemmTuningEntry>& gemm_tuning_database();
 
 // The most specific entry matching `info` (ties: the first in the file), or nullptr.
 const GemmTuningEntry* find_gemm_tuning(const std::vector<GemmTuningEntry>& db, const DeviceInfo& info);
+
+// The implicit convolution's knob set: $NGI_CONV_GEMM if set, else the matching entry's conv_params, else `gemm`
+// (the device's checked GEMM set). gemm_conv has no local-memory variant: KWG must be 0.
+GemmParams conv_params_for(const DeviceInfo& info, const GemmParams& gemm);
 
 // "cpu", "gpu" or "other".
 std::string device_type_name(const DeviceInfo& info);

@@ -1,0 +1,230 @@
+#include "ops/conv_implicit.hpp"
+
+#include <cstdlib>
+#include <cstring>
+
+#include "ops/conv.hpp"
+
+namespace ngi::detail {
+
+namespace {
+
+// Fixed work-group shape (PoCL compiles one work-group function per local size).
+const std::size_t kPadLocal[2] = {8, 1};
+
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Transposed convolution, one axis: phase p of the output (o = S*q + p) reads the padded input at row
+// q + t + offset(p) with kernel tap k = (p + P) mod S + S*(T - 1 - t), t < T = K/S; PT = T - 1 - floor(P/S) is
+// the zero padding in front that keeps every offset >= 0 (docs/ARCHITECTURE.md, "Implicit-GEMM convolution").
+int up_pad_front(int T, int S, int P) { return T - 1 - floor_div(P, S); }
+int up_offset(int p, int T, int S, int P) { return floor_div(p + P, S) - T + 1 + up_pad_front(T, S, P); }
+int up_tap(int p, int t, int T, int S, int P) { return (p + P) % S + S * (T - 1 - t); }
+
+// KU means the same in both kernels: micro-kernel steps written out per loop iteration. gemm_conv expands a
+// layer's taps when they fit in KU (at most 4): compile-time TH, TW. Otherwise runtime tap loops (TH = TW = 0),
+// one program for every geometry: Mesa takes minutes per expanded program, PoCL gains 10-15% from expanding.
+std::string tap_defines(int th, int tw, int ku) {
+    return th * tw <= std::min(ku, 4) ? " -DTH=" + std::to_string(th) + " -DTW=" + std::to_string(tw)
+                                      : " -DTH=0 -DTW=0";
+}
+
+// conv_pad applies the input activation as v >= 0 ? v : slope * v.
+bool pad_supports(Act a) {
+    return a.kind == Activation::None || a.kind == Activation::ReLU || a.kind == Activation::LeakyReLU;
+}
+float input_slope(Act a) {
+    return a.kind == Activation::None ? 1.0f : a.kind == Activation::ReLU ? 0.0f : a.alpha;
+}
+
+}  // namespace
+
+namespace {
+
+ConvPath path_from_environment() {
+    const char* e = std::getenv("NGI_CONV");
+    if (!e || !*e) return ConvPath::automatic;
+    if (std::strcmp(e, "implicit") == 0) return ConvPath::implicit;
+    if (std::strcmp(e, "im2col") == 0) return ConvPath::im2col;
+    throw InputError(std::string("NGI_CONV='") + e + "': expected 'implicit' or 'im2col'");
+}
+
+}  // namespace
+
+std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p, const ConvSpec& spec,
+                                               const float* weight, bool transposed, ConvPath path) {
+    const auto& g = spec.geom;
+    const int S = g.stride, P = g.pad;
+    if (path == ConvPath::automatic) path = path_from_environment();
+    if (path == ConvPath::im2col || p.kwg > 0 || !pad_supports(spec.in_act) || g.kh % S || g.kw % S)
+        return std::nullopt;
+    if (transposed && (g.kh - 2 * P != S || g.kw - 2 * P != S)) return std::nullopt;
+    const int th = g.kh / S, tw = g.kw / S;
+    // gemm_conv runs at most C planes x (1 + TH (1 + TW)) loop iterations per work-item, plus its epilogue's (VW
+    // per vector): where the driver stops loops (llvmpipe: 65,535), a layer beyond that takes the im2col path.
+    const long planes = long(spec.cin) * (transposed ? 1 : S * S);
+    const long iterations = planes * (1 + long(th) * (1 + tw)) + p.nr() + long(p.mr) * p.nv * (p.vw + 1);
+    if (const long limit = ctx.loop_limit(); limit > 0 && iterations > limit) return std::nullopt;
+    // Fewer output channels than a tile's MR rows: most of every tile would be padding, and with one A panel the
+    // padded input is streamed once per phase with no reuse. The im2col / col2im path, whose GEMM has M = Cout*KH*KW
+    // rows for a transposed convolution, measured 2.2x faster on the U-Net's 3-channel output layer (PERFORMANCE.md).
+    if (path == ConvPath::automatic && spec.cout < p.mr) return std::nullopt;
+    if (transposed && (up_pad_front(th, S, P) < 0 || up_pad_front(tw, S, P) < 0)) return std::nullopt;
+
+    GemmParams p1 = p;
+    const std::string taps = tap_defines(th, tw, p.ku);
+    p1.ku = 1;  // Kpad = K: gemm_conv walks exactly C planes x TH*TW taps
+    const int cin = spec.cin, cout = spec.cout;
+    std::vector<float> packed;
+    if (!transposed) {
+        // k = ((c*S + py)*S + px)*TH*TW + ty*TW + tx  <->  weight[co][c][ty*S + py][tx*S + px]
+        const int K = cin * S * S * th * tw;
+        std::vector<float> a(std::size_t(cout) * K);
+        for (int co = 0; co < cout; ++co)
+            for (int c = 0; c < cin; ++c)
+                for (int py = 0; py < S; ++py)
+                    for (int px = 0; px < S; ++px)
+                        for (int ty = 0; ty < th; ++ty)
+                            for (int tx = 0; tx < tw; ++tx) {
+                                const int k = (((c * S + py) * S + px) * th + ty) * tw + tx;
+                                a[std::size_t(co) * K + k] =
+                                    weight[((std::size_t(co) * cin + c) * g.kh + ty * S + py) * g.kw + tx * S + px];
+                            }
+        packed = pack_a(a.data(), cout, K, K, p1);
+    } else {
+        // Phase (py, px): k = (c*TH + t)*TW + u  <->  weight[c][co][up_tap(py, t)][up_tap(px, u)]
+        const int K = cin * th * tw;
+        for (int py = 0; py < S; ++py)
+            for (int px = 0; px < S; ++px) {
+                std::vector<float> a(std::size_t(cout) * K);
+                for (int co = 0; co < cout; ++co)
+                    for (int c = 0; c < cin; ++c)
+                        for (int t = 0; t < th; ++t)
+                            for (int u = 0; u < tw; ++u) {
+                                const int ky = up_tap(py, t, th, S, P), kx = up_tap(px, u, tw, S, P);
+                                a[std::size_t(co) * K + (c * th + t) * tw + u] =
+                                    weight[((std::size_t(c) * cout + co) * g.kh + ky) * g.kw + kx];
+                            }
+                const auto phase = pack_a(a.data(), cout, K, K, p1);
+                packed.insert(packed.end(), phase.begin(), phase.end());
+            }
+    }
+    return ImplicitConv(ctx, p1, taps, th, tw, cout, cin, S, P, transposed, std::move(packed));
+}
+
+ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
+                           bool transposed, std::vector<float> packed)
+    : p_(p),
+      th_(th),
+      tw_(tw),
+      cout_(cout),
+      cin_(cin),
+      stride_(stride),
+      pad_(pad),
+      transposed_(transposed),
+      pad_kernel_(ctx.kernel("im2col", "conv_pad", "-DNR=" + std::to_string(p.nr()))),
+      gemm_(ctx.kernel("gemm", "gemm_conv",
+                       p.defines() + " -DIMPLICIT=1" + taps)) {
+    const std::size_t phases = transposed ? std::size_t(stride) * stride : 1;
+    phase_floats_ = packed.size() / phases;
+    ap_ = ctx.alloc(packed.size() * sizeof(float), transposed ? "conv_transpose2d packed weights" : "conv2d packed weights");
+    ctx.write(ap_, 0, packed.size() * sizeof(float), packed.data(), "implicit conv packed weights");
+}
+
+ImplicitConv::Layout ImplicitConv::layout(const Shape& in) const {
+    const int S = stride_, P = pad_;
+    Layout l{};
+    if (!transposed_) {
+        l.out_h = conv_out_size(in.h, th_ * S, S, P, "conv2d height");
+        l.out_w = conv_out_size(in.w, tw_ * S, S, P, "conv2d width");
+        l.pad_stride = S;
+        l.pty = l.ptx = P;
+        l.planes = cin_ * S * S;
+        l.rows = l.out_h;
+        l.cols = l.out_w;
+        l.ph = l.out_h + th_ - 1;
+        l.rs = l.out_w + tw_ - 1;
+        l.b_off = {0};
+        l.y_off = {0};
+        l.out_step = 1;
+    } else {
+        l.out_h = in.h * S;  // exact geometries only: KH - 2P = S
+        l.out_w = in.w * S;
+        l.pad_stride = 1;
+        l.pty = up_pad_front(th_, S, P);
+        l.ptx = up_pad_front(tw_, S, P);
+        l.planes = cin_;
+        l.rows = in.h;
+        l.cols = in.w;
+        l.ph = in.h + th_ - 1 + up_offset(S - 1, th_, S, P);
+        l.rs = in.w + tw_ - 1 + up_offset(S - 1, tw_, S, P);
+        for (int py = 0; py < S; ++py)
+            for (int px = 0; px < S; ++px) {
+                l.b_off.push_back(up_offset(py, th_, S, P) * l.rs + up_offset(px, tw_, S, P));
+                l.y_off.push_back(py * l.out_w + px);
+            }
+        l.out_step = S;
+    }
+    // Tiling: whole rows of tiles where a row is at least a tile and rounding it up to tiles wastes at most 1/8
+    // (row-interleaved xp, a steady stream per tile); else linear tiles over the planar grid (narrow layers).
+    const int nr = p_.nr();
+    const int row_tiles = (l.cols + nr - 1) / nr;
+    bool by_rows = l.cols >= nr && std::size_t(row_tiles) * nr * 8 <= std::size_t(l.cols) * 9;
+    if (const char* e = std::getenv("NGI_CONV_TILES"); e && *e)  // experiments: "rows" or "linear" everywhere
+        by_rows = std::strcmp(e, "rows") == 0;
+    if (by_rows) {
+        l.tiles_per_row = row_tiles;
+        l.tiles = l.rows * row_tiles;
+        l.cs = l.rs;
+        l.row = l.planes * l.rs;
+    } else {
+        l.tiles_per_row = 0;
+        l.tiles = (l.rows * l.rs + nr - 1) / nr;
+        l.cs = l.ph * l.rs;
+        l.row = l.rs;
+    }
+    if (!l.b_off.empty() && transposed_)  // phase offsets are in rows and columns of xp
+        for (std::size_t i = 0; i < l.b_off.size(); ++i) l.b_off[i] = l.b_off[i] / l.rs * l.row + l.b_off[i] % l.rs;
+    // The furthest float any lane reads: the last tile's last lane, the largest phase offset, the last tap, the
+    // last channel. What lies past xp must be zeroed slack.
+    const std::size_t last_base = by_rows ? std::size_t(l.rows - 1) * l.row + std::size_t(row_tiles - 1) * nr
+                                          : std::size_t(l.tiles - 1) * nr;
+    int max_b = 0;
+    for (int b : l.b_off) max_b = std::max(max_b, b);
+    const std::size_t furthest = last_base + nr - 1 + max_b + std::size_t(th_ - 1) * l.row + (tw_ - 1) +
+                                 std::size_t(l.planes - 1) * l.cs;
+    l.floats = std::size_t(l.planes) * l.ph * l.rs;
+    l.slack = furthest + 1 > l.floats ? furthest + 1 - l.floats : 0;
+    return l;
+}
+
+std::size_t ImplicitConv::scratch_floats(const Shape& in) const {
+    const Layout l = layout(in);
+    return l.floats + l.slack;
+}
+
+void ImplicitConv::enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch, std::size_t scratch_off,
+                           cl_mem scale, cl_mem shift, Act in_act, Act out_act, std::vector<cl_event>* events) {
+    const Layout l = layout(x.shape);
+    const bool ev = events != nullptr;
+    pad_kernel_.args(x.mem, int(x.offset), x.shape.c, x.shape.h, x.shape.w, l.pad_stride, l.pty, l.ptx, l.ph, l.rs,
+                     l.planes, l.cs, l.row, scratch, int(scratch_off), input_slope(in_act), int(l.floats),
+                     int(l.slack));
+    const bool interleaved = l.cs < l.row;  // as conv_pad decides: its fastest dimension walks xp's rows in order
+    const std::size_t gp[2] = {std::size_t(interleaved ? l.planes : l.ph), std::size_t(interleaved ? l.ph : l.planes)};
+    if (cl_event e = ctx.launch(pad_kernel_, 2, gp, kPadLocal, ev); ev && e) events->push_back(e);
+
+    const int K = l.planes * th_ * tw_;
+    const int y_plane = l.out_h * l.out_w;
+    const std::size_t global[2] = {std::size_t((cout_ + p_.mr - 1) / p_.mr), std::size_t(l.tiles)};
+    const std::size_t local[2] = {std::size_t(p_.local0), std::size_t(p_.local1)};
+    for (std::size_t ph = 0; ph < l.b_off.size(); ++ph) {
+        // Each phase has its own packed A (back to back in ap_) and its own tap and output offsets.
+        gemm_.args(cout_, l.planes, K, ap_.get(), int(ph * phase_floats_), scratch, int(scratch_off) + l.b_off[ph],
+                   l.cs, l.row, th_, tw_, l.tiles_per_row, l.rows, l.cols, y.mem, int(y.offset) + l.y_off[ph], y_plane,
+                   l.out_w, l.out_step, l.out_step, scale, shift, int(out_act.kind), out_act.alpha);
+        if (cl_event e = ctx.launch(gemm_, 2, global, local, ev); ev && e) events->push_back(e);
+    }
+}
+
+}  // namespace ngi::detail
