@@ -3,11 +3,12 @@
 //   ngi_bench gemm [--device D] [--repeats R]          GEMM GFLOP/s at 1024^3 and at the thesis generator's
 //                                                       layer shapes (conv: M=Cout, N=HWout, K=Cin*16;
 //                                                       transposed conv: M=Cout*16, N=HWin, K=Cin)
-//   ngi_bench tune [--device D] [--max N] [--write-db kernels/gemm_tuning.json]
+//   ngi_bench tune [--device D] [--max N | --sets "A;B;..."] [--write-db kernels/gemm_tuning.json]
 //                                                       try GEMM parameter sets (each checked against a
 //                                                       reference first; failing to build or launch = rejected,
 //                                                       CLBlast style) and rank them; --max: the first N of the
-//                                                       space only (slow devices); --write-db: add or replace
+//                                                       space only (slow devices); --sets: these knob sets
+//                                                       only (each still checked first); --write-db: add or replace
 //                                                       this device's entry in the tuning database
 //                                                       (platform + vendor + device + driver) with the winner
 //   ngi_bench mlp --model M.safetensors [--width 1920 --height 1080] [--path fused|dense] [--ao] [--repeats R]
@@ -201,7 +202,8 @@ int run_conv(int argc, char** argv) {
     const int repeats = std::stoi(arg(argc, argv, "--repeats", "5"));
     const int width = std::stoi(arg(argc, argv, "--width", "1024")), height = std::stoi(arg(argc, argv, "--height", "512"));
     const GemmParams p = gemm_params_for(d.info());
-    const GemmParams conv_p = conv_params_for(d.info(), p);  // the implicit path's set ($NGI_CONV_GEMM, the database)
+    // The implicit path's set ($NGI_CONV_GEMM, the database); the GEMM's where the database turns the path off.
+    const GemmParams conv_p = conv_params_for(d.info(), p).value_or(p);
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> u(-0.05f, 0.05f);
     json layers = json::array();
@@ -287,6 +289,15 @@ int run_tune(int argc, char** argv) {
     std::vector<GemmParams> space = gemm_tuning_space(d.info());
     if (const int max = std::stoi(arg(argc, argv, "--max", "0")); max > 0 && std::size_t(max) < space.size())
         space.resize(std::size_t(max));  // the database's current choice stays first
+    if (const std::string sets = arg(argc, argv, "--sets"); !sets.empty()) {  // "a;b;c": exactly these candidates
+        space.clear();
+        std::size_t start = 0;
+        while (start <= sets.size()) {
+            const std::size_t end = std::min(sets.find(';', start), sets.size());
+            if (end > start) space.push_back(parse_gemm_params(sets.substr(start, end - start)));
+            start = end + 1;
+        }
+    }
     const GemmShape shapes[] = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
     json results = json::array();
     for (const auto& p : space) {

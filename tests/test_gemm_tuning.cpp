@@ -88,9 +88,16 @@ TEST_CASE("GEMM tuning database: the implicit convolution's knob set, where an e
     CHECK(db[1].conv_params->to_string() == "8,16,3,1,1,4,1");
     // The shipped database: this device's selection carries a conv set that passes the same self-check.
     const GemmSelection& sel = gemm_selection(test::ctx());
-    INFO("GEMM " << sel.params.to_string() << ", convolution " << sel.conv_params.to_string());
-    CHECK(sel.conv_params.kwg == 0);
-    CHECK(check_gemm_variant(test::ctx(), sel.conv_params, gemm_selfcheck_problems()).ok);
+    INFO("GEMM " << sel.params.to_string() << ", convolution " << (sel.conv_params ? sel.conv_params->to_string() : "im2col"));
+    if (sel.conv_params) {
+        CHECK(sel.conv_params->kwg == 0);
+        CHECK(check_gemm_variant(test::ctx(), *sel.conv_params, gemm_selfcheck_problems()).ok);
+    }
+    // "im2col" turns the implicit path off for the entry's devices.
+    const auto off = parse_gemm_tuning(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": "im2col"}]})",
+                                       "test");
+    CHECK(off[0].conv_im2col);
+    CHECK_FALSE(off[0].conv_params.has_value());
 }
 
 TEST_CASE("GEMM tuning database: the shipped one parses, has a default, and its choice passes the self-check",

@@ -296,7 +296,8 @@ void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) 
 }
 
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
-                       const GemmParams& conv_gemm) {
+                       const std::optional<GemmParams>& conv_gemm) {
+    const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
     validate_unet_tensors(cfg, file);  // names, shapes and modes, before touching the device
     const UNetSpec spec = unet_spec(cfg);
     const bool running = cfg.bn_mode == "running";
@@ -322,13 +323,13 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
         o.down = std::make_shared<ConvNode>(
             ctx, gemm, ConvSpec{l.in_c, l.inner_c, {4, 4, 2, 1}, Act::none(), down_has_bn ? Act::none() : down_act},
             get(file, l.down_w).data.data(), fold(file, l.down_b, l.down_bn, l.inner_c, cfg.bn_eps, running),
-            ConvPath::automatic, conv_gemm);
+            conv_path, conv_gemm);
         o.down_bn = per_image_bn(l.down_bn, l.inner_c, down_act);
         const Act up_in = i == D - 1 ? Act::none() : Act::relu();  // innermost input is already ReLU'd
         const Act up_act = i == 0 ? Act::tanh() : Act::none();
         o.up = std::make_shared<ConvTransposeNode>(
             ctx, gemm, ConvSpec{l.up_in, l.up_out, {4, 4, 2, 1}, up_in, up_act}, get(file, l.up_w).data.data(),
-            fold(file, l.up_b, l.up_bn, l.up_out, cfg.bn_eps, running), ConvPath::automatic, conv_gemm);
+            fold(file, l.up_b, l.up_bn, l.up_out, cfg.bn_eps, running), conv_path, conv_gemm);
         o.up_bn = per_image_bn(l.up_bn, l.up_out, Act::none());
         ops.weight_bytes += (get(file, l.down_w).data.size() + get(file, l.up_w).data.size()) * sizeof(float);
     }

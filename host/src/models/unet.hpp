@@ -1,6 +1,7 @@
 // The U-Net generators (pix2pix UnetGenerator, DeepIllumination G) as one level-by-level description, so both
 // families share the same graph builder and differ only in names, bias, norm placement and concat order.
 #pragma once
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,9 +53,10 @@ struct UNetOps {
 // Every expected tensor present with its shape, no unexpected ones, bn_mode / dropout known: InputError otherwise.
 // build_unet_ops calls it first; it needs no device (the fuzz target fuzz_safetensors calls it directly).
 void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file);
-// gemm: the GEMM knob set (im2col path); conv_gemm: the implicit convolution's (GemmSelection::conv_params).
+// gemm: the GEMM knob set (im2col path); conv_gemm: the implicit convolution's (GemmSelection::conv_params;
+// nullopt: the device's tuning entry keeps convolutions on the im2col path).
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
-                       const GemmParams& conv_gemm);
+                       const std::optional<GemmParams>& conv_gemm);
 std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width);
 
 }  // namespace ngi::detail

@@ -226,12 +226,12 @@ const GemmSelection& gemm_selection(Context& ctx) {
         // The convolution's own knob set runs the same micro-kernel (gemm_conv shares gemm_packed's macros), so
         // the same check vets its tile shape on this device; a rejected set falls back to the GEMM's.
         sel.conv_params = conv_params_for(ctx.info(), sel.params);
-        if (!(sel.conv_params == sel.params)) {
-            if (const GemmVerdict v = cached_check(ctx, sel.conv_params); !v.ok) {
+        if (sel.conv_params && !(*sel.conv_params == sel.params)) {
+            if (const GemmVerdict v = cached_check(ctx, *sel.conv_params); !v.ok) {
                 std::fprintf(stderr, "ngi: %s: convolution knob set %s rejected by the self-check: %s; using %s\n",
-                             ctx.info().name.c_str(), sel.conv_params.to_string().c_str(), v.reason.c_str(),
+                             ctx.info().name.c_str(), sel.conv_params->to_string().c_str(), v.reason.c_str(),
                              sel.params.to_string().c_str());
-                sel.rejected.emplace_back(sel.conv_params, v);
+                sel.rejected.emplace_back(*sel.conv_params, v);
                 sel.conv_params = sel.params;
             }
         }

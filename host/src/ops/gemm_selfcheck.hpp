@@ -4,6 +4,7 @@
 // of ever safer variants, and the reason is reported (ngi devices, stderr once per process).
 #pragma once
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,9 @@ std::vector<GemmParams> gemm_tuning_space(const DeviceInfo& info);
 struct GemmSelection {
     GemmParams params;
     std::vector<std::pair<GemmParams, GemmVerdict>> rejected;
-    // The implicit convolution's knob set (conv_params_for), checked like the GEMM's; params if it was rejected.
-    GemmParams conv_params;
+    // The implicit convolution's knob set (conv_params_for), checked like the GEMM's; params if it was rejected;
+    // nullopt where the tuning database turns the implicit path off (convolutions take the im2col path).
+    std::optional<GemmParams> conv_params;
 };
 
 using GemmChecker = std::function<GemmVerdict(Context&, const GemmParams&)>;

@@ -81,9 +81,14 @@ std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, con
         }
         if (j.contains("conv_params")) {
             try {
-                if (!j["conv_params"].is_string()) throw InputError("conv_params must be a string \"MR,VW,...\"");
-                e.conv_params = parse_gemm_params(j["conv_params"].get<std::string>());
-                if (e.conv_params->kwg > 0)
+                if (!j["conv_params"].is_string())
+                    throw InputError("conv_params must be a string \"MR,VW,...\" or \"im2col\"");
+                if (j["conv_params"].get<std::string>() == "im2col") {
+                    e.conv_im2col = true;
+                } else {
+                    e.conv_params = parse_gemm_params(j["conv_params"].get<std::string>());
+                }
+                if (e.conv_params && e.conv_params->kwg > 0)
                     throw InputError("conv_params: the implicit convolution has no local-memory variant (KWG 0)");
             } catch (const InputError& err) {
                 throw InputError(where + ": " + err.what());
@@ -121,15 +126,17 @@ GemmParams gemm_params_for(const DeviceInfo& info) {
     return GemmParams{};  // unreachable with the shipped database: it has a default entry (tested)
 }
 
-GemmParams conv_params_for(const DeviceInfo& info, const GemmParams& gemm) {
+std::optional<GemmParams> conv_params_for(const DeviceInfo& info, const GemmParams& gemm) {
     if (const char* e = std::getenv("NGI_CONV_GEMM"); e && *e) {
         GemmParams p = parse_gemm_params(e);
         if (p.kwg > 0) throw InputError(std::string("NGI_CONV_GEMM='") + e + "': the implicit convolution has no "
                                         "local-memory variant (KWG must be 0)");
         return p;
     }
-    if (const GemmTuningEntry* t = find_gemm_tuning(gemm_tuning_database(), info); t && t->conv_params)
-        return *t->conv_params;
+    if (const GemmTuningEntry* t = find_gemm_tuning(gemm_tuning_database(), info)) {
+        if (t->conv_im2col) return std::nullopt;
+        if (t->conv_params) return *t->conv_params;
+    }
     return gemm;
 }
 

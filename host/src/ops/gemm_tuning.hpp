@@ -21,6 +21,7 @@ struct GemmTuningEntry {
     // The implicit-GEMM convolution's knob set (gemm_conv, ops/conv_implicit.hpp) where it was tuned apart: its B
     // operand comes from a padded image, not a packed panel, and prefers other tiles. Unset: `params`.
     std::optional<GemmParams> conv_params;
+    bool conv_im2col = false;  // conv_params "im2col": the implicit path is off on matching devices
     std::string note;     // where the numbers came from (tool, date, what was measured)
     int specificity() const;  // device > driver > vendor > platform > type; 0 = the default: the lookup prefers the highest
     bool matches(const DeviceInfo& info) const;
@@ -37,8 +38,9 @@ const std::vector<GemmTuningEntry>& gemm_tuning_database();
 const GemmTuningEntry* find_gemm_tuning(const std::vector<GemmTuningEntry>& db, const DeviceInfo& info);
 
 // The implicit convolution's knob set: $NGI_CONV_GEMM if set, else the matching entry's conv_params, else `gemm`
-// (the device's checked GEMM set). gemm_conv has no local-memory variant: KWG must be 0.
-GemmParams conv_params_for(const DeviceInfo& info, const GemmParams& gemm);
+// (the device's checked GEMM set); nullopt where the entry says "im2col" (the implicit path measured slower there).
+// gemm_conv has no local-memory variant: KWG must be 0.
+std::optional<GemmParams> conv_params_for(const DeviceInfo& info, const GemmParams& gemm);
 
 // "cpu", "gpu" or "other".
 std::string device_type_name(const DeviceInfo& info);
