@@ -37,10 +37,6 @@ float input_slope(Act a) {
     return a.kind == Activation::None ? 1.0f : a.kind == Activation::ReLU ? 0.0f : a.alpha;
 }
 
-}  // namespace
-
-namespace {
-
 ConvPath path_from_environment() {
     const char* e = std::getenv("NGI_CONV");
     if (!e || !*e) return ConvPath::automatic;
@@ -67,7 +63,8 @@ std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p
     if (const long limit = ctx.loop_limit(); limit > 0 && iterations > limit) return std::nullopt;
     // Fewer output channels than a tile's MR rows: most of every tile would be padding, and with one A panel the
     // padded input is streamed once per phase with no reuse. The im2col / col2im path, whose GEMM has M = Cout*KH*KW
-    // rows for a transposed convolution, measured 2.2x faster on the U-Net's 3-channel output layer (PERFORMANCE.md).
+    // rows for a transposed convolution, measured 1.7x faster on the U-Net's 3-channel output layer (30 vs 51 ms,
+    // PERFORMANCE.md).
     if (path == ConvPath::automatic && spec.cout < p.mr) return std::nullopt;
     if (transposed && (up_pad_front(th, S, P) < 0 || up_pad_front(tw, S, P) < 0)) return std::nullopt;
 
