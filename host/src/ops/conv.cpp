@@ -89,18 +89,16 @@ void Conv2d::enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch,
     }
     const GemmParams& p = p_;
     const int K = spec_.cin * spec_.geom.kh * spec_.geom.kw, N = out.h * out.w, kp = padded_k(K, p);
-    if (pack_) {
+    if (pack_) {  // B is the input: a panel pack
         maybe_push(events, pack_->enqueue(ctx, x.mem, x.offset, K, N, scratch, scratch_off, spec_.in_act,
                                           events != nullptr));
-        maybe_push(events, gemm_->enqueue(ctx, spec_.cout, N, K, ap_.get(), scratch, scratch_off, y.mem, y.offset, N,
-                                          scale_.get(), shift_.get(), spec_.out_act, events != nullptr));
-        return;
+    } else {
+        im2col_.args(x.mem, int(x.offset), x.shape.c, x.shape.h, x.shape.w, spec_.geom.kh, spec_.geom.kw,
+                     spec_.geom.stride, spec_.geom.pad, out.h, out.w, kp, scratch, int(scratch_off),
+                     int(spec_.in_act.kind), spec_.in_act.alpha);
+        const std::size_t g[1] = {round_up(std::size_t(N), std::size_t(p.nr()))};
+        maybe_push(events, ctx.launch(im2col_, 1, g, kIm2colLocal, events != nullptr));
     }
-    im2col_.args(x.mem, int(x.offset), x.shape.c, x.shape.h, x.shape.w, spec_.geom.kh, spec_.geom.kw,
-                 spec_.geom.stride, spec_.geom.pad, out.h, out.w, kp, scratch, int(scratch_off),
-                 int(spec_.in_act.kind), spec_.in_act.alpha);
-    const std::size_t g[1] = {round_up(std::size_t(N), std::size_t(p.nr()))};
-    maybe_push(events, ctx.launch(im2col_, 1, g, kIm2colLocal, events != nullptr));
     maybe_push(events, gemm_->enqueue(ctx, spec_.cout, N, K, ap_.get(), scratch, scratch_off, y.mem, y.offset, N,
                                      scale_.get(), shift_.get(), spec_.out_act, events != nullptr));
 }
