@@ -21,6 +21,7 @@
 //                                                       time per kernel (median of R profiled runs): before/after
 //                                                       per layer
 //   ngi_bench generator --model M.safetensors [--width 1024 --height 512] [--repeats R] [--device D]
+//                       [--bn-mode running|per_image]
 //                                                       whole-model wall time (median) + per-op device time
 //
 // Timings: warm-up first (PoCL compiles work-group functions at the first launch), then the median of R runs.
@@ -364,7 +365,9 @@ int run_generator(int argc, char** argv) {
     json out;
     {
         Device d = Device::open(device_spec);
-        Model m = Model::load(d, path);
+        ModelOptions options;
+        options.bn_mode = arg(argc, argv, "--bn-mode");  // "" = the file's; the loader checks the value
+        Model m = Model::load(d, path, options);
         const auto& c = m.config();
         Tensor x({1, c.input_nc, h, w});
         std::mt19937 rng(3);

@@ -9,6 +9,7 @@
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
+#include "ngi/render.hpp"
 #include "io_test_support.hpp"
 #include "test_support.hpp"
 
@@ -214,5 +215,34 @@ TEST_CASE("dataset: the whole config is validated before anything is written", "
     CHECK_THROWS_WITH(render_dataset(test::device(), DatasetConfig::load(good), out.string()),
                       Catch::Contains("holds no dataset.json"));
     CHECK_FALSE(fs::exists(out / "train"));
+    fs::remove_all(out);
+}
+
+TEST_CASE("dataset: test_reference_spp gives the test split's references their own sample count", "[render]") {
+    const fs::path out = work_dir() / "out_test_spp";
+    fs::remove_all(out);
+    const DatasetConfig cfg = DatasetConfig::load(write_config("test_spp.json", R"({
+        "n": 8, "feature_spp": 1, "reference_spp": 1, "test_reference_spp": 6, "frames_per_scene": 1,
+        "train": [{"scene": "bleed:seed=1"}], "test": [{"scene": "room:seed=3"}]})"));
+    CHECK(cfg.test_reference_spp == 6);
+    render_dataset(test::device(), cfg, out.string());
+    // Each split's reference equals a render of the same frame (camera, light, seed) at that split's spp.
+    auto check_split = [&](const std::string& spec, const char* split, int spp) {
+        const VoxelScene scene = make_scene(spec);
+        RenderSettings rs = cfg.render;
+        rs.reference_spp = spp;
+        rs.seed = dataset_frame_seed(scene.name, 0);
+        rs.reference = true;
+        rs.reference_face = Face::Front;
+        Renderer renderer(test::device(), scene);
+        const Frame want = renderer.render(dataset_camera_path(scene, 1, cfg.keyframe_interval).at(0.0f),
+                                           lighting_at(scene.default_time, scene.sun_azimuth), rs);
+        const Frame got = read_frame((out / split / dataset_scene_folder(scene.name) / "0000").string());
+        CHECK(got.reference->data == want.reference->data);
+    };
+    check_split("room:seed=3", "test", 6);
+    check_split("bleed:seed=1", "train", 1);
+    CHECK(test::slurp((out / "dataset.json").string()).find("\"test_reference_spp\"") != std::string::npos);
+    CHECK_THAT(config_error(R"({"train": [], "test_reference_spp": -1})"), Catch::Contains("test_reference_spp"));
     fs::remove_all(out);
 }

@@ -2,6 +2,7 @@
 // the frame has a path-traced reference, a side-by-side comparison and metrics.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <nlohmann/json.hpp>
 
@@ -12,6 +13,7 @@
 #include "ngi/model.hpp"
 #include "ngi/output_folder.hpp"
 #include "ngi/pipeline.hpp"
+#include "plan_file.hpp"
 #include "side_by_side.hpp"
 
 namespace ngi_cli {
@@ -29,7 +31,7 @@ bool parse_size(const std::string& s, int& width, int& height) {
 }
 
 struct Options {
-    std::string frame_dir, model_path, out_dir, size, device;
+    std::string frame_dir, model_path, plan_path, bn_mode, out_dir, size, device;
 };
 
 int run(const Options& o) {
@@ -38,23 +40,41 @@ int run(const Options& o) {
     if (!o.size.empty()) parse_size(o.size, width, height);  // checked by the option
     // Checked before the model runs: an output folder this command may not replace is refused up front.
     ngi::OutputFolder out(out_dir, "write", {"lightmap.exr", "final.png", "compare.png", "metrics.json"});
-    ngi::Device device = ngi::Device::open(o.device);
-    ngi::Model model = ngi::Model::load(device, model_path);
+    // A plan (python3 -m ngi.plan) names the rung, its batch-norm mode and face size, and maybe a per-frame switch.
+    std::optional<Plan> plan;
+    if (!o.plan_path.empty()) plan = Plan::load(o.plan_path);
     const ngi::Frame frame = ngi::read_frame(frame_dir);  // the reference, if any, has the face size
+    double share = -1.0;
+    const PlanRung* chosen = plan ? &plan->choose(frame, share) : nullptr;
+    ngi::ModelOptions model_options;
+    model_options.bn_mode = chosen ? chosen->bn_mode : o.bn_mode;
+    ngi::Device device = ngi::Device::open(o.device);
+    // A plan may choose the direct-light rung: no network, the frame's own direct light is the lightmap.
+    std::optional<ngi::Model> model;
+    if (!chosen || !chosen->model.empty())
+        model = ngi::Model::load(device, chosen ? chosen->model : model_path, model_options);
     if (!width) width = height = frame.n;
 
     ngi::SurroundPipeline pipeline(device, frame.n);
     ngi::PreprocessStats stats;
-    // One frame in one call: one upload of the face planes, one download of the lightmap and the final image.
-    const ngi::FrameImages images = pipeline.run(model, frame, true, true, false, {}, &stats);
-    if (const int replaced = model.sanitized_inputs())  // the pipeline's input is always within range: a bug
-        std::fprintf(stderr, "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
-                     replaced);
+    ngi::FrameImages images;
+    std::string input_text = "none (direct light only)";
+    if (model) {
+        // One frame in one call: one upload of the face planes, one download of the lightmap and the final image.
+        images = pipeline.run(*model, frame, true, true, false, {}, &stats);
+        if (const int replaced = model->sanitized_inputs())  // the pipeline's input is always within range: a bug
+            std::fprintf(stderr,
+                         "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
+                         replaced);
+        const bool surround = model->config().input_nc == 12;
+        input_text = ngi::shape_string({1, model->config().input_nc, surround ? 2 * frame.n : frame.n,
+                                        surround ? 4 * frame.n : frame.n});
+    } else {
+        images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
+        images.final_image = pipeline.compose(images.lightmap, frame);
+    }
     const ngi::Image& lightmap = images.lightmap;
     const ngi::Image& final_image = images.final_image;
-    const bool surround = model.config().input_nc == 12;
-    const std::vector<int> input_shape = {1, model.config().input_nc, surround ? 2 * frame.n : frame.n,
-                                          surround ? 4 * frame.n : frame.n};
     auto present = [&](const ngi::Image& im) {
         return width == im.width && height == im.height ? im : pipeline.upscale(im, width, height);
     };
@@ -88,6 +108,14 @@ int run(const Options& o) {
                                                                *frame.reference, peak))}}},
         };
     }
+    nlohmann::json plan_json;
+    if (plan) {
+        plan_json = {{"plan", plan->path}, {"rung", chosen->name},
+                     {"model", chosen->model.empty() ? nlohmann::json() : nlohmann::json(chosen->model)},
+                     {"switched", chosen != &plan->rung}};
+        if (share >= 0.0) plan_json["outside_light_share"] = share;
+        if (!metrics.is_null()) metrics["plan"] = plan_json;
+    }
 
     // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
     const ngi::Image lightmap_out = present(lightmap);
@@ -97,9 +125,16 @@ int run(const Options& o) {
     if (!metrics.is_null()) out.write_text("metrics.json", metrics.dump(2) + "\n");
     out.commit();
     if (!metrics.is_null()) std::printf("%s\n", metrics.dump(2).c_str());
+    if (plan)
+        std::printf("plan       %s: rung %s%s\n", plan->path.c_str(), chosen->name.c_str(),
+                    share < 0.0 ? ""
+                                : (", outside light share " + std::to_string(share) +
+                                   (chosen != &plan->rung ? " < " : " >= ") +
+                                   std::to_string(plan->fallback->below))
+                                      .c_str());
     std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s, %d NaN/Inf sanitized\n", out_dir.c_str(),
                 width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
-                ngi::shape_string(input_shape).c_str(), stats.total_nonfinite());
+                input_text.c_str(), stats.total_nonfinite());
     return 0;
 }
 
@@ -111,7 +146,15 @@ Run add_lightmap(CLI::App& app) {
                                 "Writes lightmap.exr and final.png and, when the frame has a reference, compare.png "
                                 "(direct only | network | reference) and metrics.json.");
     add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render)", true);
-    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained generator", true);
+    CLI::Option* model = add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained generator", false);
+    CLI::Option* plan = add_path(*cmd, "--plan", o->plan_path, "PLAN.json",
+                                 "run the rung a plan chose (python3 -m ngi.plan), with its per-frame switch if it "
+                                 "has one; instead of --model",
+                                 false);
+    plan->excludes(model);
+    CLI::Option* bn = add_choice(*cmd, "--bn-mode", o->bn_mode, {"running", "per_image"},
+                                 "override the model file's batch-norm mode", "the file's");
+    bn->excludes(plan);
     add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
     cmd->add_option("--size", o->size, "the size of the written images, W and H in 1..16384 [default: the face size]")
         ->type_name("WxH")
@@ -123,7 +166,10 @@ Run add_lightmap(CLI::App& app) {
             },
             ""));
     add_device(*cmd, o->device);
-    return [o] { return run(*o); };
+    return [o] {
+        if (o->model_path.empty() && o->plan_path.empty()) throw UsageError("lightmap: --model or --plan is required");
+        return run(*o);
+    };
 }
 
 }  // namespace ngi_cli

@@ -23,6 +23,7 @@ struct Options {
     ngi::RenderSettings rs;
     bool no_reference = false;
     int frames = 100, frame = 0;
+    int seed = -1;       // -1: the dataset's seed of the frame
     double time = -1.0;  // -1: not given, the scene's default time
 };
 
@@ -46,7 +47,7 @@ int run(const Options& o) {
     // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene.
     const ngi::CameraPath path = ngi::dataset_camera_path(scene, frames, 25);
     const ngi::CameraPose pose = path.at(float(frame));
-    rs.seed = ngi::dataset_frame_seed(scene.name, frame);
+    rs.seed = o.seed >= 0 ? std::uint32_t(o.seed) : ngi::dataset_frame_seed(scene.name, frame);
 
     ngi::Renderer renderer(device, scene);
     ngi::RenderStats st;
@@ -114,6 +115,9 @@ Run add_render(CLI::App& app) {
     add_integer(*cmd, "--feature-spp", rs.feature_spp, 1, 1 << 20, "F", "samples per pixel of the direct feature");
     add_integer(*cmd, "--bounces", rs.max_bounces, 0, 1000, "B", "indirect bounces of the reference");
     add_integer(*cmd, "--path-frames", o->frames, 1, 1000000, "P", "frames of the scene's camera path");
+    add_integer(*cmd, "--seed", o->seed, 0, 2147483647, "S",
+                "random seed of the path tracer (a second, independent render of the same frame measures the "
+                "reference's noise)", "the dataset's seed of frame K");
     add_switch(*cmd, "--no-reference", o->no_reference, "render the features only");
     add_nonempty(*cmd, "--preview", o->preview, "PNG",
                  "also write the front view's final image (reference x albedo + emission + env) as an sRGB PNG");

@@ -63,6 +63,36 @@ expect_failure truncated "$ngi" merge --frame "$work/truncated" --out "$work/out
 expect=nonexistent.safetensors
 expect_failure no_model "$ngi" lightmap --frame "$work/frame" --model "$work/nonexistent.safetensors" --out "$work/out_no_model"
 
+# Plans (python3 -m ngi.plan writes them; docs/MODEL_FORMAT.md, "Plans"): the rung's model relative to the plan's
+# folder runs exactly as --model does; a switch runs its rung below the outside light share; bad plans are refused.
+plan() { printf '%s\n' "$2" > "$work/$1.json"; }
+plan plan_ok '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors", "n": 32}'
+"$ngi" lightmap --frame "$work/frame" --plan "$work/plan_ok.json" --out "$work/lm_plan" > "$work/plan_ok.out"
+cmp -s "$work/lm/lightmap.exr" "$work/lm_plan/lightmap.exr" || fail "lightmap --plan differs from --model"
+grep -q "rung parity" "$work/plan_ok.out" || fail "lightmap --plan: $(cat "$work/plan_ok.out")"
+plan plan_switch '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors",
+  "n": 32, "switch": {"below_outside_light_share": 1, "rung": "parity_per_image", "n": 32,
+  "model": "parity/pix2pix_running.safetensors", "bn_mode": "per_image"}}'
+"$ngi" lightmap --frame "$work/frame" --plan "$work/plan_switch.json" --out "$work/lm_switch" > /dev/null
+/usr/bin/python3 -c "import json, sys; p = json.load(open(sys.argv[1]))['plan']
+assert p['rung'] == 'parity_per_image' and p['switched'] and 0 <= p['outside_light_share'] < 1, p" \
+  "$work/lm_switch/metrics.json" || fail "lightmap --plan with a switch: $(cat "$work/lm_switch/metrics.json")"
+cmp -s "$work/lm/lightmap.exr" "$work/lm_switch/lightmap.exr" && fail "the switch's bn_mode per_image was not applied"
+plan plan_direct '{"format": "ngi-plan", "version": 1, "rung": "direct_only", "model": null, "n": 32}'
+"$ngi" lightmap --frame "$work/frame" --plan "$work/plan_direct.json" --out "$work/lm_direct" > /dev/null
+/usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1]))
+assert m['plan']['rung'] == 'direct_only' and m['plan']['model'] is None and m['network'] == m['direct_only'], m" \
+  "$work/lm_direct/metrics.json" || fail "lightmap --plan direct_only: $(cat "$work/lm_direct/metrics.json")"
+plan plan_n64 '{"format": "ngi-plan", "version": 1, "rung": "big", "model": "parity/pix2pix_running.safetensors", "n": 64}'
+expect="face size 64"
+expect_failure plan_n64 "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_n64.json" --out "$work/out_plan_n64"
+plan plan_missing '{"format": "ngi-plan", "version": 1, "rung": "gone", "model": "nowhere.safetensors", "n": 32}'
+expect="nowhere.safetensors does not exist (rung gone)"
+expect_failure plan_missing "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_missing.json" --out "$work/out_plan_missing"
+plan plan_format '{"rung": "x", "model": "parity/pix2pix_running.safetensors", "n": 32}'
+expect="plan_format.json: not a plan"
+expect_failure plan_format "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_format.json" --out "$work/out_plan_format"
+
 # No reproducer below may reach main()'s catch-all: every failure is a typed error naming its file or option.
 no_unexpected() { ! grep -q "unexpected error" "$work/$1.err" || fail "$1: untyped error: $(cat "$work/$1.err")"; }
 
@@ -93,6 +123,8 @@ expect="--spp given twice"; expect_usage spp_twice "${render[@]}" --spp 3 --out 
 expect="unexpected argument 'stray'"; expect_usage stray "${render[@]}" stray --out "$work/out_stray"
 expect=--size;        expect_usage size_bad "$ngi" lightmap --frame "$work/frame" --model "$model" --size 12x --out "$work/out_size_bad"
 expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/frame" --model "$model" --size 0x8 --out "$work/out_size_zero"
+expect=--plan;        expect_usage plan_and_model "$ngi" lightmap --frame "$work/frame" --model "$model" --plan "$work/plan_ok.json" --out "$work/out_plan_and_model"
+expect="--model or --plan"; expect_usage no_model_no_plan "$ngi" lightmap --frame "$work/frame" --out "$work/out_no_model_no_plan"
 expect=--range;       expect_usage range_nan "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range nan
 expect=--mode;        expect_usage mode_bad "$ngi" merge --frame "$work/frame" --mode cubic --out "$work/out_mode_bad"
 

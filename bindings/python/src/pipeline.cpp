@@ -215,6 +215,11 @@ float arrays (depth may be [6, N, N]), 'look' and 'up' as three numbers, 'refere
           "Channel names of the surround-aware network input, in tensor order (12).");
     m.def("single_view_input_channels", &ngi::single_view_input_channels,
           "Channel names of the single-view network input, in tensor order (10).");
+    m.def("outside_light_share", [](const ngi::Frame& frame) { return ngi::outside_light_share(frame); },
+          py::arg("frame"), R"doc(
+The share of the frame's lumination (direct + emission + env, sanitized like the network input's; Rec. 709
+luminance summed over each face) on the five faces other than the front: in [0, 1], 0 for a frame without light.
+The per-frame switch of a plan (ngi.plan) runs the single-view model when it is below the plan's threshold.)doc");
 
     py::class_<PyPipeline, std::shared_ptr<PyPipeline>>(m, "Pipeline", R"doc(
 The surround-aware pipeline for face size N: preprocessing, MergeToGlobalView, coordinate map, the generator,

@@ -24,11 +24,14 @@ struct DatasetScene {
 
 struct DatasetConfig {
     RenderSettings render;                  // n, feature_spp, reference_spp, max_bounces, rr_start (seed: per frame)
+    int test_reference_spp = 0;             // reference spp of the test split (0: reference_spp): converged
+                                            // references for evaluation, cheaper ones for training
     int frames_per_scene = 100;
     int keyframe_interval = 25;
     std::vector<DatasetScene> train, test;
 
-    // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "max_bounces", "frames_per_scene",
+    // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces",
+    // "frames_per_scene",
     // "keyframe_interval", "train": [entry...], "test": [entry...]}, entry = {"scene": "room:seed=3"} or
     // {"family": "room", "seeds": [1, 2] | {"first": 1, "count": 4}} or {"vox": "file.vox"}, plus optional
     // "time": hours | [start, end] and "frames". Relative .vox paths are relative to the config file (and are

@@ -54,6 +54,13 @@ LuminationTransfer lumination_transfer_from_name(const std::string& name);      
 const std::vector<std::string>& surround_input_channels();
 const std::vector<std::string>& single_view_input_channels();
 
+// The share of a frame's lumination (direct + emission + env, each term sanitized as the network input's
+// lumination is) that lies outside the front face: sum over the five other faces / sum over all six, each sum
+// the Rec. 709 luminance over every pixel of the face, in double. In [0, 1]; 0 for a frame without light. A
+// frame whose light is nearly all on screen (a small share) gains little from the surround-aware network: the
+// per-frame switch of a plan (docs/RESULTS.md, "Model only what a scene requires") runs a single-view model then.
+double outside_light_share(const Frame& frame);
+
 // What preprocessing found in a frame's raw buffers (all faces it used).
 struct PreprocessStats {
     std::array<int, kFeatureCount> nonfinite{};  // NaN / +-Inf values replaced, per Feature

@@ -120,10 +120,13 @@ json to_json(const DatasetConfig& c) {
             a.push_back({{"scene", s.spec}, {"time", {s.time_start, s.time_end}}, {"frames", s.frames}});
         return a;
     };
-    return {{"n", c.render.n}, {"feature_spp", c.render.feature_spp}, {"reference_spp", c.render.reference_spp},
-            {"max_bounces", c.render.max_bounces}, {"rr_start", c.render.rr_start},
-            {"frames_per_scene", c.frames_per_scene}, {"keyframe_interval", c.keyframe_interval},
-            {"train", scenes(c.train)}, {"test", scenes(c.test)}};
+    json j = {{"n", c.render.n}, {"feature_spp", c.render.feature_spp}, {"reference_spp", c.render.reference_spp},
+              {"max_bounces", c.render.max_bounces}, {"rr_start", c.render.rr_start},
+              {"frames_per_scene", c.frames_per_scene}, {"keyframe_interval", c.keyframe_interval},
+              {"train", scenes(c.train)}, {"test", scenes(c.test)}};
+    // Only when set, so that the dataset.json of a dataset rendered before this key existed still matches.
+    if (c.test_reference_spp > 0) j["test_reference_spp"] = c.test_reference_spp;
+    return j;
 }
 
 json vec(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
@@ -148,12 +151,13 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     } catch (const json::exception& e) {
         r.fail(std::string("not valid JSON: ") + e.what());
     }
-    r.keys(j, {"n", "feature_spp", "reference_spp", "max_bounces", "rr_start", "frames_per_scene",
-               "keyframe_interval", "train", "test", "comment"}, "the top level");
+    r.keys(j, {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces", "rr_start",
+               "frames_per_scene", "keyframe_interval", "train", "test", "comment"}, "the top level");
     DatasetConfig c;
     c.render.n = r.integer(j, "n", c.render.n, 1, 8192);
     c.render.feature_spp = r.integer(j, "feature_spp", c.render.feature_spp, 1, 1 << 20);
     c.render.reference_spp = r.integer(j, "reference_spp", c.render.reference_spp, 1, 1 << 20);
+    c.test_reference_spp = r.integer(j, "test_reference_spp", 0, 0, 1 << 20);
     c.render.max_bounces = r.integer(j, "max_bounces", c.render.max_bounces, 0, 1000);
     c.render.rr_start = r.integer(j, "rr_start", c.render.rr_start, 0, 1000);
     c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, 1000000);
@@ -442,6 +446,8 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
             const auto t0 = std::chrono::steady_clock::now();
             RenderSettings rs = config.render;
             rs.seed = dataset_frame_seed(scene.name, f);
+            if (slot.split == std::string("test") && config.test_reference_spp > 0)
+                rs.reference_spp = config.test_reference_spp;
             rs.reference = true;
             rs.reference_face = Face::Front;
             RenderStats stats;

@@ -1,0 +1,302 @@
+"""Model only what a scene requires: pick the cheapest zoo rung that meets a budget on this scene and device.
+
+    python3 -m ngi.plan --scene room:seed=7 --min-ssim 0.85 --out plan.json        # cheapest rung that is good enough
+    python3 -m ngi.plan --scene street:seed=3 --max-ms 300 --out plan.json         # best rung that fits the time
+    ngi lightmap --frame F --plan plan.json --out DIR                              # run what the plan chose
+
+It renders --frames calibration frames of the scene's camera path with converged references (ngi.Renderer), runs
+every rung of the zoo (models/zoo.json, written by training/ladder_eval.py) on them and scores each with
+ngi.scoring, exactly as the ladder's held-out evaluation does. The cost of a rung is the zoo's measured ms per
+frame on this device (--cost lightmap: the whole `ngi lightmap` command; generator: the network alone); a device
+the zoo has not measured gets the rung's in-process pipeline time measured here instead.
+
+Choice: with a quality floor (--min-ssim / --min-psnr, the mean over the calibration frames) the fastest rung
+that meets it (and --max-ms, if given); with only --max-ms the most accurate rung (SSIM, then PSNR) within it.
+Surround-aware rungs with a measured per-frame switch in the zoo are also tried with it (frames with little
+light outside the front view run the single-view twin; docs/RESULTS.md). --validate K renders K other frames of
+the path and checks that the chosen rung keeps its promise there; the plan records the answer.
+
+Nothing meets the budget: exit code 1, the closest rung named, nothing written. The plan is JSON
+("format": "ngi-plan", version 1; docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder,
+bn_mode, face size n, the optional switch, and the calibration and validation evidence.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import _ngi, scoring, zoo as zoo_mod
+
+DEFAULT_ZOO = Path(os.environ.get("NGI_ZOO", "models/zoo.json"))  # the repository's, run from its root
+PATH_FRAMES = 100
+
+
+class PlanError(Exception):
+    """No rung meets the budget (the message names the closest one)."""
+
+
+def progress(iterable, desc):
+    try:
+        import tqdm
+        return tqdm.tqdm(iterable, desc=desc, unit="frame", file=sys.stderr, mininterval=1.0)
+    except ImportError:  # tqdm is a Debian package (python3-tqdm); without it the plan still works, silently
+        return iterable
+
+
+def frame_indices(count, offset):
+    """`count` path frames spread over the path, shifted by `offset` of the spacing (0.25 calibration, 0.75
+    validation: disjoint sets)."""
+    step = PATH_FRAMES / count
+    return sorted({min(PATH_FRAMES - 1, int((k + offset) * step)) for k in range(count)})
+
+
+def render(renderer, ns, idx, args):
+    """Frame idx of the path at every face size in ns: {n: Frame}, the largest with a reference."""
+    top = max(ns)
+    out = {}
+    for n in ns:
+        out[n] = renderer.render(n=n, spp=args.spp, feature_spp=args.feature_spp, reference=(n == top),
+                                 time=args.time, frame=idx, frames=PATH_FRAMES)
+    return out
+
+
+class Evaluator:
+    def __init__(self, device, zoo):
+        self.device, self.zoo = device, zoo
+        self.models, self.pipes = {}, {}
+
+    def pipe(self, n):
+        if n not in self.pipes:
+            self.pipes[n] = _ngi.Pipeline(self.device, n)
+        return self.pipes[n]
+
+    def model(self, rung):
+        if rung["name"] not in self.models:
+            self.models[rung["name"]] = _ngi.Model(self.device, rung["path"], bn_mode=rung["bn_mode"])
+        return self.models[rung["name"]]
+
+    def lightmap(self, rung, frames):
+        if rung["path"] is None:  # the direct-light rung
+            return frames[rung["n"]].feature("direct")[0]
+        return self.pipe(rung["n"]).run(self.model(rung), frames[rung["n"]], outputs=("lightmap",))["lightmap"]
+
+    def time_ms(self, rung, frames, repeats=5):
+        """In-process pipeline time of one frame (median after a warm-up), for devices the zoo has not measured."""
+        if rung["path"] is None:
+            return 0.0
+        self.lightmap(rung, frames)
+        ts = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            self.lightmap(rung, frames)
+            ts.append((time.perf_counter() - t0) * 1e3)
+        return float(np.median(ts))
+
+
+def score_all(ev, candidates, frame_sets):
+    """Mean final SSIM / PSNR of every candidate over the frame sets, and the per-frame outside light shares."""
+    top = max(max(fs) for fs in frame_sets)
+    scores = {c["name"]: {"ssim": [], "psnr": [], "switched": 0} for c in candidates}
+    shares = []
+    for frames in frame_sets:
+        ref = scoring.Reference(ev.device, ev.pipe(top), frames[top])
+        share = _ngi.outside_light_share(frames[top])
+        shares.append(share)
+        cache = {}
+        for c in candidates:
+            rung = c["rung"]
+            if c.get("switch") and share < c["switch"]["below_outside_light_share"]:
+                rung = c["twin"]
+                scores[c["name"]]["switched"] += 1
+            if rung["name"] not in cache:
+                cache[rung["name"]] = ref.score(ev.lightmap(rung, frames))["final"]
+            s = cache[rung["name"]]
+            scores[c["name"]]["ssim"].append(s["ssim"])
+            scores[c["name"]]["psnr"].append(s["psnr"])
+    return {k: {"ssim": float(np.mean(v["ssim"])), "psnr": float(np.mean(v["psnr"])), "switched": v["switched"],
+                "frames": len(v["ssim"])} for k, v in scores.items()}, shares
+
+
+def meets(c, s, args):
+    return ((args.max_ms is None or c["ms"] <= args.max_ms) and (args.min_ssim is None or s["ssim"] >= args.min_ssim)
+            and (args.min_psnr is None or s["psnr"] >= args.min_psnr))
+
+
+def shortfall(c, s, args):
+    """Relative distance from the budget (0 = meets it)."""
+    d = 0.0
+    if args.max_ms is not None:
+        d += max(0.0, c["ms"] / max(args.max_ms, 1e-9) - 1.0)
+    if args.min_ssim is not None:
+        d += max(0.0, (args.min_ssim - s["ssim"]) / max(args.min_ssim, 1e-9))
+    if args.min_psnr is not None:
+        d += max(0.0, (args.min_psnr - s["psnr"]) / max(args.min_psnr, 1e-9))
+    return d
+
+
+def choose(candidates, scores, args):
+    ok = [c for c in candidates if meets(c, scores[c["name"]], args)]
+    if not ok:
+        closest = min(candidates, key=lambda c: shortfall(c, scores[c["name"]], args))
+        s = scores[closest["name"]]
+        raise PlanError(f"no rung meets the budget ({budget_text(args)}) on these calibration frames; the closest "
+                        f"is {closest['name']}: {closest['ms']:.1f} ms, SSIM {s['ssim']:.4f}, PSNR {s['psnr']:.2f} dB")
+    if args.min_ssim is not None or args.min_psnr is not None:
+        pick = min(ok, key=lambda c: (c["ms"], -scores[c["name"]]["ssim"]))
+        why = (f"the fastest of {len(ok)} candidates that meet {budget_text(args)} on {scores[pick['name']]['frames']} "
+               f"calibration frames")
+    else:
+        pick = max(ok, key=lambda c: (scores[c["name"]]["ssim"], scores[c["name"]]["psnr"]))
+        why = f"the most accurate (SSIM) of {len(ok)} candidates within {budget_text(args)}"
+    return pick, why
+
+
+def budget_text(args):
+    parts = []
+    if args.max_ms is not None:
+        parts.append(f"<= {args.max_ms:g} ms per frame ({args.cost})")
+    if args.min_ssim is not None:
+        parts.append(f"SSIM >= {args.min_ssim:g}")
+    if args.min_psnr is not None:
+        parts.append(f"PSNR >= {args.min_psnr:g} dB")
+    return ", ".join(parts)
+
+
+def candidates_of(zoo, ev, key, args, frames):
+    by_name = {r["name"]: r for r in zoo["rungs"]}
+    cands = []
+    for r in zoo["rungs"]:
+        if key is not None:
+            ms = r["cost"][key][f"{args.cost}_ms"]
+            basis = f"zoo, {key}, {args.cost}"
+        else:
+            ms = ev.time_ms(r, frames)
+            basis = "measured here (in-process pipeline)"
+        cands.append({"name": r["name"], "rung": r, "ms": ms, "cost_basis": basis})
+    for sw in zoo.get("switches") or []:
+        if sw["surround"] in by_name and sw["single_view"] in by_name and sw["below_outside_light_share"] > 0:
+            base = next(c for c in cands if c["name"] == sw["surround"])
+            twin = next(c for c in cands if c["name"] == sw["single_view"])
+            cands.append({"name": f"{sw['surround']}+switch", "rung": base["rung"], "twin": twin["rung"],
+                          "switch": sw, "ms_each": (base["ms"], twin["ms"]), "ms": base["ms"],
+                          "cost_basis": base["cost_basis"]})
+    return cands
+
+
+def rung_json(rung, plan_dir):
+    out = {"rung": rung["name"], "n": rung["n"],
+           "model": os.path.relpath(rung["path"], plan_dir) if rung["path"] else None}
+    if rung["path"]:
+        out["bn_mode"] = rung["bn_mode"]
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python3 -m ngi.plan", description=__doc__.split("\n\n")[0],
+                                 epilog="See the module documentation (pydoc ngi.plan).")
+    ap.add_argument("--scene", required=True, help="room|street|cave|backlit|bleed[:seed=S] or a .vox file")
+    ap.add_argument("--out", required=True, type=Path, help="the plan to write (JSON)")
+    ap.add_argument("--zoo", type=Path, default=DEFAULT_ZOO, help="the zoo manifest [default: $NGI_ZOO, else %(default)s]")
+    ap.add_argument("--max-ms", type=float, help="time budget per frame on this device")
+    ap.add_argument("--min-ssim", type=float, help="quality floor: mean final-image SSIM")
+    ap.add_argument("--min-psnr", type=float, help="quality floor: mean final-image PSNR (dB)")
+    ap.add_argument("--cost", choices=("lightmap", "generator"), default="lightmap",
+                    help="which measured time the budget is about [default: %(default)s]")
+    ap.add_argument("--frames", type=int, default=4, help="calibration frames [default: %(default)s]")
+    ap.add_argument("--validate", type=int, default=4, help="validation frames (0: none) [default: %(default)s]")
+    ap.add_argument("--spp", type=int, default=1024, help="reference samples per pixel [default: %(default)s]")
+    ap.add_argument("--feature-spp", type=int, default=64, help="direct-light feature spp [default: %(default)s]")
+    ap.add_argument("--time", type=float, default=None, help="time of day (hours) [default: the scene's]")
+    ap.add_argument("--device", default="", help="OpenCL device (ngi.Device spec) [default: ngi's choice]")
+    args = ap.parse_args(argv)
+    if args.max_ms is None and args.min_ssim is None and args.min_psnr is None:
+        ap.error("give a budget: --max-ms, --min-ssim and/or --min-psnr")
+    for name in ("frames", "spp", "feature_spp"):
+        if getattr(args, name) < 1:
+            ap.error(f"--{name.replace('_', '-')} must be at least 1")
+    if args.validate < 0:
+        ap.error("--validate must be 0 or more")
+    if args.out.is_dir():
+        ap.error(f"--out {args.out} is a folder")
+
+    try:
+        zoo = zoo_mod.load(args.zoo)
+    except zoo_mod.ZooError as e:
+        print(f"ngi.plan: {e}", file=sys.stderr)
+        return 1
+    dev = _ngi.Device(args.device)
+    info = dev.info
+    key = zoo_mod.device_key(zoo, info)
+    scene = _ngi.Scene(args.scene)
+    renderer = _ngi.Renderer(dev, scene)
+    ev = Evaluator(dev, zoo)
+    ns = sorted({r["n"] for r in zoo["rungs"]})
+    cal_idx = frame_indices(args.frames, 0.25)
+    cal = [render(renderer, ns, i, args) for i in progress(cal_idx, "calibration frames")]
+    cands = candidates_of(zoo, ev, key, args, cal[0])
+    scores, shares = score_all(ev, cands, cal)
+    for c in cands:  # a switch's cost: the mean over the calibration frames of the rung it ran
+        if c.get("switch"):
+            k = scores[c["name"]]["switched"]
+            c["ms"] = (c["ms_each"][0] * (len(cal) - k) + c["ms_each"][1] * k) / len(cal)
+
+    print(f"{'rung':40s} {'ms':>9s} {'SSIM':>7s} {'PSNR':>6s}  meets", file=sys.stderr)
+    for c in sorted(cands, key=lambda c: c["ms"]):
+        s = scores[c["name"]]
+        print(f"{c['name']:40s} {c['ms']:9.1f} {s['ssim']:7.4f} {s['psnr']:6.2f}  "
+              f"{'yes' if meets(c, s, args) else 'no'}", file=sys.stderr)
+    try:
+        pick, why = choose(cands, scores, args)
+    except PlanError as e:
+        print(f"ngi.plan: {e}; nothing written", file=sys.stderr)
+        return 1
+    s = scores[pick["name"]]
+
+    validation = None
+    if args.validate:
+        val_idx = [i for i in frame_indices(args.validate, 0.75) if i not in cal_idx]
+        val = [render(renderer, ns, i, args) for i in progress(val_idx, "validation frames")]
+        vs, _ = score_all(ev, [pick], val)
+        v = vs[pick["name"]]
+        kept = ((args.min_ssim is None or v["ssim"] >= args.min_ssim) and
+                (args.min_psnr is None or v["psnr"] >= args.min_psnr))
+        validation = {"frames": val_idx, "ssim": v["ssim"], "psnr": v["psnr"], "switched": v["switched"],
+                      "kept_quality_promise": kept}
+
+    plan_dir = args.out.resolve().parent
+    plan = {"format": "ngi-plan", "version": 1, **rung_json(pick["rung"], plan_dir)}
+    if pick.get("switch"):
+        plan["switch"] = {"below_outside_light_share": pick["switch"]["below_outside_light_share"],
+                          **rung_json(pick["twin"], plan_dir)}
+    plan.update({
+        "scene": scene.name, "device": {"name": info.get("name"), "platform": info.get("platform"), "zoo_key": key},
+        "budget": {"max_ms": args.max_ms, "min_ssim": args.min_ssim, "min_psnr": args.min_psnr, "cost": args.cost},
+        "why": f"{pick['name']}: {why}: {pick['ms']:.1f} ms ({pick['cost_basis']}), SSIM {s['ssim']:.4f}, "
+               f"PSNR {s['psnr']:.2f} dB",
+        "calibration": {"frames": cal_idx, "path_frames": PATH_FRAMES, "spp": args.spp, "feature_spp": args.feature_spp,
+                        "outside_light_share": shares,
+                        "rungs": [{"name": c["name"], "ms": c["ms"], **scores[c["name"]],
+                                   "meets": meets(c, scores[c["name"]], args)} for c in cands]},
+        "validation": validation, "zoo": os.path.relpath(args.zoo.resolve(), plan_dir)})
+    if plan["model"] is None:
+        plan["note"] = "direct light only: no network runs (ngi lightmap --plan uses the frame's direct light)"
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_name(f".{args.out.name}.tmp")
+    tmp.write_text(json.dumps(plan, indent=1) + "\n")
+    tmp.replace(args.out)
+    print(f"plan: {plan['why']}", file=sys.stderr)
+    if validation:
+        print(f"validation on {len(validation['frames'])} other frames: SSIM {validation['ssim']:.4f}, PSNR "
+              f"{validation['psnr']:.2f} dB: promise {'kept' if validation['kept_quality_promise'] else 'NOT kept'}",
+              file=sys.stderr)
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,143 @@
+"""The model zoo manifest (models/zoo.json): every shipped generator variant with its measured cost and accuracy.
+
+Written by training/ladder_eval.py from its measurements; read by ngi.plan. Format (version 1):
+
+    {"format": "ngi-zoo", "version": 1, "comment": ..., "protocol": {how cost and accuracy were measured},
+     "devices": {"pocl": {"platform", "name", "driver", ...}, ...},   # the devices the costs were measured on
+     "switches": [{"surround", "single_view", "below_outside_light_share", ...}],  # measured per-frame switches
+     "rungs": [{"name", "file" (relative to the manifest's folder; null for the direct-light-only rung), "sha256",
+                "layout" ("surround" | "single_view" | "none"), "n", "ngf", "num_downs", "bn_mode", "weights",
+                "input": [1, C, H, W], "gflop", "memory_mib",
+                "cost": {device key: {"generator_ms", "lightmap_ms"}},
+                "accuracy": {"heldout": {"final": {ssim, psnr, mse}, "lightmap": {...}, "families": {...}},
+                             "temporal": {sequence: {ssim, psnr, mabd, mabd_reference, warp_error, ...}}},
+                "training": {...}}, ...]}
+
+load() checks the manifest against the files: a missing file, a file whose bytes (sha256) or whose architecture
+metadata (family, input channels, ngf, num_downs) disagree with its entry is a ZooError naming the manifest, the
+rung and what differs. Pure Python (no native module needed).
+"""
+
+import hashlib
+import json
+from pathlib import Path
+
+from . import model_file
+
+FORMAT, VERSION = "ngi-zoo", 1
+INPUT_NC = {"surround": 12, "single_view": 10}
+RUNG_KEYS = ("name", "file", "layout", "n", "ngf", "num_downs", "bn_mode", "cost", "accuracy")
+
+
+class ZooError(ValueError):
+    """A manifest that cannot be used: names the manifest, the rung and what is wrong."""
+
+
+def sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def load(path, check_digests=True):
+    """The manifest at `path`, every rung checked against its file; rung["path"] = the file's absolute path."""
+    path = Path(path)
+    try:
+        zoo = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ZooError(f"zoo {path}: no such file (training/ladder_eval.py --zoo writes it)") from None
+    except ValueError as e:
+        raise ZooError(f"zoo {path}: not valid JSON: {e}") from None
+    if not isinstance(zoo, dict) or zoo.get("format") != FORMAT:
+        raise ZooError(f"zoo {path}: not a zoo manifest (\"format\": \"{FORMAT}\")")
+    if zoo.get("version") != VERSION:
+        raise ZooError(f"zoo {path}: version {zoo.get('version')!r}; this ngi reads version {VERSION}")
+    rungs = zoo.get("rungs")
+    if not isinstance(rungs, list) or not rungs:
+        raise ZooError(f"zoo {path}: no rungs")
+    names = set()
+    for r in rungs:
+        where = f"zoo {path}: rung {r.get('name', '?')!r}"
+        missing = [k for k in RUNG_KEYS if k not in r]
+        if missing:
+            raise ZooError(f"{where}: missing keys {missing}")
+        if r["name"] in names:
+            raise ZooError(f"{where}: the name appears twice")
+        names.add(r["name"])
+        if r["file"] is None:
+            if r["layout"] != "none":
+                raise ZooError(f"{where}: no file, but layout {r['layout']!r} (only the direct-light rung has none)")
+            r["path"] = None
+            continue
+        f = (path.parent / r["file"]).resolve()
+        if not f.is_file():
+            raise ZooError(f"{where}: file {f} does not exist")
+        if check_digests and r.get("sha256") and sha256(f) != r["sha256"]:
+            raise ZooError(f"{where}: file {f} differs from the manifest (sha256 {sha256(f)[:12]}..., manifest "
+                           f"{r['sha256'][:12]}...): re-run training/ladder_eval.py --zoo")
+        try:
+            cfg = model_file.read_config(str(f))
+        except Exception as e:  # a file that is not an ngi model at all
+            raise ZooError(f"{where}: file {f}: {e}") from None
+        want = {"family": "pix2pix_unet", "input_nc": INPUT_NC.get(r["layout"]), "ngf": r["ngf"],
+                "num_downs": r["num_downs"]}
+        for k, v in want.items():
+            if cfg.get(k) != v:
+                raise ZooError(f"{where}: the file's metadata disagrees with the manifest: {k} {cfg.get(k)!r} in "
+                               f"{f.name}, {v!r} in the manifest")
+        if r["bn_mode"] not in ("running", "per_image"):
+            raise ZooError(f"{where}: bn_mode {r['bn_mode']!r} (running | per_image)")
+        r["path"] = str(f)
+    return zoo
+
+
+def device_key(zoo, info):
+    """The zoo's key of the device with ngi.Device.info() `info` (same platform and device name), or None."""
+    for key, d in zoo.get("devices", {}).items():
+        if d and d.get("name") == info.get("name") and d.get("platform") == info.get("platform"):
+            return key
+    return None
+
+
+def build(summary, zoo_path):
+    """The manifest from training/ladder_eval.py's summary: the shipped variants (each exported rung as exported
+    and with the other batch-norm mode; the generators shipped before the ladder) and the direct-light rung."""
+    zoo_dir = Path(zoo_path).resolve().parent
+    repo = zoo_dir.parent
+    rungs = []
+    for name, v in summary["variants"].items():
+        if v["kind"] not in ("direct", "rung", "bn_variant", "legacy") or (v["kind"] != "direct" and not v.get("shipped")):
+            continue
+        entry = {"name": name, "kind": v["kind"], "file": None, "sha256": None, "layout": v["layout"], "n": v["n"],
+                 "ngf": v["ngf"], "num_downs": v.get("num_downs", 0), "bn_mode": v["bn_mode"] or "running",
+                 "weights": v["weights"]}
+        if v["file"]:
+            f = (repo / v["file"]).resolve()
+            entry["file"] = str(f.relative_to(zoo_dir))
+            entry["sha256"] = sha256(f)
+            entry["training"] = (model_file.read_config(str(f)).get("training") or {}).get("config", {})
+            entry["training"] = {k: entry["training"].get(k) for k in ("steps", "seed", "lr", "decay_steps")}
+        speeds = v.get("speed", {})
+        first = next(iter(speeds.values()), {})
+        entry["input"] = first.get("input")
+        entry["gflop"] = first.get("gflop", 0.0) if v["file"] else 0.0
+        entry["memory_mib"] = first.get("memory_mib")
+        entry["cost"] = {d: {"generator_ms": s["generator_ms"], "lightmap_ms": s["lightmap_ms"]}
+                         for d, s in speeds.items()}
+        if v["kind"] == "direct":
+            entry["cost"] = {d: {"generator_ms": 0.0, "lightmap_ms": 0.0} for d in summary["speed_devices"]}
+        entry["accuracy"] = {"heldout": v.get("heldout"), "temporal": v.get("temporal")}
+        rungs.append(entry)
+    shipped = {r["name"] for r in rungs}
+    switches = [s["chosen"] for s in summary.get("switch", [])
+                if s["chosen"]["surround"] in shipped and s["chosen"]["single_view"] in shipped]
+    return {"format": FORMAT, "version": VERSION,
+            "comment": "Written by training/ladder_eval.py (docs/RESULTS.md, 'The ladder'). cost: milliseconds per "
+                       "frame on each device (generator alone: ngi_bench generator, median; lightmap: the whole "
+                       "ngi lightmap command, median wall time); accuracy: mean over the held-out test frames against "
+                       "converged references (ngi.scoring), and the two temporal sequences (ngi.temporal).",
+            "protocol": {"datasets": summary["dataset_configs"], "noise_floor": summary["noise_floor"],
+                         "recipe": summary["recipe"]},
+            "devices": summary["speed_devices"], "switches": switches, "rungs": rungs}

@@ -1,0 +1,95 @@
+#include "plan_file.hpp"
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
+#include "ngi/pipeline.hpp"
+
+namespace ngi_cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+    throw ngi::InputError("plan " + path + ": " + what + " (plans are written by `python3 -m ngi.plan`)");
+}
+
+PlanRung read_rung(const json& j, const std::string& where, const std::string& path) {
+    if (!j.is_object()) fail(path, where + " must be an object");
+    auto text = [&](const char* key, bool required) -> std::string {
+        if (!j.contains(key)) {
+            if (required) fail(path, where + " has no '" + key + "'");
+            return "";
+        }
+        if (!j[key].is_string() || j[key].get<std::string>().empty())
+            fail(path, where + "." + key + " must be a non-empty string");
+        return j[key].get<std::string>();
+    };
+    PlanRung r;
+    r.name = text("rung", true);
+    if (!j.contains("model")) fail(path, where + " has no 'model'");
+    if (j["model"].is_null()) {  // the direct-light rung: no network
+        if (j.contains("n") && j["n"].is_number_integer()) r.n = j["n"].get<int>();
+        if (r.n < 1 || r.n > 8192) fail(path, where + ".n must be an integer face size in 1..8192");
+        return r;
+    }
+    r.model = text("model", true);
+    r.bn_mode = text("bn_mode", false);
+    if (!r.bn_mode.empty() && r.bn_mode != "running" && r.bn_mode != "per_image")
+        fail(path, where + ".bn_mode must be \"running\" or \"per_image\", got \"" + r.bn_mode + "\"");
+    if (!j.contains("n") || !j["n"].is_number_integer() || j["n"].get<long long>() < 1 ||
+        j["n"].get<long long>() > 8192)
+        fail(path, where + ".n must be an integer face size in 1..8192");
+    r.n = j["n"].get<int>();
+    const fs::path model = fs::path(r.model).is_absolute() ? fs::path(r.model) : fs::path(path).parent_path() / r.model;
+    std::error_code ec;
+    if (!fs::is_regular_file(model, ec))
+        fail(path, where + ".model: " + model.string() + " does not exist (rung " + r.name + ")");
+    r.model = model.string();
+    return r;
+}
+
+}  // namespace
+
+Plan Plan::load(const std::string& path) {
+    json j;
+    try {
+        j = json::parse(ngi::detail::read_file(path, "plan"));
+    } catch (const json::exception& e) {
+        fail(path, std::string("not valid JSON: ") + e.what());
+    }
+    if (!j.is_object() || j.value("format", "") != "ngi-plan") fail(path, "not a plan (\"format\": \"ngi-plan\")");
+    if (!j.contains("version") || j["version"] != 1) fail(path, "unsupported version (this ngi reads version 1)");
+    Plan p;
+    p.path = path;
+    p.rung = read_rung(j, "the top level", path);
+    if (j.contains("switch") && !j["switch"].is_null()) {
+        const json& s = j["switch"];
+        if (!s.is_object() || !s.contains("below_outside_light_share") ||
+            !s["below_outside_light_share"].is_number() || !(s["below_outside_light_share"].get<double>() >= 0.0) ||
+            !(s["below_outside_light_share"].get<double>() <= 1.0))
+            fail(path, "switch.below_outside_light_share must be a number in [0, 1]");
+        p.fallback = Switch{s["below_outside_light_share"].get<double>(), read_rung(s, "switch", path)};
+        if (p.fallback->rung.n != p.rung.n)
+            fail(path, "the switch's rung runs at N = " + std::to_string(p.fallback->rung.n) + ", the plan's at " +
+                           std::to_string(p.rung.n) + ": one frame cannot feed both");
+    }
+    return p;
+}
+
+const PlanRung& Plan::choose(const ngi::Frame& frame, double& share) const {
+    if (frame.n != rung.n)
+        throw ngi::InputError("plan " + path + ": rung " + rung.name + " runs at face size " + std::to_string(rung.n) +
+                              ", the frame has " + std::to_string(frame.n) + " (render the frame at --face " +
+                              std::to_string(rung.n) + ")");
+    share = -1.0;
+    if (!fallback) return rung;
+    share = ngi::outside_light_share(frame);
+    return share < fallback->below ? fallback->rung : rung;
+}
+
+}  // namespace ngi_cli
