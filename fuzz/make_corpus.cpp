@@ -222,6 +222,12 @@ int main(int argc, char** argv) {
     put("dataset_config", "minimal.json", R"({"train": [{"scene": "room:seed=1"}]})");
     put("dataset_config", "duplicate.json", R"({"train": [{"scene": "room:seed=1"}], "test": [{"family": "room", "seeds": [1]}]})");
 
+    // plan (ngi lightmap --plan)
+    put("plan_file", "rung.json", R"({"format": "ngi-plan", "version": 1, "rung": "s", "model": "/proc/self/exe", "n": 64, "bn_mode": "running"})");
+    put("plan_file", "switch.json", R"({"format": "ngi-plan", "version": 1, "rung": "s", "model": "/proc/self/exe", "n": 64,
+ "switch": {"below_outside_light_share": 0.6, "rung": "v", "model": "/proc/self/exe", "n": 64, "bn_mode": "per_image"}})");
+    put("plan_file", "direct.json", R"({"format": "ngi-plan", "version": 1, "rung": "direct_only", "model": null, "n": 32})");
+
     // safetensors
     const auto tiny = tiny_pix2pix();
     put("safetensors", "tiny_f32.safetensors", safetensors(tiny, full_config(), false));

@@ -7,8 +7,9 @@ first render's maximum). No model can be measured more finely than this against 
     PYTHONPATH=build/python /usr/bin/python3 training/noise_floor.py --dataset DATA --frames 5 --out noise.json
 
 For every test scene of DATA, its first --frames frames are rendered again with `ngi render --seed` (the
-dataset's seed + 7919) at the split's reference spp and compared with the dataset's reference. Each second
-render is kept under --work, so an interrupted run resumes.
+dataset's seed + 7919) at the split's reference spp and compared with the dataset's reference; the two renders'
+direct-light features (at the dataset's feature_spp) measure that feature's noise too (relative RMS noise of one
+estimate, over all six faces). Each second render is kept under --work, so an interrupted run resumes.
 """
 
 import argparse
@@ -34,8 +35,13 @@ def compare_frames(device, a_dir, b_dir):
     final = ngi.compare_images(device, fb, fa, 1.0)
     peak = float(np.max(a.reference))
     light = ngi.compare_images(device, b.reference, a.reference, max(peak, 1e-12))
+    # The direct-light feature's noise (all six faces): the RMS difference of two independent estimates is
+    # sqrt(2) x the per-estimate noise; relative to the mean direct light.
+    da, db = a.feature("direct"), b.feature("direct")
+    rel = float(np.sqrt(np.mean((da.astype(np.float64) - db) ** 2) / 2.0) / max(float(np.mean(da)), 1e-12))
     return {"final_ldr": {k: final[k] for k in ("mse", "psnr", "ssim")},
-            "lightmap_linear": {k: light[k] for k in ("mse", "psnr", "ssim")}}
+            "lightmap_linear": {k: light[k] for k in ("mse", "psnr", "ssim")},
+            "direct_feature_relative_noise": rel}
 
 
 def main(argv=None):
@@ -65,7 +71,7 @@ def main(argv=None):
             b.parent.mkdir(parents=True, exist_ok=True)
             subprocess.run([ngi_paths.find_ngi(args.ngi), "render", "--scene", info["spec"], "--out", str(b),
                             "--frame", str(fi["frame"]), "--path-frames", str(info["frames"]),
-                            "--face", str(cfg["n"]), "--spp", str(spp), "--feature-spp", "1",
+                            "--face", str(cfg["n"]), "--spp", str(spp), "--feature-spp", str(cfg["feature_spp"]),
                             "--bounces", str(cfg["max_bounces"]), "--time", str(fi["time"]),
                             "--seed", str((fi["seed"] + 7919) % 2147483647), "--device", args.device],
                            check=True, stdout=subprocess.DEVNULL, env=ngi_paths.ngi_env())
@@ -75,10 +81,13 @@ def main(argv=None):
                "seed_offset": 7919,
                "final_ldr": {m: mean("final_ldr", m) for m in ("mse", "psnr", "ssim")},
                "lightmap_linear": {m: mean("lightmap_linear", m) for m in ("mse", "psnr", "ssim")},
+               "feature_spp": cfg["feature_spp"],
+               "direct_feature_relative_noise": float(np.mean([r["direct_feature_relative_noise"] for r in rows])),
                "per_frame": rows, "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(summary, indent=1) + "\n")
-    print(json.dumps({k: summary[k] for k in ("n", "reference_spp", "frames", "final_ldr", "lightmap_linear")}))
+    print(json.dumps({k: summary[k] for k in ("n", "reference_spp", "frames", "final_ldr", "lightmap_linear",
+                                              "feature_spp", "direct_feature_relative_noise")}))
 
 
 if __name__ == "__main__":

@@ -55,14 +55,17 @@ PlanRung read_rung(const json& j, const std::string& where, const std::string& p
 
 }  // namespace
 
-Plan Plan::load(const std::string& path) {
+Plan Plan::load(const std::string& path) { return parse(ngi::detail::read_file(path, "plan"), path); }
+
+Plan Plan::parse(const std::string& text, const std::string& path) {
     json j;
     try {
-        j = json::parse(ngi::detail::read_file(path, "plan"));
+        j = json::parse(text);
     } catch (const json::exception& e) {
         fail(path, std::string("not valid JSON: ") + e.what());
     }
-    if (!j.is_object() || j.value("format", "") != "ngi-plan") fail(path, "not a plan (\"format\": \"ngi-plan\")");
+    if (!j.is_object() || !j.contains("format") || j["format"] != "ngi-plan")
+        fail(path, "not a plan (\"format\": \"ngi-plan\")");
     if (!j.contains("version") || j["version"] != 1) fail(path, "unsupported version (this ngi reads version 1)");
     Plan p;
     p.path = path;

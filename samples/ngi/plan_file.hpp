@@ -29,6 +29,8 @@ struct Plan {
     // Throws ngi::InputError naming the file and the key for a missing file, bad JSON, a wrong format or version,
     // missing or mistyped keys, a model file that does not exist.
     static Plan load(const std::string& path);
+    // The same from the file's text; `path` names the plan in errors and is the base of relative model paths.
+    static Plan parse(const std::string& text, const std::string& path);
 
     // The rung to run for this frame (the switch applied) and the frame's outside light share (-1 when the plan
     // has no switch and it was not computed). Throws ngi::InputError when the frame's face size is not the

@@ -20,6 +20,7 @@ rung and what differs. Pure Python (no native module needed).
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 from . import model_file
@@ -101,11 +102,11 @@ def device_key(zoo, info):
     return None
 
 
-def build(summary, zoo_path):
-    """The manifest from training/ladder_eval.py's summary: the shipped variants (each exported rung as exported
-    and with the other batch-norm mode; the generators shipped before the ladder) and the direct-light rung."""
+def build(summary, zoo_path, root):
+    """The manifest from training/ladder_eval.py's summary (its file paths relative to `root`, the repository):
+    the shipped variants (each exported rung as exported and with the other batch-norm mode; the generators
+    shipped before the ladder) and the direct-light rung."""
     zoo_dir = Path(zoo_path).resolve().parent
-    repo = zoo_dir.parent
     rungs = []
     for name, v in summary["variants"].items():
         if v["kind"] not in ("direct", "rung", "bn_variant", "legacy") or (v["kind"] != "direct" and not v.get("shipped")):
@@ -114,11 +115,13 @@ def build(summary, zoo_path):
                  "ngf": v["ngf"], "num_downs": v.get("num_downs", 0), "bn_mode": v["bn_mode"] or "running",
                  "weights": v["weights"]}
         if v["file"]:
-            f = (repo / v["file"]).resolve()
-            entry["file"] = str(f.relative_to(zoo_dir))
+            f = (Path(root) / v["file"]).resolve()
+            entry["file"] = os.path.relpath(f, zoo_dir)
             entry["sha256"] = sha256(f)
-            entry["training"] = (model_file.read_config(str(f)).get("training") or {}).get("config", {})
-            entry["training"] = {k: entry["training"].get(k) for k in ("steps", "seed", "lr", "decay_steps")}
+            t = model_file.read_config(str(f)).get("training") or {}
+            entry["training"] = {"steps": t.get("steps"), "epochs": t.get("epochs"), "frames": t.get("frames"),
+                                 "wall_seconds": t.get("wall_seconds"), "seed": (t.get("config") or {}).get("seed"),
+                                 "dataset_config": (t.get("dataset_config") or {}).get("comment")}
         speeds = v.get("speed", {})
         first = next(iter(speeds.values()), {})
         entry["input"] = first.get("input")

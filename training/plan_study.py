@@ -1,0 +1,72 @@
+#!/usr/bin/python3
+"""The planner on scenes in no training set: for each (scene, budget) run `python3 -m ngi.plan` and collect its
+choice, the reasons and the validation on other frames of the scene (docs/RESULTS.md, "The planner").
+
+    PYTHONPATH=build/python /usr/bin/python3 training/plan_study.py --zoo models/zoo.json --work runs/plans \\
+        --out docs/results/plan_study.json
+
+Plans already in --work are kept (a rerun only plans what is missing).
+"""
+
+import argparse
+import contextlib
+import io
+import json
+import sys
+from pathlib import Path
+
+import ngi.plan as plan
+
+CASES = [
+    ("room:seed=204", ["--min-ssim", "0.85"]),
+    ("room:seed=204", ["--max-ms", "150"]),
+    ("street:seed=103", ["--min-ssim", "0.85"]),
+    ("street:seed=103", ["--max-ms", "150"]),
+    ("cave:seed=102", ["--min-ssim", "0.85"]),
+    ("bleed:seed=102", ["--min-ssim", "0.85"]),
+    ("backlit:seed=102", ["--min-psnr", "30"]),
+    ("bleed:seed=102", ["--min-ssim", "0.99"]),
+]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--zoo", default="models/zoo.json")
+    ap.add_argument("--work", type=Path, required=True)
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--device", default="pocl")
+    args = ap.parse_args(argv)
+    args.work.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for k, (scene, budget) in enumerate(CASES):
+        out = args.work / f"plan_{k}.json"
+        if not out.is_file() and not (args.work / f"plan_{k}.failed").is_file():
+            print(f"== {scene} {' '.join(budget)}", file=sys.stderr, flush=True)
+            err = io.StringIO()
+            with contextlib.redirect_stderr(err):
+                rc = plan.main(["--scene", scene, "--zoo", args.zoo, "--device", args.device, "--out", str(out),
+                                *budget])
+            sys.stderr.write(err.getvalue())
+            if rc != 0:
+                (args.work / f"plan_{k}.failed").write_text(err.getvalue())
+        failed = args.work / f"plan_{k}.failed"
+        if failed.is_file():
+            last = [line for line in failed.read_text().splitlines() if line.startswith("ngi.plan:")]
+            rows.append({"scene": scene, "budget": " ".join(budget), "chosen": None,
+                         "why": last[-1] if last else "ngi.plan failed"})
+            continue
+        p = json.loads(out.read_text())
+        rows.append({"scene": scene, "budget": " ".join(budget), "chosen": p["rung"], "why": p["why"],
+                     "switch": p.get("switch"), "validation": p["validation"],
+                     "calibration": p["calibration"]["rungs"]})
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(rows, indent=1) + "\n")
+    for r in rows:
+        v = r.get("validation") or {}
+        print(f"{r['scene']:18s} {r['budget']:18s} -> {r['chosen']}  validation SSIM {v.get('ssim', float('nan')):.4f}"
+              f" PSNR {v.get('psnr', float('nan')):.2f} kept {v.get('kept_quality_promise')}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
