@@ -37,7 +37,7 @@ def pareto(points):
     return keep
 
 
-def fronts(summary, device, metric):
+def fronts(summary, device, metric, cost="lightmap_ms"):
     pts = []
     for name, v in summary["variants"].items():
         h = v.get("heldout")
@@ -46,28 +46,30 @@ def fronts(summary, device, metric):
         if v["kind"] == "direct":
             pts.append((name, 0.0, h["final"][metric]))
         elif device in v.get("speed", {}):
-            pts.append((name, v["speed"][device]["lightmap_ms"], h["final"][metric]))
+            pts.append((name, v["speed"][device][cost], h["final"][metric]))
     return pts, pareto(pts)
 
 
 def plot_pareto(summary, device, path):
     plt = plt_module()
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
-    for ax, metric in zip(axes, ("psnr", "ssim")):
-        pts, front = fronts(summary, device, metric)
+    fig, grid = plt.subplots(2, 2, figsize=(13, 10))
+    for ax, (cost, metric) in zip(grid.flat, [(c, m) for c in ("lightmap_ms", "generator_ms") for m in ("psnr", "ssim")]):
+        pts, front = fronts(summary, device, metric, cost)
+        floor = 1.0 if cost == "lightmap_ms" else 0.5
         for name, ms, q in pts:
             v = summary["variants"][name]
             color = {"surround": "tab:blue", "single_view": "tab:orange", "none": "black"}[v["layout"]]
             marker = {"rung": "o", "bn_variant": "s", "legacy": "^", "direct": "*"}[v["kind"]]
-            x = max(ms, 1.0)
+            x = max(ms, floor)
             ax.scatter([x], [q], c=color, marker=marker, s=60 if name in front else 25,
                        edgecolors="k" if name in front else "none", zorder=3)
             ax.annotate(name.replace("single_view", "sv").replace("surround", "s"), (x, q), fontsize=6,
                         xytext=(3, 2), textcoords="offset points")
-        fp = sorted((max(ms, 1.0), q) for name, ms, q in pts if name in front)
+        fp = sorted((max(ms, floor), q) for name, ms, q in pts if name in front)
         ax.step([p[0] for p in fp], [p[1] for p in fp], where="post", color="gray", lw=1, zorder=1)
         ax.set_xscale("log")
-        ax.set_xlabel(f"ms per frame, whole ngi lightmap command, {device} (direct light only drawn at 1 ms)")
+        what = "whole ngi lightmap command" if cost == "lightmap_ms" else "generator alone"
+        ax.set_xlabel(f"ms per frame, {what}, {device} (direct light only drawn at {floor:g} ms)")
         ax.set_ylabel(f"held-out final-image {metric.upper()}")
         ax.grid(alpha=0.3)
     fig.suptitle(f"Speed vs accuracy on {summary['speed_devices'].get(device, {}).get('name', device)}: blue surround-"
@@ -139,12 +141,13 @@ def tables(summary):
     L.append("")
 
     for d in devices:
-        for metric in ("psnr", "ssim"):
-            pts, front = fronts(summary, d, metric)
+        for cost, metric in [(c, m) for c in ("lightmap_ms", "generator_ms") for m in ("psnr", "ssim")]:
+            pts, front = fronts(summary, d, metric, cost)
             fp = sorted((ms, q, n) for n, ms, q in pts if n in front)
-            L.append(f"Pareto front on {d}, lightmap ms vs held-out final {metric.upper()} ({len(fp)} of {len(pts)} "
+            what = "whole-command" if cost == "lightmap_ms" else "generator"
+            L.append(f"Pareto front on {d}, {what} ms vs held-out final {metric.upper()} ({len(fp)} of {len(pts)} "
                      f"variants; the rest are dominated): " +
-                     " → ".join(f"{n} ({ms:.0f} ms, {q:.4f})" if metric == "ssim" else f"{n} ({ms:.0f} ms, {q:.2f} dB)"
+                     " → ".join(f"{n} ({ms:.1f} ms, {q:.4f})" if metric == "ssim" else f"{n} ({ms:.1f} ms, {q:.2f} dB)"
                                 for ms, q, n in fp))
             L.append("")
 
