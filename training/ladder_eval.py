@@ -75,10 +75,12 @@ def write_json(path, obj):
 
 
 def rel(path):
+    """A path relative to the repository; outside it, only its last two components (no machine paths in the
+    recorded results)."""
     try:
         return str(Path(path).resolve().relative_to(REPO))
     except ValueError:
-        return str(path)
+        return str(Path("<outside the repository>", *Path(path).parts[-2:]))
 
 
 # --------------------------------------------------------------------------
