@@ -1,5 +1,7 @@
 #include "ops/probe_shade.hpp"
 
+#include "ops/buffer_checks.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -8,18 +10,8 @@ namespace ngi::detail {
 
 namespace {
 
-std::size_t mem_size(cl_mem m, const char* what) {
-    std::size_t bytes = 0;
-    check(clGetMemObjectInfo(m, CL_MEM_SIZE, sizeof bytes, &bytes, nullptr), what, "clGetMemObjectInfo");
-    return bytes;
-}
-
 void require_buffer(cl_mem m, std::size_t need, const std::string& name, const std::string& for_what) {
-    if (!m) throw InputError("probe shading: the " + name + " buffer is null");
-    const std::size_t have = mem_size(m, ("probe shading: size of the " + name + " buffer").c_str());
-    if (have < need)
-        throw InputError("probe shading: the " + name + " buffer holds " + std::to_string(have) + " bytes, " + for_what +
-                         " needs " + std::to_string(need));
+    detail::require_buffer(m, need, "probe shading", name, for_what);
 }
 
 void require_finite(const float* v, const char* name) {

@@ -1,5 +1,7 @@
 #include "ops/voxel_ltf.hpp"
 
+#include "ops/buffer_checks.hpp"
+
 #include <algorithm>
 #include <string>
 #include <utility>
@@ -14,18 +16,8 @@ const std::string kLocalDefine = "-DLTF_LOCAL=" + std::to_string(kLtfLocal);
 // whatever a compiler adds around the sender loop.
 constexpr long kLoopSlack = 64;
 
-std::size_t mem_size(cl_mem m, const char* what) {
-    std::size_t bytes = 0;
-    check(clGetMemObjectInfo(m, CL_MEM_SIZE, sizeof bytes, &bytes, nullptr), what, "clGetMemObjectInfo");
-    return bytes;
-}
-
 void require_buffer(cl_mem m, std::size_t need, const std::string& name, int voxels) {
-    if (!m) throw InputError("voxel LTF: the " + name + " buffer is null");
-    const std::size_t have = mem_size(m, ("voxel LTF: size of the " + name + " buffer").c_str());
-    if (have < need)
-        throw InputError("voxel LTF: the " + name + " buffer holds " + std::to_string(have) + " bytes, " +
-                         std::to_string(voxels) + " voxels need " + std::to_string(need));
+    detail::require_buffer(m, need, "voxel LTF", name, std::to_string(voxels) + " voxels");
 }
 
 std::size_t groups_of(int v) { return (std::size_t(v) + kLtfLocal - 1) / kLtfLocal; }

@@ -1,0 +1,54 @@
+// Joint bilateral upsampling (kernels/jbu.cl): brings a low-resolution image (seed 002's indirect light, computed by
+// the network at a quarter of the resolution) to full resolution, weighting the low-resolution taps by how well their
+// geometry matches each full-resolution pixel's (normal and tangent-plane distance), Kopf et al. 2007 as seed 002
+// section 5.3 uses it. Weights, defaults and why: docs/CONVENTIONS.md section 18.
+#pragma once
+#include "runtime/context.hpp"
+
+namespace ngi::detail {
+
+// Largest tap-window radius (a 2r x 2r window). Keep in sync with JBU_MAX_RADIUS (kernels/jbu.cl).
+constexpr int kJbuMaxRadius = 3;
+constexpr int kJbuMaxChannels = 64;
+// Image sides accepted (both resolutions).
+constexpr int kJbuMaxSide = 16384;
+
+struct JbuParams {
+    // Standard deviation of the spatial Gaussian, in low-resolution pixels.
+    float sigma_spatial = 0.75f;
+    // Exponent of max(0, n_hi . n_lo): 32 keeps faces of different orientation apart (cos 30 deg^32 = 0.01) and
+    // tolerates the small differences of smooth normals. 0 turns the normal term off.
+    float normal_power = 32.0f;
+    // Standard deviation of the tangent-plane distance, in world units (metres; a voxel block is 1 m): depth steps
+    // of a block weigh exp(-50) and vanish, while coplanar taps weigh 1 however far away the surface is.
+    float sigma_plane = 0.1f;
+    // Window radius r: taps floor(q) - r + 1 ... floor(q) + r on each axis (2r x 2r), 1 <= r <= kJbuMaxRadius.
+    int radius = 2;
+    // Bilinear fallback when the geometric weights' sum is below this fraction of the spatial weights' sum.
+    float fallback_ratio = 1e-6f;
+};
+
+struct JbuInputs {
+    int low_width = 0, low_height = 0, channels = 0;
+    cl_mem low = nullptr;           // float [channels][low_height][low_width] (planar)
+    cl_mem low_normal = nullptr;    // float [3][low_height][low_width]: unit normals; zero = no surface
+    cl_mem low_position = nullptr;  // float [3][low_height][low_width]: world positions
+    int width = 0, height = 0;      // output size
+    cl_mem normal = nullptr;        // float [3][height][width]: unit normals; zero = no surface
+    cl_mem position = nullptr;      // float [3][height][width]: world positions
+};
+
+class JointBilateralUpsample {
+public:
+    explicit JointBilateralUpsample(Context& ctx);
+    // out: float [channels][height][width]. Returns the number of pixels that fell back to bilinear after one 4-byte
+    // download when read_count, else -1 with nothing transferred (fallback_count() reads it later).
+    int enqueue(Context& ctx, const JbuInputs& in, const JbuParams& params, cl_mem out, bool read_count = true);
+    int fallback_count(Context& ctx) const;
+
+private:
+    Kernel kernel_;
+    Buffer fallbacks_;
+};
+
+}  // namespace ngi::detail

@@ -1,0 +1,386 @@
+// Joint bilateral upsampling (ops/jbu.*) against the double-precision reference (tests/reference_jbu.hpp): random
+// sizes and ratios (odd, non-integer, 1x), synthetic scenes of planar regions seen at both resolutions, the property
+// the op exists for (no light bleeds across a depth step or a crease where bilinear does), the bilinear fallback,
+// surfaceless pixels, HDR and non-finite values, surfaces 10^5 m away, and bad input.
+#include <array>
+#include <cfloat>
+#include <cmath>
+#include <limits>
+
+#include "ops/jbu.hpp"
+#include "reference_jbu.hpp"
+#include "test_support.hpp"
+
+using namespace ngi;
+using namespace ngi::detail;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// A planar region of the synthetic scene: the image-space rectangle [u0, u1) x [v0, v1) of the unit square shows
+// the plane through `origin` spanned by t1, t2 (orthonormal, normal = t1 x t2); zero normal = no surface.
+struct Region {
+    double u0, v0, u1, v1;
+    std::array<double, 3> origin, t1, t2, normal;
+};
+
+// Regions are tried in order; the last one should cover the whole square.
+struct Scene {
+    std::vector<Region> regions;
+    double scale = 2.0;  // metres per unit of image space
+};
+
+const Region* region_at(const Scene& s, double u, double v) {
+    for (const Region& r : s.regions)
+        if (u >= r.u0 && u < r.u1 && v >= r.v0 && v < r.v1) return &r;
+    return nullptr;
+}
+
+// The guides of a w x h view of the scene (pixel centres), and each pixel's region index (-1: none).
+struct Guides {
+    std::vector<float> normal, position;
+    std::vector<int> region;
+};
+
+Guides render_guides(const Scene& s, int w, int h) {
+    const std::size_t plane = std::size_t(w) * h;
+    Guides g;
+    g.normal.assign(3 * plane, 0.0f);
+    g.position.assign(3 * plane, 0.0f);
+    g.region.assign(plane, -1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double u = (x + 0.5) / w, v = (y + 0.5) / h;
+            const Region* r = region_at(s, u, v);
+            if (!r) continue;
+            const std::size_t i = std::size_t(y) * w + x;
+            g.region[i] = int(r - s.regions.data());
+            for (int k = 0; k < 3; ++k) {
+                g.normal[k * plane + i] = float(r->normal[k]);
+                g.position[k * plane + i] = float(r->origin[k] + s.scale * (u * r->t1[k] + v * r->t2[k]));
+            }
+        }
+    return g;
+}
+
+std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+std::array<double, 3> unit(std::array<double, 3> a) {
+    const double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (double& x : a) x /= l;
+    return a;
+}
+
+// A region on a random plane (an axis-aligned one half of the time, as voxel faces are).
+Region random_region(std::mt19937& rng, double u0, double v0, double u1, double v1) {
+    std::uniform_real_distribution<double> d(-1.0, 1.0);
+    Region r{u0, v0, u1, v1, {d(rng) * 3, d(rng) * 3, d(rng) * 3}, {}, {}, {}};
+    std::array<double, 3> n;
+    if (rng() % 2) {
+        n = {0, 0, 0};
+        n[rng() % 3] = rng() % 2 ? 1.0 : -1.0;
+    } else {
+        n = unit({d(rng), d(rng), d(rng)});
+    }
+    // A tangent frame: any vector not parallel to n, made orthogonal.
+    const std::array<double, 3> a = std::abs(n[0]) < 0.9 ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
+    r.t1 = unit(cross(n, a));
+    r.t2 = cross(n, r.t1);
+    r.normal = cross(r.t1, r.t2);
+    return r;
+}
+
+// Several random rectangles over a random background plane; sometimes a surfaceless (sky) rectangle.
+Scene random_scene(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Scene s;
+    const int k = 1 + int(rng() % 4);
+    for (int i = 0; i < k; ++i) {
+        const double a = u(rng), b = u(rng), c = u(rng), d = u(rng);
+        s.regions.push_back(random_region(rng, std::min(a, b), std::min(c, d), std::max(a, b), std::max(c, d)));
+    }
+    if (rng() % 2) {
+        const double a = u(rng), c = u(rng);
+        s.regions.insert(s.regions.begin(), Region{a, c, a + 0.2, c + 0.3, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
+    }
+    s.regions.push_back(random_region(rng, 0, 0, 1, 1));
+    return s;
+}
+
+struct Run {
+    std::vector<float> out;
+    int fallbacks = 0;
+};
+
+Run run_jbu(const test::JbuRefImage& low, const std::vector<float>& normal, const std::vector<float>& position, int W,
+            int H, const JbuParams& params = {}) {
+    auto& ctx = test::ctx();
+    const Buffer v = test::upload(low.values), ln = test::upload(low.normal), lp = test::upload(low.position),
+                 n = test::upload(normal), p = test::upload(position);
+    Buffer out = ctx.alloc(std::size_t(low.channels) * W * H * sizeof(float), "test jbu output");
+    JbuInputs in;
+    in.low_width = low.width;
+    in.low_height = low.height;
+    in.channels = low.channels;
+    in.low = v.get();
+    in.low_normal = ln.get();
+    in.low_position = lp.get();
+    in.width = W;
+    in.height = H;
+    in.normal = n.get();
+    in.position = p.get();
+    JointBilateralUpsample op(ctx);
+    Run r;
+    r.fallbacks = op.enqueue(ctx, in, params, out.get());
+    r.out = test::download(out, std::size_t(low.channels) * W * H);
+    return r;
+}
+
+test::JbuRefParams ref_params(const JbuParams& p) {
+    test::JbuRefParams r;
+    r.sigma_spatial = p.sigma_spatial;
+    r.normal_power = p.normal_power;
+    r.sigma_plane = p.sigma_plane;
+    r.fallback_ratio = p.fallback_ratio;
+    r.radius = p.radius;
+    return r;
+}
+
+test::JbuRefImage low_view(const Scene& s, int w, int h, int channels, std::vector<float> values) {
+    const Guides g = render_guides(s, w, h);
+    return {w, h, channels, std::move(values), g.normal, g.position};
+}
+
+// Largest |a - b| over pixels that are not borderline in the reference, relative to `scale`.
+double worst_error(const Run& got, const test::JbuRefResult& ref, int channels, std::size_t plane, double scale) {
+    double worst = 0;
+    for (int c = 0; c < channels; ++c)
+        for (std::size_t i = 0; i < plane; ++i) {
+            if (ref.borderline[i]) continue;
+            const double d = std::abs(double(got.out[c * plane + i]) - ref.out[c * plane + i]);
+            worst = std::max(worst, std::isfinite(d) ? d / scale : INFINITY);
+        }
+    return worst;
+}
+
+int borderline_count(const test::JbuRefResult& ref) {
+    int n = 0;
+    for (char b : ref.borderline) n += b;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]") {
+    std::mt19937 rng(20261126);
+    double worst = 0;
+    int pixels = 0, fallbacks = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+        const Scene scene = random_scene(rng);
+        const int w = 1 + int(rng() % 23), h = 1 + int(rng() % 19);
+        // Integer ratios 1-5 and arbitrary sizes (non-integer ratios, a few smaller than the input).
+        int W, H;
+        if (trial % 2) {
+            const int f = 1 + int(rng() % 5);
+            W = w * f;
+            H = h * f;
+        } else {
+            W = 1 + int(rng() % 61);
+            H = 1 + int(rng() % 47);
+        }
+        const int channels = std::array<int, 3>{1, 3, 5}[trial % 3];
+        JbuParams params;
+        params.radius = 1 + trial % 3;
+        if (trial % 4 == 3) params.normal_power = 0.0f;  // normal term off: the plane term alone
+        const test::JbuRefImage low =
+            low_view(scene, w, h, channels, test::random_vector(std::size_t(channels) * w * h, rng, 0.0f, 4.0f));
+        const Guides hi = render_guides(scene, W, H);
+        const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, ref_params(params));
+        const Run got = run_jbu(low, hi.normal, hi.position, W, H, params);
+        INFO("trial " << trial << ": " << w << "x" << h << " -> " << W << "x" << H << ", " << channels
+                      << " channels, radius " << params.radius);
+        // Tolerance: float weights (exp, pow of up to 36 taps) against double; values in [0, 4]. Observed: < 1e-5.
+        const double e = worst_error(got, ref, channels, std::size_t(W) * H, 4.0);
+        CHECK(e < 1e-4);
+        CHECK(std::abs(got.fallbacks - ref.fallbacks) <= borderline_count(ref));
+        worst = std::max(worst, e);
+        pixels += W * H;
+        fallbacks += ref.fallbacks;
+    }
+    WARN("JBU vs reference: worst error " << worst << " of the value range over " << pixels << " pixels (" << fallbacks
+                                          << " bilinear fallbacks)");
+}
+
+TEST_CASE("JBU: no light crosses a depth step or a crease; bilinear does", "[jbu]") {
+    // A floor (y = 0, normal +y) with a one-block platform (y = 1, also +y: a depth step only the plane term
+    // separates) and a wall (x = 0, normal +x: a crease the normal term separates), at 4x, edges off the grid.
+    Scene s;
+    s.regions.push_back({0.0, 0.0, 0.37, 1.0, {0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {1, 0, 0}});      // wall
+    s.regions.push_back({0.37, 0.0, 0.71, 0.58, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}});    // platform
+    s.regions.push_back({0.0, 0.0, 1.0, 1.0, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}});       // floor
+    const std::array<float, 3> light = {0.25f, 3.0f, 1.0f};  // per region
+    const int w = 13, h = 11, W = 4 * w, H = 4 * h;
+    const Guides lo = render_guides(s, w, h), hi = render_guides(s, W, H);
+    std::vector<float> values(std::size_t(w) * h);
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = light[lo.region[i]];
+    const test::JbuRefImage low{w, h, 1, values, lo.normal, lo.position};
+    const Run got = run_jbu(low, hi.normal, hi.position, W, H);
+
+    // The bilinear resize of the same image, for contrast: full-resolution normals no tap faces (-z) make every
+    // pixel fall back.
+    std::vector<float> away(hi.normal.size(), 0.0f);
+    std::fill(away.begin() + 2 * W * H, away.end(), -1.0f);
+    const Run bilinear = run_jbu(low, away, hi.position, W, H);
+    CHECK(bilinear.fallbacks == W * H);
+
+    double jbu_err = 0, bilinear_err = 0;
+    for (std::size_t i = 0; i < std::size_t(W) * H; ++i) {
+        const double want = light[hi.region[i]];
+        jbu_err = std::max(jbu_err, std::abs(got.out[i] - want) / want);
+        bilinear_err = std::max(bilinear_err, std::abs(bilinear.out[i] - want) / want);
+    }
+    CHECK(got.fallbacks == 0);
+    CHECK(jbu_err < 1e-5);
+    CHECK(bilinear_err > 0.5);  // the same test fails for plain bilinear: it bleeds across both edges
+}
+
+TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear; no surface gives 0", "[jbu]") {
+    // Low: floor only. High: the floor, a wall facing -z the low image never saw (fallback), and sky (0).
+    Scene low_scene, hi_scene;
+    const Region floor{0.0, 0.0, 1.0, 1.0, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}};
+    low_scene.regions = {floor};
+    hi_scene.regions = {{0.5, 0.1, 0.8, 0.5, {0, 0, 4}, {-1, 0, 0}, {0, 1, 0}, {0, 0, -1}},
+                        {0.1, 0.6, 0.4, 0.9, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}},
+                        floor};
+    std::mt19937 rng(7);
+    const int w = 9, h = 7, W = 36, H = 28, channels = 3;
+    const test::JbuRefImage low =
+        low_view(low_scene, w, h, channels, test::random_vector(std::size_t(channels) * w * h, rng, 0.5f, 2.0f));
+    const Guides hi = render_guides(hi_scene, W, H);
+    const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, {});
+    const Run got = run_jbu(low, hi.normal, hi.position, W, H);
+    int wall = 0;
+    for (std::size_t i = 0; i < std::size_t(W) * H; ++i) {
+        CHECK(bool(ref.fallback[i]) == (hi.region[i] == 0));
+        wall += hi.region[i] == 0;
+        if (hi.region[i] == 1)
+            for (int c = 0; c < channels; ++c) CHECK(got.out[c * W * H + i] == 0.0f);
+    }
+    CHECK(wall > 0);
+    CHECK(got.fallbacks == wall);
+    CHECK(worst_error(got, ref, channels, std::size_t(W) * H, 2.0) < 1e-5);
+}
+
+TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away", "[jbu]") {
+    std::mt19937 rng(11);
+    Scene s;
+    // Axis-aligned planes far from the origin (a distant horizon): positions near 1e5, float spacing 0.008 m.
+    for (double far : {0.0, 1.0e4, 1.0e5}) {
+        s.regions = {{0.0, 0.0, 0.45, 1.0, {far, 0, 0}, {0, 0, 1}, {0, 1, 0}, {1, 0, 0}},
+                     {0.0, 0.0, 1.0, 1.0, {0, far, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}}};
+        const int w = 10, h = 8, W = 40, H = 32;
+        const Guides lo = render_guides(s, w, h), hi = render_guides(s, W, H);
+        INFO("surfaces at " << far << " m");
+        // A constant image stays constant (the weights are normalized), to float rounding; FLT_MAX stays finite.
+        for (float value : {0.0f, 1.0f, 65504.0f, 1.0e30f, FLT_MAX}) {
+            const test::JbuRefImage low{w, h, 1, std::vector<float>(std::size_t(w) * h, value), lo.normal, lo.position};
+            const Run got = run_jbu(low, hi.normal, hi.position, W, H);
+            INFO("constant " << value);
+            CHECK(got.fallbacks == 0);
+            for (float v : got.out) CHECK(std::abs(double(v) - value) <= 2e-6 * value);  // 16 normalized weights' rounding
+        }
+    }
+    // Hostile values: NaN -> 0, +-Inf -> +-FLT_MAX, HDR beyond half precision; outputs finite and as the reference.
+    const int w = 6, h = 5, W = 17, H = 13;
+    s.regions = {random_region(rng, 0, 0, 1, 1)};
+    std::vector<float> values = test::random_vector(std::size_t(w) * h, rng, 0.0f, 1.0e5f);
+    values[0] = std::numeric_limits<float>::quiet_NaN();
+    values[3] = std::numeric_limits<float>::infinity();
+    values[7] = -std::numeric_limits<float>::infinity();
+    values[12] = 65504.0f * 4;
+    values[20] = FLT_MAX;
+    const test::JbuRefImage low = low_view(s, w, h, 1, values);
+    const Guides hi = render_guides(s, W, H);
+    const Run got = run_jbu(low, hi.normal, hi.position, W, H);
+    const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, {});
+    CHECK(test::all_finite(got.out));
+    // Where a saturated tap takes part the sums are near FLT_MAX: compare relative to the largest magnitude.
+    CHECK(worst_error(got, ref, 1, std::size_t(W) * H, FLT_MAX) < 1e-5);
+    // Non-finite guides: a NaN normal or position makes a tap (or a pixel) surfaceless, never a NaN output.
+    test::JbuRefImage broken = low;
+    broken.normal[1] = std::numeric_limits<float>::quiet_NaN();
+    broken.position[2 * w * h + 4] = std::numeric_limits<float>::infinity();
+    std::vector<float> hi_normal = hi.normal;
+    hi_normal[5] = std::numeric_limits<float>::quiet_NaN();
+    const Run got2 = run_jbu(broken, hi_normal, hi.position, W, H);
+    const test::JbuRefResult ref2 = test::jbu_reference(broken, hi_normal, hi.position, W, H, {});
+    CHECK(test::all_finite(got2.out));
+    CHECK(got2.out[5] == 0.0f);
+    CHECK(worst_error(got2, ref2, 1, std::size_t(W) * H, FLT_MAX) < 1e-5);
+}
+
+TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
+    std::mt19937 rng(3);
+    const Scene scene = random_scene(rng);
+    const int w = 5, h = 3, W = 19, H = 11, channels = 3;
+    const test::JbuRefImage low =
+        low_view(scene, w, h, channels, test::random_vector(std::size_t(channels) * w * h, rng, 0.0f, 1.0f));
+    const Guides hi = render_guides(scene, W, H);
+    const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, {});
+    const Run got = run_jbu(low, hi.normal, hi.position, W, H);
+    CHECK(worst_error(got, ref, channels, std::size_t(W) * H, 1.0) < 1e-4);
+}
+
+TEST_CASE("JBU: bad input names the parameter or buffer", "[jbu]") {
+    auto& ctx = test::ctx();
+    JointBilateralUpsample op(ctx);
+    Buffer small = ctx.alloc(16, "small"), big = ctx.alloc(3 * 64 * 64 * sizeof(float), "big"),
+           out = ctx.alloc(3 * 64 * 64 * sizeof(float), "out");
+    JbuInputs in;
+    in.low_width = in.low_height = 8;
+    in.width = in.height = 32;
+    in.channels = 3;
+    in.low = in.low_normal = in.low_position = in.normal = in.position = big.get();
+    CHECK(op.enqueue(ctx, in, {}, out.get()) >= 0);  // the valid call the cases below break one field of
+
+    auto expect = [&](JbuInputs bad, JbuParams params, cl_mem o, const std::string& what) {
+        CHECK_THROWS_WITH(op.enqueue(ctx, bad, params, o), Contains("joint bilateral upsampling") && Contains(what));
+    };
+    JbuInputs b = in;
+    b.low_width = 0;
+    expect(b, {}, out.get(), "low-resolution width 0");
+    b = in;
+    b.height = kJbuMaxSide + 1;
+    expect(b, {}, out.get(), "output height");
+    b = in;
+    b.channels = 0;
+    expect(b, {}, out.get(), "0 channels");
+    b = in;
+    b.normal = nullptr;
+    expect(b, {}, out.get(), "the normal buffer is null");
+    b = in;
+    b.low_position = small.get();
+    expect(b, {}, out.get(), "low-resolution position buffer holds 16 bytes");
+    expect(in, {}, small.get(), "output buffer holds 16 bytes");
+    expect(in, {}, big.get(), "output buffer is also an input");
+    JbuParams p;
+    p.sigma_spatial = std::numeric_limits<float>::quiet_NaN();
+    expect(in, p, out.get(), "sigma_spatial");
+    p = {};
+    p.sigma_plane = 0.0f;
+    expect(in, p, out.get(), "sigma_plane");
+    p = {};
+    p.sigma_plane = 1e-30f;
+    expect(in, p, out.get(), "overflows");
+    p = {};
+    p.normal_power = -1.0f;
+    expect(in, p, out.get(), "normal_power");
+    p = {};
+    p.radius = kJbuMaxRadius + 1;
+    expect(in, p, out.get(), "radius 4");
+    p = {};
+    p.fallback_ratio = 1.0f;
+    expect(in, p, out.get(), "fallback_ratio");
+}
