@@ -107,15 +107,16 @@ __kernel void mlp_fused(__global const float* restrict x, const int x_off, const
     for (int o = 0; o < out; ++o) y[(size_t)i * y_item + (size_t)o * y_chan] = src[o];
 }
 
-// The frequency encoding alone, materialized for the dense (GEMM) path: e[k * n + i] (planar, channel-major).
-// Launch: 2-D (n, encoded width).
+// The frequency encoding alone, materialized for the dense (GEMM) path and for graphs (Neural GI):
+// e[e_off + k * n + i] (planar, channel-major). Launch: 2-D (n, encoded width).
 __kernel void frequency_encode_planar(__global const float* restrict x, const int x_off, const int n, const int in_ch,
                                       const int x_item, const int x_chan, const int bands, const int first_exp,
                                       const int use_pi, const int include_raw, const int order,
-                                      __global float* restrict e) {
+                                      __global float* restrict e, const int e_off) {
     const int i = get_global_id(0), k = get_global_id(1);
     const int raw = include_raw ? in_ch : 0;
     x += x_off;
+    e += e_off;
     if (i >= n || k >= encoded_width(in_ch, bands, include_raw)) return;
     float value;
     if (k < raw) {

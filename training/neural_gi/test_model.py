@@ -1,4 +1,4 @@
-"""Tests of seed 002's PyTorch model (training/neural_gi/model.py): the encoding, the shapes, the non-negative
+"""Tests of seed 002's PyTorch model (ngi.neural_gi, bindings/python/ngi/neural_gi.py): the encoding, the shapes, the non-negative
 decoding, the loss, the DeepSDF re-injection, a short overfit. About 10 s on one thread (measured 8-14 s beside a
 build).
 
@@ -10,9 +10,9 @@ import math
 import pytest
 import torch
 
-import model as ngi_model
-from model import (ENCODED_CHANNELS, INPUT_CHANNELS, LinearUnetGenerator, NeuralGI, assemble_inputs,
-                   log_l1_loss, positional_encoding)
+import ngi.neural_gi as ngi_model
+from ngi.neural_gi import (ENCODED_CHANNELS, INPUT_CHANNELS, LinearUnetGenerator, NeuralGI, assemble_inputs,
+                            log_l1_loss, positional_encoding)
 from ngi.reference_models import UnetGenerator
 
 torch.set_num_threads(1)

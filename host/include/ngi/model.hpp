@@ -16,7 +16,7 @@ namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi"
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;
@@ -57,6 +57,16 @@ struct ModelConfig {
         // (x, y, z) is the training grid.
         void check_grid(int x, int y, int z) const;
     } voxel_sh;
+
+    // family "neural_gi" (seed 002, docs/MODEL_FORMAT.md "neural_gi"): per scene, [1, 18, H, W] assembled inputs
+    // -> [1, 3, H, W] indirect light (>= 0). The neural buffer is a pix2pix U-Net (ngf, num_downs, bn_mode above;
+    // linear output, buffer_channels); the encoding uses the encoding_* fields above; the MLP takes
+    // [encoded inputs, buffer] through `mlp_depth` ReLU layers of `mlp_width`, the input concatenated again before
+    // layer `skip_layer`, then a linear layer to RGB decoded by exp(min(x, 88)).
+    struct NeuralGi {
+        int buffer_channels = 0;
+        int mlp_width = 0, mlp_depth = 0, skip_layer = 0;
+    } neural_gi;
 };
 
 // Overrides of the file's settings; an empty string keeps the file's value.
@@ -94,6 +104,7 @@ public:
     // input: [1, input_nc, H, W] with H and W multiples of 2^num_downs. Returns [1, output_nc, H, W].
     // Family "mlp": [1, input_nc, H, W] (per pixel) -> [1, output_nc, H, W], or [N, input_nc] -> [N, output_nc].
     // Family "voxel_sh": [V, 10] raw voxel attributes (one scene) -> [V, 27] SH coefficients.
+    // Family "neural_gi": [1, 18, H, W] assembled inputs -> [1, 3, H, W] indirect light.
     // The graph for each new H x W is built and planned on first use and reused afterwards.
     Tensor run(const Tensor& input, RunInfo* info = nullptr);
 

@@ -5,6 +5,7 @@
 #include "graph/graph.hpp"
 #include "ops/conv.hpp"
 #include "ops/elementwise.hpp"
+#include "ops/mlp.hpp"
 #include "ops/norm.hpp"
 
 namespace ngi::detail {
@@ -89,6 +90,41 @@ private:
     Elementwise ew_;
     std::uint32_t seed_, site_;
     float p_;
+};
+
+// A copy of its input: lets one tensor take part in a second concat (a concat places its members inside itself,
+// so a tensor can live inside only one), e.g. Neural GI's MLP input re-injected at the middle layer (DeepSDF).
+class CopyNode : public Op {
+public:
+    std::string kind() const override { return "copy"; }
+    Shape infer(const std::vector<Shape>& in) const override { return ConvNode::one(in); }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>*) override {
+        ctx.copy(in[0].mem, in[0].offset * sizeof(float), out.mem, out.offset * sizeof(float),
+                 in[0].shape.size() * sizeof(float), "graph copy node");
+    }
+};
+
+// The frequency (positional) encoding of every pixel: C channels -> encoding.width(C) (docs/CONVENTIONS.md
+// section 13).
+class FrequencyEncodeNode : public Op {
+public:
+    FrequencyEncodeNode(Context& ctx, int inputs, const FrequencyEncoding& encoding) : encode_(ctx, inputs, encoding) {}
+    std::string kind() const override { return "frequency_encode"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        const Shape& s = ConvNode::one(in);
+        if (s.c != encode_.inputs())
+            throw InputError("frequency encoding: the input has " + std::to_string(s.c) + " channels, the encoding takes " +
+                             std::to_string(encode_.inputs()));
+        return {encode_.width(), s.h, s.w};
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        cl_event e = encode_.enqueue(ctx, in[0].mem, in[0].offset, out.mem, out.offset, in[0].shape.h * in[0].shape.w,
+                                     ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    FrequencyEncodePlanar encode_;
 };
 
 }  // namespace ngi::detail

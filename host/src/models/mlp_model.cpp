@@ -63,6 +63,13 @@ void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string
     // guard replaces only NaN (-> 0) and +-Inf (-> +-FLT_MAX).
     c.input_range[0] = -3.402823466e38f;
     c.input_range[1] = 3.402823466e38f;
+    parse_encoding_fields(j, c, what);
+}
+
+void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        return InputError(what + "field '" + key + "' must be " + rule);
+    };
     if (j.contains("encoding")) {
         const nlohmann::json& e = j["encoding"];
         if (!e.is_object()) throw fail("encoding", "an object");
@@ -91,15 +98,21 @@ void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string
     }
 }
 
+FrequencyEncoding frequency_encoding(const ModelConfig& c) {
+    FrequencyEncoding e;
+    e.bands = c.encoding_bands;
+    e.first_exponent = c.encoding_first_exponent;
+    e.pi = c.encoding_pi;
+    e.include_input = c.encoding_include_input;
+    e.order = c.encoding_order == "component" ? FrequencyEncoding::Order::ComponentMajor
+                                               : FrequencyEncoding::Order::BandMajor;
+    return e;
+}
+
 MlpSpec mlp_spec(const ModelConfig& c, const SafetensorsFile& file, const std::string& path) {
     MlpSpec s;
     s.inputs = c.input_nc;
-    s.encoding.bands = c.encoding_bands;
-    s.encoding.first_exponent = c.encoding_first_exponent;
-    s.encoding.pi = c.encoding_pi;
-    s.encoding.include_input = c.encoding_include_input;
-    s.encoding.order = c.encoding_order == "component" ? FrequencyEncoding::Order::ComponentMajor
-                                                        : FrequencyEncoding::Order::BandMajor;
+    s.encoding = frequency_encoding(c);
     int in = s.encoding.width(s.inputs);
     std::set<std::string> used;
     for (std::size_t i = 0; i < c.layers.size(); ++i) {

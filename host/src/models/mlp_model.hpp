@@ -14,6 +14,10 @@ namespace ngi::detail {
 
 // Fills c.layers, the encoding fields and c.output_nc from the metadata `j`; `what` prefixes errors.
 void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
+// The optional "encoding" object into c.encoding_* (docs/MODEL_FORMAT.md; absent: no encoding).
+void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
+// c.encoding_* as the ops take it.
+FrequencyEncoding frequency_encoding(const ModelConfig& c);
 
 // The network of an "mlp" model file: tensors layers.<i>.weight [out, in] and layers.<i>.bias [out]; every tensor
 // present, of that shape, finite, and no other tensor. `path` names the file in errors.

@@ -6,6 +6,7 @@
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
 #include "models/mlp_model.hpp"
+#include "models/neural_gi_model.hpp"
 #include "models/voxel_sh_model.hpp"
 #include "models/model_access.hpp"
 #include "ops/gemm_selfcheck.hpp"
@@ -22,12 +23,14 @@ struct Model::Impl {
     bool mlp_enqueued = false;
     std::unique_ptr<detail::VoxelShRunner> voxel_sh;  // family "voxel_sh" (instead of ops and graphs)
     bool voxel_sh_enqueued = false;
+    std::unique_ptr<detail::NeuralGiOps> neural_gi;  // family "neural_gi" (instead of ops; graphs as a U-Net's)
 
     // The graph for an input of h x w, built, planned and allocated on first use.
     detail::Graph& graph(int h, int w) {
         auto& g = graphs[{h, w}];
         if (!g) {
-            auto fresh = detail::build_unet_graph(ops, h, w);
+            auto fresh = neural_gi ? detail::build_neural_gi_graph(*neural_gi, config.input_nc, h, w)
+                                   : detail::build_unet_graph(ops, h, w);
             fresh->set_input_limits(config.input_range[0], config.input_range[1]);
             fresh->compile(ngi::detail::context_of(device));
             g = std::move(fresh);
@@ -51,7 +54,7 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     ModelConfig cfg = detail::parse_model_config(meta->second, path);  // every family, the JSON parsed once
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false});
+    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr});
     auto& ctx = ngi::detail::context_of(device);
     if (cfg.family == "voxel_sh") {
         if (!options.mlp_path.empty())
@@ -69,7 +72,11 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
         throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is " + cfg.family);
     try {
         const detail::GemmSelection& gemm = detail::gemm_selection(ngi::detail::context_of(device));
-        impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params);
+        if (cfg.family == "neural_gi")
+            impl->neural_gi = std::make_unique<detail::NeuralGiOps>(
+                detail::build_neural_gi_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params));
+        else
+            impl->ops = detail::build_unet_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params);
     } catch (const InputError& e) {
         throw InputError(std::string(e.what()) + " (file " + path + ")");
     }
@@ -105,7 +112,7 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
         info->arena_bytes = graph->arena_bytes();
         info->naive_bytes = graph->naive_bytes();
         info->scratch_bytes = graph->scratch_bytes();
-        info->weight_bytes = impl_->ops.weight_bytes;
+        info->weight_bytes = impl_->neural_gi ? impl_->neural_gi->weight_bytes : impl_->ops.weight_bytes;
     }
     return out;
 }

@@ -7,6 +7,7 @@
 
 #include "graph/nodes.hpp"
 #include "models/mlp_model.hpp"
+#include "models/neural_gi_model.hpp"
 #include "models/voxel_sh_model.hpp"
 
 namespace ngi::detail {
@@ -164,7 +165,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const std::string s = j[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             if (std::string(key) == "family")  // the most common mistake gets the most specific message
-                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh)");
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh, neural_gi)");
             throw fail(key, rule);
         }
         return s;
@@ -189,7 +190,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
                          ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
                          "): update ngi");
     integer("format_version", 1, kModelFormatVersion, 1, false);  // absent: 1 (hand-written test files)
-    c.family = string("family", {"pix2pix_unet", "deepillumination", "mlp"}, "", true);
+    c.family = string("family", {"pix2pix_unet", "deepillumination", "mlp", "neural_gi"}, "", true);
     c.input_nc = int(integer("input_nc", 1, kMaxChannels, 0, true));
     if (c.family == "mlp") {
         parse_mlp_fields(j, c, what);  // layers, encoding; output_nc = the last layer's width
@@ -198,7 +199,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     } else {
         c.output_nc = int(integer("output_nc", 1, kMaxChannels, 0, true));
         c.ngf = int(integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
-        if (c.family == "pix2pix_unet") c.num_downs = int(integer("num_downs", 5, 12, 0, true));
+        if (c.family != "deepillumination") c.num_downs = int(integer("num_downs", 5, 12, 0, true));  // U-Nets
         else c.num_downs = int(integer("num_downs", 8, 8, 0, true));  // DeepIllumination's G has exactly 8
     }
     string("norm", {"batch"}, "batch", false);
@@ -220,13 +221,14 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     range("input_range", c.input_range);
     range("output_range", c.output_range);
     c.source = string("source", {}, c.source, false);
+    if (c.family == "neural_gi") parse_neural_gi_fields(j, c, what);  // after dropout: it must be off
     if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
     // "required": the fields a writer says no reader may ignore. Unknown optional fields are ignored (a newer writer
     // may add hints); a required one this reader does not know means the file needs a newer ngi.
     static const char* const kKnown[] = {"format_version", "family", "input_nc", "output_nc", "ngf", "num_downs",
                                          "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
                                          "leaky_slope", "input_layout", "input_range", "output_range", "source",
-                                         "training", "required", "layers", "encoding", "ao"};
+                                         "training", "required", "layers", "encoding", "ao", "neural_gi"};
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");
@@ -296,7 +298,7 @@ void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) 
 }
 
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
-                       const std::optional<GemmParams>& conv_gemm) {
+                       const std::optional<GemmParams>& conv_gemm, Act outer_act) {
     const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
     validate_unet_tensors(cfg, file);  // names, shapes and modes, before touching the device
     const UNetSpec spec = unet_spec(cfg);
@@ -326,7 +328,7 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
             conv_path, conv_gemm);
         o.down_bn = per_image_bn(l.down_bn, l.inner_c, down_act);
         const Act up_in = i == D - 1 ? Act::none() : Act::relu();  // innermost input is already ReLU'd
-        const Act up_act = i == 0 ? Act::tanh() : Act::none();
+        const Act up_act = i == 0 ? outer_act : Act::none();
         o.up = std::make_shared<ConvTransposeNode>(
             ctx, gemm, ConvSpec{l.up_in, l.up_out, {4, 4, 2, 1}, up_in, up_act}, get(file, l.up_w).data.data(),
             fold(file, l.up_b, l.up_bn, l.up_out, cfg.bn_eps, running), conv_path, conv_gemm);
@@ -340,32 +342,35 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
     return ops;
 }
 
-std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width) {
+TensorId add_unet(Graph& g, const UNetOps& ops, TensorId x, const std::string& prefix) {
     const int D = int(ops.levels.size());
-    if (height % (1 << D) != 0 || width % (1 << D) != 0)
-        throw InputError("run model: input " + std::to_string(height) + "x" + std::to_string(width) +
+    const Shape in = g.shape(x);
+    if (in.h % (1 << D) != 0 || in.w % (1 << D) != 0)
+        throw InputError("run model: input " + std::to_string(in.h) + "x" + std::to_string(in.w) +
                          " (HxW) must be a multiple of 2^num_downs = " + std::to_string(1 << D) +
                          " in both dimensions so the skip connections line up");
-    auto g = std::make_unique<Graph>();
-    const TensorId x = g->input({ops.input_nc, height, width}, "input");
     std::vector<TensorId> down(D);
     for (int i = 0; i < D; ++i) {
-        const std::string n = "level" + std::to_string(i) + ".down";
-        down[i] = g->add(ops.levels[i].down, {i == 0 ? x : down[i - 1]}, n + ".conv");
-        if (ops.levels[i].down_bn) down[i] = g->add(ops.levels[i].down_bn, {down[i]}, n + ".bn");
+        const std::string n = prefix + "level" + std::to_string(i) + ".down";
+        down[i] = g.add(ops.levels[i].down, {i == 0 ? x : down[i - 1]}, n + ".conv");
+        if (ops.levels[i].down_bn) down[i] = g.add(ops.levels[i].down_bn, {down[i]}, n + ".bn");
     }
     TensorId up_input = down[D - 1];
     for (int i = D - 1; i >= 0; --i) {
-        const std::string n = "level" + std::to_string(i) + ".up";
-        TensorId u = g->add(ops.levels[i].up, {up_input}, n + ".convT");
-        if (ops.levels[i].up_bn) u = g->add(ops.levels[i].up_bn, {u}, n + ".bn");
-        if (ops.levels[i].dropout) u = g->add(ops.levels[i].dropout, {u}, n + ".dropout");
-        if (i == 0) {
-            g->set_output(u);
-        } else {
-            up_input = ops.decoder_first ? g->concat({u, down[i - 1]}, n + ".cat") : g->concat({down[i - 1], u}, n + ".cat");
-        }
+        const std::string n = prefix + "level" + std::to_string(i) + ".up";
+        TensorId u = g.add(ops.levels[i].up, {up_input}, n + ".convT");
+        if (ops.levels[i].up_bn) u = g.add(ops.levels[i].up_bn, {u}, n + ".bn");
+        if (ops.levels[i].dropout) u = g.add(ops.levels[i].dropout, {u}, n + ".dropout");
+        if (i == 0) return u;
+        up_input = ops.decoder_first ? g.concat({u, down[i - 1]}, n + ".cat") : g.concat({down[i - 1], u}, n + ".cat");
     }
+    return up_input;  // not reached: level 0 returns
+}
+
+std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width) {
+    auto g = std::make_unique<Graph>();
+    const TensorId x = g->input({ops.input_nc, height, width}, "input");
+    g->set_output(add_unet(*g, ops, x));
     return g;
 }
 

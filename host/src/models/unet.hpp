@@ -54,9 +54,14 @@ struct UNetOps {
 // build_unet_ops calls it first; it needs no device (the fuzz target fuzz_safetensors calls it directly).
 void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file);
 // gemm: the GEMM knob set (im2col path); conv_gemm: the implicit convolution's (GemmSelection::conv_params;
-// nullopt: the device's tuning entry keeps convolutions on the im2col path).
+// nullopt: the device's tuning entry keeps convolutions on the im2col path). outer_act: the last layer's activation
+// (the generators' tanh; none for Neural GI's neural buffer, a free feature map).
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
-                       const std::optional<GemmParams>& conv_gemm);
+                       const std::optional<GemmParams>& conv_gemm, Act outer_act = Act::tanh());
+// The U-Net's nodes on input x of a graph (its height and width multiples of 2^num_downs: InputError otherwise);
+// returns the output tensor [output_nc, height, width]. `prefix` starts every node name.
+TensorId add_unet(Graph& g, const UNetOps& ops, TensorId x, const std::string& prefix = "");
+// A graph of the U-Net alone: input [input_nc, height, width] -> output.
 std::unique_ptr<Graph> build_unet_graph(const UNetOps& ops, int height, int width);
 
 }  // namespace ngi::detail

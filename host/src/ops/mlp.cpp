@@ -167,10 +167,27 @@ cl_event FusedMlp::enqueue(Context& ctx, cl_mem x, std::size_t x_off, ItemLayout
     return ctx.launch(kernel_, 1, g, kLocal1, want_event);
 }
 
+// ---- the encoding alone ---------------------------------------------------------------------------------------
+
+FrequencyEncodePlanar::FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding)
+    : inputs_(inputs), encoding_(encoding), kernel_(ctx.kernel("mlp", "frequency_encode_planar", encoding_defines(16))) {}
+
+cl_event FrequencyEncodePlanar::enqueue(Context& ctx, cl_mem x, std::size_t x_off, cl_mem y, std::size_t y_off, int n,
+                                        bool want_event) {
+    const FrequencyEncoding& e = encoding_;
+    if (double(width()) * n > 2147483647.0 || x_off > 2147483647u || y_off > 2147483647u)
+        throw InputError("frequency encoding: " + std::to_string(n) + " items x " + std::to_string(width()) +
+                         " features exceed the kernel's 32-bit indexing");
+    kernel_.args(x, int(x_off), n, inputs_, 1, n, e.bands, e.first_exponent, int(e.pi), int(e.include_input),
+                 int(e.order), y, int(y_off));
+    const std::size_t g[2] = {std::size_t(n), std::size_t(width())};
+    return ctx.launch(kernel_, 2, g, kEncodeLocal, want_event);
+}
+
 // ---- dense ------------------------------------------------------------------------------------------------
 
 DenseMlp::DenseMlp(Context& ctx, const GemmParams& p, const MlpSpec& spec)
-    : spec_(spec), encode_(ctx.kernel("mlp", "frequency_encode_planar", encoding_defines(16))) {
+    : spec_(spec), encode_(ctx, spec.inputs, spec.encoding) {
     spec.validate("dense MLP");
     layers_.reserve(spec.layers.size());
     for (const DenseSpec& d : spec.layers) {
@@ -209,10 +226,7 @@ void DenseMlp::enqueue(Context& ctx, const View& x, const View& y, cl_mem scratc
     View in = x;
     in.shape = Shape{x.shape.c, 1, n};
     if (e.bands > 0) {
-        encode_.args(x.mem, int(x.offset), n, spec_.inputs, 1, n, e.bands, e.first_exponent, int(e.pi), int(e.include_input),
-                     int(e.order), scratch);
-        const std::size_t g[2] = {std::size_t(n), std::size_t(e.width(spec_.inputs))};
-        cl_event ev = ctx.launch(encode_, 2, g, kEncodeLocal, events != nullptr);
+        cl_event ev = encode_.enqueue(ctx, x.mem, x.offset, scratch, 0, n, events != nullptr);
         if (events && ev) events->push_back(ev);
         in = View{scratch, 0, Shape{e.width(spec_.inputs), 1, n}};
     }

@@ -89,6 +89,23 @@ private:
     Buffer params_, desc_;
 };
 
+// The frequency encoding materialized: planar x [inputs][n] -> y [encoding.width(inputs)][n] (kernels/mlp.cl
+// frequency_encode_planar). Used by DenseMlp and as a graph node (Neural GI's Eq. 3 over an image).
+class FrequencyEncodePlanar {
+public:
+    FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding);
+    int inputs() const { return inputs_; }
+    int width() const { return encoding_.width(inputs_); }
+    // x: inputs() channels of n items (n = h w of its shape); y: width() channels of n items.
+    cl_event enqueue(Context& ctx, cl_mem x, std::size_t x_off, cl_mem y, std::size_t y_off, int n,
+                     bool want_event = false);
+
+private:
+    int inputs_;
+    FrequencyEncoding encoding_;
+    Kernel kernel_;
+};
+
 // The same MLP on the packed GEMM, one 1 x 1 convolution per layer over the items as a [C, 1, n] image (any width),
 // with the encoding materialized first. Planar layouts only (the GEMM's operand layout).
 class DenseMlp {
@@ -100,7 +117,7 @@ public:
 
 private:
     MlpSpec spec_;
-    Kernel encode_;
+    FrequencyEncodePlanar encode_;
     std::vector<Conv2d> layers_;
 };
 

@@ -6,9 +6,9 @@
     indirect L* = exp(min(o, 88))  (never negative)       final = L_d + L*                      (section 3.1)
     loss = mean | log(final + 1/e) - log(reference + 1/e) |                                      (Eq. 5 / 6)
 
-Run with the Python package `ngi` on the path (PYTHONPATH=build/python, or bindings/python: only the pure-Python
-ngi.reference_models is used). The scripts of this folder import their siblings (`import model`), as training/ and
-training/voxel_sh/ do.
+The model of ngi's "neural_gi" family (docs/MODEL_FORMAT.md): export_model writes it as an ngi model file that
+ngi::Model runs as one graph on the device. Tests: training/neural_gi/test_model.py; parity with ngi:
+tests/parity/make_neural_gi_parity.py.
 
 Input channels (`assemble_inputs`; section 3.2 adapted to ngi's Lambertian voxel renderer: no specular albedo, no
 roughness, no radiance cues, which would all equal the direct light or a constant)
@@ -304,6 +304,45 @@ def parameter_counts(model):
 
 
 # --------------------------------------------------------------------------
+# Export: an ngi model file (docs/MODEL_FORMAT.md "neural_gi")
+# --------------------------------------------------------------------------
+
+INPUT_LAYOUT = ["position.x", "position.y", "position.z", "normal.x", "normal.y", "normal.z", "albedo.r", "albedo.g",
+                "albedo.b", "view.x", "view.y", "view.z", "log1p_direct.r", "log1p_direct.g", "log1p_direct.b",
+                "light_dir.x", "light_dir.y", "light_dir.z"]
+# What assemble_inputs produces: directions and positions in [-1, 1], albedo in [0, 1], log1p(direct) in
+# [0, log1p(RADIANCE_MAX) = 69.1]. ngi's input guard replaces NaN and values beyond it.
+INPUT_RANGE = [-1.0, 70.0]
+
+
+def file_config(model, bn_mode="per_image", source=""):
+    """The metadata an ngi model file stores for `model` (flat U-Net fields as the generators' files have them,
+    the encoding as the mlp family's, the MLP under "neural_gi"), with the nested config() kept under "training"."""
+    if bn_mode not in ("per_image", "running"):
+        raise ValueError(f"bn_mode must be per_image or running, got {bn_mode!r}")
+    c = model.config()
+    enc = c["encoding"]
+    return {
+        "format_version": 1, "family": FAMILY, "input_nc": INPUT_CHANNELS, "output_nc": 3,
+        "ngf": c["buffer"]["ngf"], "num_downs": c["buffer"]["num_downs"], "norm": "batch", "bn_mode": bn_mode,
+        "bn_eps": 1e-5, "dropout": "off", "input_layout": INPUT_LAYOUT, "input_range": INPUT_RANGE,
+        "output_range": [0.0, RADIANCE_MAX],
+        "encoding": {k: enc[k] for k in ("bands", "first_exponent", "pi", "include_input", "order")},
+        "neural_gi": {"buffer_channels": c["buffer"]["buffer_channels"], "mlp_width": c["mlp"]["width"],
+                      "mlp_depth": c["mlp"]["depth"], "skip_layer": c["mlp"]["skip_layer"] or 0, "decode": DECODE},
+        "source": source, "training": c,
+    }
+
+
+def export_model(model, path, bn_mode="per_image", half=True, source=""):
+    """Write `model` as an ngi model file: every parameter and batch-norm statistic under its PyTorch name
+    (num_batches_tracked, a training counter, is left out), F16 when `half`."""
+    from ngi import model_file  # numpy only; imported here so that the model code does not need it
+    tensors = {k: v for k, v in model.state_dict().items() if not k.endswith("num_batches_tracked")}
+    model_file.write_model(path, tensors, file_config(model, bn_mode, source), half=half)
+
+
+# --------------------------------------------------------------------------
 # Loss
 # --------------------------------------------------------------------------
 
@@ -322,7 +361,7 @@ def log_l1_loss(prediction, target, epsilon=LOG_EPSILON):
 
 
 # --------------------------------------------------------------------------
-# Measurements: python3 model.py
+# Measurements: python3 -m ngi.neural_gi
 # --------------------------------------------------------------------------
 
 def measure(sizes=(64, 128), repeats=3, **kwargs):

@@ -1,0 +1,161 @@
+#include "models/neural_gi_model.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include "graph/nodes.hpp"
+#include "models/mlp_model.hpp"
+
+namespace ngi::detail {
+
+namespace {
+
+constexpr int kMaxBufferChannels = 4096, kMaxMlpWidth = 4096, kMaxMlpDepth = 64;
+const std::string kBufferPrefix = "buffer.";
+
+// The U-Net part of the config: a pix2pix generator whose output is the neural buffer (dropout never applies).
+ModelConfig buffer_config(const ModelConfig& cfg) {
+    ModelConfig b = cfg;
+    b.family = "pix2pix_unet";
+    b.output_nc = cfg.neural_gi.buffer_channels;
+    b.dropout = "off";
+    return b;
+}
+
+// The file's "buffer.*" tensors under their UnetGenerator names.
+SafetensorsFile buffer_tensors(const SafetensorsFile& file) {
+    SafetensorsFile b;
+    for (const auto& [name, t] : file.tensors)
+        if (name.rfind(kBufferPrefix, 0) == 0) b.tensors.emplace(name.substr(kBufferPrefix.size()), t);
+    return b;
+}
+
+int encoded_width(const ModelConfig& cfg) { return frequency_encoding(cfg).width(cfg.input_nc); }
+
+// Input width of hidden layer i.
+int hidden_in(const ModelConfig& cfg, int i) {
+    const ModelConfig::NeuralGi& n = cfg.neural_gi;
+    const int z = encoded_width(cfg) + n.buffer_channels;
+    if (i == 0) return z;
+    return n.mlp_width + (i == n.skip_layer ? z : 0);
+}
+
+// name -> shape of every MLP tensor.
+std::vector<std::pair<std::string, std::vector<int>>> mlp_tensors(const ModelConfig& cfg) {
+    const ModelConfig::NeuralGi& n = cfg.neural_gi;
+    std::vector<std::pair<std::string, std::vector<int>>> t;
+    for (int i = 0; i < n.mlp_depth; ++i) {
+        const std::string p = "mlp.layers." + std::to_string(i);
+        t.push_back({p + ".weight", {n.mlp_width, hidden_in(cfg, i), 1, 1}});
+        t.push_back({p + ".bias", {n.mlp_width}});
+    }
+    t.push_back({"mlp.output.weight", {cfg.output_nc, n.mlp_width, 1, 1}});
+    t.push_back({"mlp.output.bias", {cfg.output_nc}});
+    return t;
+}
+
+std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+}  // namespace
+
+void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        return InputError(what + "field '" + key + "' must be " + rule);
+    };
+    if (c.output_nc != 3) throw fail("output_nc", "3 (RGB indirect light) for family neural_gi");
+    if (c.dropout != "off") throw fail("dropout", "\"off\" for family neural_gi (its U-Net has no dropout)");
+    parse_encoding_fields(j, c, what);
+    if (!j.contains("neural_gi") || !j["neural_gi"].is_object())
+        throw fail("neural_gi", "an object {buffer_channels, mlp_width, mlp_depth, skip_layer, decode}");
+    const nlohmann::json& n = j["neural_gi"];
+    auto integer = [&](const char* k, long long lo, long long hi) {
+        if (!n.contains(k) || !n[k].is_number_integer() ||
+            (n[k].is_number_unsigned() && n[k].get<std::uint64_t>() > std::uint64_t(hi)) || n[k].get<long long>() < lo ||
+            n[k].get<long long>() > hi)
+            throw fail(std::string("neural_gi.") + k, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
+        return int(n[k].get<long long>());
+    };
+    ModelConfig::NeuralGi& g = c.neural_gi;
+    g.buffer_channels = integer("buffer_channels", 1, kMaxBufferChannels);
+    g.mlp_width = integer("mlp_width", 1, kMaxMlpWidth);
+    g.mlp_depth = integer("mlp_depth", 1, kMaxMlpDepth);
+    // 0: no re-injection (layer 0 takes the input anyway).
+    g.skip_layer = integer("skip_layer", 0, g.mlp_depth - 1);
+    if (!n.contains("decode") || n["decode"] != "exp")
+        throw fail("neural_gi.decode", "\"exp\" (indirect = exp(min(x, 88)), never negative)");
+}
+
+void validate_neural_gi_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
+    validate_unet_tensors(buffer_config(cfg), buffer_tensors(file));  // names the U-Net's own problems
+    const auto expected = mlp_tensors(cfg);
+    std::vector<std::string> missing, unexpected, misshaped;
+    for (const auto& [name, shape] : expected) {
+        auto it = file.tensors.find(name);
+        if (it == file.tensors.end()) missing.push_back(name);
+        else if (it->second.shape != shape)
+            misshaped.push_back(name + " is " + shape_string(it->second.shape) + ", expected " + shape_string(shape));
+    }
+    for (const auto& [name, t] : file.tensors)
+        if (name.rfind(kBufferPrefix, 0) != 0 &&
+            std::none_of(expected.begin(), expected.end(), [&](const auto& e) { return e.first == name; }))
+            unexpected.push_back(name);
+    std::string problems;
+    if (!missing.empty()) problems += "\n  missing tensors: " + join(missing);
+    if (!unexpected.empty()) problems += "\n  unexpected tensors: " + join(unexpected);
+    if (!misshaped.empty()) problems += "\n  shape mismatch: " + join(misshaped);
+    const ModelConfig::NeuralGi& n = cfg.neural_gi;
+    if (!problems.empty())
+        throw InputError("load model: the tensors do not match a neural_gi network with input_nc " +
+                         std::to_string(cfg.input_nc) + ", encoded width " + std::to_string(encoded_width(cfg)) +
+                         ", buffer_channels " + std::to_string(n.buffer_channels) + ", mlp " +
+                         std::to_string(n.mlp_depth) + " x " + std::to_string(n.mlp_width) + ", skip_layer " +
+                         std::to_string(n.skip_layer) + ":" + problems);
+}
+
+NeuralGiOps build_neural_gi_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
+                                const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm) {
+    validate_neural_gi_tensors(cfg, file);
+    const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
+    const ModelConfig::NeuralGi& n = cfg.neural_gi;
+    NeuralGiOps ops;
+    ops.buffer = build_unet_ops(ctx, buffer_config(cfg), buffer_tensors(file), gemm, conv_gemm, Act::none());
+    ops.encode = std::make_shared<FrequencyEncodeNode>(ctx, cfg.input_nc, frequency_encoding(cfg));
+    ops.skip_copy = std::make_shared<CopyNode>();
+    ops.skip_layer = n.skip_layer;
+    ops.weight_bytes = ops.buffer.weight_bytes;
+    auto dense = [&](const std::string& prefix, int in, int out, Act act) {
+        const StoredTensor& w = file.tensors.at(prefix + ".weight");
+        ChannelAffine affine;
+        affine.shift = file.tensors.at(prefix + ".bias").data;
+        ops.weight_bytes += (w.data.size() + affine.shift.size()) * sizeof(float);
+        return std::make_shared<ConvNode>(ctx, gemm, ConvSpec{in, out, {1, 1, 1, 0}, Act::none(), act}, w.data.data(),
+                                          affine, conv_path, conv_gemm);
+    };
+    for (int i = 0; i < n.mlp_depth; ++i)
+        ops.hidden.push_back(dense("mlp.layers." + std::to_string(i), hidden_in(cfg, i), n.mlp_width, Act::relu()));
+    ops.output = dense("mlp.output", n.mlp_width, cfg.output_nc, Act::exp());
+    return ops;
+}
+
+std::unique_ptr<Graph> build_neural_gi_graph(const NeuralGiOps& ops, int input_nc, int height, int width) {
+    auto g = std::make_unique<Graph>();
+    const TensorId x = g->input({input_nc, height, width}, "input");
+    const TensorId encoded = g->add(ops.encode, {x}, "encode");
+    const TensorId buffer = add_unet(*g, ops.buffer, x, "buffer.");
+    const TensorId z = g->concat({encoded, buffer}, "mlp.input");
+    TensorId h = z;
+    for (std::size_t i = 0; i < ops.hidden.size(); ++i) {
+        const std::string name = "mlp.layers." + std::to_string(i);
+        if (ops.skip_layer > 0 && int(i) == ops.skip_layer)
+            h = g->concat({h, g->add(ops.skip_copy, {z}, name + ".reinjected")}, name + ".input");
+        h = g->add(ops.hidden[i], {h}, name);
+    }
+    g->set_output(g->add(ops.output, {h}, "mlp.output"));
+    return g;
+}
+
+}  // namespace ngi::detail
