@@ -213,16 +213,14 @@ TEST_CASE("area light: the tracer's direct light matches the exact irradiance / 
         const double pooled_z = sum_diff / std::sqrt(sum_var), rel_stderr = std::sqrt(sum_var) / sum_exact;
         INFO(c.what << ": " << lit << " lit pixels, " << dark << " behind the panel; max |z| " << max_z
                     << ", pooled z " << pooled_z << ", pooled relative standard error " << rel_stderr);
-        // Measured on PoCL: ceiling panel max |z| 2.9 over 144 pixels, pooled z 0.4, relative standard error of
-        // the pooled mean 4e-4; crossing panel max |z| 3.1 over 144 pixels (0 dark), pooled z -0.9, 1e-3.
-        // 4.5 sigma over 144 pixels fails by chance with probability ~1e-3; a wrong factor (pi, 2, a cosine) is
-        // hundreds of sigma off.
+        // Measured on PoCL (seed 11): ceiling panel max |z| 2.99 over 144 pixels, pooled z -0.07, relative
+        // standard error of the pooled mean 4.2e-4; crossing panel max |z| 1.97 over 144 pixels (none dark),
+        // pooled z -0.13, 2.8e-3. 4.5 sigma over 144 pixels fails by chance with probability ~1e-3; a wrong factor
+        // (pi, 2, a cosine) is hundreds of sigma off.
         CHECK(lit > 100);
         CHECK(max_z < 4.5);
         CHECK(std::abs(pooled_z) < 4.0);
         CHECK(rel_stderr < 0.01);
-        WARN(c.what << ": max |z| " << max_z << " over " << lit << " pixels, pooled z " << pooled_z
-                    << ", pooled rel. std error " << rel_stderr);
 
         // The "direct" feature is the same depth-0 estimator with its own samples: within the same error bars,
         // scaled to its sample count.
@@ -244,10 +242,10 @@ TEST_CASE("area light: the tracer's direct light matches the exact irradiance / 
             fdiff += direct.data[i] - e;
             fvar += v;
         }
+        // Measured: max |z| 2.69 (ceiling) and 2.36 (crossing), pooled z -0.46 and -1.05.
         INFO(c.what << ": direct feature max |z| " << fmax_z << ", pooled z " << fdiff / std::sqrt(fvar));
         CHECK(fmax_z < 4.5);
         CHECK(std::abs(fdiff / std::sqrt(fvar)) < 4.0);
-        WARN(c.what << ": direct feature max |z| " << fmax_z << ", pooled z " << fdiff / std::sqrt(fvar));
         // The frame records the light and the cluster centre.
         REQUIRE(fr.area_light.has_value());
         CHECK(*fr.area_light == c.light);
@@ -341,7 +339,7 @@ TEST_CASE("area light: indirect light adds to direct, and a closed box conserves
             }
             INFO("front face: indirect " << diff / double(ref.data.size()) << " per pixel channel, z "
                                          << diff / std::sqrt(diff_var));
-            CHECK(diff / std::sqrt(diff_var) > 10.0);
+            CHECK(diff / std::sqrt(diff_var) > 10.0);  // measured: 0.018 per pixel channel, z = 451
         }
     }
     const double W = 6.0 * 36.0, expected = L * light.area() / ((1.0 - a) * W);
@@ -350,10 +348,29 @@ TEST_CASE("area light: indirect light adds to direct, and a closed box conserves
                             << stderr_mean << ", expected " << expected);
     CHECK(sum_area == Approx(W).epsilon(0.01));
     // The quadrature's own error (a midpoint rule on each face) adds to the noise: allowed 1 % on top of 4 sigma.
+    // Measured on PoCL: 0.0370035 +- 2.7e-5 against 0.0370370 (-1.2 sigma, -0.09 %); quadrature area 216.33 m^2.
     CHECK(std::abs(mean - expected) < 4.0 * stderr_mean + 0.01 * expected);
     CHECK(stderr_mean < 0.01 * expected);
-    WARN("closed box: mean lighting " << mean << " +- " << stderr_mean << ", expected " << expected
-                                      << ", quadrature area " << sum_area << " of " << W);
+}
+
+// The area light's code path at a size the oclgrind stage can afford (tools/ci/oclgrind.sh: out-of-bounds and
+// uninitialized reads in the kernel); the statistics are the other cases' business.
+TEST_CASE("area light: a small frame with bounces (oclgrind-sized)", "[render][area][oclgrind-small]") {
+    VoxelScene scene = floor_scene();
+    scene.fill({9, 1, 6}, {10, 4, 10}, scene.add_material({glm::vec3(0.8f), glm::vec3(0.0f), false}));  // a wall
+    Renderer r(test::device(), scene);
+    RenderSettings rs;
+    rs.n = 8;
+    rs.feature_spp = 1;
+    rs.reference_spp = 2;
+    rs.max_bounces = 2;
+    const AreaLight light = panel({8, 3, 8}, {1, 0, 0}, {0, 0, 0.75f}, glm::vec3(2.0f));
+    const Frame fr = r.render(looking_down({8, 2.2f, 8}), only(light), rs);
+    REQUIRE(fr.reference.has_value());
+    // Every floor pixel under the panel sees it (the wall at x >= 9 is beside, not between): the one-sample
+    // direct estimate is positive everywhere, and the reference too.
+    for (float v : fr.get(Feature::Direct, Face::Front).data) CHECK(v > 0.0f);
+    for (float v : fr.reference->data) CHECK((std::isfinite(v) && v > 0.0f));
 }
 
 TEST_CASE("area light: bad input names the field", "[render][area]") {
