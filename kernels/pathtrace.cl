@@ -7,14 +7,15 @@
 // One work-item per pixel; every random number comes from a counter-based hash of (pixel, sample, seed, counter),
 // so the result does not depend on scheduling, work-group size or device.
 
-// Layout of the `light` parameter array (keep in sync with renderer.cpp).
-#define L_SUN_DIR 0      // 3: unit vector toward the sun
-#define L_SUN_E 3        // 3: sun irradiance (facing the sun)
-#define L_SUN_COS 6      // 1: cosine of the sun's angular radius
-#define L_ZENITH 8       // 3: sky radiance straight up
-#define L_HORIZON 11     // 3: sky radiance at the horizon
-#define L_GROUND 14      // 3: radiance from below the horizon
-#define L_GLOW 17        // 3: sun-centred glow added to the sky
+// Layout of the `light` parameter array: L_SUN_DIR (3, unit vector toward the sun), L_SUN_E (3, sun irradiance
+// facing the sun), L_SUN_COS (1, cosine of the sun's angular radius), L_ZENITH, L_HORIZON, L_GROUND (3 each, sky
+// radiance up, at the horizon, from below it), L_GLOW (3, the sun-centred glow), then the rectangular area light:
+// L_AREA_CENTRE, L_AREA_U, L_AREA_V (3 each: centre and half-edge vectors), L_AREA_RADIANCE (3; 0 = off),
+// L_AREA_NORMAL (3, unit, the emitting side) and L_AREA_AREA (1, m^2). The offsets are defined once, in
+// renderer.cpp (kLightLayout), and arrive here as -D build options.
+#if !defined(L_SUN_DIR) || !defined(L_AREA_AREA)
+#error "pathtrace.cl is built by renderer.cpp, which defines the light layout (L_*) as build options"
+#endif
 
 #define SKY_DEPTH 1.0e4f     // depth reported where the primary ray escapes (finite on purpose)
 #define T_INF 1.0e30f
@@ -245,6 +246,27 @@ static inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint*
     return h.mat ? (float3)(0.0f) : E * (c * M_1_PI_F);
 }
 
+// Rectangular area light (not geometry: no ray ever hits it, the camera does not see it), lit by next-event
+// estimation alone: a uniform point y on the rectangle (density 1 / A in area), one shadow ray x -> y. Lighting
+// = (1 / pi) * integral over A of L cos_x cos_y / d^2 dA, estimated as A L cos_x cos_y / (pi d^2); one-sided
+// (cos_y = 0 behind the emitting side). The shadow ray stops RAY_OFFSET short of y so that a panel flush with
+// the face of a block (a ceiling light) is not hidden by that block. Called only when the light is on, so the
+// random stream of every other strategy is the same as without an area light.
+static inline float3 area_light(const Scene* s, float3 p, float3 n, Rng* r, uint* rays) {
+    const float2 u = rng2(r);
+    const float3 y = lv(s->light, L_AREA_CENTRE) + lv(s->light, L_AREA_U) * (2.0f * u.x - 1.0f) +
+                     lv(s->light, L_AREA_V) * (2.0f * u.y - 1.0f);
+    float3 w = y - p;
+    const float d2 = dot(w, w), dist = sqrt(d2);
+    if (!(dist > RAY_OFFSET)) return (float3)(0.0f);
+    w /= dist;
+    const float cos_x = dot(n, w), cos_y = -dot(lv(s->light, L_AREA_NORMAL), w);
+    if (cos_x <= 0.0f || cos_y <= 0.0f) return (float3)(0.0f);
+    const Hit h = trace(s, p, w, dist - RAY_OFFSET, rays);
+    if (h.mat != 0) return (float3)(0.0f);  // a block between x and y
+    return lv(s->light, L_AREA_RADIANCE) * (s->light[L_AREA_AREA] * cos_x * cos_y * M_1_PI_F / d2);
+}
+
 // Solid-angle density with which emitter sampling picks the direction toward a point on an emissive face at
 // distance `dist` whose normal makes cosine `cos_l` with the direction back to the shading point.
 static inline float emitter_pdf(const Scene* s, float3 Le, float dist, float cos_l) {
@@ -359,20 +381,23 @@ static inline float3 patch_light(const Scene* s, float3 p, float3 n, int2 range,
 }
 
 // One sample of the lighting (irradiance / pi) arriving at surface point p with normal n: direct light from the
-// sun, emissive blocks and the sky (depth 0), plus up to max_bounces indirect bounces. Sun and emitters use
-// next-event estimation; the sky and emitters are also hit by the cosine-sampled continuation ray, MIS-weighted
+// sun, emissive blocks, the area light and the sky (depth 0), plus up to max_bounces indirect bounces. Sun,
+// emitters and the area light use next-event estimation (the area light nothing else: rays never hit it); the sky and emitters are also hit by the cosine-sampled continuation ray, MIS-weighted
 // against emitter sampling and (inside covered regions) sky-portal sampling. Russian roulette after rr_start
 // bounces keeps long paths unbiased.
 static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max_bounces, int rr_start, Rng* r,
                               uint* rays) {
     float3 sum = (float3)(0.0f), beta = (float3)(1.0f);
     float sun_mis = 1.0f;  // MIS weight of sun NEE here against patch sampling at the previous vertex
+    const float3 area_le = lv(s->light, L_AREA_RADIANCE);
+    const int area_on = area_le.x + area_le.y + area_le.z > 0.0f;
     for (int depth = 0;; ++depth) {
         const int reg = region_at(s, p);
         const int2 range = reg >= 0 && s->use_portals ? s->portal_range[reg] : (int2)(0, 0);
         // Patch sampling covers x -> y -> sun, so only where the continuation would still do sun NEE at y.
         const int2 prange = reg >= 0 && s->use_patches && depth < max_bounces ? s->patch_range[reg] : (int2)(0, 0);
         sum += beta * (sun_mis * sun_light(s, p, n, r, rays) + emitter_light(s, p, n, r, rays));
+        if (area_on) sum += beta * area_light(s, p, n, r, rays);
         if (range.y > 0) sum += beta * portal_light(s, p, n, range, r, rays);
         if (prange.y > 0) sum += beta * patch_light(s, p, n, prange, r, rays);
         const float3 w = cosine_sample(n, rng2(r));

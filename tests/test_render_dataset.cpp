@@ -30,6 +30,12 @@ std::string write_config(const std::string& name, const std::string& text) {
     return p.string();
 }
 
+std::string frame_name_for_test(int f) {
+    char b[16];
+    std::snprintf(b, sizeof b, "%04d", f);
+    return b;
+}
+
 std::string config_error(const std::string& text) {
     try {
         DatasetConfig::load(write_config("bad.json", text));
@@ -244,5 +250,78 @@ TEST_CASE("dataset: test_reference_spp gives the test split's references their o
     check_split("bleed:seed=1", "train", 1);
     CHECK(test::slurp((out / "dataset.json").string()).find("\"test_reference_spp\"") != std::string::npos);
     CHECK_THAT(config_error(R"({"train": [], "test_reference_spp": -1})"), Catch::Contains("test_reference_spp"));
+    fs::remove_all(out);
+}
+
+TEST_CASE("dataset: an area_light config draws one light per frame from the frame's seed, recorded in the frame",
+          "[render][area]") {
+    const fs::path out = work_dir() / "out_area";
+    fs::remove_all(out);
+    const DatasetConfig cfg = DatasetConfig::load(write_config("area.json", R"({
+        "n": 8, "feature_spp": 1, "reference_spp": 2, "frames_per_scene": 2,
+        "area_light": {"centre_min": [3, 4, 3], "centre_max": [6, 4.5, 6], "size_min": 0.5, "size_max": 2,
+                       "radiance": [4, 3, 2]},
+        "train": [{"scene": "bleed:seed=1"}]})"));
+    REQUIRE(cfg.area_light.has_value());
+    CHECK(cfg.area_light->facing == "down");
+    render_dataset(test::device(), cfg, out.string());
+    const VoxelScene scene = make_scene("bleed:seed=1");
+    const CameraPath path = dataset_camera_path(scene, 2, cfg.keyframe_interval);
+    std::vector<AreaLight> lights;
+    for (int f = 0; f < 2; ++f) {
+        const std::uint32_t seed = dataset_frame_seed(scene.name, f);
+        const AreaLight want = dataset_frame_area_light(*cfg.area_light, seed);
+        // Inside the configured ranges, facing down.
+        for (int k = 0; k < 3; ++k) {
+            CHECK(want.centre[k] >= cfg.area_light->centre_min[k]);
+            CHECK(want.centre[k] <= cfg.area_light->centre_max[k]);
+        }
+        CHECK(2.0f * glm::length(want.half_u) >= 0.5f);
+        CHECK(2.0f * glm::length(want.half_v) <= 2.0f);
+        CHECK(want.normal().y == Approx(-1.0f));
+        CHECK(want.radiance == glm::vec3(4, 3, 2));
+        CHECK(dataset_frame_area_light(*cfg.area_light, seed) == want);  // deterministic
+        lights.push_back(want);
+        const Frame got = read_frame((out / "train" / dataset_scene_folder(scene.name) / frame_name_for_test(f)).string());
+        REQUIRE(got.area_light.has_value());
+        CHECK(*got.area_light == want);
+        REQUIRE(got.position.has_value());
+        CHECK(*got.position == path.at(float(f)).position);
+        // The reference equals a render of that frame with that light.
+        RenderSettings rs = cfg.render;
+        rs.seed = seed;
+        Lighting lighting = lighting_at(scene.default_time, scene.sun_azimuth);
+        lighting.area_light = want;
+        Renderer renderer(test::device(), scene);
+        CHECK(renderer.render_reference(path.at(float(f)), lighting, rs).data == got.reference->data);
+    }
+    CHECK_FALSE(lights[0] == lights[1]);  // a new light per frame
+    CHECK(test::slurp((out / "dataset.json").string()).find("\"area_light\"") != std::string::npos);
+    // Adding an area light to a dataset with frames is a different config.
+    DatasetConfig other = cfg;
+    other.area_light->radiance = glm::vec3(1.0f);
+    CHECK_THROWS_WITH(render_dataset(test::device(), other, out.string()), Catch::Contains("different config"));
+
+    for (int facing = 0; facing < 6; ++facing) {  // every facing's normal points where it says
+        const char* names[] = {"down", "up", "+x", "-x", "+z", "-z"};
+        const glm::vec3 normals[] = {{0, -1, 0}, {0, 1, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1}, {0, 0, -1}};
+        DatasetAreaLight a = *cfg.area_light;
+        a.facing = names[facing];
+        const AreaLight l = dataset_frame_area_light(a, 7);
+        CHECK_NOTHROW(check_area_light(l, "test"));
+        CHECK(glm::length(l.normal() - normals[facing]) < 1e-6f);
+    }
+    CHECK_THAT(config_error(R"({"train": [], "area_light": {"centre_min": [0, 0, 0], "centre_max": [1, 1, 1],
+                                "size_min": 1, "size_max": 1, "radiance": [1, -1, 1]}})"),
+               Catch::Contains("'radiance' in 'area_light'"));
+    CHECK_THAT(config_error(R"({"train": [], "area_light": {"centre_min": [0, 2, 0], "centre_max": [1, 1, 1],
+                                "size_min": 1, "size_max": 1, "radiance": [1, 1, 1]}})"),
+               Catch::Contains("'centre_min' in 'area_light'"));
+    CHECK_THAT(config_error(R"({"train": [], "area_light": {"centre_min": [0, 0, 0], "centre_max": [1, 1, 1],
+                                "size_min": 1, "size_max": 1, "radiance": [1, 1, 1], "facing": "sideways"}})"),
+               Catch::Contains("'facing' in 'area_light'"));
+    CHECK_THAT(config_error(R"({"train": [], "area_light": {"centre_min": [0, 0, 0], "centre_max": [1, 1, 1],
+                                "size_min": 0, "size_max": 1, "radiance": [1, 1, 1]}})"),
+               Catch::Contains("'size_min' in 'area_light'"));
     fs::remove_all(out);
 }

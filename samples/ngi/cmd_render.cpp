@@ -1,10 +1,14 @@
 // ngi render: one frame folder of a scene (features of the six faces + the front view's reference lighting).
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "ngi/camera_path.hpp"
@@ -19,13 +23,40 @@ namespace ngi_cli {
 namespace {
 
 struct Options {
-    std::string spec, out, device, preview;
+    std::string spec, out, device, preview, area_light;
     ngi::RenderSettings rs;
     bool no_reference = false;
     int frames = 100, frame = 0;
     int seed = -1;       // -1: the dataset's seed of the frame
     double time = -1.0;  // -1: not given, the scene's default time
 };
+
+// --area-light "cx,cy,cz,ux,uy,uz,vx,vy,vz,r,g,b": centre, half edges and radiance (ngi/area_light.hpp).
+ngi::AreaLight parse_area_light(const std::string& text) {
+    std::vector<float> v;
+    std::size_t pos = 0;
+    while (pos <= text.size()) {
+        const std::size_t end = std::min(text.find(',', pos), text.size());
+        const std::string item = text.substr(pos, end - pos);
+        char* stop = nullptr;
+        const double d = std::strtod(item.c_str(), &stop);
+        if (item.empty() || stop != item.c_str() + item.size() || !std::isfinite(d) || std::abs(d) > 1.0e30)
+            throw UsageError("--area-light needs 12 comma-separated numbers cx,cy,cz,ux,uy,uz,vx,vy,vz,r,g,b; '" +
+                             item + "' is not a finite number");
+        v.push_back(float(d));
+        pos = end + 1;
+    }
+    if (v.size() != 12)
+        throw UsageError("--area-light needs 12 comma-separated numbers cx,cy,cz,ux,uy,uz,vx,vy,vz,r,g,b, got " +
+                         std::to_string(v.size()));
+    ngi::AreaLight l;
+    l.centre = {v[0], v[1], v[2]};
+    l.half_u = {v[3], v[4], v[5]};
+    l.half_v = {v[6], v[7], v[8]};
+    l.radiance = {v[9], v[10], v[11]};
+    ngi::check_area_light(l, "--area-light");
+    return l;
+}
 
 int run(const Options& o) {
     const std::string &spec = o.spec, &out = o.out, &preview = o.preview;
@@ -40,6 +71,7 @@ int run(const Options& o) {
                             !std::filesystem::is_regular_file(preview, ec))  // found before the render, not after
         throw ngi::InputError("write " + preview + ": exists and is not a regular file; refusing to replace it");
     const double time = o.time;
+    const ngi::AreaLight area_light = o.area_light.empty() ? ngi::AreaLight{} : parse_area_light(o.area_light);
     ngi::check_frame_folder_target(out);  // before the render, not after
     ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(spec);
@@ -51,7 +83,9 @@ int run(const Options& o) {
 
     ngi::Renderer renderer(device, scene);
     ngi::RenderStats st;
-    const ngi::Frame fr = renderer.render(pose, ngi::lighting_at(hours, scene.sun_azimuth), rs, &st);
+    ngi::Lighting lighting = ngi::lighting_at(hours, scene.sun_azimuth);
+    lighting.area_light = area_light;
+    const ngi::Frame fr = renderer.render(pose, lighting, rs, &st);
     // Both outputs or neither: the preview goes to a temporary name first and is renamed after the frame
     // folder is in place (write_frame itself is all-or-nothing).
     std::string preview_tmp;
@@ -121,6 +155,10 @@ Run add_render(CLI::App& app) {
     add_switch(*cmd, "--no-reference", o->no_reference, "render the features only");
     add_nonempty(*cmd, "--preview", o->preview, "PNG",
                  "also write the front view's final image (reference x albedo + emission + env) as an sRGB PNG");
+    add_nonempty(*cmd, "--area-light", o->area_light, "C,U,V,L",
+                 "a rectangular area light (not a block; lit by next-event estimation): 12 numbers "
+                 "cx,cy,cz,ux,uy,uz,vx,vy,vz,r,g,b = centre, orthogonal half-edge vectors (it emits toward "
+                 "cross(u, v)) and radiance; recorded in camera.json");
     return [o] { return run(*o); };
 }
 

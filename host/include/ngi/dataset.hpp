@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,6 +23,18 @@ struct DatasetScene {
     int frames = 0;                         // frames of this scene (0 = the config's frames_per_scene)
 };
 
+// An optional rectangular area light drawn anew for every frame from the frame's seed (dataset_frame_area_light):
+// centre uniform in the box [centre_min, centre_max] (world metres), each edge uniform in [size_min, size_max]
+// metres, axis aligned, emitting toward `facing`, radiance `radiance`. The light is not geometry (it may float in
+// the air); a centre inside a block is the config's business (the blocks hide it).
+struct DatasetAreaLight {
+    glm::vec3 centre_min{0.0f}, centre_max{0.0f};
+    float size_min = 1.0f, size_max = 1.0f;
+    std::string facing = "down";  // "down" (a ceiling panel, normal -y), "up", "+x", "-x", "+z", "-z"
+    glm::vec3 radiance{0.0f};
+    bool operator==(const DatasetAreaLight&) const = default;
+};
+
 struct DatasetConfig {
     RenderSettings render;                  // n, feature_spp, reference_spp, max_bounces, rr_start (seed: per frame)
     int test_reference_spp = 0;             // reference spp of the test split (0: reference_spp): converged
@@ -29,12 +42,14 @@ struct DatasetConfig {
     int frames_per_scene = 100;
     int keyframe_interval = 25;
     std::vector<DatasetScene> train, test;
+    std::optional<DatasetAreaLight> area_light;  // absent: no area light (every dataset before this key)
 
     // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces",
     // "frames_per_scene",
     // "keyframe_interval", "train": [entry...], "test": [entry...]}, entry = {"scene": "room:seed=3"} or
     // {"family": "room", "seeds": [1, 2] | {"first": 1, "count": 4}} or {"vox": "file.vox"}, plus optional
-    // "time": hours | [start, end] and "frames". Relative .vox paths are relative to the config file (and are
+    // "time": hours | [start, end] and "frames"; optional "area_light": {"centre_min": [x, y, z], "centre_max":
+    // [x, y, z], "size_min": m, "size_max": m, "radiance": [r, g, b], "facing": "down"} (facing optional). Relative .vox paths are relative to the config file (and are
     // stored as absolute paths, so a resumed run from another directory sees the same config).
     // Throws InputError naming the file for bad JSON, unknown keys, bad values, and scenes in both splits.
     static DatasetConfig load(const std::string& path);
@@ -47,6 +62,8 @@ struct DatasetConfig {
 CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval);
 std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame);
 float dataset_frame_time(const DatasetScene& scene, int frame, int frames);
+// The area light of the frame with seed `frame_seed` (dataset_frame_seed): deterministic in both arguments.
+AreaLight dataset_frame_area_light(const DatasetAreaLight& config, std::uint32_t frame_seed);
 
 // A file-system-safe folder name for a scene: "room_seed3", or the .vox file's stem.
 std::string dataset_scene_folder(const std::string& scene_name);

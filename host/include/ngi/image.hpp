@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "ngi/area_light.hpp"
 #include "ngi/camera.hpp"
 
 namespace ngi {
@@ -36,6 +37,12 @@ struct Frame {
     glm::vec3 look{0, 0, -1}, up{0, 1, 0};
     std::array<std::array<Image, kFaceCount>, kFeatureCount> faces;  // [feature][face]
     std::optional<Image> reference;
+    // The rectangular area light the frame was lit with (absent: none) and the cluster centre in world metres,
+    // so that a consumer can place the light relative to each pixel (world position = centre + planar depth along
+    // the pixel's ray). Renderer::render records both only when the frame has an area light, which leaves the
+    // camera.json of every other frame as it was.
+    std::optional<AreaLight> area_light;
+    std::optional<glm::vec3> position;
     Image& get(Feature f, Face face) { return faces[int(f)][int(face)]; }
     const Image& get(Feature f, Face face) const { return faces[int(f)][int(face)]; }
 };

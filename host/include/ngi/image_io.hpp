@@ -68,7 +68,10 @@ void write_image(const std::string& path, const Image& image);
 //                              reported in FrameReadStats::ldr_files. Having both the .exr and the .png is an error.
 //                              emission and env are optional (docs/CONVENTIONS.md: they then count as 0), but
 //                              only as a whole: on all six faces or on none; absent ones stay empty (0x0) Images.
-// <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera (other keys ignored)
+// <dir>/camera.json            {"look": [x, y, z], "up": [x, y, z]} of the front camera; optional "position"
+//                              [x, y, z] (the cluster centre, world metres) and "area_light" {"centre", "half_u",
+//                              "half_v", "radiance"} (Frame::area_light, checked by check_area_light); other
+//                              keys ignored
 // <dir>/reference.exr          optional: front-view reference lighting, 3 channels, N x N (the face size;
 //                              any other size is an InputError naming both sizes)
 //

@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 
+#include "ngi/area_light.hpp"
 #include "ngi/device.hpp"
 #include "ngi/device_buffer.hpp"
 #include "ngi/image.hpp"
@@ -41,6 +42,9 @@ struct Lighting {
     Sun sun;
     Sky sky;
     float lamp_level = 0.0f;  // multiplies the emission of lamp materials (0 = off by day, 1 = on at night)
+    // A rectangular emitter that is not a block (ngi/area_light.hpp); off by default (radiance 0), and then the
+    // renderer's output is bit for bit what it was without it. lighting_at() leaves it off.
+    AreaLight area_light;
 };
 
 // Time of day in hours (0..24; 6 = sunrise, 12 = noon, 18 = sunset, night after ~18.7): the sun's path (heading

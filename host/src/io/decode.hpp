@@ -17,5 +17,8 @@ Image decode_png(const std::string& bytes, const std::string& path, PngEncoding 
 
 // camera.json of a frame folder: {"look": [x, y, z], "up": [x, y, z]}, validated as a camera cluster.
 void decode_camera_json(const std::string& text, const std::string& path, glm::vec3& look, glm::vec3& up);
+// The same plus the optional "position" ([x, y, z]) and "area_light" ({"centre", "half_u", "half_v", "radiance"},
+// each [x, y, z], validated by check_area_light) into frame.position / frame.area_light (absent keys: empty).
+void decode_camera_json(const std::string& text, const std::string& path, Frame& frame);
 
 }  // namespace ngi::detail

@@ -87,7 +87,7 @@ glm::vec3 json_vec3(const nlohmann::json& j, const char* key, const std::string&
 
 void read_camera(Frame& frame, const fs::path& file) {
     const std::string path = file.string();
-    detail::decode_camera_json(detail::read_file(path), path, frame.look, frame.up);
+    detail::decode_camera_json(detail::read_file(path), path, frame);
 }
 
 void check_image(const Image& img, int channels, int n, const std::string& name) {
@@ -113,7 +113,9 @@ void check_frame_folder_target(const std::string& dir) {
     OutputFolder(dir, "write frame", frame_folder_replaceable);  // checks only: the staging folder is made lazily
 }
 
-void detail::decode_camera_json(const std::string& text, const std::string& path, glm::vec3& look, glm::vec3& up) {
+namespace {
+
+nlohmann::json parse_camera_json(const std::string& text, const std::string& path) {
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
@@ -121,12 +123,45 @@ void detail::decode_camera_json(const std::string& text, const std::string& path
         throw InputError("read " + path + ": not valid JSON: " + e.what());
     }
     if (!j.is_object()) throw InputError("read " + path + ": expected a JSON object with \"look\" and \"up\"");
+    return j;
+}
+
+void decode_look_up(const nlohmann::json& j, const std::string& path, glm::vec3& look, glm::vec3& up) {
     look = json_vec3(j, "look", path);
     up = json_vec3(j, "up", path);
     try {
         CameraCluster::from_look_up(look, up);
     } catch (const InputError& e) {
         throw InputError("read " + path + ": " + e.what());
+    }
+}
+
+}  // namespace
+
+void detail::decode_camera_json(const std::string& text, const std::string& path, glm::vec3& look, glm::vec3& up) {
+    decode_look_up(parse_camera_json(text, path), path, look, up);
+}
+
+void detail::decode_camera_json(const std::string& text, const std::string& path, Frame& frame) {
+    const nlohmann::json j = parse_camera_json(text, path);
+    decode_look_up(j, path, frame.look, frame.up);
+    frame.position.reset();
+    frame.area_light.reset();
+    if (j.contains("position")) frame.position = json_vec3(j, "position", path);
+    if (j.contains("area_light")) {
+        const nlohmann::json& a = j["area_light"];
+        const std::string where = path + " \"area_light\"";
+        if (!a.is_object()) throw InputError("read " + where + ": must be an object");
+        for (auto it = a.begin(); it != a.end(); ++it)
+            if (it.key() != "centre" && it.key() != "half_u" && it.key() != "half_v" && it.key() != "radiance")
+                throw InputError("read " + where + ": unknown key \"" + it.key() + "\"");
+        AreaLight l;
+        l.centre = json_vec3(a, "centre", where);
+        l.half_u = json_vec3(a, "half_u", where);
+        l.half_v = json_vec3(a, "half_v", where);
+        l.radiance = json_vec3(a, "radiance", where);
+        check_area_light(l, "read " + path);
+        frame.area_light = l;
     }
 }
 
@@ -227,6 +262,10 @@ void write_frame(const std::string& dir, const Frame& frame) {
     } catch (const InputError& e) {
         throw InputError(what + e.what());
     }
+    if (frame.position && !(std::isfinite(frame.position->x) && std::isfinite(frame.position->y) &&
+                            std::isfinite(frame.position->z)))
+        throw InputError(what + "position is not finite");
+    if (frame.area_light) check_area_light(*frame.area_light, "write frame " + dir);
 
     OutputFolder out(dir, "write frame", frame_folder_replaceable);
     for (int fi = 0; fi < kFeatureCount; ++fi) {
@@ -245,8 +284,15 @@ void write_frame(const std::string& dir, const Frame& frame) {
     }
     if (frame.reference)
         out.write("reference.exr", [&](const std::string& p) { write_exr(p, *frame.reference, ExrPixelType::Float); });
-    const nlohmann::json camera = {{"look", {frame.look.x, frame.look.y, frame.look.z}},
-                                   {"up", {frame.up.x, frame.up.y, frame.up.z}}};
+    nlohmann::json camera = {{"look", {frame.look.x, frame.look.y, frame.look.z}},
+                             {"up", {frame.up.x, frame.up.y, frame.up.z}}};
+    // Only when present: a frame without them keeps the camera.json it had before these keys existed.
+    auto vec = [](glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+    if (frame.position) camera["position"] = vec(*frame.position);
+    if (frame.area_light)
+        camera["area_light"] = {{"centre", vec(frame.area_light->centre)}, {"half_u", vec(frame.area_light->half_u)},
+                                {"half_v", vec(frame.area_light->half_v)},
+                                {"radiance", vec(frame.area_light->radiance)}};
     out.write_text("camera.json", camera.dump(2) + "\n");
     out.commit();
 }

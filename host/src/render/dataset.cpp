@@ -2,11 +2,13 @@
 #include "ngi/dataset.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "io/file_util.hpp"
+#include "render/rand.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 
@@ -111,7 +113,53 @@ struct ConfigReader {
         }
         return out;
     }
+
+    glm::vec3 vec3(const json& j, const char* key, const std::string& where) const {
+        if (!j.contains(key)) fail(where + " needs '" + key + "'");
+        const json& v = j[key];
+        if (!v.is_array() || v.size() != 3) fail(std::string("'") + key + "' in " + where + " must be [x, y, z]");
+        glm::vec3 out;
+        for (int k = 0; k < 3; ++k) {
+            if (!v[k].is_number() || !std::isfinite(v[k].get<double>()) || std::abs(v[k].get<double>()) > 1.0e6)
+                fail(std::string("'") + key + "' in " + where + " must hold finite numbers within +-1e6");
+            out[k] = v[k].get<float>();
+        }
+        return out;
+    }
+    float metres(const json& j, const char* key, const std::string& where) const {
+        if (!j.contains(key)) fail(where + " needs '" + key + "'");
+        const json& v = j[key];
+        if (!v.is_number() || !(v.get<double>() >= 1.0e-3 && v.get<double>() <= 1.0e4))
+            fail(std::string("'") + key + "' in " + where + " must be metres in 0.001..10000");
+        return v.get<float>();
+    }
+
+    DatasetAreaLight area_light(const json& j) const {
+        const std::string where = "'area_light'";
+        keys(j, {"centre_min", "centre_max", "size_min", "size_max", "facing", "radiance"}, where);
+        DatasetAreaLight a;
+        a.centre_min = vec3(j, "centre_min", where);
+        a.centre_max = vec3(j, "centre_max", where);
+        for (int k = 0; k < 3; ++k)
+            if (a.centre_min[k] > a.centre_max[k]) fail("'centre_min' in " + where + " exceeds 'centre_max'");
+        a.size_min = metres(j, "size_min", where);
+        a.size_max = metres(j, "size_max", where);
+        if (a.size_min > a.size_max) fail("'size_min' in " + where + " exceeds 'size_max'");
+        a.radiance = vec3(j, "radiance", where);
+        if (a.radiance.r < 0 || a.radiance.g < 0 || a.radiance.b < 0)
+            fail("'radiance' in " + where + " must not be negative");
+        if (j.contains("facing")) {
+            const json& f = j["facing"];
+            static const std::set<std::string> kFacings = {"down", "up", "+x", "-x", "+z", "-z"};
+            if (!f.is_string() || !kFacings.count(f.get<std::string>()))
+                fail("'facing' in " + where + " must be one of \"down\", \"up\", \"+x\", \"-x\", \"+z\", \"-z\"");
+            a.facing = f.get<std::string>();
+        }
+        return a;
+    }
 };
+
+json vec(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
 
 json to_json(const DatasetConfig& c) {
     auto scenes = [](const std::vector<DatasetScene>& v) {
@@ -126,10 +174,14 @@ json to_json(const DatasetConfig& c) {
               {"train", scenes(c.train)}, {"test", scenes(c.test)}};
     // Only when set, so that the dataset.json of a dataset rendered before this key existed still matches.
     if (c.test_reference_spp > 0) j["test_reference_spp"] = c.test_reference_spp;
+    if (c.area_light) {  // likewise
+        const DatasetAreaLight& a = *c.area_light;
+        j["area_light"] = {{"centre_min", vec(a.centre_min)}, {"centre_max", vec(a.centre_max)},
+                           {"size_min", a.size_min}, {"size_max", a.size_max}, {"facing", a.facing},
+                           {"radiance", vec(a.radiance)}};
+    }
     return j;
 }
-
-json vec(glm::vec3 v) { return json::array({v.x, v.y, v.z}); }
 
 std::string frame_name(int f) {
     char b[16];
@@ -152,7 +204,7 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
         r.fail(std::string("not valid JSON: ") + e.what());
     }
     r.keys(j, {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces", "rr_start",
-               "frames_per_scene", "keyframe_interval", "train", "test", "comment"}, "the top level");
+               "frames_per_scene", "keyframe_interval", "train", "test", "area_light", "comment"}, "the top level");
     DatasetConfig c;
     c.render.n = r.integer(j, "n", c.render.n, 1, 8192);
     c.render.feature_spp = r.integer(j, "feature_spp", c.render.feature_spp, 1, 1 << 20);
@@ -162,6 +214,7 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     c.render.rr_start = r.integer(j, "rr_start", c.render.rr_start, 0, 1000);
     c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, 1000000);
     c.keyframe_interval = r.integer(j, "keyframe_interval", c.keyframe_interval, 1, 100000);
+    if (j.contains("area_light")) c.area_light = r.area_light(j["area_light"]);
     if (!j.contains("train")) r.fail("no 'train' scenes");
     const fs::path base = fs::path(path).parent_path();
     c.train = r.split(j["train"], "train", base);
@@ -190,6 +243,25 @@ std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame) {
 float dataset_frame_time(const DatasetScene& s, int frame, int frames) {
     if (frames <= 1) return s.time_start;
     return s.time_start + (s.time_end - s.time_start) * float(frame) / float(frames - 1);
+}
+
+AreaLight dataset_frame_area_light(const DatasetAreaLight& c, std::uint32_t frame_seed) {
+    // Its own stream of the frame's seed: the light does not move when anything else drawn per frame changes.
+    detail::Rand r(frame_seed, 0x41524541u);  // "AREA"
+    AreaLight l;
+    for (int k = 0; k < 3; ++k) l.centre[k] = r.range(c.centre_min[k], c.centre_max[k]);
+    const float a = 0.5f * r.range(c.size_min, c.size_max), b = 0.5f * r.range(c.size_min, c.size_max);
+    // Half edges along two axes, ordered so that cross(half_u, half_v) points toward `facing`.
+    const glm::vec3 x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+    if (c.facing == "down") { l.half_u = a * x; l.half_v = b * z; }
+    else if (c.facing == "up") { l.half_u = a * z; l.half_v = b * x; }
+    else if (c.facing == "+x") { l.half_u = a * y; l.half_v = b * z; }
+    else if (c.facing == "-x") { l.half_u = a * z; l.half_v = b * y; }
+    else if (c.facing == "+z") { l.half_u = a * x; l.half_v = b * y; }
+    else if (c.facing == "-z") { l.half_u = a * y; l.half_v = b * x; }
+    else throw InputError("dataset: area light facing '" + c.facing + "' is not down, up, +x, -x, +z or -z");
+    l.radiance = c.radiance;
+    return l;
 }
 
 std::string dataset_scene_folder(const std::string& name) {
@@ -451,9 +523,9 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
             rs.reference = true;
             rs.reference_face = Face::Front;
             RenderStats stats;
-            const Frame frame = renderer.render(path.at(float(f)),
-                                                lighting_at(dataset_frame_time(times, f, frames), scene.sun_azimuth),
-                                                rs, &stats);
+            Lighting lighting = lighting_at(dataset_frame_time(times, f, frames), scene.sun_azimuth);
+            if (config.area_light) lighting.area_light = dataset_frame_area_light(*config.area_light, rs.seed);
+            const Frame frame = renderer.render(path.at(float(f)), lighting, rs, &stats);
             write_frame((dir / frame_name(f)).string(), frame);
             ++p.frames_done;
             ++p.frames_rendered;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "ngi/camera.hpp"
 #include "ngi/error.hpp"
@@ -17,7 +18,27 @@ namespace {
 constexpr std::size_t kLocal = 64;   // fixed work-group size (PoCL compiles one work-group function per size)
 constexpr int kFeatureChannels = 16; // pathtrace.cl F_CHANNELS: albedo 3, normal 3, depth 1, direct 3, emission 3, env 3
 constexpr int kFeatureOffset[kFeatureCount] = {0, 3, 6, 7, 10, 13};  // per ngi::Feature
-constexpr int kLightParams = 20;     // pathtrace.cl L_* layout
+
+// Layout of pathtrace.cl's `light` parameter array (what each holds: the comment there). Defined here only: every
+// pathtrace.cl kernel is built with these as -D options (kPathtraceDefines), so host and device cannot disagree.
+struct LightSlot {
+    const char* name;
+    int offset;
+};
+constexpr LightSlot kLightLayout[] = {
+    {"L_SUN_DIR", 0},       {"L_SUN_E", 3},         {"L_SUN_COS", 6},     {"L_ZENITH", 8},
+    {"L_HORIZON", 11},      {"L_GROUND", 14},       {"L_GLOW", 17},       {"L_AREA_CENTRE", 20},
+    {"L_AREA_U", 23},       {"L_AREA_V", 26},       {"L_AREA_RADIANCE", 29}, {"L_AREA_NORMAL", 32},
+    {"L_AREA_AREA", 35}};
+constexpr int kLightParams = 36;
+// The sun and sky part (what the sunlit-patch weights depend on, with the materials).
+constexpr int kSunSkyParams = 20;
+
+std::string pathtrace_defines() {
+    std::string d;
+    for (const LightSlot& l : kLightLayout) d += std::string(d.empty() ? "" : " ") + "-D" + l.name + "=" + std::to_string(l.offset);
+    return d;
+}
 
 float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
@@ -156,6 +177,7 @@ struct Renderer::Impl {
     int buffers_n = 0;
     int nlights = 0;
     float inv_total = 0.0f;
+    bool area_on = false;  // this frame has an area light (one more shadow ray per path vertex)
     detail::Kernel k_features, k_reference, k_ao, k_geometry;
     detail::Buffer ao;  // render_ao's output
     detail::Buffer geometry;  // render_geometry's output
@@ -166,6 +188,7 @@ struct Renderer::Impl {
 
     // Per frame: lamp level into the material table, the emitter list and its CDF, sun/sky, camera.
     void upload_frame(const CameraPose& pose, const Lighting& l, const RenderSettings& rs) {
+        check_area_light(l.area_light, "render");
         std::vector<float> m(palette.size() * 8, 0.0f);
         for (std::size_t i = 0; i < palette.size(); ++i) {
             const Material& p = palette[i];
@@ -197,6 +220,17 @@ struct Renderer::Impl {
         ctx->write(lights, 0, faces.size() * 4, faces.data(), "render: upload emitter list");
         ctx->write(cdf, 0, c.size() * 4, c.data(), "render: upload emitter CDF");
 
+        const AreaLight& a = l.area_light;
+        area_on = a.enabled();
+        // The area light's normal and area in double (a thin panel's cross product loses float bits); all zero
+        // when it is off, so the kernel never reads what it does not use.
+        const glm::dvec3 cross = glm::cross(glm::dvec3(a.half_u), glm::dvec3(a.half_v));
+        const double cross_len = glm::length(cross);
+        const glm::vec3 area_normal = area_on ? glm::vec3(cross / cross_len) : glm::vec3(0.0f);
+        const float area = area_on ? float(4.0 * cross_len) : 0.0f;
+        const glm::vec3 zero(0.0f);
+        const glm::vec3 centre = area_on ? a.centre : zero, half_u = area_on ? a.half_u : zero,
+                        half_v = area_on ? a.half_v : zero, radiance = area_on ? a.radiance : zero;
         const float L[kLightParams] = {
             l.sun.direction.x, l.sun.direction.y, l.sun.direction.z,
             l.sun.irradiance.r, l.sun.irradiance.g, l.sun.irradiance.b,
@@ -204,7 +238,13 @@ struct Renderer::Impl {
             l.sky.zenith.r, l.sky.zenith.g, l.sky.zenith.b,
             l.sky.horizon.r, l.sky.horizon.g, l.sky.horizon.b,
             l.sky.ground.r, l.sky.ground.g, l.sky.ground.b,
-            l.sky.glow.r, l.sky.glow.g, l.sky.glow.b};
+            l.sky.glow.r, l.sky.glow.g, l.sky.glow.b,
+            centre.x, centre.y, centre.z,
+            half_u.x, half_u.y, half_u.z,
+            half_v.x, half_v.y, half_v.z,
+            radiance.r, radiance.g, radiance.b,
+            area_normal.x, area_normal.y, area_normal.z,
+            area};
         ctx->write(light, 0, sizeof(L), L, "render: upload lighting");
         update_patches(L, m, rs);
 
@@ -222,12 +262,13 @@ struct Renderer::Impl {
     // Samples per pixel one launch may take. Unlimited (INT_MAX) unless the driver ends loops after a fixed number
     // of iterations per work-item (Context::loop_limit; llvmpipe: 65,535, counted over every loop of the kernel).
     // Bound per sample: per bounce up to six DDA walks (primary or continuation, sun, emitter, portal, patch and
-    // its sun ray) of at most dims.x + dims.y + dims.z + 3 steps, plus three binary searches of at most 32 steps.
+    // its sun ray; a seventh with an area light) of at most dims.x + dims.y + dims.z + 3 steps, plus three binary
+    // searches of at most 32 steps. Call after upload_frame (area_on).
     int samples_per_launch(int max_bounces, const char* what) const {
         const long limit = ctx->loop_limit();
         if (limit <= 0) return std::numeric_limits<int>::max();
         const long walk = long(size.x) + size.y + size.z + 3;
-        const long per_bounce = 6 * walk + 3 * 32;
+        const long per_bounce = (area_on ? 7 : 6) * walk + 3 * 32;
         const long per_sample = (long(max_bounces) + 1) * per_bounce;
         const long fixed = walk + 64;  // the primary ray and the kernel's own loops
         if (fixed + per_sample > limit)
@@ -263,7 +304,7 @@ struct Renderer::Impl {
     // normalized per region on the host.
     void update_patches(const float* L, const std::vector<float>& m, const RenderSettings& rs) {
         if (npatches == 0) return;
-        std::vector<float> key(L, L + kLightParams);
+        std::vector<float> key(L, L + kSunSkyParams);
         key.insert(key.end(), m.begin(), m.end());
         if (key == patch_light_key) return;
         patch_light_key = key;
@@ -379,11 +420,11 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.patch_prob = m.ctx->alloc(np, "render: patch probabilities");
     m.patch_cdf = m.ctx->alloc(np, "render: patch CDF");
     m.patch_weight = m.ctx->alloc(np, "render: patch weights");
-    m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights");
-    m.k_features = m.ctx->kernel("pathtrace", "pt_features");
-    m.k_reference = m.ctx->kernel("pathtrace", "pt_reference");
-    m.k_ao = m.ctx->kernel("pathtrace", "pt_ao");
-    m.k_geometry = m.ctx->kernel("pathtrace", "pt_geometry");
+    m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights", pathtrace_defines());
+    m.k_features = m.ctx->kernel("pathtrace", "pt_features", pathtrace_defines());
+    m.k_reference = m.ctx->kernel("pathtrace", "pt_reference", pathtrace_defines());
+    m.k_ao = m.ctx->kernel("pathtrace", "pt_ao", pathtrace_defines());
+    m.k_geometry = m.ctx->kernel("pathtrace", "pt_geometry", pathtrace_defines());
     for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry}) {
         std::size_t wg = 0;
         if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
@@ -445,6 +486,10 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     fr.n = s.n;
     fr.look = pose.look;
     fr.up = pose.up;
+    if (lighting.area_light.enabled()) {  // what a consumer needs to place the light relative to each pixel
+        fr.area_light = lighting.area_light;
+        fr.position = pose.position;
+    }
     for (int f = 0; f < kFeatureCount; ++f)
         for (int face = 0; face < kFaceCount; ++face) {
             Image img(s.n, s.n, feature_channels(Feature(f)));
@@ -630,13 +675,17 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
     Impl& m = *impl_;
     check_voxels(voxels, m.size, "voxel field", kMaxFieldVoxels);
     check_field_settings(s);
+    // vf_sh projects the radiance its rays meet; rays never meet the area light (it is not geometry), so its SH
+    // would miss the light's direct part while the other outputs include it. Refused rather than inconsistent.
+    if (lighting.area_light.enabled())
+        throw InputError("voxel field: the lighting has an area light, which the voxel field does not support");
     const auto t0 = std::chrono::steady_clock::now();
     detail::Context& ctx = *m.ctx;
     if (!m.k_vf_sh.get()) {
-        m.k_vf_sun = ctx.kernel("pathtrace", "vf_sun_visibility");
-        m.k_vf_sh = ctx.kernel("pathtrace", "vf_sh");
-        m.k_vf_probe = ctx.kernel("pathtrace", "vf_probe_lighting");
-        m.k_vf_face = ctx.kernel("pathtrace", "vf_face_lighting");
+        m.k_vf_sun = ctx.kernel("pathtrace", "vf_sun_visibility", pathtrace_defines());
+        m.k_vf_sh = ctx.kernel("pathtrace", "vf_sh", pathtrace_defines());
+        m.k_vf_probe = ctx.kernel("pathtrace", "vf_probe_lighting", pathtrace_defines());
+        m.k_vf_face = ctx.kernel("pathtrace", "vf_face_lighting", pathtrace_defines());
     }
     RenderSettings rs;
     rs.max_bounces = s.max_bounces;
@@ -729,7 +778,7 @@ std::vector<std::uint32_t> Renderer::voxel_visibility(const SurfaceVoxels& voxel
     Impl& m = *impl_;
     check_voxels(voxels, m.size, "voxel visibility", kMaxVisibilityVoxels);
     detail::Context& ctx = *m.ctx;
-    if (!m.k_vf_vis.get()) m.k_vf_vis = ctx.kernel("pathtrace", "vf_visibility");
+    if (!m.k_vf_vis.get()) m.k_vf_vis = ctx.kernel("pathtrace", "vf_visibility", pathtrace_defines());
     const std::size_t V = voxels.size(), words = (V + 31) / 32;
     const VoxelBuffers in = upload_voxels(ctx, voxels, false);
     detail::Buffer mask = ctx.alloc(V * words * 4, "voxel visibility: mask");
