@@ -116,6 +116,25 @@ expect=--time;        expect_usage time_range "${render[@]}" --time 49 --out "$w
 expect=--path-frames; expect_usage path_frames "${render[@]}" --path-frames 2147483647 --out "$work/out_path_frames"
 expect=--area-light;  expect_usage area_light_count "${render[@]}" --area-light 1,2,3 --out "$work/out_area_light_count"
 expect=--area-light;  expect_usage area_light_nan "${render[@]}" --area-light 8,3,8,1,0,0,0,0,1,1,nan,1 --out "$work/out_area_light_nan"
+# ngi neural-gi (seed 002): a frame lit by an area light through a random-weight neural_gi model (plumbing only),
+# at full resolution and with joint bilateral upsampling; a frame without an area light and a generator are refused.
+PYTHONPATH=${PYTHONPATH:-$(dirname "$ngi")/python} /usr/bin/python3 "$(dirname "$0")/../parity/make_neural_gi_parity.py" \
+    --out "$work/ngi_parity" > "$work/ngi_parity.log" 2>&1
+"$ngi" render --scene bleed:seed=3 --face 64 --spp 4 --feature-spp 1 --area-light 4,5.9,4,0.5,0,0,0,0,0.5,30,30,30 \
+    --out "$work/area_frame" > /dev/null
+for k in 1 2; do
+  "$ngi" neural-gi --frame "$work/area_frame" --model "$work/ngi_parity/paper_mlp_f16.safetensors" --upsample $k \
+      --out "$work/ngi_$k" > /dev/null
+  for f in indirect.exr lighting.exr final.png compare.png metrics.json; do
+    [ -s "$work/ngi_$k/$f" ] || fail "ngi neural-gi --upsample $k did not write $f"
+  done
+done
+expect="no area light"
+expect_failure ngi_no_light "$ngi" neural-gi --frame "$work/frame" --model "$work/ngi_parity/paper_mlp_f16.safetensors" --out "$work/out_ngi_no_light"
+no_unexpected ngi_no_light
+expect="is a pix2pix_unet model"
+expect_failure ngi_generator "$ngi" neural-gi --frame "$work/area_frame" --model "$model" --out "$work/out_ngi_generator"
+expect=--upsample;    expect_usage ngi_upsample "$ngi" neural-gi --frame "$work/area_frame" --model "$model" --upsample 0 --out "$work/out_ngi_upsample"
 expect=--path-frames; expect_usage path_frames_overflow "${render[@]}" --path-frames 99999999999999999999 --out "$work/out_path_frames_overflow"
 expect=--face;        expect_usage face_suffix "${render[@]}" --face 32x --out "$work/out_face_suffix"
 expect=--spp;         expect_usage spp_zero "${render[@]}" --spp 0 --out "$work/out_spp_zero"

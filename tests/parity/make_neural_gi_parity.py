@@ -79,7 +79,8 @@ def make_case(case, out_dir):
     randomize(model, g)
     model_name = f"{case['name']}.safetensors"
     neural_gi.export_model(model, os.path.join(out_dir, model_name), bn_mode=case["bn_mode"], half=case["half"],
-                           source=f"tests/parity/make_neural_gi_parity.py {case['name']}")
+                           source=f"tests/parity/make_neural_gi_parity.py {case['name']}",
+                           scene_box=((0, 0, 0), (16, 16, 16)))
     model = model.double()
     if case["half"]:  # the reference uses exactly the stored values
         with torch.no_grad():
@@ -132,6 +133,13 @@ def bad_files(out_dir, good_case):
     write("bad_no_section.safetensors", tensors, c, "field 'neural_gi' must be an object")
     t = {k: v for k, v in tensors.items() if not k.startswith("buffer.model.model.1.")}
     write("bad_buffer.safetensors", t, config, "missing tensors: model.model.1.")
+    c = json.loads(json.dumps(config))
+    c["neural_gi"]["scene_box"] = {"min": [0, 0, 0], "max": [1, -1, 1]}
+    write("bad_box.safetensors", tensors, c, "neural_gi.scene_box")
+    # Loads, but cannot run on frames (no scene box to normalize positions with): NeuralGiRenderer refuses it.
+    c = json.loads(json.dumps(config))
+    del c["neural_gi"]["scene_box"]
+    model_file.write_model(os.path.join(out_dir, "no_box.safetensors"), tensors, c)
     return bad
 
 

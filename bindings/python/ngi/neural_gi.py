@@ -315,9 +315,11 @@ INPUT_LAYOUT = ["position.x", "position.y", "position.z", "normal.x", "normal.y"
 INPUT_RANGE = [-1.0, 70.0]
 
 
-def file_config(model, bn_mode="per_image", source=""):
+def file_config(model, bn_mode="per_image", source="", scene_box=None, training=None):
     """The metadata an ngi model file stores for `model` (flat U-Net fields as the generators' files have them,
-    the encoding as the mlp family's, the MLP under "neural_gi"), with the nested config() kept under "training"."""
+    the encoding as the mlp family's, the MLP under "neural_gi"), with the nested config() and `training` (a dict of
+    the run's settings) kept under "training". scene_box: ((min x, y, z), (max x, y, z)), the box assemble_inputs
+    normalized positions with; ngi needs it to assemble inputs from frames (NeuralGiRenderer)."""
     if bn_mode not in ("per_image", "running"):
         raise ValueError(f"bn_mode must be per_image or running, got {bn_mode!r}")
     c = model.config()
@@ -328,18 +330,21 @@ def file_config(model, bn_mode="per_image", source=""):
         "bn_eps": 1e-5, "dropout": "off", "input_layout": INPUT_LAYOUT, "input_range": INPUT_RANGE,
         "output_range": [0.0, RADIANCE_MAX],
         "encoding": {k: enc[k] for k in ("bands", "first_exponent", "pi", "include_input", "order")},
-        "neural_gi": {"buffer_channels": c["buffer"]["buffer_channels"], "mlp_width": c["mlp"]["width"],
-                      "mlp_depth": c["mlp"]["depth"], "skip_layer": c["mlp"]["skip_layer"] or 0, "decode": DECODE},
-        "source": source, "training": c,
+        "neural_gi": dict({"buffer_channels": c["buffer"]["buffer_channels"], "mlp_width": c["mlp"]["width"],
+                           "mlp_depth": c["mlp"]["depth"], "skip_layer": c["mlp"]["skip_layer"] or 0,
+                           "decode": DECODE},
+                          **({"scene_box": {"min": [float(v) for v in scene_box[0]],
+                                            "max": [float(v) for v in scene_box[1]]}} if scene_box is not None else {})),
+        "source": source, "training": dict(c, **(training or {})),
     }
 
 
-def export_model(model, path, bn_mode="per_image", half=True, source=""):
+def export_model(model, path, bn_mode="per_image", half=True, source="", scene_box=None, training=None):
     """Write `model` as an ngi model file: every parameter and batch-norm statistic under its PyTorch name
-    (num_batches_tracked, a training counter, is left out), F16 when `half`."""
+    (num_batches_tracked, a training counter, is left out), F16 when `half`; config from file_config."""
     from ngi import model_file  # numpy only; imported here so that the model code does not need it
     tensors = {k: v for k, v in model.state_dict().items() if not k.endswith("num_batches_tracked")}
-    model_file.write_model(path, tensors, file_config(model, bn_mode, source), half=half)
+    model_file.write_model(path, tensors, file_config(model, bn_mode, source, scene_box, training), half=half)
 
 
 # --------------------------------------------------------------------------

@@ -66,6 +66,10 @@ struct ModelConfig {
     struct NeuralGi {
         int buffer_channels = 0;
         int mlp_width = 0, mlp_depth = 0, skip_layer = 0;
+        // The scene's bounding box (world metres) that positions are normalized with: 2 (p - min) / (max - min) - 1.
+        // A model is trained for one scene; running it on frames (NeuralGiRenderer) needs the box.
+        bool has_scene_box = false;
+        float scene_min[3] = {0, 0, 0}, scene_max[3] = {0, 0, 0};
     } neural_gi;
 };
 

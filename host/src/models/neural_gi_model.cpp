@@ -1,6 +1,7 @@
 #include "models/neural_gi_model.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "graph/nodes.hpp"
@@ -85,6 +86,24 @@ void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::
     g.mlp_depth = integer("mlp_depth", 1, kMaxMlpDepth);
     // 0: no re-injection (layer 0 takes the input anyway).
     g.skip_layer = integer("skip_layer", 0, g.mlp_depth - 1);
+    if (n.contains("scene_box")) {
+        const nlohmann::json& b = n["scene_box"];
+        const std::string rule = "{\"min\": [x, y, z], \"max\": [x, y, z]}, finite (|v| <= 1e30), min <= max";
+        auto vec3 = [&](const char* k, float* out) {
+            if (!b.is_object() || !b.contains(k) || !b[k].is_array() || b[k].size() != 3) throw fail("neural_gi.scene_box", rule);
+            for (int i = 0; i < 3; ++i) {
+                if (!b[k][i].is_number()) throw fail("neural_gi.scene_box", rule);
+                const double v = b[k][i].get<double>();
+                if (!std::isfinite(v) || std::abs(v) > 1e30) throw fail("neural_gi.scene_box", rule);
+                out[i] = float(v);
+            }
+        };
+        vec3("min", g.scene_min);
+        vec3("max", g.scene_max);
+        for (int i = 0; i < 3; ++i)
+            if (g.scene_min[i] > g.scene_max[i]) throw fail("neural_gi.scene_box", rule);
+        g.has_scene_box = true;
+    }
     if (!n.contains("decode") || n["decode"] != "exp")
         throw fail("neural_gi.decode", "\"exp\" (indirect = exp(min(x, 88)), never negative)");
 }
