@@ -73,7 +73,7 @@ for stage in $stages; do
       # the sanitize and tsan stages); each of them would recompile the generators' programs in new processes and
       # contexts, minutes on llvmpipe. The Catch2 kernel, model and frame-path tests are what runs the device.
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(training_smoke|training_voxel_sh|training_neural_gi|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*)$'); then
+                 -E '^(training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;
