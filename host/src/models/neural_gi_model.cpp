@@ -55,12 +55,6 @@ std::vector<std::pair<std::string, std::vector<int>>> mlp_tensors(const ModelCon
     return t;
 }
 
-std::string join(const std::vector<std::string>& v) {
-    std::string s;
-    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s;
-}
-
 }  // namespace
 
 void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
@@ -110,22 +104,8 @@ void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::
 
 void validate_neural_gi_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
     validate_unet_tensors(buffer_config(cfg), buffer_tensors(file));  // names the U-Net's own problems
-    const auto expected = mlp_tensors(cfg);
-    std::vector<std::string> missing, unexpected, misshaped;
-    for (const auto& [name, shape] : expected) {
-        auto it = file.tensors.find(name);
-        if (it == file.tensors.end()) missing.push_back(name);
-        else if (it->second.shape != shape)
-            misshaped.push_back(name + " is " + shape_string(it->second.shape) + ", expected " + shape_string(shape));
-    }
-    for (const auto& [name, t] : file.tensors)
-        if (name.rfind(kBufferPrefix, 0) != 0 &&
-            std::none_of(expected.begin(), expected.end(), [&](const auto& e) { return e.first == name; }))
-            unexpected.push_back(name);
-    std::string problems;
-    if (!missing.empty()) problems += "\n  missing tensors: " + join(missing);
-    if (!unexpected.empty()) problems += "\n  unexpected tensors: " + join(unexpected);
-    if (!misshaped.empty()) problems += "\n  shape mismatch: " + join(misshaped);
+    const std::string problems = tensor_mismatches(
+        mlp_tensors(cfg), file, [](const std::string& name) { return name.rfind(kBufferPrefix, 0) == 0; });
     const ModelConfig::NeuralGi& n = cfg.neural_gi;
     if (!problems.empty())
         throw InputError("load model: the tensors do not match a neural_gi network with input_nc " +

@@ -268,9 +268,8 @@ std::vector<std::pair<std::string, std::vector<int>>> expected_tensors(const UNe
     return out;
 }
 
-void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
-    const UNetSpec spec = unet_spec(cfg);
-    const auto expected = expected_tensors(spec);
+std::string tensor_mismatches(const std::vector<std::pair<std::string, std::vector<int>>>& expected,
+                              const SafetensorsFile& file, const std::function<bool(const std::string&)>& other) {
     std::vector<std::string> missing, unexpected, misshaped;
     for (const auto& [name, shape] : expected) {
         auto it = file.tensors.find(name);
@@ -279,7 +278,7 @@ void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) 
             misshaped.push_back(name + " is " + shape_string(it->second.shape) + ", expected " + shape_string(shape));
     }
     for (const auto& [name, t] : file.tensors) {
-        bool known = false;
+        bool known = other && other(name);
         for (const auto& e : expected) known = known || e.first == name;
         if (!known) unexpected.push_back(name);
     }
@@ -287,6 +286,11 @@ void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) 
     if (!missing.empty()) problems += "\n  missing tensors: " + join(missing);
     if (!unexpected.empty()) problems += "\n  unexpected tensors: " + join(unexpected);
     if (!misshaped.empty()) problems += "\n  shape mismatch: " + join(misshaped);
+    return problems;
+}
+
+void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
+    const std::string problems = tensor_mismatches(expected_tensors(unet_spec(cfg)), file);
     if (!problems.empty())
         throw InputError("load model: the tensors do not match a " + cfg.family + " generator with input_nc " +
                          std::to_string(cfg.input_nc) + ", output_nc " + std::to_string(cfg.output_nc) + ", ngf " +

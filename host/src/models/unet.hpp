@@ -1,6 +1,7 @@
 // The U-Net generators (pix2pix UnetGenerator, DeepIllumination G) as one level-by-level description, so both
 // families share the same graph builder and differ only in names, bias, norm placement and concat order.
 #pragma once
+#include <functional>
 #include <optional>
 #include <memory>
 #include <string>
@@ -50,6 +51,12 @@ struct UNetOps {
     std::size_t weight_bytes = 0;
 };
 
+// "\n  missing tensors: ...", "\n  unexpected tensors: ...", "\n  shape mismatch: ..." lines for `file` against
+// `expected` (empty when they match); tensors for which `other(name)` holds belong to someone else and are not
+// reported as unexpected.
+std::string tensor_mismatches(const std::vector<std::pair<std::string, std::vector<int>>>& expected,
+                              const SafetensorsFile& file,
+                              const std::function<bool(const std::string&)>& other = nullptr);
 // Every expected tensor present with its shape, no unexpected ones, bn_mode / dropout known: InputError otherwise.
 // build_unet_ops calls it first; it needs no device (the fuzz target fuzz_safetensors calls it directly).
 void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file);
