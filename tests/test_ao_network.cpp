@@ -112,7 +112,7 @@ TEST_CASE("AO ring offsets: 16 points, rounded half away from zero, counter-cloc
     CHECK(ngi::AoNetwork::ring_offsets(2.5f)[1] == 3);  // 2.5 -> 3 (half away from zero)
 }
 
-TEST_CASE("AO network: ring gather + MLP + clamp match a naive reference; device path equals host path",
+TEST_CASE("AO network: ring gather + MLP + clamp match a naive reference, device path equals host path",
           "[ao][mlp]") {
     ngi::test::TempDir dir("ao-network");
     std::mt19937 rng(11);

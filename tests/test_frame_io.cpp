@@ -243,7 +243,7 @@ TEST_CASE("frame folder: bad input is an InputError naming the file", "[io][fram
     CHECK_THROWS_WITH(ngi::read_frame(dir), Contains("missing") && Contains("front_normal.exr"));
 }
 
-TEST_CASE("frame folder: NaN/Inf are sanitized by feature and counted per file; PNG and RGBA features", "[io][frame]") {
+TEST_CASE("frame folder: NaN/Inf are sanitized by feature and counted per file, PNG and RGBA features", "[io][frame]") {
     TempDir root("frame-nan");
     std::mt19937 rng(5);
     ngi::Frame f = make_frame(8, rng);

@@ -302,7 +302,7 @@ TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192
         }
 }
 
-TEST_CASE("GEMM local-memory variant: knobs parse and print; sets the device cannot run are refused with numbers",
+TEST_CASE("GEMM local-memory variant: knobs parse and print, sets the device cannot run are refused with numbers",
           "[gemm][local]") {
     const GemmParams p = parse_gemm_params("4,4,1,1,16,16,1,16");
     CHECK(p.kwg == 16);
@@ -340,7 +340,7 @@ TEST_CASE("GEMM local-memory variant: knobs parse and print; sets the device can
     CHECK_THAT(v.reason, Catch::Contains("CL_DEVICE_LOCAL_MEM_SIZE"));
 }
 
-TEST_CASE("GEMM local-memory variant: in the tuning space where it fits; the fallback chain ends on gemm_packed",
+TEST_CASE("GEMM local-memory variant: in the tuning space where it fits, the fallback chain ends on gemm_packed",
           "[gemm][local]") {
     const GemmParams pref = parse_gemm_params("4,4,1,1,16,16,0,16");
     const auto chain = gemm_fallback_chain(pref);

@@ -193,7 +193,7 @@ TEST_CASE("thesis merge: middle band and front crop are bit-exact copies of the 
         }
 }
 
-TEST_CASE("thesis merge matches the naive layout reference; the gather kernel matches its table", "[pipeline][oclgrind]") {
+TEST_CASE("thesis merge matches the naive layout reference, the gather kernel matches its table", "[pipeline][oclgrind]") {
     std::mt19937 rng(5);
     for (int n : {2, 6, 16, 30}) {
         Frame fr;

@@ -127,7 +127,7 @@ TEST_CASE("EXR round trips in float (exact) and half (rounded), 1..12 channels",
     CHECK(dir.list() == std::vector<std::string>{"f.exr", "h.exr"});  // no temporaries left
 }
 
-TEST_CASE("EXR channel order of foreign files: R, G, B, others in natural order, A; by layer", "[io]") {
+TEST_CASE("EXR channel order of foreign files: R, G, B, others in natural order, A, by layer", "[io]") {
     TempDir dir("exr-names");
     // Channel k holds the value k, so the order read back is visible in the data.
     auto check = [&](const std::vector<std::string>& written, const std::vector<std::string>& expected) {
@@ -156,7 +156,7 @@ TEST_CASE("EXR channel order of foreign files: R, G, B, others in natural order,
                       Contains("2 distinct"));
 }
 
-TEST_CASE("EXR: the image is the display window; pixels outside the data window are 0", "[io]") {
+TEST_CASE("EXR: the image is the display window, pixels outside the data window are 0", "[io]") {
     TempDir dir("exr-window");
     std::mt19937 rng(6);
     const ngi::Image img = random_image(5, 4, 3, rng, 1.0f, 2.0f);
@@ -309,7 +309,7 @@ TEST_CASE("PNG: 8-bit round trips, sRGB, and 16-bit / palette files from an inde
     CHECK(pal.data == std::vector<float>{1.0f, 0.0f, 0.0f, 128.0f / 255.0f, 0.0f, 0.0f, 64.0f / 255.0f, 1.0f});
 }
 
-TEST_CASE("read_image / write_image choose the format by extension; .npy holds [C, H, W]", "[io]") {
+TEST_CASE("read_image / write_image choose the format by extension, .npy holds [C, H, W]", "[io]") {
     TempDir dir("any");
     std::mt19937 rng(3);
     const ngi::Image img = random_image(9, 5, 3, rng, -2.0f, 2.0f);

@@ -213,7 +213,7 @@ TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]")
                                           << " bilinear fallbacks)");
 }
 
-TEST_CASE("JBU: no light crosses a depth step or a crease; bilinear does", "[jbu]") {
+TEST_CASE("JBU: no light crosses a depth step or a crease, bilinear does", "[jbu]") {
     // A floor (y = 0, normal +y) with a one-block platform (y = 1, also +y: a depth step only the plane term
     // separates) and a wall (x = 0, normal +x: a crease the normal term separates), at 4x, edges off the grid.
     Scene s;
@@ -246,7 +246,7 @@ TEST_CASE("JBU: no light crosses a depth step or a crease; bilinear does", "[jbu
     CHECK(bilinear_err > 0.5);  // the same test fails for plain bilinear: it bleeds across both edges
 }
 
-TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear; no surface gives 0", "[jbu]") {
+TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear, no surface gives 0", "[jbu]") {
     // Low: floor only. High: the floor, a wall facing -z the low image never saw (fallback), and sky (0).
     Scene low_scene, hi_scene;
     const Region floor{0.0, 0.0, 1.0, 1.0, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}};

@@ -63,7 +63,7 @@ TEST_CASE("outside_light_share: random frames, odd sizes, with and without emiss
         }
 }
 
-TEST_CASE("outside_light_share: light only in front, only behind, none; hostile values", "[pipeline][light_share]") {
+TEST_CASE("outside_light_share: light only in front, only behind, none, hostile values", "[pipeline][light_share]") {
     std::mt19937 rng(6);
     Frame fr = lit_frame(5, rng, true);
     auto clear_faces = [&](auto keep) {

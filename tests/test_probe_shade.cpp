@@ -179,7 +179,7 @@ TEST_CASE("probe shading = the reference on random cameras and faces (both field
     }
 }
 
-TEST_CASE("probe shading: hit points exactly on block edges and corners find the block; misses are counted",
+TEST_CASE("probe shading: hit points exactly on block edges and corners find the block, misses are counted",
           "[probe]") {
     auto& ctx = test::ctx();
     ProbeShade op(ctx);

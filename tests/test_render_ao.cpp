@@ -92,7 +92,7 @@ glm::vec3 smooth_normal_reference(const VoxelScene& s, glm::vec3 p, glm::vec3 nf
 
 }  // namespace
 
-TEST_CASE("geometry: face normals, planar depth and smooth normals match a naive reference; a ball's smooth "
+TEST_CASE("geometry: face normals, planar depth and smooth normals match a naive reference, a ball's smooth "
           "normals are radial", "[render][ao]") {
     Device& dev = test::device();
     // A ball of radius 9 blocks around (16, 16, 16) in a 33^3 grid (odd, not a power of two).

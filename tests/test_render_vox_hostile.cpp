@@ -100,7 +100,7 @@ TEST_CASE(".vox hostile: groups listing a child twice do not explode", "[vox]") 
     }
 }
 
-TEST_CASE(".vox hostile: shared nodes that are not cycles still load; cycles are named", "[vox]") {
+TEST_CASE(".vox hostile: shared nodes that are not cycles still load, cycles are named", "[vox]") {
     // nSHP 3 is reached through two transforms: a DAG, two instances.
     const std::string dag = vox_file(kCube + ntrn(0, 1) + ngrp(1, {2, 4}) + ntrn(2, 3, {{"_t", "0 0 0"}}) + nshp(3, 0) +
                                      ntrn(4, 3, {{"_t", "3 0 0"}}));

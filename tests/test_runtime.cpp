@@ -28,7 +28,7 @@ TEST_CASE("launch: a local size beyond the kernel's work-group limit is halved f
 }
 
 // Not under oclgrind: the refused launch is deliberate, and oclgrind's API check would (rightly) log it.
-TEST_CASE("launch: a fixed-shape kernel keeps its work-group; a launch the device refuses names the kernel",
+TEST_CASE("launch: a fixed-shape kernel keeps its work-group, a launch the device refuses names the kernel",
           "[runtime]") {
     auto& c = test::ctx();
     Kernel k = c.kernel("metrics", "squared_error_partials");

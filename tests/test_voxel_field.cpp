@@ -238,7 +238,7 @@ TEST_CASE("voxel field: uniform sky over a floor gives the analytic SH, lighting
         }
 }
 
-TEST_CASE("voxel field: the sun alone projects to E V Y(s); its band-2 irradiance is the truncated cosine lobe",
+TEST_CASE("voxel field: the sun alone projects to E V Y(s), its band-2 irradiance is the truncated cosine lobe",
           "[voxel_field]") {
     VoxelScene s({12, 6, 12}, "plane");
     const std::uint8_t black = s.add_material({glm::vec3(0.0f), glm::vec3(0.0f), false});
@@ -351,7 +351,7 @@ TEST_CASE("voxel field: face lighting of a sunlit floor face next to a wall equa
     }
 }
 
-TEST_CASE("voxel field: deterministic; samples split over launches give the same bits; seeds are independent",
+TEST_CASE("voxel field: deterministic, samples split over launches give the same bits, seeds are independent",
           "[voxel_field]") {
     // A room with a window, a lamp and a table: every estimator (sun, sky portals, sunlit patches, emitters).
     VoxelScene s({10, 7, 10}, "room");

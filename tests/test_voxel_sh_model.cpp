@@ -107,20 +107,20 @@ void check_parity(const std::string& arch) {
 
 }  // namespace
 
-TEST_CASE("voxel_sh mlp files match PyTorch (F32 and F16 weights; V = 1, 37, 1001)", "[voxel_sh][model][parity]") {
+TEST_CASE("voxel_sh mlp files match PyTorch (F32 and F16 weights, V = 1, 37, 1001)", "[voxel_sh][model][parity]") {
     check_parity("mlp");
 }
 
-TEST_CASE("voxel_sh set network files match PyTorch's broadcast concat (F32 and F16; V = 1, 37, 1001)",
+TEST_CASE("voxel_sh set network files match PyTorch's broadcast concat (F32 and F16, V = 1, 37, 1001)",
           "[voxel_sh][model][parity]") {
     check_parity("set");
 }
 
-TEST_CASE("voxel_sh resnet files match PyTorch (F32 and F16 weights; V = 1, 37, 1001)", "[voxel_sh][model][parity]") {
+TEST_CASE("voxel_sh resnet files match PyTorch (F32 and F16 weights, V = 1, 37, 1001)", "[voxel_sh][model][parity]") {
     check_parity("resnet");
 }
 
-TEST_CASE("voxel_sh input guard: NaN -> the middle of the training range, counted; +-FLT_MAX and +-Inf stay finite",
+TEST_CASE("voxel_sh input guard: NaN -> the middle of the training range, counted, +-FLT_MAX and +-Inf stay finite",
           "[voxel_sh][model]") {
     for (const char* arch : {"set", "resnet"}) {
         CAPTURE(arch);
