@@ -18,8 +18,9 @@ if ! command -v clang++-15 >/dev/null; then
     exit 2
 fi
 mkdir -p "$out"
+# -O1 -gline-tables-only: OSS-Fuzz's flags (line numbers in crash reports; a quicker build than -O2 -g).
 CC=clang-15 CXX=clang++-15 cmake -S . -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_FUZZ=ON \
-    -DNGI_BUILD_TESTS=OFF -DNGI_BUILD_PERF=OFF >"$out/cmake.log" 2>&1 ||
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" -DNGI_BUILD_TESTS=OFF -DNGI_BUILD_PERF=OFF >"$out/cmake.log" 2>&1 ||
     { cat "$out/cmake.log" >&2; exit 2; }
 cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/build.log" 2>&1 ||
     { tail -50 "$out/build.log" >&2; exit 2; }
