@@ -23,6 +23,19 @@
 //   ngi_bench generator --model M.safetensors [--width 1024 --height 512] [--repeats R] [--device D]
 //                       [--bn-mode running|per_image]
 //                                                       whole-model wall time (median) + per-op device time
+//   ngi_bench neural-gi --model M.safetensors [--frames 128:1,256:4,...] [--repeats R] [--device D] [--no-profile]
+//                                                       seed 002 on a synthetic frame (a room filling the model's
+//                                                       scene box, one block in it, a ceiling area light), per face
+//                                                       size N and upsampling K ("N:K"; default 128:1, 128:2,
+//                                                       128:4, 256:1, 256:2, 256:4, 512:4, 1024:4):
+//                                                       NeuralGiRenderer::run (wall time: four face planes up,
+//                                                       input assembly, the network at N/K, joint bilateral
+//                                                       upsampling to N, lighting, two downloads), and its parts
+//                                                       alone: the network at N/K (Model::enqueue, device in and
+//                                                       out), the upsampling kernel (N/K -> N); unless
+//                                                       --no-profile, the network's device time per op kind from
+//                                                       one profiled run. Pairs the model cannot run (N/K not a
+//                                                       multiple of 2^num_downs) are listed as skipped, with why
 //
 // Timings: warm-up first (PoCL compiles work-group functions at the first launch), then the median of R runs.
 #include <algorithm>
@@ -33,6 +46,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -40,10 +54,12 @@
 
 #include "ngi/ao.hpp"
 #include "ngi/model.hpp"
+#include "ngi/neural_gi.hpp"
 #include "ops/conv.hpp"
 #include "ops/gemm.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/gemm_tuning.hpp"
+#include "ops/jbu.hpp"
 
 using namespace ngi;
 using namespace ngi::detail;
@@ -55,6 +71,21 @@ std::string arg(int argc, char** argv, const char* name, const std::string& fall
     for (int i = 2; i + 1 < argc; ++i)
         if (!std::strcmp(argv[i], name)) return argv[i + 1];
     return fallback;
+}
+
+std::vector<std::string> split(const std::string& s, char separator = ',') {
+    std::vector<std::string> out;
+    std::size_t start = 0;
+    while (start < s.size()) {
+        const std::size_t end = std::min(s.find(separator, start), s.size());
+        if (end > start) out.push_back(s.substr(start, end - start));
+        start = end + 1;
+    }
+    return out;
+}
+
+bool has_flag(int argc, char** argv, const char* name) {
+    return std::find_if(argv + 2, argv + argc, [&](const char* a) { return !std::strcmp(a, name); }) != argv + argc;
 }
 
 double median(std::vector<double> v) {
@@ -465,6 +496,259 @@ int run_mlp(int argc, char** argv) {
     return 0;
 }
 
+// ngi_bench neural-gi's frame: the front face of a camera inside a room that fills the model's scene box (the box
+// its positions are normalized with, so every input is in range), one block on the floor (depth and normal edges
+// for the upsampling to respect), lit by a ceiling area light; direct light from that light without shadows. The
+// timings do not depend on the values except through the upsampling's bilinear fallbacks, which are counted; the
+// values are plausible so that the count means something. Also returns the full-resolution guides (world positions
+// and normals) for timing the upsampling alone.
+struct RoomFrame {
+    Frame frame;
+    std::vector<float> position, normal;  // [3][n][n]
+};
+
+RoomFrame room_frame(int n, const float scene_min[3], const float scene_max[3]) {
+    const glm::vec3 lo(scene_min[0], scene_min[1], scene_min[2]), hi(scene_max[0], scene_max[1], scene_max[2]);
+    const glm::vec3 extent = hi - lo;
+    RoomFrame room;
+    Frame& f = room.frame;
+    f.n = n;
+    f.look = glm::normalize(glm::vec3(0.3f, -0.25f, -1.0f));
+    f.up = glm::vec3(0.0f, 1.0f, 0.0f);
+    const glm::vec3 eye = lo + extent * glm::vec3(0.45f, 0.45f, 0.85f);
+    f.position = eye;
+    AreaLight light;
+    light.centre = lo + extent * glm::vec3(0.5f, 0.97f, 0.5f);
+    light.half_u = glm::vec3(0.1f * extent.x, 0.0f, 0.0f);
+    light.half_v = glm::vec3(0.0f, 0.0f, 0.1f * extent.z);  // cross(half_u, half_v) points down: into the room
+    light.radiance = glm::vec3(20.0f, 18.0f, 15.0f);
+    f.area_light = light;
+    for (Feature feature : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct})
+        f.get(feature, Face::Front) = Image(n, n, feature_channels(feature));
+    Image& albedo = f.get(Feature::Albedo, Face::Front);
+    Image& normal = f.get(Feature::Normal, Face::Front);
+    Image& depth = f.get(Feature::Depth, Face::Front);
+    Image& direct = f.get(Feature::Direct, Face::Front);
+    const glm::vec3 block_lo = lo + extent * glm::vec3(0.3f, 0.0f, 0.25f);
+    const glm::vec3 block_hi = lo + extent * glm::vec3(0.55f, 0.3f, 0.5f);
+    // Walls -x, +x, -y (floor), +y (ceiling), -z, +z, then the block.
+    const glm::vec3 colours[7] = {{0.8f, 0.2f, 0.2f}, {0.2f, 0.7f, 0.2f}, {0.6f, 0.6f, 0.6f}, {0.9f, 0.9f, 0.9f},
+                                  {0.7f, 0.7f, 0.6f}, {0.5f, 0.5f, 0.7f}, {0.8f, 0.6f, 0.3f}};
+    const FaceBasis basis = CameraCluster::from_look_up(f.look, f.up).face(Face::Front);
+    const glm::vec3 light_normal = light.normal();
+    const float light_area = light.area(), pi = 3.14159265f;
+    const std::size_t plane = std::size_t(n) * n;
+    room.position.resize(3 * plane);
+    room.normal.resize(3 * plane);
+    for (int row = 0; row < n; ++row)
+        for (int col = 0; col < n; ++col) {
+            // Planar depth t: the point is eye + t d with d the pixel's unnormalized ray (what the renderer writes).
+            const glm::vec3 d = face_pixel_direction(basis, col, row, n);
+            // The room from inside: the nearest wall along the ray.
+            float t = std::numeric_limits<float>::infinity();
+            int axis = 0;
+            for (int a = 0; a < 3; ++a)
+                if (d[a] != 0.0f) {
+                    const float ta = ((d[a] > 0.0f ? hi[a] : lo[a]) - eye[a]) / d[a];
+                    if (ta < t) t = ta, axis = a;
+                }
+            int surface = 2 * axis + (d[axis] > 0.0f ? 1 : 0);
+            // The block from outside (slabs): entered at the largest entry distance when that precedes every exit.
+            float t_in = 0.0f, t_out = std::numeric_limits<float>::infinity();
+            int in_axis = -1;
+            for (int a = 0; a < 3; ++a) {
+                if (d[a] == 0.0f) {
+                    if (eye[a] < block_lo[a] || eye[a] > block_hi[a]) t_out = -1.0f;
+                    continue;
+                }
+                float t0 = (block_lo[a] - eye[a]) / d[a], t1 = (block_hi[a] - eye[a]) / d[a];
+                if (t0 > t1) std::swap(t0, t1);
+                if (t0 > t_in) t_in = t0, in_axis = a;
+                t_out = std::min(t_out, t1);
+            }
+            if (in_axis >= 0 && t_in <= t_out && t_in < t) t = t_in, axis = in_axis, surface = 6;
+            glm::vec3 nrm(0.0f);
+            nrm[axis] = d[axis] > 0.0f ? -1.0f : 1.0f;  // facing the camera
+            const glm::vec3 p = eye + t * d;
+            // A small source's irradiance / pi (the lighting buffers' quantity): L A cos cos / (pi r^2).
+            const glm::vec3 to_light = light.centre - p;
+            const float r2 = glm::dot(to_light, to_light);
+            const glm::vec3 w = to_light / std::sqrt(r2);
+            const float g = std::max(0.0f, glm::dot(nrm, w)) * std::max(0.0f, -glm::dot(light_normal, w)) *
+                            light_area / (pi * r2);
+            depth.at(0, row, col) = t;
+            for (int c = 0; c < 3; ++c) {
+                albedo.at(c, row, col) = colours[surface][c];
+                normal.at(c, row, col) = nrm[c];
+                direct.at(c, row, col) = light.radiance[c] * g;
+                room.position[c * plane + std::size_t(row) * n + col] = p[c];
+                room.normal[c * plane + std::size_t(row) * n + col] = nrm[c];
+            }
+        }
+    return room;
+}
+
+// Every `stride`-th pixel of a [3][n][n] plane set, the pixel nearest the centre of each block (as the renderer
+// samples its low-resolution G-buffer): [3][n / stride][n / stride].
+std::vector<float> subsample(const std::vector<float>& planes, int n, int stride) {
+    const int side = n / stride;
+    std::vector<float> out(3 * std::size_t(side) * side);
+    for (int c = 0; c < 3; ++c)
+        for (int y = 0; y < side; ++y)
+            for (int x = 0; x < side; ++x)
+                out[(std::size_t(c) * side + y) * side + x] =
+                    planes[(std::size_t(c) * n + y * stride + stride / 2) * n + x * stride + stride / 2];
+    return out;
+}
+
+Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what) {
+    Buffer b = ctx.alloc(v.size() * sizeof(float), what);
+    ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
+    return b;
+}
+
+int run_neural_gi(int argc, char** argv) {
+    const std::string path = arg(argc, argv, "--model");
+    if (path.empty()) throw InputError("neural-gi: --model M.safetensors (a neural_gi model with a scene box) is required");
+    // "N:K,N:K": face size N, upsampling K. The default: the network at 128 and 256 at full resolution, the same
+    // frames with the network at 1/2 and 1/4 where the U-Net can take that size, and the network at 128 and 256
+    // upsampled 4x.
+    std::vector<std::pair<int, int>> frames;
+    for (const std::string& pair : split(arg(argc, argv, "--frames", "128:1,128:2,128:4,256:1,256:2,256:4,512:4,1024:4"))) {
+        const std::size_t colon = pair.find(':');
+        if (colon == std::string::npos) throw InputError("neural-gi: --frames takes N:K pairs, got '" + pair + "'");
+        frames.emplace_back(std::stoi(pair.substr(0, colon)), std::stoi(pair.substr(colon + 1)));
+    }
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "5"));
+    const std::string device_spec = arg(argc, argv, "--device");
+
+    Device d = Device::open(device_spec);
+    Context& ctx = ngi::detail::context_of(d);
+    Model model = Model::load(d, path);
+    const ModelConfig& c = model.config();
+    if (c.family != "neural_gi" || !c.neural_gi.has_scene_box)
+        throw InputError("neural-gi: " + path + " is not a neural_gi model with a scene box");
+    NeuralGiRenderer renderer(d);
+    JointBilateralUpsample jbu(ctx);
+    const JbuParams jbu_params;  // NeuralGiOptions' defaults
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const int step = 1 << c.num_downs;
+    std::vector<int> network_sides;
+    json cases = json::array();
+    RoomFrame room;
+    for (const auto& [n, k] : frames) {
+        json row = {{"n", n}, {"upsample", k}};
+        if (n < 1 || k < 1 || n % k || (n / k) % step) {
+            row["skipped"] = "the network would run at " + std::to_string(n) + " / " + std::to_string(k) +
+                             ", which is not a positive multiple of 2^num_downs = " + std::to_string(step);
+            std::fprintf(stderr, "neural-gi N %d, upsample %d: skipped (%s)\n", n, k,
+                         row["skipped"].get<std::string>().c_str());
+            cases.push_back(row);
+            continue;
+        }
+        if (room.frame.n != n) room = room_frame(n, c.neural_gi.scene_min, c.neural_gi.scene_max);
+        const int side = n / k;
+        if (std::find(network_sides.begin(), network_sides.end(), side) == network_sides.end())
+            network_sides.push_back(side);
+        std::fprintf(stderr, "neural-gi N %d, upsample %d (network at %d): warm-up + %d runs ...\n", n, k, side,
+                     repeats);
+        NeuralGiOptions options;
+        options.upsample = k;
+        NeuralGiImages images;
+        const auto frame_ms = time_runs(ctx, repeats, [&] { images = renderer.run(model, room.frame, options); });
+        row["network_side"] = side;
+        row["frame_ms_median"] = median(frame_ms);
+        row["frame_ms_all"] = frame_ms;
+        row["jbu_fallback_pixels"] = images.jbu_fallbacks;
+        row["sanitized_inputs"] = images.sanitized_inputs;
+
+        // The network alone at N / K, input and output on the device (what the frame spends in it).
+        std::vector<float> x(std::size_t(c.input_nc) * side * side);
+        for (auto& v : x) v = u(rng);
+        DeviceBuffer xb = DeviceBuffer::allocate(d, x.size() * sizeof(float));
+        DeviceBuffer yb = DeviceBuffer::allocate(d, std::size_t(c.output_nc) * side * side * sizeof(float));
+        xb.upload(x.data(), x.size() * sizeof(float));
+        const auto network_ms = time_runs(ctx, repeats, [&] { model.enqueue(xb, yb, side, side); });
+        row["network_ms_median"] = median(network_ms);
+        row["network_ms_all"] = network_ms;
+
+        if (k > 1) {  // The upsampling alone: the frame's guides at both resolutions, random indirect light.
+            std::vector<float> low(3 * std::size_t(side) * side);
+            for (auto& v : low) v = 1.0f + u(rng);
+            const Buffer low_b = upload_floats(ctx, low, "bench JBU low"),
+                         low_normal = upload_floats(ctx, subsample(room.normal, n, k), "bench JBU low normals"),
+                         low_position = upload_floats(ctx, subsample(room.position, n, k), "bench JBU low positions"),
+                         normal = upload_floats(ctx, room.normal, "bench JBU normals"),
+                         position = upload_floats(ctx, room.position, "bench JBU positions");
+            const Buffer out = ctx.alloc(3 * std::size_t(n) * n * sizeof(float), "bench JBU out");
+            JbuInputs in;
+            in.low_width = in.low_height = side;
+            in.channels = 3;
+            in.low = low_b.get();
+            in.low_normal = low_normal.get();
+            in.low_position = low_position.get();
+            in.width = in.height = n;
+            in.normal = normal.get();
+            in.position = position.get();
+            const auto jbu_ms = time_runs(ctx, repeats, [&] { jbu.enqueue(ctx, in, jbu_params, out.get(), false); });
+            row["jbu_ms_median"] = median(jbu_ms);
+            row["jbu_ms_all"] = jbu_ms;
+        }
+        std::fprintf(stderr, "neural-gi N %d, upsample %d: frame %.1f ms, network at %d %.1f ms, upsampling %.1f ms\n",
+                     n, k, median(frame_ms), side, median(network_ms), row.value("jbu_ms_median", 0.0));
+        cases.push_back(row);
+    }
+
+    json network_profile = json::object();
+    if (!has_flag(argc, argv, "--no-profile")) {
+        // Device time per op of one profiled run per network size (after a warm-up run), timed apart from the wall
+        // times above (profiling can perturb them); also the network's device memory.
+        Device pd = Device::open(device_spec, DeviceOptions{true});
+        Model pm = Model::load(pd, path);
+        for (const int side : network_sides) {
+            std::fprintf(stderr, "neural-gi: profiled network run at %d ...\n", side);
+            Tensor x({1, c.input_nc, side, side});
+            for (auto& v : x.data) v = u(rng);
+            RunInfo info;
+            pm.run(x, &info);
+            pm.run(x, &info);
+            double total = 0, gflop = 0;
+            json by_kind = json::object();
+            for (const auto& l : info.layers) {
+                total += l.ms;
+                gflop += l.gflop;
+                by_kind[l.kind] = by_kind.value(l.kind, 0.0) + l.ms;
+            }
+            network_profile[std::to_string(side)] = {
+                {"device_ms_total", total}, {"device_ms_by_kind", by_kind}, {"gflop", gflop},
+                {"memory_mib", {{"weights", info.weight_bytes / 1048576.0}, {"arena", info.arena_bytes / 1048576.0},
+                                {"scratch", info.scratch_bytes / 1048576.0}}}};
+        }
+    }
+
+    const json model_json = {
+        {"file", std::filesystem::path(path).filename().string()}, {"family", c.family}, {"ngf", c.ngf},
+        {"num_downs", c.num_downs}, {"bn_mode", c.bn_mode}, {"buffer_channels", c.neural_gi.buffer_channels},
+        {"mlp_width", c.neural_gi.mlp_width}, {"mlp_depth", c.neural_gi.mlp_depth},
+        {"skip_layer", c.neural_gi.skip_layer},
+        {"scene_box", {{"min", std::vector<float>(c.neural_gi.scene_min, c.neural_gi.scene_min + 3)},
+                       {"max", std::vector<float>(c.neural_gi.scene_max, c.neural_gi.scene_max + 3)}}}};
+    const json out = {
+        {"device", device_json(d, gemm_params_for(d.info()))},
+        {"model", model_json},
+        {"frame", "synthetic: a room filling the model's scene box, one block, a ceiling area light, unshadowed "
+                  "direct light (perf/ngi_bench.cpp room_frame)"},
+        {"repeats", repeats},
+        {"timing", "frame: NeuralGiRenderer::run wall time (uploads, inputs, network, upsampling, lighting, two "
+                   "downloads); network: Model::enqueue at N/K + finish; jbu: the upsampling kernel + finish; medians "
+                   "after one warm-up"},
+        {"cases", cases},
+        {"network_profile", network_profile}};
+    std::printf("%s\n", out.dump(2).c_str());
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -475,11 +759,12 @@ int main(int argc, char** argv) {
         if (cmd == "generator") return run_generator(argc, argv);
         if (cmd == "conv") return run_conv(argc, argv);
         if (cmd == "mlp") return run_mlp(argc, argv);
+        if (cmd == "neural-gi") return run_neural_gi(argc, argv);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "ngi_bench %s: error: %s\n", cmd.c_str(), e.what());
         return 1;
     }
-    std::fprintf(stderr, "usage: ngi_bench gemm|tune|conv|generator|mlp [options]  (see the comment at the top of "
+    std::fprintf(stderr, "usage: ngi_bench gemm|tune|conv|generator|mlp|neural-gi [options]  (see the comment at the top of "
                          "perf/ngi_bench.cpp)\n");
     return 2;
 }
