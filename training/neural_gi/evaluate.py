@@ -13,6 +13,14 @@ training loss (Eq. 6 over the surface pixels). Methods: "model" and "direct_only
 feature alone, i.e. no indirect light). --engine torch runs the file's weights in PyTorch (float32; F16 weights
 widened), --engine ngi runs the file in ngi (ngi.Model on --device). The JSON holds the means over frames (PSNR:
 over frames where it is finite) and every frame's numbers.
+
+--path-traced SPLIT adds the method "path_traced": the lighting is the reference.exr of the same-named frame in
+DATASET/SPLIT/<scene> (a render of the same view and light at fewer samples with another seed: path tracing at
+equal time, see sequences.py). --temporal scores the held-out frames as one sequence in frame order (a moving
+camera or a moving light, sequences.py): MABD_t = mean over pixels of |Y_t - Y_t-1|, Y the luminance (Rec. 709
+weights) of the tone-mapped final image, for the reference and every method; "mabd" is its mean over t and
+"mabd_error" the mean over t of |MABD_t(method) - MABD_t(reference)| (0: the method flickers exactly as much as the
+reference; the reference's own MABD includes its Monte Carlo noise).
 """
 
 import argparse
@@ -32,6 +40,7 @@ import ngi.scoring as scoring
 from ngi.neural_gi import NeuralGI, decode_indirect, sanitize_radiance
 
 METRICS = ("mae", "mse", "psnr", "ssim")
+REC709 = np.array([0.2126, 0.7152, 0.0722], np.float64)
 
 
 def load_torch_model(path):
@@ -76,7 +85,8 @@ class Predictor:
 
 
 def scores(ref, frame, lighting):
-    """{final: {mae, mse, psnr, ssim}, lighting: {...}} of a [3, N, N] lighting against the frame's reference."""
+    """({final: {mae, mse, psnr, ssim}, lighting: {...}}, the tone-mapped final image) of a [3, N, N] lighting
+    against the frame's reference."""
     s = ref.score(lighting)
     shown = s["display"]
     lm = np.minimum(scoring._clean_light(lighting), max(scoring.LIGHT_MAX, ref.peak))
@@ -86,7 +96,20 @@ def scores(ref, frame, lighting):
         for k in ("psnr", "ssim"):
             if v[k] is not None and not math.isfinite(v[k]):
                 v[k] = None
-    return out
+    return out, shown
+
+
+def luminance(display):
+    """[3, N, N] tone-mapped sRGB image -> [N, N] float64 luminance (Rec. 709 weights on the displayed values)."""
+    return np.tensordot(REC709, np.asarray(display, np.float64), axes=1)
+
+
+def temporal(lum):
+    """{method: [N, N] luminance per frame (in order)} -> {method: {mabd, mabd_per_step, mabd_error}}."""
+    steps = {m: [float(np.mean(np.abs(b - a))) for a, b in zip(seq, seq[1:])] for m, seq in lum.items()}
+    ref = steps["reference"]
+    return {m: {"mabd": float(np.mean(v)) if v else None, "mabd_per_step": v,
+                "mabd_error": float(np.mean(np.abs(np.subtract(v, ref)))) if v else None} for m, v in steps.items()}
 
 
 def mean_of(rows, method, part, metric):
@@ -107,6 +130,9 @@ def main(argv=None):
     ap.add_argument("--device", default="cpu", help="OpenCL device of the metrics (and of --engine ngi)")
     ap.add_argument("--cache", type=Path, help="decoded frames (default: next to --out)")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--path-traced", metavar="SPLIT",
+                    help="add path tracing at equal time: the reference.exr of the same frames in DATASET/SPLIT/<scene>")
+    ap.add_argument("--temporal", action="store_true", help="the held-out frames are a sequence: add MABD")
     ap.add_argument("--out", required=True, type=Path, help="JSON results")
     a = ap.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -126,6 +152,8 @@ def main(argv=None):
     cache = a.cache or a.out.parent / (a.out.stem + "_cache")
     rows = []
     pipeline = None
+    methods = ["model", "direct_only"] + (["path_traced"] if a.path_traced else [])
+    lum = {m: [] for m in ["reference"] + methods}
     for f in test_frames:
         arr = data.cached_frame(f, cache / scene_dir.parent.name / scene_dir.name, f.name)
         inputs, direct, ref_t, mask = data.to_tensors(arr, bbox_min, bbox_max)
@@ -138,11 +166,23 @@ def main(argv=None):
             pipeline = ngi.Pipeline(device, frame.n)
         ref = scoring.Reference(device, pipeline, frame)
         loss = lambda light: float(data.masked_log_l1(torch.from_numpy(light)[None], ref_t, mask))
-        rows.append({"frame": f"{f.parent.name}/{f.name}", "surface_fraction": float(m.mean()),
-                     "model": dict(scores(ref, frame, lighting), log_l1=loss(lighting)),
-                     "direct_only": dict(scores(ref, frame, direct_np * m), log_l1=loss(direct_np * m))})
+        lightings = {"model": lighting, "direct_only": direct_np * m}
+        if a.path_traced:
+            pt_dir = Path(a.dataset) / a.path_traced / scene_dir.name / f.name
+            if not (pt_dir / "reference.exr").is_file():
+                raise SystemExit(f"--path-traced: {pt_dir}/reference.exr is missing")
+            lightings["path_traced"] = np.asarray(ngi.read_frame(str(pt_dir)).reference, np.float32) * m
+        row = {"frame": f"{f.parent.name}/{f.name}", "surface_fraction": float(m.mean())}
+        for method, light in lightings.items():
+            numbers, shown = scores(ref, frame, light)
+            row[method] = dict(numbers, log_l1=loss(light))
+            if a.temporal:
+                lum[method].append(luminance(shown))
+        if a.temporal:
+            lum["reference"].append(luminance(ref.final))
+        rows.append(row)
     summary = {}
-    for method in ("model", "direct_only"):
+    for method in methods:
         summary[method] = {part: {k: mean_of(rows, method, part, k) for k in METRICS} for part in ("final", "lighting")}
         summary[method]["log_l1"] = float(np.mean([r[method]["log_l1"] for r in rows]))
     result = {"dataset": str(a.dataset), "scene": scene_dir.name, "model": str(a.model), "engine": a.engine,
@@ -150,14 +190,17 @@ def main(argv=None):
               "metrics": "final: tone-mapped (ACES, sRGB) final image, data range 1; lighting: linear, data range = "
                          "the reference's maximum; mae/mse over all pixels and channels; log_l1: Eq. 6 on surface "
                          "pixels",
-              "summary": summary, "seconds": round(time.monotonic() - t0, 2), "per_frame": rows}
+              "summary": summary, "temporal": temporal(lum) if a.temporal and len(rows) > 1 else None,
+              "seconds": round(time.monotonic() - t0, 2), "per_frame": rows}
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text(json.dumps(result, indent=1) + "\n")
     for method, s in summary.items():
         f = s["final"]
         print(f"{method:12s} final PSNR {f['psnr'] if f['psnr'] is not None else float('nan'):.2f} dB, "
               f"SSIM {f['ssim'] if f['ssim'] is not None else float('nan'):.4f}, MAE {f['mae']:.5f}; "
-              f"log-L1 {s['log_l1']:.4f}", file=sys.stderr)
+              f"log-L1 {s['log_l1']:.4f}" + (f"; MABD {result['temporal'][method]['mabd']:.5f} (reference "
+                                             f"{result['temporal']['reference']['mabd']:.5f})"
+                                             if result["temporal"] else ""), file=sys.stderr)
     return 0
 
 

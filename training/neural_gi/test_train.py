@@ -259,6 +259,35 @@ def test_no_buffer_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
     assert config["neural_gi"]["buffer_channels"] == 1 and config["training"]["run"]["no_buffer"] is True
 
 
+def test_unet_only_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
+    torch.manual_seed(4)
+    net = train.UnetOnlyGI(ngf=8, num_downs=5)
+    for p in net.parameters():
+        p.data.normal_(0, 0.1)
+    full = train.unet_as_neural_gi(net)
+    x = torch.rand(1, 18, 32, 32) * 2 - 1
+    with train.per_image_bn(net), train.per_image_bn(full):
+        a, b = net.raw_output(x), full.raw_output(x)
+    assert torch.equal(a, b), (a - b).abs().max()  # the pass-through MLP is exact, not approximately equal
+    # through train.py: --unet-only trains and writes a neural_gi file that ngi runs like PyTorch
+    work = tmp_path / "unet"
+    run(train_cmd(dataset, work, 2, ["--unet-only"]))
+    path = work / "model.safetensors"
+    config = model_file.read_config(str(path))
+    assert config["neural_gi"]["buffer_channels"] == 3 and config["training"]["run"]["unet_only"] is True
+    arr = data.cached_frame(scene_dir(dataset) / "0005", tmp_path / "cache", "0005")
+    box = train.box_of_config(config)
+    inputs, _, _, _ = data.to_tensors(arr, *box)
+    import evaluate  # noqa: E402 (sibling script)
+    torch_out = evaluate.Predictor(path, "torch", None)(inputs)
+    ngi_out = evaluate.Predictor(path, "ngi", ngi.Device("cpu"))(inputs)
+    # F16 weights in both; ngi accumulates in another order: a relative difference of float32 rounding
+    err = np.abs(ngi_out - torch_out) / (np.abs(torch_out) + 1e-3)
+    assert float(err.max()) < 1e-3, float(err.max())
+    with pytest.raises(SystemExit):
+        train.parse_args(["--dataset", "d", "--work", "w", "--out", "o", "--no-buffer", "--unet-only"])
+
+
 def test_ngi_on_frames_matches_training(dataset, tmp_path):
     """Training and inference assemble the inputs independently (data.py + ngi.neural_gi.assemble_inputs here,
     kernels/neural_gi.cl in `ngi neural-gi`): the same exported model on the same held-out frame must give the same
@@ -285,3 +314,38 @@ def test_ngi_on_frames_matches_training(dataset, tmp_path):
     print(f"ngi neural-gi vs PyTorch on a frame: max relative difference {rel.max():.2e}")
     assert rel.max() < 1e-3, rel.max()
     assert np.all(got[:, ~surface] == 0), "no surface: no indirect light"
+
+
+def test_temporal_mabd_by_hand():
+    """evaluate.temporal: MABD_t = mean |Y_t - Y_t-1| per method; mabd_error against the reference's own."""
+    import evaluate  # noqa: E402 (sibling script)
+    ones = np.ones((4, 4))
+    lum = {"reference": [0 * ones, 0.1 * ones, 0.3 * ones],
+           "model": [0 * ones, 0.1 * ones, 0.1 * ones],  # steps 0.1, 0.0
+           "flat": [0.5 * ones] * 3}                      # no change at all
+    t = evaluate.temporal(lum)
+    assert t["reference"]["mabd_per_step"] == pytest.approx([0.1, 0.2])
+    assert t["reference"]["mabd_error"] == 0
+    assert t["model"]["mabd"] == pytest.approx(0.05) and t["model"]["mabd_error"] == pytest.approx(0.1)
+    assert t["flat"]["mabd"] == 0 and t["flat"]["mabd_error"] == pytest.approx(0.15)
+    # luminance: Rec. 709 weights of the displayed RGB
+    rgb = np.zeros((3, 2, 2))
+    rgb[1] = 1.0
+    assert evaluate.luminance(rgb) == pytest.approx(np.full((2, 2), 0.7152))
+
+
+def test_sequences_plan():
+    """sequences.py: the moving light sweeps x across the config's light box at fixed y, z; the camera moves along
+    the path from --start-frame; equal-time renders use other seeds than the references."""
+    import sequences  # noqa: E402 (sibling script)
+    jobs = sequences.plan(CONFIG, 3, [8], 100)
+    cam = [j for j in jobs if j[0] == "moving_camera"]
+    light = [j for j in jobs if j[0] == "moving_light"]
+    pt = [j for j in jobs if j[0] == "moving_light_pt8"]
+    assert [j[2][1] for j in cam] == ["100", "101", "102"] and {j[2][1] for j in light} == {"100"}
+    xs = [float(j[2][3].split(",")[0]) for j in light]
+    assert xs == pytest.approx([4.5, 9.5, 14.5])
+    assert {tuple(j[2][3].split(",")[1:]) for j in light} == {("7.15", "9", "1", "0", "0", "0", "0", "1", "60", "56",
+                                                                "50")}
+    assert {j[3] for j in pt} == {8} and not {j[4] for j in pt} & {j[4] for j in light}
+    assert [j[0] for j in jobs].count("noise") == 1

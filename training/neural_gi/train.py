@@ -15,6 +15,10 @@ every training frame once in an order that depends only on (seed, epoch). BatchN
 mode (batch 1: per-image statistics) and the file is exported with bn_mode "per_image", which is how ngi runs it;
 held-out losses are computed the same way (per-image statistics, the running statistics left untouched).
 
+--unet-only: the paper's "[72]-net" baseline, ngi's pix2pix U-Net alone (linear, 3 channels, exp decoding) on the same
+inputs and data, exported as an exactly equivalent neural_gi file (buffer = the U-Net with C_B 3, an MLP of 6 ReLU
+units that passes it through: unet_as_neural_gi).
+
 --no-buffer: the baseline without the CNN neural buffer (the MLP on [I, Gamma(I)] only, Table 4's "MLP only").
 It is exported as an exactly equivalent neural_gi file: a 1-channel U-Net (ngf 8, num_downs 5) whose channel the
 MLP gives zero weight (so the buffer's value never matters), because the neural_gi family has no buffer-less form.
@@ -120,9 +124,64 @@ def no_buffer_as_neural_gi(net, seed=0):
     return full
 
 
+class UnetOnlyGI(nn.Module):
+    """The paper's "[72]-net" baseline: ngi's pix2pix U-Net alone (linear output, 3 channels) on the same 18 inputs,
+    no encoding, no MLP; exp decoding as NeuralGI's, so the loss, data and schedule are the same."""
+
+    def __init__(self, ngf=ng.DEFAULT_NGF, num_downs=ng.DEFAULT_NUM_DOWNS):
+        super().__init__()
+        self.ngf, self.num_downs = ngf, num_downs
+        self.buffer = ng.LinearUnetGenerator(ng.INPUT_CHANNELS, 3, num_downs, ngf)
+
+    def check_inputs(self, inputs):
+        m = 2 ** self.num_downs
+        if inputs.dim() != 4 or inputs.shape[1] != ng.INPUT_CHANNELS or inputs.shape[2] % m or inputs.shape[3] % m:
+            raise ValueError(f"inputs must be [N, {ng.INPUT_CHANNELS}, H, W] with H, W multiples of {m}, "
+                             f"got {tuple(inputs.shape)}")
+
+    def raw_output(self, inputs):
+        self.check_inputs(inputs)
+        return self.buffer(inputs)
+
+    def forward(self, inputs):
+        return ng.decode_indirect(self.raw_output(inputs))
+
+    def render(self, inputs, direct):
+        indirect = self(inputs)
+        return ng.sanitize_radiance(direct) + indirect, indirect
+
+
+# The U-Net baseline's MLP in its neural_gi file: 6 ReLU units carry +B and -B, the output takes their difference.
+UNET_PASS_WIDTH = 6
+
+
+def unet_as_neural_gi(net):
+    """An exactly equivalent SceneNeuralGI: buffer = the U-Net (C_B 3), MLP = 1 hidden layer of 6 units that passes
+    the buffer through unchanged: h = relu([B, -B]), raw = h[0:3] - h[3:6] = B (weights 0 / +-1 and zero biases
+    are exact in F16, and relu(b) - relu(-b) = b exactly), so the file runs the baseline in ngi as it trained."""
+    full = SceneNeuralGI(buffer_channels=3, ngf=net.ngf, num_downs=net.num_downs, mlp_width=UNET_PASS_WIDTH,
+                         mlp_depth=1, skip_layer=None)
+    e = ng.ENCODED_CHANNELS
+    with torch.no_grad():
+        full.buffer.load_state_dict(net.buffer.state_dict())
+        first, out = full.mlp.layers[0], full.mlp.output
+        first.weight.zero_()
+        first.bias.zero_()
+        out.weight.zero_()
+        out.bias.zero_()
+        for c in range(3):
+            first.weight[c, e + c, 0, 0] = 1.0
+            first.weight[3 + c, e + c, 0, 0] = -1.0
+            out.weight[c, c, 0, 0] = 1.0
+            out.weight[c, 3 + c, 0, 0] = -1.0
+    return full
+
+
 def build(config):
     torch.manual_seed(config["seed"])
     a = config["arch"]
+    if config.get("unet_only"):
+        return UnetOnlyGI(a["ngf"], a["num_downs"])
     if config["no_buffer"]:
         return NoBufferGI(a["mlp_width"], a["mlp_depth"], a["skip_layer"] or None)
     return SceneNeuralGI(a["buffer_channels"], a["ngf"], a["num_downs"], a["mlp_width"], a["mlp_depth"],
@@ -205,8 +264,12 @@ def scene_metadata(bbox_min, bbox_max):
 
 def export(net, config, bbox_min, bbox_max, out, half, source, extra=None):
     """Write the model file; returns its config as written."""
-    full = no_buffer_as_neural_gi(net) if config["no_buffer"] else net
-    meta = dict(scene_metadata(bbox_min, bbox_max), run=dict(extra or {}, no_buffer=config["no_buffer"]))
+    if config.get("unet_only"):
+        full = unet_as_neural_gi(net)
+    else:
+        full = no_buffer_as_neural_gi(net) if config["no_buffer"] else net
+    meta = dict(scene_metadata(bbox_min, bbox_max),
+                run=dict(extra or {}, no_buffer=config["no_buffer"], unet_only=bool(config.get("unet_only"))))
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     if "scene_box" in inspect.signature(ng.export_model).parameters:  # the box as a field of the format
         full.scene = None
@@ -249,12 +312,16 @@ def parse_args(argv):
     ap.add_argument("--mlp-depth", type=int, default=ng.DEFAULT_MLP_DEPTH)
     ap.add_argument("--skip-layer", type=int, default=ng.DEFAULT_SKIP_LAYER, help="0: no re-injection")
     ap.add_argument("--no-buffer", action="store_true", help="baseline: the MLP without the CNN neural buffer")
+    ap.add_argument("--unet-only", action="store_true",
+                    help="baseline: ngi's U-Net alone on the same inputs (the paper's [72]-net; --ngf, --num-downs)")
     ap.add_argument("--log-every", type=int, default=100)
     ap.add_argument("--eval-every", type=int, default=1000)
     ap.add_argument("--eval-frames", type=int, default=8, help="held-out (and training) frames of the curve")
     ap.add_argument("--checkpoint-every", type=int, default=500)
     ap.add_argument("--threads", type=int, default=1)
     a = ap.parse_args(argv)
+    if a.no_buffer and a.unet_only:
+        ap.error("--no-buffer and --unet-only are two different baselines: pass one")
     if a.steps < 0 or a.log_every < 1 or a.eval_every < 1 or a.checkpoint_every < 1:
         ap.error("--steps must be >= 0; --log-every, --eval-every and --checkpoint-every >= 1")
     return a
@@ -276,6 +343,8 @@ def main(argv=None):
               "eval_frames": a.eval_frames, "checkpoint_every": a.checkpoint_every, "threads": a.threads,
               "scene": str(scene_dir.resolve()), "train_frames": [f.name for f in train_frames],
               "test_frames": [f"{f.parent.parent.name}/{f.name}" for f in test_frames]}
+    if a.unet_only:  # only when set: checkpoints of the other models resume unchanged
+        config["unet_only"] = True
 
     a.work.mkdir(parents=True, exist_ok=True)
     ckpt = a.work / "checkpoint.pt"
@@ -311,7 +380,7 @@ def main(argv=None):
                                "train_seconds": train_seconds, "torch_rng": torch.get_rng_state(),
                                "config": config, "scene_box": [train_data.bbox_min, train_data.bbox_max]})
 
-    kind = "no-buffer MLP" if a.no_buffer else "NeuralGI"
+    kind = "no-buffer MLP" if a.no_buffer else "U-Net only" if a.unet_only else "NeuralGI"
     print(f"neural_gi {kind}: {n_params:,} parameters; {scene_dir.name}: {len(train_data)} train frames, "
           f"{run['test']} held out, N = {train_data.n}; {torch.get_num_threads()} thread(s); "
           + (f"resuming at step {step}" if step else "from scratch") + f", {a.steps} steps",
@@ -367,7 +436,7 @@ def main(argv=None):
               "heldout_loss": mean_loss(net, eval_test), "train_eval_loss": mean_loss(net, eval_train),
               "out": str(a.out)}
     export(net, config, train_data.bbox_min, train_data.bbox_max, a.out, not a.f32,
-           f"training/neural_gi/train.py{' --no-buffer' if a.no_buffer else ''} on {scene_dir.name} ({step} steps)",
+           f"training/neural_gi/train.py{' --no-buffer' if a.no_buffer else ' --unet-only' if a.unet_only else ''} on {scene_dir.name} ({step} steps)",
            extra={"steps": step, "lr": a.lr, "seed": a.seed, "train_frames": len(train_data),
                   "heldout_frames": run["test"], "heldout_loss": result["heldout_loss"],
                   "train_seconds": result["train_seconds"]})
