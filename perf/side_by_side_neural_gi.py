@@ -3,8 +3,8 @@
 weights, same inputs; with --bench also whole frames with and without joint bilateral upsampling (`ngi_bench
 neural-gi`, the same model file on the same device). Prints one JSON object (and writes it to --out).
 
-Network: ngi.neural_gi.NeuralGI with its defaults (U-Net buffer: C_B 16, ngf 32, num_downs 6; MLP 8 x 256 with
-the input re-injected at layer 4; Eq. 3 encoding, 378 channels), random weights drawn as
+Network: ngi.neural_gi.NeuralGI with its defaults (U-Net buffer: C_B 16, ngf 32, num_downs 6 or --num-downs; MLP
+8 x 256 with the input re-injected at layer 4; Eq. 3 encoding, 378 channels), random weights drawn as
 tests/parity/make_neural_gi_parity.py draws them (He-scaled so that activations stay O(1) and the exp-decoded
 output spans orders of magnitude; seeded), exported as training exports a model (ngi.neural_gi.export_model: F16
 weights, bn_mode per_image, scene box [0, 16]^3). PyTorch runs the F16-rounded weights, so all sides compute the
@@ -91,11 +91,12 @@ def relative(path):
     return str(p.relative_to(REPO)) if p.is_relative_to(REPO) else p.name
 
 
-def build_model():
-    """The default NeuralGI with the parity test's random weights, rounded to F16 as the exported file stores them."""
+def build_model(num_downs=neural_gi.DEFAULT_NUM_DOWNS):
+    """The default NeuralGI (num_downs: 5 for the shipped N = 32 models) with the parity test's random weights, rounded
+    to F16 as the exported file stores them."""
     g = torch.Generator().manual_seed(SEED)
     torch.manual_seed(SEED)
-    model = neural_gi.NeuralGI()
+    model = neural_gi.NeuralGI(num_downs=num_downs)
     parity.randomize(model, g)
     return model
 
@@ -205,7 +206,10 @@ def table(result):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--device", default="pocl", help="ngi device spec (pocl, rusticl, cpu, gpu, P:D)")
-    ap.add_argument("--sizes", type=int, nargs="+", default=[64, 128, 256], help="network sides N (multiples of 64)")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[64, 128, 256],
+                    help="network sides N (multiples of 2^num_downs)")
+    ap.add_argument("--num-downs", type=int, default=neural_gi.DEFAULT_NUM_DOWNS,
+                    help="the U-Net's depth (default 6; the shipped per-scene models at N = 32 use 5)")
     ap.add_argument("--threads", type=int, default=2, help="torch.set_num_threads")
     ap.add_argument("--warmups", type=int, default=2)
     ap.add_argument("--repeats", type=int, default=7)
@@ -213,18 +217,22 @@ def main():
     ap.add_argument("--frames", help="ngi_bench neural-gi --frames N:K,... (default: ngi_bench's)")
     ap.add_argument("--out", help="also write the JSON here")
     args = ap.parse_args()
+    if args.num_downs < 5:
+        ap.error("--num-downs must be >= 5 (UnetGenerator's fixed outer levels)")
+    if any(n % 2 ** args.num_downs for n in args.sizes):
+        ap.error(f"--sizes must be multiples of 2^{args.num_downs}")
     import ngi
 
     start, start_load = time.time(), load()
     torch.set_num_threads(args.threads)
-    model = round_to_f16(build_model())
+    model = round_to_f16(build_model(args.num_downs))
     result = {
         "date_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "git_head": git_head(),
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "torch": torch.__version__,
                     "torch_threads": torch.get_num_threads(), "blas": torch_generator.blas_info(),
                     "omp_wait_policy": os.environ["OMP_WAIT_POLICY"]},
-        "settings": {"device": args.device, "sizes": args.sizes, "warmups": args.warmups, "repeats": args.repeats,
+        "settings": {"device": args.device, "sizes": args.sizes, "num_downs": args.num_downs, "warmups": args.warmups, "repeats": args.repeats,
                      "bench": relative(args.bench) if args.bench else None, "frames": args.frames,
                      "rusticl_enable": os.environ.get("RUSTICL_ENABLE")},
         "model": {"config": model.config(), "parameters": neural_gi.parameter_counts(model), "weights": "F16",

@@ -7,9 +7,10 @@
 For the dataset config's (only) scene, at its N, feature and reference spp:
 
   moving_camera/<scene>/NNNN   frames S..S+F-1 of the scene's smooth camera path (`ngi render --frame K
-                               --path-frames P`: keyframes every 25 frames, ~0.1 m per frame; a walk other than the
-                               dataset's, whose frame 0 is the dataset's frame 0: S = 8750 by default, away from
-                               it), one fixed area light
+                               --path-frames P`: keyframes every 25 frames, ~0.1 m per frame; a walk of its own,
+                               not the dataset's: checked, frame 0 at (11.5, 6.5, 5.5) and frame 8750 at (6.1, 2.8,
+                               13.6) in bleed:seed=1, the dataset's frames 0 and 350 at (7.5, 6.5, 4.5) and (7.0, 5.1,
+                               3.6)), one fixed area light
                                (the centre of the config's light box, 2 x 2 m, facing down)
   moving_light/<scene>/NNNN    the camera of moving_camera's first frame, the light's centre swept along x across the
                                config's light box (y, z and size fixed) in F steps
@@ -40,10 +41,13 @@ import ngi_paths  # noqa: E402
 SEQUENCES = ("moving_camera", "moving_light")
 LIGHT_HALF_EDGE = 1.0  # metres: the fixed 2 x 2 m panel of the sequences (the dataset draws edges of 1-3 m)
 REFERENCE_MS = re.compile(r"^reference\s+(\d+) spp, \d+ bounces: ([0-9.]+) ms", re.M)
+FEATURE_MS = re.compile(r"^features\s+6 x \d+\^2, \d+ spp direct: ([0-9.]+) ms", re.M)
 
 
 def folder_name(spec):
-    """`ngi dataset`'s scene folder name: bleed:seed=1 -> bleed_seed1."""
+    """`ngi dataset`'s scene folder name of a procedural scene: bleed:seed=1 -> bleed_seed1."""
+    if not re.fullmatch(r"[a-z_]+:seed=\d+", spec):
+        raise SystemExit(f"sequences.py handles procedural scenes (NAME:seed=S), not {spec!r}")
     return spec.replace(":", "_").replace("=", "")
 
 
@@ -94,7 +98,9 @@ def main(argv=None):
     if len(config["train"]) != 1 or "area_light" not in config:
         raise SystemExit(f"{a.config}: needs one train scene and an area_light")
     spec = config["train"][0]["scene"]
-    hours = config["train"][0].get("time", 0)
+    hours = config["train"][0].get("time")
+    if hours is not None and not isinstance(hours, (int, float)):
+        raise SystemExit(f"{a.config}: a time range ({hours}) has no single time for a sequence; give one time")
     scene = folder_name(spec)
     ngi_bin = a.ngi or ngi_paths.find_ngi()
     record_path = a.out / "render.json"
@@ -110,7 +116,8 @@ def main(argv=None):
         if (out / "reference.exr").is_file() and key in record:
             continue
         folder.mkdir(parents=True, exist_ok=True)
-        cmd = [ngi_bin, "render", "--scene", spec, "--time", str(hours), "--path-frames", str(a.path_frames),
+        cmd = [ngi_bin, "render", "--scene", spec, *(["--time", str(hours)] if hours is not None else []),
+               "--path-frames", str(a.path_frames),
                "--face", str(config["n"]), "--feature-spp", str(config["feature_spp"]), "--spp", str(spp),
                "--bounces", str(config.get("max_bounces", 8)), "--seed", str(seed), "--device", a.device,
                "--out", str(out), *base]
@@ -118,10 +125,11 @@ def main(argv=None):
         proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
         if proc.returncode:
             raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
-        m = REFERENCE_MS.search(proc.stdout)
-        if not m:
-            raise SystemExit(f"no reference timing in ngi render's output:\n{proc.stdout}")
-        record[key] = {"spp": int(m.group(1)), "reference_ms": float(m.group(2)), "seed": seed,
+        m, fm = REFERENCE_MS.search(proc.stdout), FEATURE_MS.search(proc.stdout)
+        if not m or not fm:
+            raise SystemExit(f"no reference or feature timing in ngi render's output:\n{proc.stdout}")
+        record[key] = {"spp": int(m.group(1)), "reference_ms": float(m.group(2)),
+                       "feature_ms_six_faces": float(fm.group(1)), "seed": seed,
                        "wall_s": round(time.monotonic() - t0, 3), "args": base}
         size = scene_size(proc.stdout)
         (folder / "scene.json").write_text(json.dumps({"spec": spec, "size": size,

@@ -130,6 +130,8 @@ class UnetOnlyGI(nn.Module):
 
     def __init__(self, ngf=ng.DEFAULT_NGF, num_downs=ng.DEFAULT_NUM_DOWNS):
         super().__init__()
+        if num_downs < 5:
+            raise ValueError(f"num_downs must be >= 5 (UnetGenerator's fixed outer levels), got {num_downs}")
         self.ngf, self.num_downs = ngf, num_downs
         self.buffer = ng.LinearUnetGenerator(ng.INPUT_CHANNELS, 3, num_downs, ngf)
 
@@ -313,7 +315,8 @@ def parse_args(argv):
     ap.add_argument("--skip-layer", type=int, default=ng.DEFAULT_SKIP_LAYER, help="0: no re-injection")
     ap.add_argument("--no-buffer", action="store_true", help="baseline: the MLP without the CNN neural buffer")
     ap.add_argument("--unet-only", action="store_true",
-                    help="baseline: ngi's U-Net alone on the same inputs (the paper's [72]-net; --ngf, --num-downs)")
+                    help="baseline: ngi's U-Net alone on the same inputs (the paper's [72]-net; --ngf, --num-downs; "
+                         "the buffer and MLP options are not used)")
     ap.add_argument("--log-every", type=int, default=100)
     ap.add_argument("--eval-every", type=int, default=1000)
     ap.add_argument("--eval-frames", type=int, default=8, help="held-out (and training) frames of the curve")
@@ -435,10 +438,11 @@ def main(argv=None):
               "steps_per_second": step / train_seconds if train_seconds > 0 else None,
               "heldout_loss": mean_loss(net, eval_test), "train_eval_loss": mean_loss(net, eval_train),
               "out": str(a.out)}
+    flag = " --no-buffer" if a.no_buffer else " --unet-only" if a.unet_only else ""
     export(net, config, train_data.bbox_min, train_data.bbox_max, a.out, not a.f32,
-           f"training/neural_gi/train.py{' --no-buffer' if a.no_buffer else ' --unet-only' if a.unet_only else ''} on {scene_dir.name} ({step} steps)",
-           extra={"steps": step, "lr": a.lr, "seed": a.seed, "train_frames": len(train_data),
-                  "heldout_frames": run["test"], "heldout_loss": result["heldout_loss"],
+           f"training/neural_gi/train.py{flag} on {scene_dir.name} ({step} steps)",
+           extra={"dataset_scene": scene_dir.name, "steps": step, "lr": a.lr, "seed": a.seed,
+                  "train_frames": len(train_data), "heldout_frames": run["test"], "heldout_loss": result["heldout_loss"],
                   "train_seconds": result["train_seconds"]})
     print(json.dumps(result), flush=True)
     return 0
