@@ -14,9 +14,9 @@ feature alone, i.e. no indirect light). --engine torch runs the file's weights i
 widened), --engine ngi runs the file in ngi (ngi.Model on --device). The JSON holds the means over frames (PSNR:
 over frames where it is finite) and every frame's numbers.
 
---path-traced SPLIT adds the method "path_traced": the lighting is the reference.exr of the same-named frame in
-DATASET/SPLIT/<scene> (a render of the same view and light at fewer samples with another seed: path tracing at
-equal time, see sequences.py). --temporal scores the held-out frames as one sequence in frame order (a moving
+--path-traced SPLIT [SPLIT ...] adds one method per split, "path_traced_<S>" (S: the split name's "_pt<S>" suffix,
+else the split name): the lighting is the reference.exr of the same-named frame in DATASET/SPLIT/<scene> (a render
+of the same view and light at S samples per pixel with another seed: path tracing at equal time, sequences.py). --temporal scores the held-out frames as one sequence in frame order (a moving
 camera or a moving light, sequences.py): MABD_t = mean over pixels of |Y_t - Y_t-1|, Y the luminance (Rec. 709
 weights) of the tone-mapped final image, for the reference and every method; "mabd" is its mean over t and
 "mabd_error" the mean over t of |MABD_t(method) - MABD_t(reference)| (0: the method flickers exactly as much as the
@@ -26,6 +26,7 @@ reference; the reference's own MABD includes its Monte Carlo noise).
 import argparse
 import json
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -112,6 +113,12 @@ def temporal(lum):
                 "mabd_error": float(np.mean(np.abs(np.subtract(v, ref)))) if v else None} for m, v in steps.items()}
 
 
+def path_traced_method(split):
+    """The method name of a --path-traced split: moving_camera_pt16 -> path_traced_16."""
+    m = re.search(r"_pt(\d+)$", split)
+    return "path_traced_" + (m.group(1) if m else split)
+
+
 def mean_of(rows, method, part, metric):
     vals = [r[method][part][metric] for r in rows if r[method][part][metric] is not None]
     return float(np.mean(vals)) if vals else None
@@ -130,7 +137,7 @@ def main(argv=None):
     ap.add_argument("--device", default="cpu", help="OpenCL device of the metrics (and of --engine ngi)")
     ap.add_argument("--cache", type=Path, help="decoded frames (default: next to --out)")
     ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--path-traced", metavar="SPLIT",
+    ap.add_argument("--path-traced", metavar="SPLIT", nargs="+", default=[],
                     help="add path tracing at equal time: the reference.exr of the same frames in DATASET/SPLIT/<scene>")
     ap.add_argument("--temporal", action="store_true", help="the held-out frames are a sequence: add MABD")
     ap.add_argument("--out", required=True, type=Path, help="JSON results")
@@ -152,7 +159,8 @@ def main(argv=None):
     cache = a.cache or a.out.parent / (a.out.stem + "_cache")
     rows = []
     pipeline = None
-    methods = ["model", "direct_only"] + (["path_traced"] if a.path_traced else [])
+    traced = {path_traced_method(split): split for split in a.path_traced}
+    methods = ["model", "direct_only"] + list(traced)
     lum = {m: [] for m in ["reference"] + methods}
     for f in test_frames:
         arr = data.cached_frame(f, cache / scene_dir.parent.name / scene_dir.name, f.name)
@@ -167,11 +175,11 @@ def main(argv=None):
         ref = scoring.Reference(device, pipeline, frame)
         loss = lambda light: float(data.masked_log_l1(torch.from_numpy(light)[None], ref_t, mask))
         lightings = {"model": lighting, "direct_only": direct_np * m}
-        if a.path_traced:
-            pt_dir = Path(a.dataset) / a.path_traced / scene_dir.name / f.name
+        for method, split in traced.items():
+            pt_dir = Path(a.dataset) / split / scene_dir.name / f.name
             if not (pt_dir / "reference.exr").is_file():
                 raise SystemExit(f"--path-traced: {pt_dir}/reference.exr is missing")
-            lightings["path_traced"] = np.asarray(ngi.read_frame(str(pt_dir)).reference, np.float32) * m
+            lightings[method] = np.asarray(ngi.read_frame(str(pt_dir)).reference, np.float32) * m
         row = {"frame": f"{f.parent.name}/{f.name}", "surface_fraction": float(m.mean())}
         for method, light in lightings.items():
             numbers, shown = scores(ref, frame, light)
@@ -196,7 +204,7 @@ def main(argv=None):
     a.out.write_text(json.dumps(result, indent=1) + "\n")
     for method, s in summary.items():
         f = s["final"]
-        print(f"{method:12s} final PSNR {f['psnr'] if f['psnr'] is not None else float('nan'):.2f} dB, "
+        print(f"{method:16s} final PSNR {f['psnr'] if f['psnr'] is not None else float('nan'):.2f} dB, "
               f"SSIM {f['ssim'] if f['ssim'] is not None else float('nan'):.4f}, MAE {f['mae']:.5f}; "
               f"log-L1 {s['log_l1']:.4f}" + (f"; MABD {result['temporal'][method]['mabd']:.5f} (reference "
                                              f"{result['temporal']['reference']['mabd']:.5f})"

@@ -66,6 +66,13 @@ def method_rows(variants):
     return rows
 
 
+def traced_rows(result, variant):
+    """Rows of evaluate.py's path_traced_<spp> methods, fewest samples first."""
+    keys = sorted((k for k in result["summary"] if k.startswith("path_traced_")),
+                  key=lambda k: int(k.rsplit("_", 1)[1]) if k.rsplit("_", 1)[1].isdigit() else 0)
+    return [(f"path tracing, {k.rsplit('_', 1)[1]} spp", variant, k) for k in keys]
+
+
 def quality_table(results, kind):
     lines = ["| scene | method | final MAE | final MSE | final PSNR dB | final SSIM | lighting PSNR dB | log-L1 |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
@@ -75,8 +82,7 @@ def quality_table(results, kind):
             continue
         rows = method_rows(present)
         first = present[rows[0][1]][kind]
-        if "path_traced" in first["summary"]:
-            rows.append(("path tracing at equal time", rows[0][1], "path_traced"))
+        rows += traced_rows(first, rows[0][1])
         for label, v, method in rows:
             s = present[v][kind]["summary"][method]
             f, li = s["final"], s["lighting"]
@@ -95,8 +101,7 @@ def temporal_table(results):
                 continue
             rows = method_rows(present)
             first = present[rows[0][1]][kind]
-            if "path_traced" in first["summary"]:
-                rows.append(("path tracing at equal time", rows[0][1], "path_traced"))
+            rows += traced_rows(first, rows[0][1])
             ref = first["temporal"]["reference"]["mabd"]
             for label, v, method in rows:
                 t = present[v][kind]["temporal"][method]

@@ -6,9 +6,10 @@
 #   bash training/neural_gi/reproduce.sh [render|sequences|train|evaluate|report|all] [scene ...]
 #   bash training/neural_gi/reproduce.sh one SCENE VARIANT     # one training (variants: see variant_args)
 #
-# Environment: STEPS (training steps of every variant, default 10000), DATA (default data), PT_SPP (equal-time
-# path tracing sample counts rendered, default "8 16 32"; PT_USE: the one scored, default 16: see the results page
-# for how it was chosen), JOBS (trainings at once, default 2, one thread each).
+# Environment: STEPS (training steps of every variant, default 5000, as shipped), DATA (default data), PT_SPP
+# (path tracing sample counts rendered and scored beside the models, default "16 32 100": 16 ~ the network's time,
+# 100 ~ the network plus its 256-spp direct-light input, measured in docs/RESULTS_NEURAL_GI.md), JOBS (trainings at
+# once, default 2, one thread each).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
@@ -17,10 +18,9 @@ shift || true
 if [ "$STAGE" = one ]; then ONE=("$@"); set --; fi
 SCENES=("${@:-bleed room}")
 read -r -a SCENES <<< "${SCENES[*]}"
-STEPS="${STEPS:-10000}"
+STEPS="${STEPS:-5000}"
 DATA="${DATA:-data}"
-PT_SPP="${PT_SPP:-8 16 32}"
-PT_USE="${PT_USE:-16}"
+PT_SPP="${PT_SPP:-16 32 100}"
 JOBS="${JOBS:-2}"
 PY=/usr/bin/python3
 export PYTHONPATH="$ROOT/build/python${PYTHONPATH:+:$PYTHONPATH}"
@@ -71,7 +71,7 @@ train_one() {  # scene variant
 
 train() {
   local jobs=()
-  for v in neural_gi neural_gi_seed2 no_buffer unet_only; do
+  for v in neural_gi neural_gi_seed2 unet_only no_buffer; do  # the comparisons that matter most first
     for s in "${SCENES[@]}"; do jobs+=("$s $v"); done
   done
   printf '%s\n' "${jobs[@]}" | xargs -P "$JOBS" -I{} bash -c 'train_one {}'
@@ -89,7 +89,7 @@ evaluate() {
         --out "$RESULTS/${f}__${v}__heldout.json"
       for q in moving_camera moving_light; do
         "$PY" "$T/evaluate.py" --dataset "$SEQ" --scene "$f" --split "$q" --test-split "$q" --model "$m" \
-          --path-traced "${q}_pt${PT_USE}" --temporal --cache "$DATA/neural_gi_cache_seq" \
+          --path-traced $(for x in $PT_SPP; do echo "${q}_pt$x"; done) --temporal --cache "$DATA/neural_gi_cache_seq" \
           --out "$RESULTS/${f}__${v}__${q}.json"
       done
     done
