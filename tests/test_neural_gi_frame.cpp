@@ -208,6 +208,17 @@ TEST_CASE("neural GI on a frame: bad input names what is wrong", "[neural_gi]") 
     bad_jbu.upsample = 2;
     bad_jbu.jbu_sigma_plane = 0.0f;
     CHECK_THROWS_WITH(renderer.run(model, good, bad_jbu), Contains("sigma_plane"));
+    // The model's box is [0, 16]^3 (make_neural_gi_parity.py): a camera or a light outside it is another scene's.
+    ngi::Frame far_camera = good;
+    far_camera.position = glm::vec3(6.0f, 3.0f, 21.5f);
+    CHECK_THROWS_WITH(renderer.run(model, far_camera),
+                      Contains("camera position (6, 3, 21.5) is outside the model's scene box (0, 0, 0)..(16, 16, 16)"));
+    ngi::Frame far_light = good;
+    far_light.area_light->centre = glm::vec3(-0.5f, 7.5f, 5.0f);
+    CHECK_THROWS_WITH(renderer.run(model, far_light), Contains("area light centre (-0.5, 7.5, 5)"));
+    ngi::Frame on_face = good;  // on the box's face (and within its rounding margin): a frame of this scene
+    on_face.area_light->centre = glm::vec3(7.0f, 16.005f, 5.0f);
+    CHECK_NOTHROW(renderer.run(model, on_face));
 
     ngi::Model no_box = ngi::Model::load(ngi::test::device(), (dir / "no_box.safetensors").string());
     CHECK_THROWS_WITH(renderer.run(no_box, good), Contains("no neural_gi.scene_box"));

@@ -4,7 +4,9 @@
 // planes and the download of the two results.
 #include "ngi/neural_gi.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "models/model_access.hpp"
@@ -33,6 +35,30 @@ const Image& front(const Frame& frame, Feature f) {
 void require_finite(const glm::vec3& v, const char* what) {
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         throw InputError(std::string("neural GI: the frame's ") + what + " is not finite");
+}
+
+std::string triple(const float* v) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v[0]), double(v[1]), double(v[2]));
+    return buf;
+}
+
+// A Neural GI model is trained for one scene: the camera and the light of a frame of that scene lie in its box
+// (the grid). A point outside means a frame of another scene (or a light placed where training never put one), whose
+// inputs the network would see clamped to the box's faces and answer with confident, wrong light. The margin
+// (1e-3 of the box's largest side) only absorbs float rounding of points on a face.
+void require_in_box(const glm::vec3& p, const ModelConfig::NeuralGi& cfg, const char* what) {
+    float extent = 0.0f;
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, cfg.scene_max[k] - cfg.scene_min[k]);
+    const float margin = 1.0e-3f * extent;
+    for (int k = 0; k < 3; ++k)
+        if (!(p[k] >= cfg.scene_min[k] - margin && p[k] <= cfg.scene_max[k] + margin)) {
+            const float v[3] = {p.x, p.y, p.z};
+            throw InputError(std::string("neural GI: the frame's ") + what + " " + triple(v) +
+                             " is outside the model's scene box " + triple(cfg.scene_min) + ".." +
+                             triple(cfg.scene_max) + ": a frame of another scene? (a Neural GI model is trained "
+                             "for one scene; neural_gi.scene_box in the model file)");
+        }
 }
 
 }  // namespace
@@ -99,6 +125,8 @@ NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const Neu
                          "Neural GI models are trained for a scene lit by one (ngi render --area-light)");
     require_finite(*frame.position, "camera position");
     check_area_light(*frame.area_light, "neural GI");
+    require_in_box(*frame.position, config.neural_gi, "camera position");
+    require_in_box(frame.area_light->centre, config.neural_gi, "area light centre");
     const int n = frame.n, k = options.upsample;
     if (k < 1 || k > 64 || n < 1 || n % k)
         throw InputError("neural GI: upsample " + std::to_string(k) + " must be in 1..64 and divide the face size " +
