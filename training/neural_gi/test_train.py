@@ -7,7 +7,6 @@ spp). About a minute on one thread.
 
 import json
 import math
-import os
 import shutil
 import signal
 import subprocess
@@ -349,3 +348,35 @@ def test_sequences_plan():
                                                                 "50")}
     assert {j[3] for j in pt} == {8} and not {j[4] for j in pt} & {j[4] for j in light}
     assert [j[0] for j in jobs].count("noise") == 1
+
+
+# The two shipped per-scene models (models/neural_gi/README.md) and the scene each was trained on.
+SHIPPED = {"neural_gi_bleed.safetensors": ("bleed:seed=1", [19.0, 9.0, 18.0]),
+           "neural_gi_room.safetensors": ("room:seed=1", None)}
+
+
+def test_shipped_models_run_in_ngi_as_in_pytorch(dataset, tmp_path):
+    """Each shipped model: F16, per-image BN, its scene box recorded; ngi (PoCL) gives PyTorch's indirect light on a
+    frame of the test dataset (bleed:seed=1; the room model sees it through its own box: valid inputs, another
+    scene). Tolerance as test_ngi_on_frames_matches_training: 1e-3 relative on surface pixels."""
+    import evaluate  # noqa: E402 (sibling script)
+    root = HERE.parents[1] / "models" / "neural_gi"
+    frame = scene_dir(dataset) / f"{FRAMES - 1:04d}"
+    arr = data.decode_frame(frame)
+    for name, (spec, box_max) in SHIPPED.items():
+        path = root / name
+        assert path.is_file(), f"{path} is missing"
+        config = model_file.read_config(str(path))
+        assert config["family"] == "neural_gi" and config["bn_mode"] == "per_image"
+        tensors, _ = model_file.read_model(str(path))
+        assert all(v.dtype == np.float16 for v in tensors.values()), name
+        box = train.box_of_config(config)
+        assert box[0] == [0.0, 0.0, 0.0] and (box_max is None or box[1] == box_max), (name, box)
+        assert spec.replace(":", "_").replace("=", "") in config["training"]["run"]["dataset_scene"], name
+        inputs, _, _, mask = data.to_tensors(arr, *box)
+        want = evaluate.Predictor(path, "torch", None)(inputs)[0]
+        got = evaluate.Predictor(path, "ngi", ngi.Device("cpu"))(inputs)[0]
+        surface = mask[0, 0].numpy() > 0
+        rel = np.abs(got - want)[:, surface] / np.maximum(np.abs(want)[:, surface], 1e-6)
+        print(f"{name}: ngi vs PyTorch max relative difference {rel.max():.2e}")
+        assert rel.max() < 1e-3, (name, rel.max())
