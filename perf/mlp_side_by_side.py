@@ -28,6 +28,7 @@ import numpy as np
 import torch
 
 import ngi.model_file as model_file
+from bench_record import emit
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
@@ -129,11 +130,7 @@ def main():
             row["torch_gflops"] = row["gflop"] / (row["torch_ms"] * 1e-3)
             row["fraction_of_ngi_gemm_roof"] = row["ngi_gflops"] / result["gemm_roof"]["ngi_gflops"]
             result["cases"].append(row)
-    text = json.dumps(result, indent=2)
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text + "\n")
+    emit(result, a.out)
 
 
 if __name__ == "__main__":

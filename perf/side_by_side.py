@@ -49,7 +49,6 @@ import os
 import shutil
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 
@@ -62,6 +61,7 @@ import ngi.model_file as model_file
 import ngi.reference_models as reference_models
 
 import torch_generator
+from bench_record import emit, git_head, load, log
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
@@ -69,14 +69,6 @@ SHIPPED_MODEL = os.path.join(REPO, "models", "surround.safetensors")
 BN_MODES = ("running", "per_image")
 TARGET_RATIO = {"thesis": 0.6, "shipped": 0.3}   # ngi / PyTorch fastest, at most
 TARGET_ROOF_FRACTION = 0.75                       # whole-network GFLOP/s / ngi GEMM 1024^3, at least
-
-
-def log(text):
-    print(text, file=sys.stderr, flush=True)
-
-
-def load():
-    return [round(v, 2) for v in os.getloadavg()]
 
 
 def run_json(cmd):
@@ -105,14 +97,6 @@ def snapshot(path, dest):
             return before
         time.sleep(5)
     raise RuntimeError(f"{path} kept changing; is a build writing it?")
-
-
-def git_head():
-    try:
-        return subprocess.run(["git", "-C", REPO, "rev-parse", "HEAD"], stdout=subprocess.PIPE,
-                              stderr=subprocess.DEVNULL, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return None
 
 
 def cases(quick):
@@ -326,11 +310,7 @@ def main():
         "ngi_gemm_generator_total": gemm_start["generator_gemm_total"],
     }
     result["summary_table"] = table(result)
-    text = json.dumps(result, indent=2)
-    print(text)
-    if args.out:
-        with open(args.out, "w") as f:
-            f.write(text + "\n")
+    emit(result, args.out)
     log("\n".join(result["summary_table"]))
     log(f"gemm 1024^3: ngi {result['gemm_1024']['ngi_gflops_start']:.0f} / {result['gemm_1024']['ngi_gflops_end']:.0f}"
         f" GFLOP/s (start / end), torch.mm {torch_mm_gflops:.0f}; load {start_load} -> "

@@ -57,6 +57,7 @@ import numpy as np
 import torch
 
 import ngi.neural_gi as neural_gi
+from bench_record import emit, git_head, load, log, relative
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
@@ -66,29 +67,6 @@ import torch_generator  # noqa: E402  (perf/: time_ms, blas_info, instance_norm_
 
 SCENE_BOX = ((0.0, 0.0, 0.0), (16.0, 16.0, 16.0))  # what parity.random_inputs normalizes positions with
 SEED = 1
-
-
-def log(text):
-    print(text, file=sys.stderr, flush=True)
-
-
-def load():
-    return [round(v, 2) for v in os.getloadavg()]
-
-
-def git_head():
-    try:
-        return subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], stdout=subprocess.PIPE,
-                              stderr=subprocess.DEVNULL, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return None
-
-
-def relative(path):
-    """A path as the JSON records it: relative to the repository when inside it, else its file name only (no
-    machine paths in recorded results)."""
-    p = Path(path).resolve()
-    return str(p.relative_to(REPO)) if p.is_relative_to(REPO) else p.name
 
 
 def build_model(num_downs=neural_gi.DEFAULT_NUM_DOWNS):
@@ -257,11 +235,7 @@ def main():
     result["load_average"]["end"] = load()
     result["wall_seconds"] = time.time() - start
     result["summary_table"] = table(result)
-    text = json.dumps(result, indent=2)
-    print(text)
-    if args.out:
-        with open(args.out, "w") as f:
-            f.write(text + "\n")
+    emit(result, args.out)
     log("\n".join(result["summary_table"]))
     log(f"load {start_load} -> {result['load_average']['end']}; {result['wall_seconds']:.0f} s")
 
