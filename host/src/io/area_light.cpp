@@ -3,18 +3,14 @@
 #include "ngi/area_light.hpp"
 
 #include <cmath>
-#include <sstream>
 
+#include "io/vec_text.hpp"
 #include "ngi/error.hpp"
 
 namespace ngi {
 namespace {
 
-std::string text(glm::vec3 v) {
-    std::ostringstream s;
-    s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-    return s.str();
-}
+std::string text(glm::vec3 v) { return detail::vec_text(v); }
 
 }  // namespace
 

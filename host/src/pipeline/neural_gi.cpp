@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
+#include "io/vec_text.hpp"
 #include "models/model_access.hpp"
 #include "ops/jbu.hpp"
 #include "pipeline/pipeline_impl.hpp"
@@ -37,12 +37,6 @@ void require_finite(const glm::vec3& v, const char* what) {
         throw InputError(std::string("neural GI: the frame's ") + what + " is not finite");
 }
 
-std::string triple(const float* v) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v[0]), double(v[1]), double(v[2]));
-    return buf;
-}
-
 // A Neural GI model is trained for one scene: the camera and the light of a frame of that scene lie in its box
 // (the grid). A point outside means a frame of another scene (or a light placed where training never put one), whose
 // inputs the network would see clamped to the box's faces and answer with confident, wrong light. The margin
@@ -53,10 +47,11 @@ void require_in_box(const glm::vec3& p, const ModelConfig::NeuralGi& cfg, const 
     const float margin = 1.0e-3f * extent;
     for (int k = 0; k < 3; ++k)
         if (!(p[k] >= cfg.scene_min[k] - margin && p[k] <= cfg.scene_max[k] + margin)) {
-            const float v[3] = {p.x, p.y, p.z};
-            throw InputError(std::string("neural GI: the frame's ") + what + " " + triple(v) +
-                             " is outside the model's scene box " + triple(cfg.scene_min) + ".." +
-                             triple(cfg.scene_max) + ": a frame of another scene? (a Neural GI model is trained "
+            const glm::vec3 lo(cfg.scene_min[0], cfg.scene_min[1], cfg.scene_min[2]);
+            const glm::vec3 hi(cfg.scene_max[0], cfg.scene_max[1], cfg.scene_max[2]);
+            throw InputError(std::string("neural GI: the frame's ") + what + " " + detail::vec_text(p) +
+                             " is outside the model's scene box " + detail::vec_text(lo) + ".." + detail::vec_text(hi) +
+                             ": a frame of another scene? (a Neural GI model is trained "
                              "for one scene; neural_gi.scene_box in the model file)");
         }
 }
