@@ -16,8 +16,9 @@ over frames where it is finite) and every frame's numbers.
 
 --path-traced SPLIT [SPLIT ...] adds one method per split, "path_traced_<S>" (S: the split name's "_pt<S>" suffix,
 else the split name): the lighting is the reference.exr of the same-named frame in DATASET/SPLIT/<scene> (a render
-of the same view and light at S samples per pixel with another seed: path tracing at equal time, sequences.py). --temporal scores the held-out frames as one sequence in frame order (a moving
-camera or a moving light, sequences.py): MABD_t = mean over pixels of |Y_t - Y_t-1|, Y the luminance (Rec. 709
+of the same view and light at S samples per pixel with another seed: path tracing at equal time, sequences.py).
+--temporal scores the held-out frames as one sequence in frame order (a moving camera or a moving light,
+sequences.py): MABD_t = mean over pixels of |Y_t - Y_t-1|, Y the luminance (Rec. 709
 weights) of the tone-mapped final image, for the reference and every method; "mabd" is its mean over t and
 "mabd_error" the mean over t of |MABD_t(method) - MABD_t(reference)| (0: the method flickers exactly as much as the
 reference; the reference's own MABD includes its Monte Carlo noise).

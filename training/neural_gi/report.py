@@ -73,16 +73,21 @@ def traced_rows(result, variant):
     return [(f"path tracing, {k.rsplit('_', 1)[1]} spp", variant, k) for k in keys]
 
 
+def table_rows(variants, kind, temporal=False):
+    """({variant: its results} of the variants evaluated on `kind` (with temporal metrics if asked), the table's
+    (label, variant, method) rows: the networks, direct light, then path tracing at each sample count)."""
+    present = {v: r for v, r in variants.items() if kind in r and (not temporal or r[kind]["temporal"])}
+    if not present:
+        return present, []
+    rows = method_rows(present)
+    return present, rows + traced_rows(present[rows[0][1]][kind], rows[0][1])
+
+
 def quality_table(results, kind):
     lines = ["| scene | method | final MAE | final MSE | final PSNR dB | final SSIM | lighting PSNR dB | log-L1 |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for scene, variants in results.items():
-        present = {v: r for v, r in variants.items() if kind in r}
-        if not present:
-            continue
-        rows = method_rows(present)
-        first = present[rows[0][1]][kind]
-        rows += traced_rows(first, rows[0][1])
+        present, rows = table_rows(variants, kind)
         for label, v, method in rows:
             s = present[v][kind]["summary"][method]
             f, li = s["final"], s["lighting"]
@@ -96,13 +101,10 @@ def temporal_table(results):
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for scene, variants in results.items():
         for kind in ("moving_camera", "moving_light"):
-            present = {v: r for v, r in variants.items() if kind in r and r[kind]["temporal"]}
-            if not present:
+            present, rows = table_rows(variants, kind, temporal=True)
+            if not rows:
                 continue
-            rows = method_rows(present)
-            first = present[rows[0][1]][kind]
-            rows += traced_rows(first, rows[0][1])
-            ref = first["temporal"]["reference"]["mabd"]
+            ref = present[rows[0][1]][kind]["temporal"]["reference"]["mabd"]
             for label, v, method in rows:
                 t = present[v][kind]["temporal"][method]
                 f = present[v][kind]["summary"][method]["final"]

@@ -76,7 +76,18 @@ class SceneNeuralGI(ng.NeuralGI):
         return c
 
 
-class NoBufferGI(nn.Module):
+class IndirectFromRaw(nn.Module):
+    """A baseline's forward and render as NeuralGI's: indirect = exp decoding of raw_output; final = direct + it."""
+
+    def forward(self, inputs):
+        return ng.decode_indirect(self.raw_output(inputs))
+
+    def render(self, inputs, direct):
+        indirect = self(inputs)
+        return ng.sanitize_radiance(direct) + indirect, indirect
+
+
+class NoBufferGI(IndirectFromRaw):
     """The baseline without the neural buffer: R on [I, Gamma(I)] (378 channels), exp decoding."""
 
     def __init__(self, mlp_width=ng.DEFAULT_MLP_WIDTH, mlp_depth=ng.DEFAULT_MLP_DEPTH,
@@ -91,13 +102,6 @@ class NoBufferGI(nn.Module):
     def raw_output(self, inputs):
         self.check_inputs(inputs)
         return self.mlp(ng.positional_encoding(inputs))
-
-    def forward(self, inputs):
-        return ng.decode_indirect(self.raw_output(inputs))
-
-    def render(self, inputs, direct):
-        indirect = self(inputs)
-        return ng.sanitize_radiance(direct) + indirect, indirect
 
 
 def no_buffer_as_neural_gi(net, seed=0):
@@ -124,7 +128,7 @@ def no_buffer_as_neural_gi(net, seed=0):
     return full
 
 
-class UnetOnlyGI(nn.Module):
+class UnetOnlyGI(IndirectFromRaw):
     """The paper's "[72]-net" baseline: ngi's pix2pix U-Net alone (linear output, 3 channels) on the same 18 inputs,
     no encoding, no MLP; exp decoding as NeuralGI's, so the loss, data and schedule are the same."""
 
@@ -144,13 +148,6 @@ class UnetOnlyGI(nn.Module):
     def raw_output(self, inputs):
         self.check_inputs(inputs)
         return self.buffer(inputs)
-
-    def forward(self, inputs):
-        return ng.decode_indirect(self.raw_output(inputs))
-
-    def render(self, inputs, direct):
-        indirect = self(inputs)
-        return ng.sanitize_radiance(direct) + indirect, indirect
 
 
 # The U-Net baseline's MLP in its neural_gi file: 6 ReLU units carry +B and -B, the output takes their difference.
