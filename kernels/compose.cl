@@ -11,16 +11,36 @@
 // The decoded lightmap stops at the largest half float, so it survives a half-float EXR.
 #define LIGHT_MAX 65504.0f
 
-// In place: model output v in [lo, hi] -> [0, 1] -> linear lightmap through the inverse lumination transfer
-// (Reinhard: x = y / (1 - y)). NaN (a broken model output) becomes 0.
+// Light terms: NaN -> 0, negative -> 0, +Inf -> FLT_MAX.
+static inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
+
+// Model output v in [lo, hi] -> [0, 1] -> linear light through the inverse lumination transfer
+// (Reinhard: x = y / (1 - y)), in [0, LIGHT_MAX]. NaN (a broken model output) becomes 0.
+static inline float decode_light(float v, const float lo, const float hi, const int transfer) {
+    float y = (v - lo) / (hi - lo);
+    y = isnan(y) ? 0.0f : clamp(y, 0.0f, 1.0f);
+    if (transfer == TRANSFER_REINHARD) y = y < 1.0f ? fmin(y / (1.0f - y), LIGHT_MAX) : LIGHT_MAX;
+    return y;
+}
+
+// In place: the model output of an output_mode "lightmap" model (the thesis's) -> the linear lightmap.
 __kernel void decode_lightmap(__global float* restrict x, const int count, const float lo, const float hi,
                               const int transfer) {
     const int i = get_global_id(0);
     if (i >= count) return;
-    float y = (x[i] - lo) / (hi - lo);
-    y = isnan(y) ? 0.0f : clamp(y, 0.0f, 1.0f);
-    if (transfer == TRANSFER_REINHARD) y = y < 1.0f ? fmin(y / (1.0f - y), LIGHT_MAX) : LIGHT_MAX;
-    x[i] = y;
+    x[i] = decode_light(x[i], lo, hi, transfer);
+}
+
+// In place: the model output of an output_mode "indirect" model decodes (exactly as above) to indirect light only;
+// the lightmap is that plus the front face's direct light, read at direct[direct_off + i] (the same planar RGB
+// layout as x: the frame planes 7-9 of face 0, or an uploaded N x N x 3 image). Direct light is sanitized like
+// compose_final's light terms and the sum saturates at FLT_MAX, so the lightmap is finite and >= 0 whatever the
+// frame holds. A kernel of its own, so the lightmap mode's code and results stay exactly as they were.
+__kernel void decode_indirect(__global float* restrict x, const int count, const float lo, const float hi,
+                              const int transfer, __global const float* restrict direct, const int direct_off) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    x[i] = fmin(decode_light(x[i], lo, hi, transfer) + clean_light(direct[direct_off + i]), FLT_MAX);
 }
 
 // The inverse of decode_lightmap, for training targets: linear light x -> [0, 1] through the lumination transfer
@@ -56,9 +76,6 @@ __kernel void resize_bilinear(__global const float* restrict src, const int src_
         dst[(c * dst_h + y) * dst_w + x] = (1.0f - ay) * top + ay * bottom;
     }
 }
-
-// Light terms: NaN -> 0, negative -> 0, +Inf -> FLT_MAX.
-static inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
 
 // final = lightmap * albedo + emission + env, elementwise over `count` values of planar RGB images of one size.
 // Albedo is sanitized as in preprocessing (NaN -> 0, clamped to [0, 1]); the sum saturates at FLT_MAX.

@@ -231,3 +231,105 @@ TEST_CASE("encode lightmap: the inverse of the decoding, the same encoding as th
     cfg.output_range[1] = cfg.output_range[0];
     REQUIRE_THROWS_WITH(pl.encode_lightmap(Image(n, n, 3), cfg), Contains("output_range"));
 }
+
+namespace {
+
+// What decode_indirect adds, in float as the kernel does: NaN and negative -> 0, +Inf -> FLT_MAX.
+float clean_light_f(float v) { return std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, FLT_MAX); }
+
+// Direct light with every hostile value an application's buffer may hold.
+std::vector<float> hostile_direct(std::size_t count, std::mt19937& rng) {
+    std::vector<float> d = test::random_vector(count, rng, -0.5f, 30.0f);
+    sprinkle(d, rng, {kNaN, kInf, -kInf, -3.0f, 65504.0f, 70000.0f, 1e30f, FLT_MAX, 0.0f});
+    return d;
+}
+
+}  // namespace
+
+TEST_CASE("decode_indirect: decoded indirect light + sanitized direct, against a naive reference at odd sizes",
+          "[pipeline][oclgrind]") {
+    // The kernel itself at odd element counts and offsets (the pipeline only launches 3 N^2 with N even): each
+    // value equals decode_lightmap's value + the cleaned direct light in float, saturating at FLT_MAX.
+    detail::Context& c = test::ctx();
+    detail::Kernel decode = c.kernel("compose", "decode_lightmap");
+    detail::Kernel indirect = c.kernel("compose", "decode_indirect");
+    std::mt19937 rng(71);
+    std::uniform_int_distribution<int> size(1, 301), offset(0, 97);
+    for (int trial = 0; trial < 12; ++trial) {
+        const int count = trial == 0 ? 1 : size(rng) | 1;  // odd
+        const int off = offset(rng);
+        const bool reinhard = trial % 2 == 0;
+        const float lo = trial % 3 == 0 ? 0.0f : -1.0f, hi = 1.0f;
+        std::vector<float> v = test::random_vector(std::size_t(count), rng, lo - 0.2f, hi + 0.2f);
+        sprinkle(v, rng, {kNaN, kInf, hi, std::nextafter(hi, lo)});
+        std::vector<float> direct(std::size_t(off), kNaN);  // before the offset: never read
+        const std::vector<float> d = hostile_direct(std::size_t(count), rng);
+        direct.insert(direct.end(), d.begin(), d.end());
+        CAPTURE(trial, count, off, reinhard, lo);
+
+        detail::Buffer xb = test::upload(v), lb = test::upload(v), db = test::upload(direct);
+        const std::size_t g[1] = {std::size_t(count)}, l[1] = {64};
+        indirect.args(xb, count, lo, hi, int(!reinhard), db, off);
+        c.launch(indirect, 1, g, l);
+        decode.args(lb, count, lo, hi, int(!reinhard));
+        c.launch(decode, 1, g, l);
+        const std::vector<float> got = test::download(xb, std::size_t(count));
+        const std::vector<float> light = test::download(lb, std::size_t(count));
+        double worst = 0;
+        for (int i = 0; i < count; ++i) {
+            REQUIRE(std::isfinite(got[i]));
+            REQUIRE(got[i] >= 0.0f);
+            // Bit for bit: the lightmap mode's decoding plus the cleaned direct light.
+            REQUIRE(got[i] == std::min(light[i] + clean_light_f(d[i]), FLT_MAX));
+            const double want = std::min(ref::decode_light(v[i], lo, hi, reinhard) + ref::clean_light(d[i]),
+                                         double(FLT_MAX));
+            worst = std::max(worst, rel_err(got[i], want));
+        }
+        REQUIRE(worst < 2e-5);  // as the lightmap decoding's test: y / (1 - y) near 1
+    }
+}
+
+TEST_CASE("front lightmap, output_mode indirect: the decoded output + the frame's front direct light",
+          "[pipeline][oclgrind]") {
+    using Catch::Matchers::Contains;
+    std::mt19937 rng(73);
+    for (int n : {2, 6, 10}) {
+        SurroundPipeline pl(test::device(), n);
+        ModelConfig lightmap_cfg, indirect_cfg;
+        indirect_cfg.output_mode = "indirect";
+        Frame fr;
+        fr.n = n;
+        Image direct(n, n, 3);
+        direct.data = hostile_direct(direct.data.size(), rng);
+        fr.get(Feature::Direct, Face::Front) = direct;
+        for (bool global : {true, false}) {
+            CAPTURE(n, global);
+            Tensor y(global ? std::vector<int>{1, 3, 2 * n, 4 * n} : std::vector<int>{1, 3, n, n});
+            y.data = test::random_vector(y.size(), rng, -1.1f, 1.1f);
+            sprinkle(y.data, rng, {kNaN, 1.0f});
+            const Image base = pl.front_lightmap(y, lightmap_cfg);
+            // A lightmap-mode model does not read the frame: the same result with or without it.
+            REQUIRE(pl.front_lightmap(y, lightmap_cfg, fr).data == base.data);
+            const Image l = pl.front_lightmap(y, indirect_cfg, fr);
+            REQUIRE(l.width == n);
+            REQUIRE(l.channels == 3);
+            for (std::size_t i = 0; i < l.data.size(); ++i)
+                REQUIRE(l.data[i] == std::min(base.data[i] + clean_light_f(direct.data[i]), FLT_MAX));
+        }
+        // Without the frame, or with a frame that lacks the front direct light: refused, saying what is missing.
+        const Tensor y({1, 3, n, n});
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, indirect_cfg),
+                            Contains("indirect") && Contains("needs the frame's front direct light"));
+        Frame no_direct;
+        no_direct.get(Feature::Direct, Face::Back) = direct;
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, indirect_cfg, no_direct),
+                            Contains("'direct'") && Contains("'front'") && Contains("missing"));
+        Frame wrong_size;
+        wrong_size.get(Feature::Direct, Face::Front) = Image(n + 2, n + 2, 3);
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, indirect_cfg, wrong_size), Contains("'direct'"));
+        ModelConfig bad = indirect_cfg;
+        bad.output_mode = "residual";
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, bad, fr), Contains("residual") && Contains("\"indirect\""));
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, bad), Contains("residual"));
+    }
+}

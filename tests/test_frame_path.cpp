@@ -4,7 +4,12 @@
 #include <CL/cl.h>
 
 #include <atomic>
+#include <cfloat>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "ngi/device_buffer.hpp"
@@ -55,6 +60,32 @@ std::vector<float> read_back(const DeviceBuffer& b) {
     b.download(v.data(), b.bytes());
     return v;
 }
+
+// A copy of the model file `src` (in the temp folder) whose config says output_mode `mode`, the weights untouched:
+// the safetensors header is rewritten (data offsets are relative to the data section, which follows unchanged).
+std::string with_output_mode(const std::string& src, const std::string& mode) {
+    std::ifstream in(src, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() >= 8);
+    std::uint64_t len = 0;
+    for (int i = 0; i < 8; ++i) len |= std::uint64_t(std::uint8_t(bytes[i])) << (8 * i);
+    nlohmann::json header = nlohmann::json::parse(bytes.substr(8, len));
+    nlohmann::json config = nlohmann::json::parse(header["__metadata__"]["ngi"].get<std::string>());
+    config["output_mode"] = mode;
+    config["required"] = {"output_mode"};
+    header["__metadata__"]["ngi"] = config.dump();
+    std::string h = header.dump();
+    while (h.size() % 8) h += ' ';
+    std::string out(8, '\0');
+    for (int i = 0; i < 8; ++i) out[i] = char((std::uint64_t(h.size()) >> (8 * i)) & 0xff);
+    out += h + bytes.substr(8 + len);
+    const std::filesystem::path p = std::filesystem::temp_directory_path() /
+                                    ("ngi_test_" + mode + "_" + std::filesystem::path(src).filename().string());
+    std::ofstream(p, std::ios::binary).write(out.data(), std::streamsize(out.size()));
+    return p.string();
+}
+
+float clean_light(float v) { return std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, FLT_MAX); }
 
 }  // namespace
 
@@ -339,4 +370,62 @@ TEST_CASE("frame path: the path tracer feeds the pipeline without the frame leav
 
     DeviceBuffer small = DeviceBuffer::allocate(dev, 64);
     REQUIRE_THROWS_WITH(renderer.render_planes(pose, lighting, rs, small), Catch::Contains("planes buffer holds"));
+}
+
+TEST_CASE("frame path: an indirect-mode model's lightmap is the lightmap mode's + the sanitized front direct light",
+          "[frame]") {
+    // The same weights read as output_mode "indirect": the network's output is identical, so run(), enqueue() and
+    // the step-by-step path must give exactly the lightmap mode's lightmap + the cleaned front direct light, and
+    // the final and display images of that lightmap.
+    Device& dev = test::device();
+    std::mt19937 rng(9);
+    const int n = 64;
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    for (const std::string& path : kModels) {
+        Model lightmap_model = Model::load(dev, path);
+        Model model = Model::load(dev, with_output_mode(path, "indirect"));
+        REQUIRE(lightmap_model.config().output_mode == "lightmap");
+        REQUIRE(model.config().output_mode == "indirect");
+        SurroundPipeline pl(dev, n);
+        Frame fr = random_frame(n, rng, true, path == kModels[0]);
+        std::vector<float>& d = fr.get(Feature::Direct, Face::Front).data;
+        const float hostile[] = {nan, inf, -inf, -2.0f, 65504.0f, 70000.0f, 1e30f, FLT_MAX};
+        for (std::size_t k = 0; k < std::size(hostile); ++k) d[k * 997 % d.size()] = hostile[k];
+        ToneMapOptions tm;
+        tm.exposure_ev = -1.0f;
+        CAPTURE(path);
+
+        PreprocessStats want_stats, got_stats;
+        const FrameImages base = pl.run(lightmap_model, fr, true, true, true, tm, &want_stats);
+        const FrameImages r = pl.run(model, fr, true, true, true, tm, &got_stats);
+        REQUIRE(r.lightmap.data.size() == d.size());
+        for (std::size_t i = 0; i < d.size(); ++i) {
+            REQUIRE(std::isfinite(r.lightmap.data[i]));
+            REQUIRE(r.lightmap.data[i] == std::min(base.lightmap.data[i] + clean_light(d[i]), FLT_MAX));
+        }
+        REQUIRE(r.final_image.data == pl.compose(r.lightmap, fr).data);
+        REQUIRE(r.display.data == pl.tonemap(r.final_image, tm).data);
+        // The non-finite direct values are counted by preprocessing, as in either mode.
+        REQUIRE(got_stats.nonfinite == want_stats.nonfinite);
+        REQUIRE(got_stats.nonfinite[int(Feature::Direct)] >= 3);
+
+        // The step-by-step path: the frame overload of front_lightmap; the old one refuses an indirect model.
+        const Tensor y = model.run(pl.network_input(fr, model.config()));
+        REQUIRE(pl.front_lightmap(y, model.config(), fr).data == r.lightmap.data);
+        REQUIRE_THROWS_WITH(pl.front_lightmap(y, model.config()),
+                            Catch::Matchers::Contains("needs the frame's front direct light"));
+
+        // Device in, device out: the direct light is read from the planes on the device.
+        const bool surround = model.config().input_nc == 12;
+        const std::vector<float> planes = pack_frame_planes(fr, surround ? 6 : 1);
+        DeviceBuffer in = DeviceBuffer::allocate(dev, planes.size() * sizeof(float));
+        in.upload(planes.data(), in.bytes());
+        FrameOutputs outs;
+        outs.tonemap = tm;
+        outs.lightmap = DeviceBuffer::allocate(dev, d.size() * sizeof(float));
+        outs.final_image = DeviceBuffer::allocate(dev, d.size() * sizeof(float));
+        pl.enqueue(model, in, FrameDesc::of(fr, surround ? 6 : 1), outs);
+        REQUIRE(read_back(outs.lightmap) == r.lightmap.data);
+        REQUIRE(read_back(outs.final_image) == r.final_image.data);
+    }
 }

@@ -162,6 +162,39 @@ TEST_CASE("broken model files give clear errors", "[model][file][oclgrind]") {
     SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
 }
 
+TEST_CASE("output_mode: lightmap by default, indirect for pix2pix_unet, anything else refused", "[model][file]") {
+    const auto entries = tiny_entries();
+    auto cfg = tiny_config();
+    // Absent: the thesis's mode.
+    CHECK(ngi::Model::load(ngi::test::device(), write_file("mode_default", entries, cfg)).config().output_mode ==
+          "lightmap");
+    cfg["output_mode"] = "indirect";
+    cfg["required"] = {"output_mode"};  // what ngi.model_file writes for it: older readers refuse the file
+    CHECK(ngi::Model::load(ngi::test::device(), write_file("mode_indirect", entries, cfg)).config().output_mode ==
+          "indirect");
+    cfg["output_mode"] = "lightmap";
+    CHECK(ngi::Model::load(ngi::test::device(), write_file("mode_lightmap", entries, cfg)).config().output_mode ==
+          "lightmap");
+
+    // An unknown value names the file, the value and the allowed values.
+    cfg["output_mode"] = "residual";
+    const std::string bad = write_file("mode_bad", entries, cfg);
+    REQUIRE_THROWS_WITH(ngi::Model::load(ngi::test::device(), bad),
+                        Contains(bad) && Contains("output_mode") && Contains("\"residual\"") &&
+                            Contains("\"lightmap\"") && Contains("\"indirect\""));
+    cfg["output_mode"] = 1;
+    expect_error(write_file("mode_type", entries, cfg), "field 'output_mode' must be a string");
+
+    // Only pix2pix_unet generators compose with the frame's direct light.
+    auto di = tiny_config();
+    di["family"] = "deepillumination";
+    di["num_downs"] = 8;
+    di["output_mode"] = "indirect";
+    expect_error(write_file("mode_di", entries, di), "only family pix2pix_unet supports; this is family deepillumination");
+    const nlohmann::json vox = {{"family", "voxel_sh"}, {"output_mode", "indirect"}};
+    expect_error(write_file("mode_vox", {}, vox), "only family pix2pix_unet has an output mode");
+}
+
 TEST_CASE("NaN, Inf and far out-of-range inputs are sanitized and counted", "[model][extremes][oclgrind]") {
     auto m = ngi::Model::load(ngi::test::device(), write_file("sanitize", tiny_entries(), tiny_config()));
     ngi::Tensor x({1, 1, 32, 32});  // zeros; input_range is the default [-1, 1]

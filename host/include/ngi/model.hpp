@@ -27,6 +27,11 @@ struct ModelConfig {
     std::vector<std::string> input_layout;  // channel names, may be empty
     float input_range[2] = {-1.0f, 1.0f};
     float output_range[2] = {-1.0f, 1.0f};
+    // What the decoded output is (family pix2pix_unet; docs/MODEL_FORMAT.md, docs/CONVENTIONS.md section 8):
+    // "lightmap" (the thesis's; default) the front view's whole lightmap, direct + indirect; "indirect" indirect
+    // light only, and the pipeline adds the frame's front direct light to make the lightmap (so front_lightmap
+    // needs the frame).
+    std::string output_mode = "lightmap";
     std::string source;
     std::string json;                // the metadata exactly as stored
 

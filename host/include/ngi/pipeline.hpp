@@ -99,7 +99,8 @@ struct FrameDesc {
 };
 
 // The outputs of one frame; empty buffers are not produced. Each is N x N x 3 planar float32 (3 N^2 floats):
-// lightmap = linear HDR lightmap of the front view, final_image = lightmap x albedo + emission + env (linear),
+// lightmap = linear HDR lightmap of the front view (for an output_mode "indirect" model: its decoded indirect light
+// + the planes' front direct light, docs/CONVENTIONS.md section 8), final_image = lightmap x albedo + emission + env (linear),
 // display = final_image tone-mapped by `tonemap` to [0, 1].
 struct FrameOutputs {
     DeviceBuffer lightmap, final_image, display;
@@ -158,8 +159,14 @@ public:
 
     // The front view's linear HDR lightmap (N x N x 3) from the generator's output: [1, 3, 2N, 4N] (front
     // view extracted: an exact crop in Thesis mode) or [1, 3, N, N]; values mapped from config.output_range
-    // through the inverse lumination transfer.
+    // through the inverse lumination transfer. For config.output_mode "lightmap" only: an "indirect" config
+    // throws InputError (its lightmap needs the frame's direct light: use the overload below).
     Image front_lightmap(const Tensor& model_output, const ModelConfig& config);
+    // The same for a model of either output mode. "indirect": the decoded output is indirect light, and the
+    // lightmap is that + the frame's front direct light (Feature::Direct of Face::Front, N x N x 3; NaN and
+    // negative -> 0, +Inf -> FLT_MAX, the sum saturating at FLT_MAX; docs/CONVENTIONS.md section 8); InputError
+    // naming the feature and face when the frame lacks it. "lightmap": the frame is not read.
+    Image front_lightmap(const Tensor& model_output, const ModelConfig& config, const Frame& frame);
 
     // The inverse of front_lightmap's decoding, for training targets: a linear lightmap (any size, 3 channels)
     // -> [1, 3, H, W] in config.output_range through this pipeline's lumination transfer. Light is sanitized

@@ -119,6 +119,10 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     }
     if (!j.is_object()) throw InputError(what + "the config is not a JSON object");
     if (j.contains("family") && j["family"].is_string() && j["family"] == "voxel_sh") {
+        // voxel_sh ignores keys it does not know, but an indirect output mode must not pass unnoticed.
+        if (j.contains("output_mode") && j["output_mode"] != "lightmap")
+            throw InputError(what + "field 'output_mode' is " + j["output_mode"].dump().substr(0, 80) +
+                             "; only family pix2pix_unet has an output mode other than \"lightmap\"");
         ModelConfig c = parse_voxel_sh_config(j, path);  // its own fields and rules (models/voxel_sh_model.cpp)
         c.json = text;
         return c;
@@ -221,6 +225,13 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     range("input_range", c.input_range);
     range("output_range", c.output_range);
     c.source = string("source", {}, c.source, false);
+    c.output_mode = string("output_mode", {"lightmap", "indirect"}, c.output_mode, false);
+    // Only the pipeline's pix2pix generators compose their output with the frame's direct light (neural_gi
+    // predicts indirect light by construction, through its own renderer; the others are not lightmap generators).
+    if (c.output_mode != "lightmap" && c.family != "pix2pix_unet")
+        throw InputError(what + "field 'output_mode' is \"" + c.output_mode +
+                         "\", which only family pix2pix_unet supports; this is family " + c.family +
+                         " (use \"lightmap\" or leave the key out)");
     if (c.family == "neural_gi") parse_neural_gi_fields(j, c, what);  // after dropout: it must be off
     if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
     // "required": the fields a writer says no reader may ignore. Unknown optional fields are ignored (a newer writer
@@ -228,7 +239,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     static const char* const kKnown[] = {"format_version", "family", "input_nc", "output_nc", "ngf", "num_downs",
                                          "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
                                          "leaky_slope", "input_layout", "input_range", "output_range", "source",
-                                         "training", "required", "layers", "encoding", "ao", "neural_gi"};
+                                         "training", "required", "layers", "encoding", "ao", "neural_gi",
+                                         "output_mode"};
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");

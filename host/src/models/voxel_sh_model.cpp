@@ -172,7 +172,8 @@ ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::str
     if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
     static const char* const kKnown[] = {"format_version", "family", "architecture", "input_nc", "output_nc", "grid",
                                          "input_lo", "input_hi", "output_mean", "output_std", "hidden", "phi", "rho",
-                                         "width", "blocks", "input_layout", "source", "training", "required"};
+                                         "width", "blocks", "input_layout", "source", "training", "required",
+                                         "output_mode"};  // "lightmap" only (checked in parse_model_config)
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");

@@ -30,10 +30,9 @@ void upload_image(detail::Context& ctx, detail::Buffer& b, const Image& im, cons
     ctx.write(b, 0, im.data.size() * sizeof(float), im.data.data(), what);
 }
 
-}  // namespace
-
-Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& config) {
-    Impl& im = *impl_;
+// The shared body of both front_lightmap overloads: extraction, then the decode; with `direct` (the front face's
+// direct light, N x N x 3, checked) the decoded indirect light is added to it (decode_indirect).
+Image decode_front(SurroundPipeline::Impl& im, const Tensor& y, const ModelConfig& config, const Image* direct) {
     const int n = im.n;
     const auto& s = y.shape;
     const bool global = s.size() == 4 && s[2] == 2 * n && s[3] == 4 * n;
@@ -65,11 +64,35 @@ Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& confi
     // Decoding after the extraction: in Thesis mode the crop is exact either way; in Equirect mode the
     // resampling then interpolates in the model's (perceptually more even) encoded domain.
     const int count = int(out.data.size());
-    im.decode.args(im.light, count, lo, hi, int(im.transfer));
     const std::size_t g[1] = {std::size_t(count)};
-    im.ctx.launch(im.decode, 1, g, kLocal1);
+    if (direct) {
+        upload_image(im.ctx, im.aux[0], *direct, "front direct light");
+        im.decode_indirect.args(im.light, count, lo, hi, int(im.transfer), im.aux[0], 0);
+        im.ctx.launch(im.decode_indirect, 1, g, kLocal1);
+    } else {
+        im.decode.args(im.light, count, lo, hi, int(im.transfer));
+        im.ctx.launch(im.decode, 1, g, kLocal1);
+    }
     im.ctx.read(im.light, 0, bytes, out.data.data(), "front lightmap");
     return out;
+}
+
+}  // namespace
+
+Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& config) {
+    if (detail::indirect_output(config, "front lightmap"))
+        throw InputError("front lightmap: the model's output_mode is \"indirect\" (it predicts indirect light "
+                         "only): an indirect-mode model needs the frame's front direct light; call "
+                         "front_lightmap(output, config, frame)");
+    return decode_front(*impl_, y, config, nullptr);
+}
+
+Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& config, const Frame& frame) {
+    if (!detail::indirect_output(config, "front lightmap")) return decode_front(*impl_, y, config, nullptr);
+    const Image& direct = frame.get(Feature::Direct, Face::Front);
+    detail::check_face_image(direct, Feature::Direct, Face::Front, impl_->n,
+                             "front lightmap (an indirect-mode model adds the front direct light)");
+    return decode_front(*impl_, y, config, &direct);
 }
 
 Tensor SurroundPipeline::encode_lightmap(const Image& lightmap, const ModelConfig& config) {

@@ -48,8 +48,16 @@ void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, cons
                       int(face_plane));
     else
         ctx.copy(model_out, 0, light_dst, 0, bytes, "front lightmap");
-    decode.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer));
-    ctx.launch(decode, 1, g, kLocal1);
+    if (detail::indirect_output(config, "enqueue frame")) {
+        // The decoded indirect light plus the front face's direct light, read in place from the planes (planes
+        // 7-9 of face 0: contiguous RGB, the lightmap's own layout), so the frame stays on the device.
+        decode_indirect.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer), planes,
+                             int(std::size_t(frame_plane(Feature::Direct)) * face_plane));
+        ctx.launch(decode_indirect, 1, g, kLocal1);
+    } else {
+        decode.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer));
+        ctx.launch(decode, 1, g, kLocal1);
+    }
     if (!final_dst && !display_dst) return;
 
     // The front face's albedo, emission and env planes (contiguous RGB triples of face 0) for compose_final.
@@ -91,6 +99,7 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
     if (config.output_nc != 3)
         throw InputError("enqueue frame: the model outputs " + std::to_string(config.output_nc) +
                          " channels; a lightmap needs 3");
+    detail::indirect_output(config, "enqueue frame");  // an unknown output_mode fails before anything is enqueued
     // The generator's size: the global view (2N x 4N) or the front face; it must be divisible by 2^num_downs.
     const int h = surround ? 2 * im.n : im.n, w = surround ? 4 * im.n : im.n;
     const int step = 1 << config.num_downs;

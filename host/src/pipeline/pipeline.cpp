@@ -105,6 +105,13 @@ bool optional_feature_present(const Frame& frame, Feature feature, const Face* f
     return true;
 }
 
+bool indirect_output(const ModelConfig& config, const char* what) {
+    if (config.output_mode == "lightmap") return false;
+    if (config.output_mode == "indirect") return true;
+    throw InputError(std::string(what) + ": the model's output_mode is \"" + config.output_mode.substr(0, 80) +
+                     "\"; expected \"lightmap\" or \"indirect\"");
+}
+
 bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
     if (b.bytes() >= bytes) return false;
     b.reset();
@@ -119,6 +126,7 @@ SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, Lumi
       gather(ctx.kernel("globalview", "lut_gather")),
       preprocess(ctx.kernel("gbuffer", "preprocess_gbuffer")),
       decode(ctx.kernel("compose", "decode_lightmap")),
+      decode_indirect(ctx.kernel("compose", "decode_indirect")),
       encode(ctx.kernel("compose", "encode_lightmap")),
       resize(ctx.kernel("compose", "resize_bilinear")),
       compose(ctx.kernel("compose", "compose_final")),

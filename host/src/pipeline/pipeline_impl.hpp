@@ -31,6 +31,10 @@ bool optional_feature_present(const Frame& frame, Feature feature, const Face* f
 // Which input the model wants: true = global view (12 channels), false = front view only (10). Throws InputError
 // for a model whose input width, input_layout or input_range the pipeline cannot serve.
 bool check_model_input(const ModelConfig& config);
+// Whether the model's output is indirect light only (output_mode "indirect"), which the output side adds to the
+// frame's front direct light. Throws InputError naming `what` for an output_mode other than "lightmap" and
+// "indirect" (a hand-built ModelConfig: the loader refuses other values).
+bool indirect_output(const ModelConfig& config, const char* what);
 
 // Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept).
 bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what);
@@ -46,7 +50,7 @@ struct SurroundPipeline::Impl {
     GlobalViewMode mode;
     LuminationTransfer transfer;
 
-    detail::Kernel gather, preprocess, decode, encode, resize, compose, tonemap;
+    detail::Kernel gather, preprocess, decode, decode_indirect, encode, resize, compose, tonemap;
     detail::Buffer merge_idx, merge_w;      // 8 N^2 entries
     detail::Buffer extract_idx, extract_w;  // N^2 entries
     Image coords;                           // 4N x 2N x 2, phi and theta in [0, 1]
@@ -72,6 +76,7 @@ struct SurroundPipeline::Impl {
     // Downloads the preprocessing counters of the last enqueue_input into `stats`.
     void read_stats(PreprocessStats& stats);
     // Decode (in place), compose and tone map of enqueue(); the destinations are raw buffers of >= 3 N^2 floats.
+    // An indirect-mode model's decoded output is added to the front direct light read from `planes`.
     void enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes, bool has_emission,
                          bool has_env, cl_mem light_dst, cl_mem final_dst, cl_mem display_dst,
                          const ToneMapOptions& tonemap);
