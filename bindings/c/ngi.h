@@ -165,6 +165,16 @@ NGI_API ngi_status ngi_model_load_with_options(ngi_device* device, const char* p
                                                ngi_dropout dropout, ngi_model** out);
 /* Any pointer may be NULL. */
 NGI_API ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output_nc, int* num_downs);
+/* What a generator's decoded output is (the model file's "output_mode", docs/MODEL_FORMAT.md). */
+typedef NGI_ENUM(ngi_output_mode) {
+    NGI_OUTPUT_LIGHTMAP = 0, /* the front view's whole lightmap, direct + indirect (the thesis's; the default) */
+    NGI_OUTPUT_INDIRECT = 1, /* indirect light only: the pipeline adds the frame's front direct light (planes 7-9
+                                of face 0, NaN and negative -> 0, +Inf -> FLT_MAX, the sum saturating at FLT_MAX)
+                                to make the lightmap; ngi_pipeline_run / _enqueue do it with no extra argument */
+    NGI_OUTPUT_MODE_MAX_ENUM = 0x7FFFFFFF
+} ngi_output_mode;
+/* The model's output mode into *mode (not NULL). */
+NGI_API ngi_status ngi_model_output_mode(const ngi_model* model, ngi_output_mode* mode);
 /* input: input_nc x height x width floats (CHW, batch 1, input_bytes >= that many bytes); output: output_nc x height
  * x width floats. height and width must be positive multiples of 2^num_downs. Blocking. */
 NGI_API ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
@@ -212,7 +222,9 @@ NGI_API ngi_status ngi_pipeline_frame_bytes(const ngi_pipeline* pipeline, int fa
 NGI_API ngi_status ngi_pipeline_set_camera(ngi_pipeline* pipeline, const float look[3], const float up[3]);
 /* The display transform of the next frames (default: 0 EV, ACES, sRGB on). exposure_ev in [-64, 64]. */
 NGI_API ngi_status ngi_pipeline_set_tonemap(ngi_pipeline* pipeline, float exposure_ev, ngi_tone_curve curve, int srgb);
-/* Device in, device out, asynchronous, no host transfer. flags: ngi_frame_flags. Any output may be NULL (not made). */
+/* Device in, device out, asynchronous, no host transfer. flags: ngi_frame_flags. Any output may be NULL (not made).
+ * The lightmap is the model's decoded output, plus the front direct light for an NGI_OUTPUT_INDIRECT model (so the
+ * planes' direct planes are read in either mode: the network input needs them too). */
 NGI_API ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model, ngi_buffer* planes, int faces,
                                         unsigned flags, ngi_buffer* lightmap, ngi_buffer* final_image,
                                         ngi_buffer* display);

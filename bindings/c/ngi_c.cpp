@@ -418,6 +418,15 @@ ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output
     });
 }
 
+ngi_status ngi_model_output_mode(const ngi_model* model, ngi_output_mode* mode) {
+    return guarded(__func__, [&] {
+        const auto& c = live(model, "model").model.config();
+        require(mode, "mode is NULL");
+        // The loader admits exactly these two values (host/src/models/unet.cpp).
+        *mode = c.output_mode == "indirect" ? NGI_OUTPUT_INDIRECT : NGI_OUTPUT_LIGHTMAP;
+    });
+}
+
 ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
                          float* output, size_t output_bytes) {
     return guarded(__func__, [&] {

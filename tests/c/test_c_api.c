@@ -139,6 +139,12 @@ static void test_model(ngi_device* dev, const char* models) {
                 "ngi_model_load_with_options", "dropout -1");
     CHECK(ngi_model_load_with_options(dev, path, NGI_BN_FROM_FILE, NGI_DROPOUT_OFF, &m) == NGI_OK);
     CHECK(ngi_model_channels(m, &in_nc, &out_nc, &downs) == NGI_OK && in_nc == 10 && out_nc == 3 && downs == 6);
+    {
+        ngi_output_mode mode = NGI_OUTPUT_INDIRECT;
+        CHECK(ngi_model_output_mode(m, &mode) == NGI_OK && mode == NGI_OUTPUT_LIGHTMAP);  /* no key: lightmap */
+        CHECK_FAILS(ngi_model_output_mode(m, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_output_mode", "mode");
+        CHECK_FAILS(ngi_model_output_mode(NULL, &mode), NGI_ERROR_INVALID_HANDLE, "ngi_model_output_mode", "model");
+    }
     in_bytes = (size_t)in_nc * h * w * sizeof(float);
     out_bytes = (size_t)out_nc * h * w * sizeof(float);
     x = (float*)malloc(in_bytes);
