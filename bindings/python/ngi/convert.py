@@ -12,7 +12,7 @@ checkpoint layout its upstream training code writes:
 Usage (with <build>/python on PYTHONPATH):
   /usr/bin/python3 -m ngi.convert IN.pth OUT.safetensors \\
       --family pix2pix_unet --bn-mode per_image [--input-nc 12 --output-nc 3 \\
-      --ngf 64 --num-downs 8] [--dropout off|seeded --dropout-seed S] [--half]
+      --ngf 64 --num-downs 8] [--dropout off|seeded --dropout-seed S] [--output-mode lightmap|indirect] [--half]
 """
 
 import argparse
@@ -24,8 +24,8 @@ import sys
 import numpy as np
 import torch
 
-from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, ConversionError, expected_shapes, make_config,
-                         write_model)
+from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, ConversionError, expected_shapes,
+                         make_config, write_model)
 
 # --------------------------------------------------------------------------
 # Checkpoint loading and validation
@@ -148,13 +148,17 @@ def main(argv=None):
     parser.add_argument("--dropout-seed", type=int, default=0)
     parser.add_argument("--input-layout", default="",
                         help="comma-separated input channel names, e.g. albedo.r,albedo.g,...")
+    parser.add_argument("--output-mode", choices=OUTPUT_MODES, default="lightmap",
+                        help="what the generator was trained to predict: lightmap (the front view's direct + "
+                             "indirect light, the thesis's) or indirect (indirect light only; the pipeline adds the "
+                             "frame's direct light); pix2pix_unet only")
     parser.add_argument("--source", help="free text stored in the config (default: input file name)")
     parser.add_argument("--half", action="store_true", help="store tensors as F16 instead of F32")
     args = parser.parse_args(argv)
 
     options = {"bn_mode": args.bn_mode, "input_nc": args.input_nc, "output_nc": args.output_nc,
                "ngf": args.ngf, "num_downs": args.num_downs, "dropout": args.dropout,
-               "dropout_seed": args.dropout_seed,
+               "dropout_seed": args.dropout_seed, "output_mode": args.output_mode,
                "input_layout": [name for name in args.input_layout.split(",") if name]}
     if args.source is not None:
         options["source"] = args.source
@@ -164,7 +168,7 @@ def main(argv=None):
         print(f"ngi.convert: error: {error}", file=sys.stderr)
         return 1
     print(f"ngi.convert: wrote {args.output} ({config['family']}, bn_mode={config['bn_mode']}, "
-          f"dropout={config['dropout']}, {'F16' if args.half else 'F32'}, "
+          f"dropout={config['dropout']}, output_mode={config['output_mode']}, {'F16' if args.half else 'F32'}, "
           f"{os.path.getsize(args.output)} bytes)", file=sys.stderr)
     return 0
 

@@ -23,6 +23,9 @@ FORMAT_VERSION = 1
 FAMILIES = ("pix2pix_unet", "deepillumination")
 BN_MODES = ("running", "per_image")
 DROPOUT_MODES = ("off", "seeded")
+# What a pix2pix_unet generator's decoded output is (docs/MODEL_FORMAT.md, "output_mode"): the front view's whole
+# lightmap (the thesis's; the default) or indirect light only, which the pipeline adds to the frame's direct light.
+OUTPUT_MODES = ("lightmap", "indirect")
 
 # Hyper-parameters both upstream generators hard-code; they are written into
 # the config anyway so the C++ side never has to assume them (DROPOUT_P, the
@@ -212,10 +215,15 @@ def expected_shapes(config):
 # --------------------------------------------------------------------------
 
 def make_config(family, *, bn_mode, input_nc=12, output_nc=3, ngf=64, num_downs=8,
-                dropout="off", dropout_seed=0, input_layout=(), source=""):
+                dropout="off", dropout_seed=0, input_layout=(), source="", output_mode="lightmap"):
     """Validate the options and return the complete ngi config dict."""
     if family not in FAMILIES:
         raise ConversionError(f"family must be one of {FAMILIES}, got {family!r}")
+    if output_mode not in OUTPUT_MODES:
+        raise ConversionError(f"output_mode must be one of {OUTPUT_MODES}, got {output_mode!r}")
+    if output_mode != "lightmap" and family != "pix2pix_unet":
+        raise ConversionError(f"output_mode {output_mode!r} is supported by family pix2pix_unet only, "
+                              f"not {family!r}")
     if bn_mode not in BN_MODES:
         raise ConversionError(f"bn_mode must be one of {BN_MODES}, got {bn_mode!r}")
     if dropout not in DROPOUT_MODES:
@@ -233,7 +241,7 @@ def make_config(family, *, bn_mode, input_nc=12, output_nc=3, ngf=64, num_downs=
     input_layout = list(input_layout)
     if input_layout and len(input_layout) != input_nc:
         raise ConversionError(f"input_layout names {len(input_layout)} channels but input_nc is {input_nc}")
-    return {
+    config = {
         "format_version": FORMAT_VERSION,
         "family": family,
         "input_nc": input_nc,
@@ -250,8 +258,14 @@ def make_config(family, *, bn_mode, input_nc=12, output_nc=3, ngf=64, num_downs=
         "input_layout": input_layout,
         "input_range": VALUE_RANGE,
         "output_range": VALUE_RANGE,
+        "output_mode": output_mode,
         "source": source,
     }
+    if output_mode != "lightmap":
+        # A reader that does not know the key would decode indirect light as the whole lightmap, silently dark:
+        # "required" makes older readers refuse the file instead.
+        config["required"] = ["output_mode"]
+    return config
 
 
 # --------------------------------------------------------------------------

@@ -26,6 +26,7 @@ py::dict config_dict(const ngi::ModelConfig& c) {
     d["input_layout"] = c.input_layout;
     d["input_range"] = py::make_tuple(c.input_range[0], c.input_range[1]);
     d["output_range"] = py::make_tuple(c.output_range[0], c.output_range[1]);
+    d["output_mode"] = c.output_mode;
     d["metadata"] = py::module_::import("json").attr("loads")(c.json.empty() ? std::string("{}") : c.json);
     return d;
 }
@@ -90,6 +91,10 @@ each input size is built on first use.)doc")
         .def_property_readonly("config", [](const PyModel& pm) { return config_dict(pm.model.config()); },
                                "The architecture (family, channel counts, ranges, ...) and the file's metadata.")
         .def_property_readonly("path", [](const PyModel& pm) { return pm.path; })
+        .def_property_readonly("output_mode", [](const PyModel& pm) { return pm.model.config().output_mode; },
+                               "What the decoded output is: 'lightmap' (the front view's direct + indirect light; "
+                               "the default) or 'indirect' (indirect light only; the pipeline adds the frame's "
+                               "front direct light).")
         .def_property_readonly("sanitized_inputs", [](const PyModel& pm) { return pm.sanitized; },
                                "Input values the last run() replaced (NaN -> 0; +-Inf and values far outside the "
                                "input range -> its nearer end).")

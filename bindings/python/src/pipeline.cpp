@@ -317,15 +317,23 @@ front view only) and range [-1, 1].)doc")
         }, py::arg("lightmap"), py::arg("model") = py::none(),
            "A linear lightmap [3, H, W] as a training target [1, 3, H, W] in the output range (the model's, else "
            "[-1, 1]): what `ngi merge` writes as target.npy for the frame's reference.")
-        .def("front_lightmap", [](PyPipeline& p, const py::object& output, const PyModel& model) {
+        .def("front_lightmap", [](PyPipeline& p, const py::object& output, const PyModel& model,
+                                  const py::object& frame) {
             FloatArray a = float_array(output, "Pipeline.front_lightmap: output");
             expect_ndim(a, {4}, "Pipeline.front_lightmap: output", "[1, 3, H, W]");
             ngi::Tensor t(std::vector<int>(a.shape(), a.shape() + 4));
             std::memcpy(t.data.data(), a.data(), t.data.size() * sizeof(float));
             p.device->get("Pipeline.front_lightmap");
-            return from_image(p.pipeline.front_lightmap(t, model.model.config()));
-        }, py::arg("output"), py::arg("model"),
-           "The front view's linear lightmap [3, N, N] from a generator output [1, 3, 2N, 4N] or [1, 3, N, N].")
+            if (frame.is_none()) return from_image(p.pipeline.front_lightmap(t, model.model.config()));
+            std::shared_ptr<ngi::Frame> fr;
+            if (py::isinstance<ngi::Frame>(frame)) fr = frame.cast<std::shared_ptr<ngi::Frame>>();
+            else fr = std::make_shared<ngi::Frame>(
+                     ngi::read_frame(path_string(frame, "Pipeline.front_lightmap: frame (a Frame, a path or None)")));
+            return from_image(p.pipeline.front_lightmap(t, model.model.config(), *fr));
+        }, py::arg("output"), py::arg("model"), py::arg("frame") = py::none(), R"doc(
+The front view's linear lightmap [3, N, N] from a generator output [1, 3, 2N, 4N] or [1, 3, N, N]. A model with
+output_mode "indirect" predicts indirect light only: its lightmap adds the frame's front direct light, so it needs
+`frame` (a Frame or a frame folder path; ngi.InputError without it). A "lightmap" model does not read the frame.)doc")
         .def("global_view", [](PyPipeline& p, const ngi::Frame& frame, const std::string& feature) {
             for (ngi::Feature f : kFeatures)
                 if (feature == ngi::feature_name(f)) {

@@ -146,6 +146,50 @@ def test_network_input_and_channels(dev, surround, frame):
     assert target.shape == (1, 3, 64, 64)
 
 
+def test_output_mode_indirect_adds_the_front_direct_light(dev, surround, frame, frame_dir, tmp_path):
+    # The shipped weights rewritten as an output_mode "indirect" model (ngi.model_file: what ngi.convert
+    # --output-mode indirect writes): the same network output, decoded as indirect light and added to the frame's
+    # front direct light.
+    from ngi import model_file
+    tensors, config = model_file.read_model(MODELS / "surround.safetensors")
+    config = dict(config, output_mode="indirect", required=["output_mode"])
+    path = tmp_path / "indirect.safetensors"
+    model_file.write_model(path, tensors, config)
+    model = ngi.Model(dev, path)
+    assert surround.output_mode == "lightmap" and surround.config["output_mode"] == "lightmap"
+    assert model.output_mode == "indirect" and model.config["output_mode"] == "indirect"
+
+    pipe = ngi.Pipeline(dev, 64)
+    y = model.run(pipe.network_input(frame, model))
+    direct = frame.feature("direct")[0]  # the front face, [3, N, N]
+    want = pipe.front_lightmap(y, surround) + np.clip(np.nan_to_num(direct, nan=0.0), 0.0, None)
+    got = pipe.front_lightmap(y, model, frame)
+    np.testing.assert_array_equal(got, want)
+    # A frame folder works too (its EXRs may round the light to half, so against the folder read back).
+    np.testing.assert_array_equal(pipe.front_lightmap(y, model, frame_dir),
+                                  pipe.front_lightmap(y, model, ngi.read_frame(frame_dir)))
+    np.testing.assert_array_equal(pipe.front_lightmap(y, surround, frame), pipe.front_lightmap(y, surround))
+    np.testing.assert_array_equal(pipe.run(model, frame)["lightmap"], got)
+    with pytest.raises(ngi.InputError, match="needs the frame's front direct light"):
+        pipe.front_lightmap(y, model)
+
+    config["output_mode"] = "residual"
+    model_file.write_model(tmp_path / "bad.safetensors", tensors, config)
+    with pytest.raises(ngi.InputError, match="residual"):
+        ngi.Model(dev, tmp_path / "bad.safetensors")
+
+
+def test_make_config_output_mode():
+    from ngi import model_file
+    assert model_file.make_config("pix2pix_unet", bn_mode="running")["output_mode"] == "lightmap"
+    config = model_file.make_config("pix2pix_unet", bn_mode="running", output_mode="indirect")
+    assert config["output_mode"] == "indirect" and config["required"] == ["output_mode"]
+    with pytest.raises(model_file.ConversionError, match="output_mode"):
+        model_file.make_config("pix2pix_unet", bn_mode="running", output_mode="residual")
+    with pytest.raises(model_file.ConversionError, match="pix2pix_unet only"):
+        model_file.make_config("deepillumination", bn_mode="running", output_mode="indirect")
+
+
 def test_network_input_equals_ngi_merge(dev, frame, frame_dir, tmp_path):
     pipe = ngi.Pipeline(dev, 64)
     back = ngi.read_frame(frame_dir)
