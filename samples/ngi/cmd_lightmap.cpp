@@ -68,7 +68,8 @@ int run(const Options& o) {
                          replaced);
         const bool surround = model->config().input_nc == 12;
         input_text = ngi::shape_string({1, model->config().input_nc, surround ? 2 * frame.n : frame.n,
-                                        surround ? 4 * frame.n : frame.n});
+                                        surround ? 4 * frame.n : frame.n}) +
+                     ", output " + model->config().output_mode;  // "indirect": + the frame's direct light
     } else {
         images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
         images.final_image = pipeline.compose(images.lightmap, frame);
@@ -116,6 +117,9 @@ int run(const Options& o) {
         if (share >= 0.0) plan_json["outside_light_share"] = share;
         if (!metrics.is_null()) metrics["plan"] = plan_json;
     }
+    // What the network's output was (docs/MODEL_FORMAT.md): the whole lightmap, or indirect light that the
+    // pipeline added to the frame's direct light. None without a model (direct light only).
+    if (!metrics.is_null()) metrics["output_mode"] = model ? nlohmann::json(model->config().output_mode) : nlohmann::json();
 
     // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
     const ngi::Image lightmap_out = present(lightmap);
