@@ -12,8 +12,12 @@ them against `ngi merge`'s files bit for bit.
 Cache layout (reused on rerun, one merge per new or changed frame):
 
     CACHE/cache.json                      layout, channel names, format version
-    CACHE/<split>/<scene>/<frame>/        input.npy, target.npy, manifest.json
+    CACHE/<split>/<scene>/<frame>/        input.npy, target.npy, front.npy, manifest.json
                                           (manifest: frame folder, a stamp of its files, shapes, channels)
+
+front.npy [1, 15, N, N] holds the front face's linear planes the losses of an indirect-mode generator and of the
+final image need (FRONT_PLANES): the reference lighting, direct light, albedo, emission and env, as the frame folder
+holds them (read_frame's sanitizing; absent emission/env are zeros). The loss sanitizes them as compose.cl does.
 
 A frame's entry is reused while its manifest's stamp (names, sizes and mtimes of the frame folder's files)
 still matches. Each entry is written into a temporary folder and renamed into place, so an interrupted run
@@ -37,7 +41,7 @@ import torch
 
 import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in this project's scripts
 
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2  # 2: front.npy
 LAYOUTS = ("surround", "single_view")
 
 # docs/CONVENTIONS.md section 7 (surround_input_channels / single_view_input_channels in pipeline.hpp). Checked
@@ -45,6 +49,9 @@ LAYOUTS = ("surround", "single_view")
 SURROUND_CHANNELS = ["albedo.r", "albedo.g", "albedo.b", "normal.x", "normal.y", "normal.z", "depth",
                      "lumination.r", "lumination.g", "lumination.b", "coord.phi", "coord.theta"]
 SINGLE_VIEW_CHANNELS = SURROUND_CHANNELS[:10]
+# front.npy's planes, each RGB: the slices below index its channel axis.
+FRONT_PLANES = ("reference", "direct", "albedo", "emission", "env")
+FRONT = {name: slice(3 * i, 3 * i + 3) for i, name in enumerate(FRONT_PLANES)}
 
 
 def check_layout(layout):
@@ -182,8 +189,19 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     _save_atomic(out_dir / "input.npy", pipe.network_input(frame, single_view=single))
+    _save_atomic(out_dir / "front.npy", front_planes(frame))
     _save_atomic(out_dir / "target.npy", pipe.encode_lightmap(frame.reference))
     return names
+
+
+def front_planes(frame):
+    """[1, 15, N, N] float32: FRONT_PLANES of the front face (face 0), linear; a feature the frame lacks is zeros."""
+    n = frame.n
+    planes = [np.asarray(frame.reference, np.float32).reshape(3, n, n)]
+    for name in FRONT_PLANES[1:]:
+        f = frame.feature(name)
+        planes.append(np.zeros((3, n, n), np.float32) if f is None else np.asarray(f[0], np.float32).reshape(3, n, n))
+    return np.concatenate(planes)[None]
 
 
 class MergeCache:
@@ -223,7 +241,7 @@ class MergeCache:
         except ValueError:
             return False
         return (m.get("stamp") == frame_stamp(frame_dir) and m.get("layout") == self.layout
-                and (self.entry(rel) / "input.npy").is_file() and (self.entry(rel) / "target.npy").is_file())
+                and all((self.entry(rel) / f).is_file() for f in ("input.npy", "target.npy", "front.npy")))
 
     def _merge(self, frame_dir, rel):
         dest = self.entry(rel)
@@ -249,7 +267,7 @@ class MergeCache:
         """Re-merge one cached frame and compare it with the cache bit for bit."""
         with tempfile.TemporaryDirectory(dir=self.dir) as tmp:
             run_merge(Path(dataset_dir) / rel, tmp, self.layout, self.device)
-            for name in ("input.npy", "target.npy"):
+            for name in ("input.npy", "target.npy", "front.npy"):
                 if not np.array_equal(np.load(Path(tmp) / name), np.load(self.entry(rel) / name)):
                     return False
         return True
@@ -291,7 +309,8 @@ class MergeCache:
 
 
 class FrameDataset(torch.utils.data.Dataset):
-    """(input [C, H, W], target [3, N, N], name) per frame, read from the merge cache (float32, as ngi wrote)."""
+    """(input [C, H, W], target [3, N, N], name) per frame, read from the merge cache (float32, as ngi wrote);
+    front(i): the frame's front.npy [15, N, N] (FRONT_PLANES)."""
 
     def __init__(self, cache, frames):
         self.cache = cache
@@ -303,6 +322,9 @@ class FrameDataset(torch.utils.data.Dataset):
     def arrays(self, i):
         e = self.cache.entry(self.frames[i])
         return np.load(e / "input.npy")[0], np.load(e / "target.npy")[0]
+
+    def front(self, i):
+        return torch.from_numpy(np.load(self.cache.entry(self.frames[i]) / "front.npy")[0])
 
     def __getitem__(self, i):
         x, y = self.arrays(i)

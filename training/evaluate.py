@@ -2,7 +2,8 @@
 """Held-out evaluation: in PyTorch (during training and for export's bn_mode choice) and with ngi itself.
 
 heldout_scores() runs the generator as ngi will (ngi.reference_models.UnetGenerator, bn_mode running or per_image,
-dropout off or seeded) over held-out frames and scores its front view against the target:
+dropout off or seeded) over held-out frames and scores its front view (in the indirect output mode: the composed
+lightmap direct + indirect, encoded like the target; lightmap_loss.py) against the target:
   l1          mean |G(x)_front - y| in the model's [-1, 1] output encoding (the L1 term of the training loss)
   psnr_enc    PSNR of the same, on the [0, 1] Reinhard-encoded scale (data range 1)
   mse_linear  mean squared error of the decoded linear lightmaps (x = e / (1 - e)), capped at 65504 like ngi
@@ -34,6 +35,7 @@ import ngi.reference_models as reference_models
 
 import data
 import distributed
+import lightmap_loss
 import networks
 import ngi_paths
 
@@ -60,7 +62,12 @@ def heldout_scores(state_dict, cfg, dataset, n, bn_mode, dropout="off", dropout_
     with torch.no_grad():
         for i in d.shard(range(count)):
             x, y, _ = dataset[i]
-            out = data.crop_front(g(x[None]), n, cfg["layout"])[0].numpy().astype(np.float64)
+            out = data.crop_front(g(x[None]), n, cfg["layout"])[0]
+            mode = cfg.get("output_mode", "lightmap")
+            if mode != "lightmap":
+                direct = dataset.front(i)[data.FRONT["direct"]].double()
+                out = lightmap_loss.encode(lightmap_loss.lightmap(out.double(), direct, mode))
+            out = out.numpy().astype(np.float64)
             y = y.numpy().astype(np.float64)
             mine.append((np.abs(out - y).mean(), (((out - y) / 2.0) ** 2).mean(),
                          ((decode(out) - decode(y)) ** 2).mean()))

@@ -10,6 +10,8 @@ config says how ngi must run it:
   family pix2pix_unet, input_nc 12 (surround) or 10 (single view), output_nc 3, ngf, num_downs,
   input_layout   the C++ channel names (surround_input_channels / single_view_input_channels)
   input_range, output_range  [-1, 1]
+  output_mode    the training config's: "lightmap" (the output is the whole lightmap) or "indirect" (indirect
+                 light, which ngi adds to the frame's direct light)
   bn_mode        --bn-mode per_image | running | auto (default): auto scores both on held-out frames (the
                  eval split, dropout as exported) with the L1 of the training loss and keeps the better one
   dropout        --dropout off (default: nn.Dropout's expectation, deterministic) | seeded (pix2pix's
@@ -81,6 +83,7 @@ def main(argv=None):
     config = model_file.make_config("pix2pix_unet", bn_mode=bn_mode, input_nc=data.input_nc(cfg["layout"]),
                                     output_nc=3, ngf=cfg["ngf"], num_downs=cfg["num_downs"], dropout=args.dropout,
                                     dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
+                                    output_mode=cfg.get("output_mode", "lightmap"),
                                     source=f"ngi training/train.py, run {run.resolve().name}, step {state['step']}")
     steps = state["step"]
     samples = state.get("samples", steps)  # checkpoints from before the effective batch: one image per step
@@ -99,7 +102,9 @@ def main(argv=None):
         "bn_mode_selection": selection,
         "lumination_transfer": "reinhard",
         "global_view_mode": "thesis",
-        "target": "reference.exr encoded by SurroundPipeline::encode_lightmap (ngi merge target.npy)",
+        "target": "reference.exr encoded by SurroundPipeline::encode_lightmap (ngi merge target.npy)"
+                  + ("; the output is indirect light, the loss sees direct + indirect encoded the same way"
+                     if config["output_mode"] == "indirect" else ""),
         "checkpoint": str(ckpt_path),  # as given (relative to the working directory): no machine paths in shipped files
         "exported": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "torch": torch.__version__,

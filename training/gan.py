@@ -22,6 +22,15 @@ would learn to find that seam, and G would be pushed to draw one. Patches outsid
 identical in real and fake samples and carry no signal, only cost (8x the pixels). The global context still
 reaches the front view through G, whose receptive field is the whole global view; the PatchGAN is local
 (70x70) anyway. For the single-view model x_D is the whole input (10 + 3 = 13 channels).
+
+Indirect output mode (issue 25; lightmap_loss.py). With cfg output_mode "indirect" the generator's output is
+indirect light and the image that the losses and D see is the composed lightmap direct + indirect, encoded like the
+target (encode(lightmap)): D still compares encoded lightmaps, and a generator that outputs no indirect light at all
+gives exactly the direct-light baseline. Further terms (weights in the config, 0 = off):
+  lambda_final  L1 of the tone-mapped final images (what `ngi lightmap` scores: ACES + sRGB of
+                albedo x lightmap + emission + env) against the reference's: errors weighted as a viewer sees them,
+                so light added to a dark scene costs what it looks like, not what it weighs in linear units
+  lambda_gan    the GAN term's weight (1 = pix2pix); 0 trains the generator on the L1 terms alone and skips D
 """
 
 import contextlib
@@ -31,6 +40,7 @@ import torch.nn as nn
 
 import data
 import distributed
+import lightmap_loss
 import networks
 
 
@@ -41,6 +51,10 @@ class Pix2Pix:
         self.cfg = cfg
         self.n = n
         self.layout = cfg["layout"]
+        self.mode = cfg.get("output_mode", "lightmap")
+        lightmap_loss.check_mode(self.mode)
+        self.lambda_gan = float(cfg.get("lambda_gan", 1.0))
+        self.lambda_final = float(cfg.get("lambda_final", 0.0))
         nc = data.input_nc(self.layout)
         self.G = networks.init_weights(networks.build_generator(nc, 3, cfg["ngf"], cfg["num_downs"],
                                                                 use_dropout=cfg["dropout"])).to(device)
@@ -80,20 +94,39 @@ class Pix2Pix:
         self.G_ddp = DDP(self.G, device_ids=ids, broadcast_buffers=False)
         self.D_ddp = DDP(self.D, device_ids=ids, broadcast_buffers=False)
 
-    def step(self, xs, ys, step):
+    def needs_front(self):
+        """Whether step() needs the frames' front planes (data.FRONT_PLANES)."""
+        return self.mode != "lightmap" or self.lambda_final > 0
+
+    def composed(self, v, front):
+        """(encoded, linear) front lightmap for the generator's front output v: the encoded one is what the L1 term
+        and D see (v itself in lightmap mode, so the thesis's objective is unchanged bit for bit), the linear one
+        (None when no loss needs it) what the final image is composed from."""
+        if self.mode == "lightmap":
+            return v, (lightmap_loss.decode(v) if self.lambda_final > 0 else None)
+        light = lightmap_loss.lightmap(v, front[:, data.FRONT["direct"]], self.mode)
+        return lightmap_loss.encode(light), light
+
+    def step(self, xs, ys, step, fronts=None):
         """One optimization step. xs, ys: this rank's images, lists of [1, C, H, W] inputs and [1, 3, N, N] targets
         (or one tensor each). Every image goes through G and D alone (per-image BatchNorm, as with batch 1); the
         gradients are the mean over this rank's images (loss / accumulate) and, through DDP's allreduce, over the
-        ranks, so W ranks x A images per rank is one step of an effective batch of W x A images. Returns the sums
-        of the losses over this rank's images (train.py averages them over the effective batch) and lr."""
+        ranks, so W ranks x A images per rank is one step of an effective batch of W x A images. fronts: the
+        images' front planes [1, 15, N, N] (needed when needs_front()). Returns the sums of the losses over this
+        rank's images (train.py averages them over the effective batch) and lr."""
         if torch.is_tensor(xs):
             xs, ys = [xs], [ys]
+            fronts = [fronts] if fronts is not None else None
+        if self.needs_front() and fronts is None:
+            raise ValueError(f"output_mode {self.mode!r} / lambda_final {self.lambda_final}: step() needs the "
+                             "frames' front planes")
         d = self.dist
         count = len(xs)
         batch = count * d.world
         dev = d.device
         xs = [x.to(dev) for x in xs]
         ys = [y.to(dev) for y in ys]
+        fronts = [f.to(dev) for f in fronts] if fronts is not None else [None] * len(xs)
         lr = self.lr_at(step)
         for opt in (self.opt_G, self.opt_D):
             for group in opt.param_groups:
@@ -109,18 +142,22 @@ class Pix2Pix:
         slots_d = BufferSlots(self.D, count) if batch > 1 else None
         use = lambda slots, i: slots.use(i) if slots is not None else contextlib.nullcontext()  # noqa: E731
 
-        fakes, x_ds = [], []
+        fakes, lights, x_ds = [], [], []
         for i, x in enumerate(xs):
             with sync(self.G_ddp if d.enabled else None, i), use(slots_g, i):
-                fakes.append(self.front(g_run(x)))
+                fake, light = self.composed(self.front(g_run(x)), fronts[i])
+            fakes.append(fake)
+            lights.append(light)
             x_ds.append(self.front(x))
 
+        sums = {"G_GAN": 0.0, "G_L1": 0.0, "D_real": 0.0, "D_fake": 0.0, "G_final": 0.0}
+        use_gan = self.lambda_gan > 0
         # Discriminator: fake (detached) -> 0, real -> 1.
         for p in self.D.parameters():
-            p.requires_grad_(True)
-        self.opt_D.zero_grad(set_to_none=True)
-        sums = {"G_GAN": 0.0, "G_L1": 0.0, "D_real": 0.0, "D_fake": 0.0}
-        for i in range(count):
+            p.requires_grad_(use_gan)
+        if use_gan:
+            self.opt_D.zero_grad(set_to_none=True)
+        for i in range(count if use_gan else 0):
             with sync(self.D_ddp if d.enabled else None, i), use(slots_d, i):
                 pred_fake = d_run(torch.cat([x_ds[i], fakes[i].detach()], 1))
                 loss_d_fake = self.bce(pred_fake, torch.zeros_like(pred_fake))
@@ -130,7 +167,8 @@ class Pix2Pix:
                 scale(loss_d).backward()
             sums["D_real"] += loss_d_real.item()
             sums["D_fake"] += loss_d_fake.item()
-        self.opt_D.step()
+        if use_gan:
+            self.opt_D.step()
 
         # Generator: fool D, and L1 to the target. D (updated, frozen) runs as the plain module: its parameters get
         # no gradients here, which a DDP forward would wait for. One backward of the mean over the images: G's
@@ -140,13 +178,22 @@ class Pix2Pix:
         self.opt_G.zero_grad(set_to_none=True)
         total = None
         for i in range(count):
-            with use(slots_d, i):
-                pred = self.D(torch.cat([x_ds[i], fakes[i]], 1))
-            loss_g_gan = self.bce(pred, torch.ones_like(pred))
             loss_g_l1 = self.l1(fakes[i], ys[i])
-            loss_g = scale(loss_g_gan + self.cfg["lambda_l1"] * loss_g_l1)
+            loss_g = self.cfg["lambda_l1"] * loss_g_l1
+            if use_gan:
+                with use(slots_d, i):
+                    pred = self.D(torch.cat([x_ds[i], fakes[i]], 1))
+                loss_g_gan = self.bce(pred, torch.ones_like(pred))
+                loss_g = loss_g + self.lambda_gan * loss_g_gan
+                sums["G_GAN"] += loss_g_gan.item()
+            if self.lambda_final > 0:
+                f = fronts[i]
+                loss_final = self.l1(lightmap_loss.display_final(lights[i], f),
+                                     lightmap_loss.display_final(f[:, data.FRONT["reference"]], f))
+                loss_g = loss_g + self.lambda_final * loss_final
+                sums["G_final"] += loss_final.item()
+            loss_g = scale(loss_g)
             total = loss_g if total is None else total + loss_g
-            sums["G_GAN"] += loss_g_gan.item()
             sums["G_L1"] += loss_g_l1.item()
         total.backward()
         self.opt_G.step()

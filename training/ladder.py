@@ -24,7 +24,7 @@ import ngi_paths
 
 HERE = Path(__file__).resolve().parent
 LADDER = HERE / "configs" / "ladder.json"
-RUNG_KEYS = {"name", "layout", "n", "ngf", "num_downs", "seed", "lane", "ship"}
+RUNG_KEYS = {"name", "layout", "n", "ngf", "num_downs", "seed", "lane", "ship", "recipe"}
 
 
 def log(msg):
@@ -34,6 +34,10 @@ def log(msg):
 def load_ladder(path=LADDER):
     """The ladder config, each rung checked for unknown keys and unique names."""
     ladder = json.loads(Path(path).read_text())
+    try:
+        ladder["path"] = Path(path).resolve().relative_to(ngi_paths.REPO).as_posix()
+    except ValueError:
+        ladder["path"] = Path(path).name
     names = set()
     for r in ladder["rungs"]:
         unknown = set(r) - RUNG_KEYS
@@ -46,10 +50,12 @@ def load_ladder(path=LADDER):
 
 
 def rung_config(ladder, rung):
-    """train.py config of one rung: the recipe with the rung's architecture and seed."""
+    """train.py config of one rung: the recipe with the rung's own recipe keys (an ablation's), architecture and
+    seed."""
     cfg = dict(ladder["recipe"])
+    cfg.update(rung.get("recipe", {}))
     cfg.update({k: rung[k] for k in ("layout", "ngf", "num_downs", "seed") if k in rung})
-    cfg["comment"] = f"ladder rung {rung['name']} (training/configs/ladder.json)"
+    cfg["comment"] = f"ladder rung {rung['name']} ({ladder.get('path', 'training/configs/ladder.json')})"
     return cfg
 
 

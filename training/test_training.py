@@ -13,6 +13,10 @@
 5. exports (bn_mode auto), runs `ngi generate` on the same input and compares with PyTorch (max |diff| < 1e-4),
    runs `ngi lightmap` on the test frame and evaluate.py on the test split;
 6. the same for a single-view model (10 input channels);
+6b. the indirect output mode (issue 25): lightmap_loss.py's decode / tone map / compose equal the pipeline's
+   kernels; a tiny surround generator trained with output_mode indirect, the final-image term and no GAN: its
+   loss falls, the export records the mode, and ngi's lightmap of a frame is the frame's direct light plus the
+   decoded output of the same network in PyTorch (max relative |diff| < 1e-4);
 7. seed 001's AO: `ngi ao-data` (6 + 1 views at 48 px), ao_train.py for 40 iterations, and `ngi ao` equal to the
    exported network evaluated in PyTorch on ao_common.py's ring inputs (max |diff| < 1e-4, background 1).
 Exit code 77 (ctest: skipped) when torch or numpy is missing.
@@ -40,6 +44,7 @@ import ngi.reference_models as reference_models  # noqa: E402
 
 import ao_common  # noqa: E402
 import data  # noqa: E402
+import lightmap_loss  # noqa: E402
 import ngi_paths  # noqa: E402
 from ngi_paths import run  # noqa: E402  (a failed command raises RuntimeError with its output)
 
@@ -157,6 +162,63 @@ def test_export_and_run(ngi, dataset, work, run_dir, layout):
     return model, worst
 
 
+def test_indirect_mode(ngi, dataset, work):
+    """The indirect output mode end to end (docs/CONVENTIONS.md section 8, training/lightmap_loss.py)."""
+    import ngi as ngi_py
+    dev = ngi_py.Device("")
+    rel = data.list_frames(dataset, "test")[0]
+    frame = ngi_py.read_frame(str(dataset / rel))
+    n = frame.n
+    pipe = ngi_py.Pipeline(dev, n)
+    # front.npy holds the frame's front planes as the frame folder has them.
+    front = data.FrameDataset(data.MergeCache(data.default_cache_dir(dataset, "surround"), "surround"), [rel]).front(0)
+    check(np.array_equal(front[data.FRONT["direct"]].numpy(), frame.feature("direct")[0])
+          and np.array_equal(front[data.FRONT["reference"]].numpy(), frame.reference),
+          "front.npy: the frame's front direct light and reference, bit for bit")
+    # The PyTorch output side equals the kernels (float32 rounding apart).
+    rng = np.random.default_rng(3)
+    light = (rng.random((3, n, n)) * 4.0).astype(np.float32)
+    light[0, 0, :4] = [0.0, 1e-4, 65504.0, 2e5]
+    want = pipe.tonemap(scoring_compose(frame, light))
+    got = lightmap_loss.display_final(torch.from_numpy(light)[None], front[None])[0].numpy()
+    tm_err = float(np.abs(got - want).max())
+    check(tm_err < 1e-5, f"lightmap_loss compose + ACES + sRGB == the pipeline's: max |diff| {tm_err:.2g}")
+    v = np.clip(rng.normal(0, 0.6, (1, 3, n, n)), -1, 1).astype(np.float32)
+    v[0, 0, 0, :3] = [-1.0, 1.0, 0.999999]
+    surround = ngi_py.Model(dev, str(work / "surround.safetensors"))
+    want = pipe.front_lightmap(v, surround)
+    got = lightmap_loss.decode(torch.from_numpy(v).double())[0].numpy()
+    dec_err = float(np.max(np.abs(got - want) / (1e-3 + np.abs(want))))
+    check(dec_err < 1e-5, f"lightmap_loss.decode == decode_lightmap: max relative |diff| {dec_err:.2g}")
+
+    cfg_path = work / "indirect.json"
+    cfg_path.write_text(json.dumps(dict(TRAIN, layout="surround", steps=30, output_mode="indirect", lambda_final=100,
+                                        lambda_gan=0, eval_every=30)))
+    train(cfg_path, dataset, work / "run_ind", ngi)
+    log = read_log(work / "run_ind")
+    l1 = [e["G_L1"] for e in log]
+    check(np.mean(l1[-5:]) < np.mean(l1[:5]) and all(e["G_GAN"] == 0 and e["G_final"] > 0 for e in log),
+          f"indirect mode: L1 {np.mean(l1[:5]):.4f} -> {np.mean(l1[-5:]):.4f}; no GAN term, final-image term on")
+    model_path = work / "indirect.safetensors"
+    run([sys.executable, HERE / "export.py", "--run", work / "run_ind", "--out", model_path])
+    _, cfg = model_file.read_model(str(model_path))
+    check(cfg["output_mode"] == "indirect", "export: output_mode indirect in the model file")
+    model = ngi_py.Model(dev, str(model_path))
+    check(model.output_mode == "indirect", "ngi.Model reads the mode")
+    got = pipe.run(model, frame, outputs=("lightmap",))["lightmap"]
+    x = pipe.network_input(frame, model)
+    out, _ = reference_output(model_path, x)
+    want = (lightmap_loss.clean_light(torch.from_numpy(frame.feature("direct")[0]).double())
+            + lightmap_loss.decode(data.crop_front(torch.from_numpy(out).double(), n, "surround"))[0]).numpy()
+    err = float(np.max(np.abs(got - want) / (1e-3 + np.abs(want))))
+    check(err < 1e-4, f"indirect mode: ngi lightmap == direct + decoded PyTorch output, max relative |diff| {err:.2g}")
+
+
+def scoring_compose(frame, light):
+    import ngi.scoring as scoring
+    return scoring.compose(frame, light)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
@@ -225,6 +287,9 @@ def main():
     summary = json.loads((work / "eval" / "summary.json").read_text())
     check(summary["frames"] == 1 and summary["network"]["final_ldr"]["ssim"] is not None,
           "evaluate.py: summary over the test split")
+
+    # 6b. The indirect output mode.
+    test_indirect_mode(ngi, dataset, work)
 
     # 6. Single view.
     cfg_sv = work / "single_view.json"

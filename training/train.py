@@ -27,7 +27,10 @@ steps), decay_steps (linear decay of lr to 0 over the last decay_steps), seed, c
 eval_every, eval_frames, threads (per rank; 0 = PyTorch's default, which torchrun sets to 1 per rank),
 accumulate (images per optimizer step per rank, each forwarded alone, gradients averaged; default 1),
 batch_size (must be 1), train_split, eval_split, max_frames (0 = all), cache_dir
-(null = DATA/merge_cache/<layout>), merge_jobs, comment.
+(null = DATA/merge_cache/<layout>), merge_jobs, comment; output_mode ("lightmap": the thesis, the output is the
+whole lightmap | "indirect": the output is indirect light added to the frame's direct light), lambda_final (weight
+of the L1 of tone-mapped final images, 0 = off), lambda_gan (weight of the GAN term, 0 = no discriminator);
+gan.py says what each does.
 """
 
 import argparse
@@ -47,6 +50,7 @@ import data
 import distributed
 import evaluate
 import gan
+import lightmap_loss
 import networks
 import ngi_paths
 
@@ -56,6 +60,7 @@ DEFAULTS = {
     "steps": 20000, "decay_steps": 0, "seed": 1, "checkpoint_every": 500, "keep_every": 5000,
     "eval_every": 0, "eval_frames": 20, "threads": 0, "train_split": "train", "eval_split": "test",
     "max_frames": 0, "cache_dir": None, "merge_jobs": 1, "comment": "",
+    "output_mode": "lightmap", "lambda_final": 0.0, "lambda_gan": 1.0,
 }
 # Keys that may change when a run is resumed (they do not change what a step computes).
 # accumulate may change as long as the effective batch (world size x accumulate) stays (train() checks that).
@@ -73,6 +78,10 @@ def load_config(path, overrides):
         cfg.update(user)
     cfg.update({k: v for k, v in overrides.items() if v is not None})
     data.check_layout(cfg["layout"])
+    lightmap_loss.check_mode(cfg["output_mode"])
+    for key in ("lambda_final", "lambda_gan"):
+        if not (isinstance(cfg[key], (int, float)) and math.isfinite(cfg[key]) and cfg[key] >= 0):
+            raise ValueError(f"{key} must be a finite number >= 0, got {cfg[key]!r}")
     if cfg["batch_size"] != 1:
         raise ValueError("batch_size must be 1 (pix2pix's setting; per-image BatchNorm at inference relies on it); "
                          "for more images per step use accumulate or more ranks (each image is normalized alone)")
@@ -113,7 +122,7 @@ def rewrite_log(path, max_step):
     data.write_text_atomic(path, "".join(line + "\n" for line in kept))
 
 
-LOSS_KEYS = ("G_GAN", "G_L1", "D_real", "D_fake")
+LOSS_KEYS = ("G_GAN", "G_L1", "D_real", "D_fake", "G_final")
 
 
 class SampleOrder:
@@ -293,8 +302,10 @@ def train(args, cfg, d):
         while step < cfg["steps"]:
             ran = True
             t0 = time.monotonic()
-            items = [train_set[order(samples + p)] for p in positions]
-            sums = model.step([x[None] for x, _, _ in items], [y[None] for _, y, _ in items], step)
+            indices = [order(samples + p) for p in positions]
+            items = [train_set[i] for i in indices]
+            fronts = [train_set.front(i)[None] for i in indices] if model.needs_front() else None
+            sums = model.step([x[None] for x, _, _ in items], [y[None] for _, y, _ in items], step, fronts)
             # One small allreduce: the losses' sums over the effective batch, and whether any rank got a signal
             # (all ranks then stop after the same step).
             reduced = d.all_reduce_sum([sums[k] for k in LOSS_KEYS] + [float(stop.signum is not None)])
