@@ -23,7 +23,7 @@ namespace ngi_cli {
 namespace {
 
 struct Options {
-    std::string spec, out, device, preview, area_light;
+    std::string spec, out, device, preview, area_light, camera_path = "auto";
     ngi::RenderSettings rs;
     bool no_reference = false;
     int frames = 100, frame = 0;
@@ -77,7 +77,8 @@ int run(const Options& o) {
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const float hours = time < 0.0 ? scene.default_time : float(time);
     // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene.
-    const ngi::CameraPath path = ngi::dataset_camera_path(scene, frames, 25);
+    const ngi::CameraPath path = ngi::dataset_camera_path(
+        scene, frames, 25, ngi::parse_camera_path_kind(o.camera_path, "--camera-path"));
     const ngi::CameraPose pose = path.at(float(frame));
     rs.seed = o.seed >= 0 ? std::uint32_t(o.seed) : ngi::dataset_frame_seed(scene.name, frame);
 
@@ -149,6 +150,10 @@ Run add_render(CLI::App& app) {
     add_integer(*cmd, "--feature-spp", rs.feature_spp, 1, 1 << 20, "F", "samples per pixel of the direct feature");
     add_integer(*cmd, "--bounces", rs.max_bounces, 0, 1000, "B", "indirect bounces of the reference");
     add_integer(*cmd, "--path-frames", o->frames, 1, 1000000, "P", "frames of the scene's camera path");
+    add_choice(*cmd, "--camera-path", o->camera_path, {"auto", "fly", "orbit"},
+               "the camera path: fly = through the scene's free space, orbit = around its solid blocks looking at "
+               "them, auto = orbit for a .vox file, fly for a procedural scene (as a dataset's \"camera_path\")",
+               "auto");
     add_integer(*cmd, "--seed", o->seed, 0, 2147483647, "S",
                 "random seed of the path tracer (a second, independent render of the same frame measures the "
                 "reference's noise)", "the dataset's seed of frame K");

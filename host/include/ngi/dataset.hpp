@@ -43,13 +43,16 @@ struct DatasetConfig {
     int keyframe_interval = 25;
     std::vector<DatasetScene> train, test;
     std::optional<DatasetAreaLight> area_light;  // absent: no area light (every dataset before this key)
+    CameraPathKind camera_path = CameraPathKind::Auto;  // "camera_path": auto (orbit for .vox, fly otherwise),
+                                                        // fly or orbit; stored in dataset.json only when not auto
 
     // JSON (docs/RENDERER.md): {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces",
     // "frames_per_scene",
     // "keyframe_interval", "train": [entry...], "test": [entry...]}, entry = {"scene": "room:seed=3"} or
     // {"family": "room", "seeds": [1, 2] | {"first": 1, "count": 4}} or {"vox": "file.vox"}, plus optional
     // "time": hours | [start, end] and "frames"; optional "area_light": {"centre_min": [x, y, z], "centre_max":
-    // [x, y, z], "size_min": m, "size_max": m, "radiance": [r, g, b], "facing": "down"} (facing optional). Relative .vox paths are relative to the config file (and are
+    // [x, y, z], "size_min": m, "size_max": m, "radiance": [r, g, b], "facing": "down"} (facing optional); optional
+    // "camera_path": "auto" | "fly" | "orbit" (make_camera_path). Relative .vox paths are relative to the config file (and are
     // stored as absolute paths, so a resumed run from another directory sees the same config).
     // Throws InputError naming the file for bad JSON, unknown keys, bad values, and scenes in both splits.
     static DatasetConfig load(const std::string& path);
@@ -58,8 +61,10 @@ struct DatasetConfig {
 };
 
 // The per-scene camera path and per-frame seed the dataset uses, so that `ngi render --frame K` reproduces
-// frame K of a dataset scene exactly.
-CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval);
+// frame K of a dataset scene exactly. `kind` as the config's "camera_path" (Auto: an orbit for .vox scenes, the
+// fly-through for procedural ones).
+CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval,
+                               CameraPathKind kind = CameraPathKind::Auto);
 std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame);
 float dataset_frame_time(const DatasetScene& scene, int frame, int frames);
 // The area light of the frame with seed `frame_seed` (dataset_frame_seed): deterministic in both arguments.

@@ -24,6 +24,10 @@ struct Material {
 struct CameraHints {
     glm::vec3 region_lo{0.0f}, region_hi{0.0f};  // keyframes lie inside this box (world metres)
     std::optional<glm::vec3> look;                // preferred horizontal look direction (e.g. away from an opening)
+    // The default path ("auto") orbits the occupied blocks instead of flying through free space: set for a model
+    // without a world around it (.vox files), whose free space is mostly sky. The region then reaches beyond the
+    // grid (outside it is air: primary rays enter the grid through its boundary).
+    bool orbit = false;
 };
 
 struct VoxelScene {

@@ -3,8 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <string>
 #include <glm/gtc/constants.hpp>
 
+#include "ngi/camera.hpp"
 #include "ngi/error.hpp"
 #include "render/rand.hpp"
 
@@ -14,6 +17,8 @@ namespace {
 constexpr float kKeyClearance = 0.5f;   // keyframes: half-size of the block-free box around the camera
 constexpr float kPathClearance = 0.3f;  // every interpolated position
 constexpr int kAttempts = 48;
+
+std::string scene_label(const VoxelScene& s) { return s.name.empty() ? std::string("(unnamed)") : s.name; }
 
 glm::vec3 catmull_rom(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3, float s) {
     const float s2 = s * s, s3 = s2 * s;
@@ -39,6 +44,53 @@ glm::quat orientation(float yaw, float pitch) {
 
 float yaw_of(glm::vec3 d) { return std::atan2(d.z, d.x); }
 
+float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
+
+// Distance along o + t d (d unit) to the first solid block, or -1 if the ray leaves the grid without one. Like the
+// tracer's DDA (kernels/pathtrace.cl, trace_crossing), a ray that starts outside the grid enters it through its box.
+float first_hit(const VoxelScene& s, glm::vec3 o, glm::vec3 d) {
+    const glm::vec3 inv(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
+    const glm::vec3 ta = -o * inv, tb = (glm::vec3(s.size) - o) * inv;
+    const glm::vec3 lo = glm::min(ta, tb), hi = glm::max(ta, tb);
+    const float t_enter = std::max({lo.x, lo.y, lo.z}), t_exit = std::min({hi.x, hi.y, hi.z});
+    float t = std::max(t_enter, 0.0f);
+    if (t_exit < t) return -1.0f;
+    glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor(o + d * t)), glm::ivec3(0), s.size - 1);
+    const glm::ivec3 step(d.x >= 0.0f ? 1 : -1, d.y >= 0.0f ? 1 : -1, d.z >= 0.0f ? 1 : -1);
+    const glm::vec3 delta = glm::abs(inv);
+    glm::vec3 next = (glm::vec3(c + glm::ivec3(glm::greaterThan(step, glm::ivec3(0)))) - o) * inv;
+    for (;;) {  // each step enters a neighbour cell: at most X + Y + Z steps
+        if (s.voxels[s.index(c)] != 0) return t;
+        const int a = next.x < next.y && next.x < next.z ? 0 : (next.y < next.z ? 1 : 2);
+        t = next[a];
+        c[a] += step[a];
+        next[a] += delta[a];
+        if (c[a] < 0 || c[a] >= s.size[a]) return -1.0f;
+    }
+}
+
+// Bounding box (block corners) and centroid (block centres) of the solid blocks.
+struct Occupied {
+    glm::vec3 lo{0.0f}, hi{0.0f}, centroid{0.0f};
+};
+
+Occupied occupied_blocks(const VoxelScene& s) {
+    glm::ivec3 lo(s.size), hi(-1);
+    glm::dvec3 sum(0.0);
+    std::size_t count = 0;
+    for (int z = 0; z < s.size.z; ++z)
+        for (int y = 0; y < s.size.y; ++y)
+            for (int x = 0; x < s.size.x; ++x)
+                if (s.voxels[s.index({x, y, z})] != 0) {
+                    lo = glm::min(lo, glm::ivec3(x, y, z));
+                    hi = glm::max(hi, glm::ivec3(x, y, z));
+                    sum += glm::dvec3(x, y, z) + 0.5;
+                    ++count;
+                }
+    if (count == 0) throw InputError("camera orbit: scene " + scene_label(s) + " has no solid block to orbit");
+    return {glm::vec3(lo), glm::vec3(hi + 1), glm::vec3(sum / double(count))};
+}
+
 }  // namespace
 
 CameraPose CameraPath::at(float frame) const {
@@ -59,6 +111,42 @@ CameraPose CameraPath::at(float frame) const {
     pose.look = glm::normalize(q * glm::vec3(0, 0, -1));
     pose.up = glm::normalize(q * glm::vec3(0, 1, 0));
     return pose;
+}
+
+bool clear_of_blocks_in_open_air(const VoxelScene& scene, glm::vec3 p, float radius) {
+    const glm::ivec3 lo = glm::max(glm::ivec3(glm::floor(p - radius)), glm::ivec3(0));
+    const glm::ivec3 hi = glm::min(glm::ivec3(glm::floor(p + radius)), scene.size - 1);
+    for (int z = lo.z; z <= hi.z; ++z)  // empty loops when the box misses the grid
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (scene.voxels[scene.index({x, y, z})] != 0) return false;
+    return true;
+}
+
+float front_geometry_share(const VoxelScene& scene, const CameraPose& pose, int n) {
+    if (n < 1) throw InputError("front_geometry_share: the face size must be positive");
+    const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
+    int hits = 0;
+    for (int row = 0; row < n; ++row)
+        for (int col = 0; col < n; ++col)
+            hits += first_hit(scene, pose.position, glm::normalize(face_pixel_direction(b, col, row, n))) >= 0.0f;
+    return float(hits) / float(n * n);
+}
+
+CameraPathKind parse_camera_path_kind(const std::string& text, const std::string& what) {
+    if (text == "auto") return CameraPathKind::Auto;
+    if (text == "fly") return CameraPathKind::Fly;
+    if (text == "orbit") return CameraPathKind::Orbit;
+    throw InputError(what + ": camera path '" + text + "' is not auto, fly or orbit");
+}
+
+const char* camera_path_kind_name(CameraPathKind kind) {
+    switch (kind) {
+        case CameraPathKind::Fly: return "fly";
+        case CameraPathKind::Orbit: return "orbit";
+        case CameraPathKind::Auto: break;
+    }
+    return "auto";
 }
 
 bool clear_of_blocks(const VoxelScene& scene, glm::vec3 p, float radius) {
@@ -130,6 +218,113 @@ CameraPath make_camera_path(const VoxelScene& scene, int frames, std::uint32_t s
     const float yaw0 = r.range(0.0f, glm::two_pi<float>());
     for (int k = 0; k < nkeys; ++k) path.keys.push_back({p, orientation(yaw0 + 1.2f * float(k), 0.0f)});
     return path;
+}
+
+CameraPath make_orbit_path(const VoxelScene& scene, int frames, std::uint32_t seed, int interval) {
+    if (frames < 1 || interval < 1) throw InputError("camera orbit: frames and interval must be positive");
+    const int nkeys = std::max(2, (frames - 1 + interval - 1) / interval + 1);
+    const Occupied m = occupied_blocks(scene);
+    // Look at the box's centre pulled halfway to the centroid: models with much empty box (a character's arms,
+    // a tree's crown) are framed by their mass, not by the air between.
+    const glm::vec3 box_centre = 0.5f * (m.lo + m.hi);
+    const glm::vec3 target = 0.5f * (box_centre + m.centroid);
+    // The distance at which the box's bounding sphere just fits the 90-degree face; candidates reach from well
+    // inside it (flat or wide models fill the view only from close by or from above) to beyond it.
+    const float d0 = 0.5f * glm::length(m.hi - m.lo) / std::sin(glm::quarter_pi<float>());
+    constexpr float kFactors[] = {0.4f, 0.5f, 0.6f, 0.75f, 0.9f, 1.05f, 1.2f};
+    constexpr float kElevations[] = {5.0f, 20.0f, 35.0f, 50.0f};  // degrees above the target
+    constexpr int nf = int(std::size(kFactors)), ne = int(std::size(kElevations));
+    constexpr int kOrbitAttempts = 8;
+    // 7.5 keyframes per turn: a second turn does not retrace the first one's keyframes.
+    const float step = glm::two_pi<float>() / 7.5f;
+    const glm::vec3 up(0, 1, 0);
+    detail::Rand r(seed, 0x6f726274u);  // "orbt"
+
+    CameraPath best;
+    float best_worst = -1.0f;
+    // Open air along the straight hop from the previous keyframe (the spline stays near it): in a scene with
+    // blocks all over its box (a forest), a close keyframe may stand in a clearing the next one cannot reach.
+    auto hop_clear = [&](glm::vec3 a, glm::vec3 b) {
+        const int steps = int(std::ceil(glm::length(b - a) / 0.1f));
+        for (int i = 1; i < steps; ++i)
+            if (!clear_of_blocks_in_open_air(scene, glm::mix(a, b, float(i) / float(steps)), kPathClearance + 0.05f))
+                return false;
+        return true;
+    };
+    for (int attempt = 0; attempt < kOrbitAttempts; ++attempt) {
+        // Each failed attempt gives up the closest distance left: the last ones orbit from outside the clutter.
+        const int first_f = std::min(attempt, nf - 1);
+        const float theta0 = r.range(0.0f, glm::two_pi<float>());
+        const float dir = r.chance(0.5f) ? 1.0f : -1.0f;
+        CameraPath path;
+        path.interval = interval;
+        int prev_f = -1, prev_e = -1;
+        for (int k = 0; k < nkeys; ++k) {
+            const float theta = theta0 + dir * step * float(k);
+            float best_score = -1e9f;
+            CameraKey key;
+            int key_f = -1, key_e = -1;
+            for (int fi = first_f; fi < nf; ++fi)
+                for (int ei = 0; ei < ne; ++ei) {
+                    const float dist = d0 * kFactors[fi], el = glm::radians(kElevations[ei]);
+                    const glm::vec3 p = target + dist * glm::vec3(std::cos(el) * std::cos(theta), std::sin(el),
+                                                                  std::cos(el) * std::sin(theta));
+                    if (!in_region(scene, p) || !clear_of_blocks_in_open_air(scene, p, kKeyClearance)) continue;
+                    if (!path.keys.empty() && !hop_clear(path.keys.back().position, p)) continue;
+                    const glm::vec3 look = glm::normalize(target - p);
+                    // Not from behind a nearby wall or inside a tree: the view toward the target must carry
+                    // at least a quarter of the way there.
+                    const float t_centre = first_hit(scene, p, look);
+                    if (t_centre >= 0.0f && t_centre < 0.25f * dist) continue;
+                    const float share = front_geometry_share(scene, {p, look, up}, 16);
+                    if (share <= 0.0f) continue;
+                    // Filled views first (beyond 80 % more fill is no better), then farther views (more of the
+                    // model), then staying near the previous keyframe's distance and height (a calm orbit),
+                    // plus a little seeded variety.
+                    float score = std::min(share, 0.8f) + 0.08f * float(fi) / float(nf - 1) + r.range(0.0f, 0.04f);
+                    if (prev_f >= 0)
+                        score -= 0.1f * float(std::abs(fi - prev_f)) / float(nf - 1) +
+                                 0.1f * float(std::abs(ei - prev_e)) / float(ne - 1);
+                    if (score > best_score) {
+                        best_score = score;
+                        key = {p, glm::quatLookAtRH(look, up)};
+                        key_f = fi;
+                        key_e = ei;
+                    }
+                }
+            if (key_f < 0) break;  // no room at this azimuth: try another start
+            path.keys.push_back(key);
+            prev_f = key_f;
+            prev_e = key_e;
+        }
+        if (int(path.keys.size()) < nkeys) continue;
+        bool clear = true;  // the spline swings wider or narrower than the keyframes: check it
+        for (int f = 0; f < path.frame_count() * 2 && clear; ++f) {
+            const glm::vec3 p = path.at(0.5f * float(f)).position;
+            clear = in_region(scene, p) && clear_of_blocks_in_open_air(scene, p, kPathClearance);
+        }
+        if (!clear) continue;
+        float worst = 1.0f;  // the emptiest front view of the path's frames
+        for (int f = 0; f < path.frame_count() && worst > 0.0f; ++f)
+            worst = std::min(worst, front_geometry_share(scene, path.at(float(f)), 8));
+        if (worst > 0.0f) return path;
+        if (worst > best_worst) {
+            best_worst = worst;
+            best = path;
+        }
+    }
+    if (best_worst < 0.0f)
+        throw InputError("camera orbit: scene " + scene_label(scene) +
+                         " has no room for the camera around its model (0.5 m of air at each keyframe, inside the "
+                         "scene's camera region)");
+    return best;  // every start leaves some frame looking past the model: the best one found
+}
+
+CameraPath make_camera_path(const VoxelScene& scene, CameraPathKind kind, int frames, std::uint32_t seed,
+                            int interval) {
+    if (kind == CameraPathKind::Auto) kind = scene.camera.orbit ? CameraPathKind::Orbit : CameraPathKind::Fly;
+    return kind == CameraPathKind::Orbit ? make_orbit_path(scene, frames, seed, interval)
+                                         : make_camera_path(scene, frames, seed, interval);
 }
 
 }  // namespace ngi

@@ -174,6 +174,7 @@ json to_json(const DatasetConfig& c) {
               {"train", scenes(c.train)}, {"test", scenes(c.test)}};
     // Only when set, so that the dataset.json of a dataset rendered before this key existed still matches.
     if (c.test_reference_spp > 0) j["test_reference_spp"] = c.test_reference_spp;
+    if (c.camera_path != CameraPathKind::Auto) j["camera_path"] = camera_path_kind_name(c.camera_path);  // likewise
     if (c.area_light) {  // likewise
         const DatasetAreaLight& a = *c.area_light;
         j["area_light"] = {{"centre_min", vec(a.centre_min)}, {"centre_max", vec(a.centre_max)},
@@ -204,7 +205,8 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
         r.fail(std::string("not valid JSON: ") + e.what());
     }
     r.keys(j, {"n", "feature_spp", "reference_spp", "test_reference_spp", "max_bounces", "rr_start",
-               "frames_per_scene", "keyframe_interval", "train", "test", "area_light", "comment"}, "the top level");
+               "frames_per_scene", "keyframe_interval", "train", "test", "area_light", "camera_path", "comment"},
+           "the top level");
     DatasetConfig c;
     c.render.n = r.integer(j, "n", c.render.n, 1, 8192);
     c.render.feature_spp = r.integer(j, "feature_spp", c.render.feature_spp, 1, 1 << 20);
@@ -215,6 +217,14 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, 1000000);
     c.keyframe_interval = r.integer(j, "keyframe_interval", c.keyframe_interval, 1, 100000);
     if (j.contains("area_light")) c.area_light = r.area_light(j["area_light"]);
+    if (j.contains("camera_path")) {
+        if (!j["camera_path"].is_string()) r.fail("'camera_path' must be \"auto\", \"fly\" or \"orbit\"");
+        try {
+            c.camera_path = parse_camera_path_kind(j["camera_path"].get<std::string>(), "'camera_path'");
+        } catch (const InputError& e) {
+            r.fail(e.what());
+        }
+    }
     if (!j.contains("train")) r.fail("no 'train' scenes");
     const fs::path base = fs::path(path).parent_path();
     c.train = r.split(j["train"], "train", base);
@@ -232,8 +242,8 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     return c;
 }
 
-CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval) {
-    return make_camera_path(scene, frames, fnv1a(scene.name), interval);
+CameraPath dataset_camera_path(const VoxelScene& scene, int frames, int interval, CameraPathKind kind) {
+    return make_camera_path(scene, kind, frames, fnv1a(scene.name), interval);
 }
 
 std::uint32_t dataset_frame_seed(const std::string& scene_name, int frame) {
@@ -287,7 +297,7 @@ void validate_scenes(const DatasetConfig& config) {
             const int frames = entry.frames > 0 ? entry.frames : config.frames_per_scene;
             try {
                 const VoxelScene scene = make_scene(entry.spec);
-                dataset_camera_path(scene, frames, config.keyframe_interval);
+                dataset_camera_path(scene, frames, config.keyframe_interval, config.camera_path);
             } catch (const Error& e) {
                 throw InputError(std::string("dataset: ") + split_name + " scene " + std::to_string(i) + " (" +
                                  entry.spec + "): " + e.what() + "; nothing was written");
@@ -486,7 +496,7 @@ void render_dataset(const Device& device, const DatasetConfig& config, const std
         }
 
         const VoxelScene scene = make_scene(entry.spec);
-        const CameraPath path = dataset_camera_path(scene, frames, config.keyframe_interval);
+        const CameraPath path = dataset_camera_path(scene, frames, config.keyframe_interval, config.camera_path);
         DatasetScene times = entry;
         if (times.time_start < 0) times.time_start = times.time_end = scene.default_time;
         json info = {{"spec", scene.name}, {"split", slot.split}, {"frames", frames},

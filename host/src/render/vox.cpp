@@ -437,6 +437,14 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
         }
     }
     s.name = path;
+    // A .vox file is a model, not a world: the grid is the model's bounding box, so a fly-through of its free
+    // space mostly sees sky. Its default camera path orbits it from the air around the grid (up to one model
+    // size away, never below its base: the lower half-space is the ground). The fly-through stays inside the grid
+    // whatever the region (its candidates are clipped to the grid), so `--camera-path fly` is unchanged.
+    const float margin = float(std::max({s.size.x, s.size.y, s.size.z}));
+    s.camera.orbit = true;
+    s.camera.region_lo = glm::vec3(-margin, 0.0f, -margin);
+    s.camera.region_hi = glm::vec3(s.size) + margin;
     return s;
 }
 
