@@ -61,6 +61,17 @@ const std::vector<std::string>& single_view_input_channels();
 // per-frame switch of a plan (docs/RESULTS.md, "Model only what a scene requires") runs a single-view model then.
 double outside_light_share(const Frame& frame);
 
+// The share of the front view's final image that a lightmap adds beyond the frame's direct light (the per-frame
+// guard of `ngi lightmap --guard`, docs/CONVENTIONS.md section 17):
+//   sum Y(albedo x max(clean(lightmap) - clean(direct), 0)) / sum Y(final),
+// final = compose_final's albedo x clean(lightmap) + clean(emission) + clean(env) (the terms the frame has), both
+// sums over the front face's pixels in double, Y = Rec. 709 luminance (as outside_light_share), albedo NaN -> 0
+// and clamped to [0, 1], clean = compose's rule for light terms (NaN, negative -> 0; +Inf -> FLT_MAX). In [0, 1];
+// 0 when nothing is lit. Any lightmap: a lightmap-mode network's or an indirect-mode one's (direct + indirect).
+// A large share means the frame's look rests mostly on the network's indirect light. Throws InputError when
+// `lightmap` is not N x N x 3 or the frame lacks the front albedo or direct light (or one is not N x N x 3).
+double indirect_share(const Frame& frame, const Image& lightmap);
+
 // What preprocessing found in a frame's raw buffers (all faces it used).
 struct PreprocessStats {
     std::array<int, kFeatureCount> nonfinite{};  // NaN / +-Inf values replaced, per Feature
