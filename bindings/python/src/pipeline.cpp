@@ -220,6 +220,17 @@ float arrays (depth may be [6, N, N]), 'look' and 'up' as three numbers, 'refere
 The share of the frame's lumination (direct + emission + env, sanitized like the network input's; Rec. 709
 luminance summed over each face) on the five faces other than the front: in [0, 1], 0 for a frame without light.
 The per-frame switch of a plan (ngi.plan) runs the single-view model when it is below the plan's threshold.)doc");
+    m.def("indirect_share", [](const ngi::Frame& frame, const py::object& lightmap) {
+        const ngi::Image img = to_image(lightmap, "indirect_share: lightmap");
+        py::gil_scoped_release release;  // a host loop over N x N x 3 values: other threads may run meanwhile
+        return ngi::indirect_share(frame, img);
+    }, py::arg("frame"), py::arg("lightmap"), R"doc(
+The share of the front view's final image that `lightmap` ([3, N, N], linear) adds beyond the frame's direct light:
+sum of Y(albedo * max(lightmap - direct, 0)) / sum of Y(final), final = albedo * lightmap + emission + env (the
+terms the frame has), Y = Rec. 709 luminance, light terms and albedo sanitized as compose does (NaN, negative -> 0,
++Inf -> FLT_MAX; albedo clamped to [0, 1]), sums in double. In [0, 1]; 0 when nothing is lit. The signal of
+`ngi lightmap --guard` (docs/CONVENTIONS.md section 17). InputError when the lightmap is not [3, N, N] or the frame
+lacks the front albedo or direct light.)doc");
 
     py::class_<PyPipeline, std::shared_ptr<PyPipeline>>(m, "Pipeline", R"doc(
 The surround-aware pipeline for face size N: preprocessing, MergeToGlobalView, coordinate map, the generator,

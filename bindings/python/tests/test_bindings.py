@@ -179,6 +179,39 @@ def test_output_mode_indirect_adds_the_front_direct_light(dev, surround, frame, 
         ngi.Model(dev, tmp_path / "bad.safetensors")
 
 
+def test_indirect_share_equals_the_numpy_formula(dev, surround, frame):
+    # The guard's signal (docs/CONVENTIONS.md section 17) on the network's lightmap of a rendered frame, and on a
+    # hostile one, against the formula in NumPy (float64 sums).
+    pipe = ngi.Pipeline(dev, 64)
+    lightmap = pipe.run(surround, frame)["lightmap"]
+    f32max = float(np.finfo(np.float32).max)
+
+    def clean(v):
+        return np.clip(np.nan_to_num(np.asarray(v, np.float64), nan=0.0, posinf=f32max, neginf=0.0), 0.0, f32max)
+
+    def front(name):
+        v = frame.feature(name)
+        return 0.0 if v is None else clean(v[0])
+
+    def share(lm):
+        albedo = np.clip(np.nan_to_num(frame.feature("albedo")[0].astype(np.float64), nan=0.0), 0.0, 1.0)
+        luma = np.array([0.2126, 0.7152, 0.0722])[:, None, None]
+        added = np.sum(luma * albedo * np.maximum(clean(lm) - front("direct"), 0.0))
+        total = np.sum(luma * np.minimum(clean(lm) * albedo + front("emission") + front("env"), f32max))
+        return float(np.clip(added / total, 0.0, 1.0)) if total > 0 else 0.0
+
+    s = ngi.indirect_share(frame, lightmap)
+    assert 0.0 < s < 1.0
+    assert s == pytest.approx(share(lightmap), rel=1e-6)
+    hostile = lightmap.copy()
+    hostile[0, 0, :3] = [np.nan, -np.inf, -5.0]
+    hostile[1, 2, 2] = np.inf
+    assert ngi.indirect_share(frame, hostile) == pytest.approx(share(hostile), rel=1e-6)
+    assert ngi.indirect_share(frame, frame.feature("direct")[0]) == 0.0  # direct light adds nothing
+    with pytest.raises(ngi.InputError, match="indirect_share: the lightmap is 64x32x3, expected 64x64x3"):
+        ngi.indirect_share(frame, lightmap[:, :32])
+
+
 def test_make_config_output_mode():
     from ngi import model_file
     assert model_file.make_config("pix2pix_unet", bn_mode="running")["output_mode"] == "lightmap"
