@@ -1,5 +1,9 @@
 // ngi lightmap: a frame folder + a trained generator -> the front view's GI lightmap and final image, and, when
 // the frame has a path-traced reference, a side-by-side comparison and metrics.
+#include <algorithm>
+#include <cfloat>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -30,8 +34,24 @@ bool parse_size(const std::string& s, int& width, int& height) {
            parse_integer(s.substr(x + 1), 1, 16384, height);
 }
 
+// --guard T: the whole string a finite decimal number with 0 < T <= 1 (0 would send every lit frame to direct
+// light; above 1 the guard could never act), or false.
+bool parse_guard(const std::string& s, double& t) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), t);
+    return !s.empty() && ec == std::errc() && end == s.data() + s.size() && std::isfinite(t) && t > 0.0 && t <= 1.0;
+}
+
+// A share for the guard's line: three decimals, or three significant digits below 0.001 (a tiny threshold would
+// otherwise print as 0.000).
+std::string share_text(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, v == 0.0 || v >= 0.001 ? "%.3f" : "%.3g", v);
+    return b;
+}
+
 struct Options {
     std::string frame_dir, model_path, plan_path, bn_mode, out_dir, size, device;
+    double guard = 0.0;  // 0: no --guard (the plan's guard, if any, applies)
 };
 
 int run(const Options& o) {
@@ -73,6 +93,24 @@ int run(const Options& o) {
     } else {
         images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
         images.final_image = pipeline.compose(images.lightmap, frame);
+    }
+
+    // The per-frame guard (issue 25): when the lightmap's indirect share of the final image exceeds the threshold,
+    // the network is unlikely to help this frame and the frame falls back to its own direct light, sanitized as
+    // decode_indirect and compose sanitize it. Measured on the network's front lightmap at the frame's face size,
+    // before anything is presented or scored, so every output below (lightmap.exr, final.png, compare.png and the
+    // "network" metrics) is the fallback's. An explicit --guard overrides the plan's.
+    const double guard = o.guard > 0.0 ? o.guard : plan && plan->guard ? plan->guard->max_indirect_share : 0.0;
+    double guard_share = 0.0;
+    bool fell_back = false;
+    if (guard > 0.0) {
+        guard_share = ngi::indirect_share(frame, images.lightmap);
+        fell_back = guard_share > guard;
+        if (fell_back) {
+            images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
+            for (float& v : images.lightmap.data) v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, FLT_MAX);
+            images.final_image = pipeline.compose(images.lightmap, frame);
+        }
     }
     const ngi::Image& lightmap = images.lightmap;
     const ngi::Image& final_image = images.final_image;
@@ -120,6 +158,8 @@ int run(const Options& o) {
     // What the network's output was (docs/MODEL_FORMAT.md): the whole lightmap, or indirect light that the
     // pipeline added to the frame's direct light. None without a model (direct light only).
     if (!metrics.is_null()) metrics["output_mode"] = model ? nlohmann::json(model->config().output_mode) : nlohmann::json();
+    if (guard > 0.0 && !metrics.is_null())
+        metrics["guard"] = {{"max_indirect_share", guard}, {"indirect_share", guard_share}, {"fell_back", fell_back}};
 
     // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
     const ngi::Image lightmap_out = present(lightmap);
@@ -136,6 +176,9 @@ int run(const Options& o) {
                                    (chosen != &plan->rung ? " < " : " >= ") +
                                    std::to_string(plan->fallback->below))
                                       .c_str());
+    if (guard > 0.0)
+        std::printf("guard      indirect share %s %s %s: %s\n", share_text(guard_share).c_str(), fell_back ? ">" : "<=",
+                    share_text(guard).c_str(), fell_back ? "direct light used" : "network kept");
     std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s, %d NaN/Inf sanitized\n", out_dir.c_str(),
                 width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
                 input_text.c_str(), stats.total_nonfinite());
@@ -148,7 +191,10 @@ Run add_lightmap(CLI::App& app) {
     auto o = std::make_shared<Options>();
     CLI::App* cmd = add_command(app, "lightmap", "a frame folder + a trained generator -> the front view's GI lightmap",
                                 "Writes lightmap.exr and final.png and, when the frame has a reference, compare.png "
-                                "(direct only | network | reference) and metrics.json.");
+                                "(direct only | network | reference) and metrics.json. With a guard (--guard, or the "
+                                "plan's), a frame whose lightmap adds more than the threshold's share of the final "
+                                "image beyond direct light falls back to direct light alone (docs/CONVENTIONS.md "
+                                "section 17).");
     add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render)", true);
     CLI::Option* model = add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained generator", false);
     CLI::Option* plan = add_path(*cmd, "--plan", o->plan_path, "PLAN.json",
@@ -167,6 +213,18 @@ Run add_lightmap(CLI::App& app) {
                 int w = 0, h = 0;
                 return parse_size(s, w, h) ? std::string()
                                            : "must be WxH with W and H in 1..16384, e.g. 512x512, got '" + s + "'";
+            },
+            ""));
+    cmd->add_option("--guard", o->guard,
+                     "fall back to direct light alone when the indirect share of the frame (ngi::indirect_share: "
+                     "what the lightmap adds beyond direct light, as a share of the final image's luminance) "
+                     "exceeds T; overrides the plan's guard [0 < T <= 1, default: the plan's, else no guard]")
+        ->type_name("T")
+        ->check(CLI::Validator(
+            [](std::string& s) {
+                double t = 0;
+                return parse_guard(s, t) ? std::string()
+                                         : "needs a finite number with 0 < T <= 1, got '" + s + "'";
             },
             ""));
     add_device(*cmd, o->device);

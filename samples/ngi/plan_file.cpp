@@ -81,6 +81,19 @@ Plan Plan::parse(const std::string& text, const std::string& path) {
             fail(path, "the switch's rung runs at N = " + std::to_string(p.fallback->rung.n) + ", the plan's at " +
                            std::to_string(p.rung.n) + ": one frame cannot feed both");
     }
+    if (j.contains("guard") && !j["guard"].is_null()) {  // null: no guard, as for "switch"
+        const json& g = j["guard"];
+        if (!g.is_object()) fail(path, "guard must be an object {\"max_indirect_share\": T}");
+        for (const auto& item : g.items())  // a misspelt key would silently disable the guard
+            if (item.key() != "max_indirect_share")
+                fail(path, "guard has an unknown key '" + item.key() + "' (it takes max_indirect_share only)");
+        if (!g.contains("max_indirect_share")) fail(path, "guard has no 'max_indirect_share'");
+        const json& t = g["max_indirect_share"];
+        // A JSON number is finite; 0 would send every lit frame to direct light, above 1 the guard never acts.
+        if (!t.is_number() || !(t.get<double>() > 0.0) || !(t.get<double>() <= 1.0))
+            fail(path, "guard.max_indirect_share must be a number with 0 < T <= 1, got " + t.dump());
+        p.guard = Guard{t.get<double>()};
+    }
     return p;
 }
 

@@ -25,9 +25,16 @@ struct Plan {
         PlanRung rung;
     };
     std::optional<Switch> fallback;
+    // The per-frame guard (optional "guard": {"max_indirect_share": T}, 0 < T <= 1): a frame whose
+    // ngi::indirect_share of the chosen rung's lightmap exceeds T falls back to direct light alone. `ngi lightmap
+    // --guard` overrides it.
+    struct Guard {
+        double max_indirect_share = 0.0;
+    };
+    std::optional<Guard> guard;
 
     // Throws ngi::InputError naming the file and the key for a missing file, bad JSON, a wrong format or version,
-    // missing or mistyped keys, a model file that does not exist.
+    // missing, mistyped or out-of-range keys, a model file that does not exist.
     static Plan load(const std::string& path);
     // The same from the file's text; `path` names the plan in errors and is the base of relative model paths.
     static Plan parse(const std::string& text, const std::string& path);

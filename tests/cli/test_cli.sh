@@ -108,6 +108,47 @@ expect_usage() {
   [ ! -e "$work/out_$name" ] || fail "$name: left output behind in $work/out_$name"
 }
 
+# ---- The per-frame guard (--guard T, or a plan's "guard"; docs/CONVENTIONS.md section 17): a frame whose lightmap adds
+# more than T of its final image beyond direct light falls back to direct light. A tiny T makes the random-weight
+# generator's frame fall back (its lightmap is then the direct-light rung's, and so are its scores); T = 1 never does.
+# check_guard DIR FELL_BACK: metrics.json records the guard, and "network" is direct light exactly when it fell back.
+check_guard() {
+  /usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1])); g = m['guard']
+assert set(g) == {'max_indirect_share', 'indirect_share', 'fell_back'} and 0 < g['indirect_share'] <= 1, g
+assert g['fell_back'] is $2 and (m['network'] == m['direct_only']) is $2, m" "$work/$1/metrics.json" ||
+    fail "lightmap guard in $1: $(cat "$work/$1/metrics.json")"
+}
+"$ngi" lightmap --frame "$work/frame" --model "$model" --guard 1e-9 --out "$work/lm_guard_low" > "$work/guard_low.out"
+check_guard lm_guard_low True
+cmp -s "$work/lm_direct/lightmap.exr" "$work/lm_guard_low/lightmap.exr" || fail "guard fallback: not the direct light"
+grep -q "^guard      indirect share .* > 1e-09: direct light used" "$work/guard_low.out" ||
+  fail "guard fallback: $(cat "$work/guard_low.out")"
+"$ngi" lightmap --frame "$work/frame" --model "$model" --guard 1 --out "$work/lm_guard_keep" > "$work/guard_keep.out"
+check_guard lm_guard_keep False
+cmp -s "$work/lm/lightmap.exr" "$work/lm_guard_keep/lightmap.exr" || fail "guard 1 changed the network's lightmap"
+grep -q "^guard      indirect share .* <= 1.000: network kept" "$work/guard_keep.out" ||
+  fail "guard kept: $(cat "$work/guard_keep.out")"
+plan plan_guard '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors",
+  "n": 32, "guard": {"max_indirect_share": 1e-9}}'
+"$ngi" lightmap --frame "$work/frame" --plan "$work/plan_guard.json" --out "$work/lm_plan_guard" > /dev/null
+check_guard lm_plan_guard True
+"$ngi" lightmap --frame "$work/frame" --plan "$work/plan_guard.json" --guard 1 --out "$work/lm_plan_guard1" > /dev/null
+check_guard lm_plan_guard1 False  # an explicit --guard overrides the plan's
+cmp -s "$work/lm/lightmap.exr" "$work/lm_plan_guard1/lightmap.exr" || fail "--guard 1 over a plan's guard: not the network"
+plan plan_guard0 '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors",
+  "n": 32, "guard": {"max_indirect_share": 0}}'
+expect="guard.max_indirect_share must be a number with 0 < T <= 1, got 0"
+expect_failure plan_guard0 "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_guard0.json" --out "$work/out_plan_guard0"
+plan plan_guard_key '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors",
+  "n": 32, "guard": {"max_indirect_shares": 0.5}}'
+expect="guard has an unknown key 'max_indirect_shares'"
+expect_failure plan_guard_key "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_guard_key.json" --out "$work/out_plan_guard_key"
+no_unexpected plan_guard0 && no_unexpected plan_guard_key
+for t in 0 1.5 nan inf -0.5 0.5x ""; do
+  expect=--guard; expect_usage "guard_$t" "$ngi" lightmap --frame "$work/frame" --model "$model" --guard "$t" --out "$work/out_guard_$t"
+  no_unexpected "guard_$t"
+done
+
 # ---- Numeric options are parsed strictly: whole string, finite, in range; errors name the option (exit 2).
 render=("$ngi" render --scene room:seed=1 --face 8 --spp 1 --feature-spp 1)
 expect=--time;        expect_usage time_nan "${render[@]}" --time nan --out "$work/out_time_nan"
