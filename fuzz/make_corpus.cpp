@@ -227,6 +227,8 @@ int main(int argc, char** argv) {
     put("plan_file", "switch.json", R"({"format": "ngi-plan", "version": 1, "rung": "s", "model": "/proc/self/exe", "n": 64,
  "switch": {"below_outside_light_share": 0.6, "rung": "v", "model": "/proc/self/exe", "n": 64, "bn_mode": "per_image"}})");
     put("plan_file", "direct.json", R"({"format": "ngi-plan", "version": 1, "rung": "direct_only", "model": null, "n": 32})");
+    put("plan_file", "guard.json", R"({"format": "ngi-plan", "version": 1, "rung": "s", "model": "/proc/self/exe", "n": 64,
+ "guard": {"max_indirect_share": 0.4}})");
 
     // safetensors
     const auto tiny = tiny_pix2pix();

@@ -139,13 +139,10 @@ def score_frames(runner, vs, frames, label):
     return rows, skipped
 
 
-def indirect_share(frame, lightmap, direct):
-    """Share of the final image's luminance that the lightmap adds beyond direct light (the guard's signal):
-    sum of luma(albedo x max(lightmap - direct, 0)) / sum of luma(final). 0 for an empty image."""
-    albedo = np.clip(np.nan_to_num(frame.feature("albedo")[0], nan=0.0), 0.0, 1.0)
-    added = np.maximum(np.nan_to_num(lightmap, nan=0.0) - np.maximum(np.nan_to_num(direct, nan=0.0), 0.0), 0.0)
-    total = float(np.sum(scoring.luminance(scoring.compose(frame, lightmap))))
-    return float(np.sum(scoring.luminance(added * albedo))) / total if total > 0 else 0.0
+def indirect_share(frame, lightmap, direct=None):
+    """The guard's signal: the share of the final image's luminance the lightmap adds beyond direct light
+    (ngi.indirect_share, docs/CONVENTIONS.md section 17)."""
+    return float(ngi.indirect_share(frame, np.ascontiguousarray(lightmap, np.float32)))
 
 
 def heldout_rows(args, runner, vs, work):
@@ -189,12 +186,21 @@ def vox_rows(args, runner, vs, work):
 # Summaries
 # --------------------------------------------------------------------------
 
+def finite_mean(values):
+    values = [v for v in values if v is not None and np.isfinite(v)]
+    return float(np.mean(values)) if values else None
+
+
 def mean_scores(rows):
+    """Mean final-image PSNR / SSIM and linear-lightmap MSE / PSNR / SSIM over frames (a PSNR that is not finite,
+    identical images, is left out of its mean, as ladder_eval and training/report.py do)."""
     if not rows:
         return None
-    return {"frames": len(rows), "psnr": float(np.mean([r["final"]["psnr"] for r in rows])),
-            "ssim": float(np.mean([r["final"]["ssim"] for r in rows])),
-            "lightmap_mse": float(np.mean([r["lightmap"]["mse"] for r in rows]))}
+    return {"frames": len(rows), "psnr": finite_mean([r["final"]["psnr"] for r in rows]),
+            "ssim": finite_mean([r["final"]["ssim"] for r in rows]),
+            "lightmap_mse": finite_mean([r["lightmap"]["mse"] for r in rows]),
+            "lightmap_psnr": finite_mean([r["lightmap"]["psnr"] for r in rows]),
+            "lightmap_ssim": finite_mean([r["lightmap"]["ssim"] for r in rows])}
 
 
 def by_group(rows, key):
@@ -502,6 +508,7 @@ def merge_zoo(zoo_path, vs, summary, speed):
             "speed": {d: speed[d][v["name"]] for d in speed if v["name"] in speed[d]},
             "heldout": {"frames": s["heldout"]["all"]["frames"],
                         "final": {"psnr": s["heldout"]["all"]["psnr"], "ssim": s["heldout"]["all"]["ssim"]},
+                        "lightmap": {k: s["heldout"]["all"][f"lightmap_{k}"] for k in ("psnr", "ssim", "mse")},
                         "groups": s["heldout"], "vox": s["vox"]},
             "temporal": {"moving_camera": summary["temporal"].get(v["name"])}}
     new = zoo_mod.build(fake, zoo_path, REPO)["rungs"]
@@ -521,6 +528,52 @@ def merge_zoo(zoo_path, vs, summary, speed):
     le.write_json(zoo_path, zoo)
     zoo_mod.load(zoo_path)  # what was written must load
     return [r["name"] for r in new]
+
+
+def gi_cards(zoo):
+    """models/ladder/GI.md: one model card per shipped indirect-light rung (from the zoo manifest)."""
+    L = ["# The indirect-light rungs (issue 25)", "",
+         "Pix2pix U-Net generators whose output is **indirect light only** (`output_mode` \"indirect\" in the file's "
+         "metadata): ngi adds the frame's front direct light to the decoded output, so a network that predicts nothing "
+         "still gives direct light alone. Trained here with one recipe (training/configs/gi.json: L1 of the encoded "
+         "composed lightmap + L1 of the tone-mapped final image, no GAN term) on configs/dataset_gi_n64.json, exported "
+         "with F16 weights. Measured cost and accuracy: [models/zoo.json](../zoo.json); the comparison with direct "
+         "light, the thesis-mode rungs and the public .vox scenes: [docs/RESULTS.md](../../docs/RESULTS.md). "
+         "Reproduce: training/README.md, \"Indirect-light generators\".", ""]
+    for r in zoo["rungs"]:
+        if r.get("output_mode") != "indirect" or r["kind"] != "rung":
+            continue
+        h = (r["accuracy"] or {}).get("heldout") or {}
+        t = r.get("training") or {}
+        g = h.get("groups") or {}
+        what = ("the global view (6 faces merged to 4N x 2N, 12 channels)" if r["layout"] == "surround"
+                else "the front face only (10 channels)")
+        L += [f"## `{r['file']}`", "",
+              f"- **Sees** {what}; N = {r['n']}, input {r['input']}; ngf {r['ngf']}, {r['num_downs']} downsamplings; "
+              f"{fmt(r.get('gflop'), '.2f')} GFLOP per frame.",
+              "- **Output**: indirect diffuse light of the front view (>= 0); lightmap = the frame's direct light + it; "
+              f"batch norm at inference: {r['bn_mode']} (chosen by held-out L1 at export).",
+              f"- **Training**: {t.get('steps')} steps = {fmt(t.get('epochs'), '.1f')} epochs over {t.get('frames')} "
+              f"frames, seed {t.get('seed')}, {fmt((t.get('wall_seconds') or 0) / 60, '.0f')} min on one core."]
+        if h:
+            parts = [f"{k} {fmt(v['psnr'])} dB / SSIM {fmt(v['ssim'], '.3f')} ({v['frames']} frames)"
+                     for k, v in g.items() if v]
+            L.append("- **Held-out** final images against converged references: " + "; ".join(parts) + ".")
+        vox = h.get("vox") or {}
+        if vox.get("all"):
+            L.append(f"- **Public .vox scenes** (evaluation only): {fmt(vox['all']['psnr'])} dB / SSIM "
+                     f"{fmt(vox['all']['ssim'], '.3f')} over {vox['all']['frames']} frames.")
+        if r.get("guard"):
+            L.append(f"- **Guard**: falls back to direct light when the indirect share exceeds "
+                     f"{r['guard']['max_indirect_share']:g} (calibrated on {r['guard']['calibration_frames']} frames; "
+                     "`ngi lightmap --guard`, applied by `ngi.plan`).")
+        costs = "; ".join(f"{d}: generator {c['generator_ms']:.1f} ms, whole `ngi lightmap` {c['lightmap_ms']:.0f} ms"
+                          for d, c in r["cost"].items())
+        L += [f"- **Cost**: {costs}.",
+              "- **Limits**: trained on procedural block scenes (rooms, streets, caves, backlit and colour-bleeding "
+              "rooms, sculptures, Cornell boxes) at N = 64 with a 64-spp direct-light feature; see docs/RESULTS.md "
+              "for where it gains least.", ""]
+    return "\n".join(L) + "\n"
 
 
 def main(argv=None):
@@ -587,6 +640,7 @@ def main(argv=None):
     (args.out / "gi_tables.md").write_text(tables(summary))
     if args.zoo:
         log(f"gi_eval: zoo {args.zoo}: added {merge_zoo(args.zoo, vs, summary, speed)}")
+        (args.zoo.parent / "ladder" / "GI.md").write_text(gi_cards(json.loads(args.zoo.read_text())))
     log(f"gi_eval: wrote {args.out / 'gi.json'} and {args.out / 'gi_tables.md'}")
     return 0
 

@@ -17,8 +17,9 @@ import data
 OUTPUT_MODES = ("lightmap", "indirect")
 LIGHT_MAX = 65504.0  # compose.cl LIGHT_MAX: the decoded output stops at the largest half float
 FLT_MAX = 3.4028234663852886e38
-# y / (1 - y) reaches LIGHT_MAX at y = LIGHT_MAX / (LIGHT_MAX + 1); clamping there first keeps the gradient finite.
-_Y_MAX = LIGHT_MAX / (LIGHT_MAX + 1.0)
+# y is clamped below 1 (exactly representable in float32) so that y / (1 - y) stays finite, as does its gradient;
+# the cap at LIGHT_MAX then applies as in the kernel.
+_Y_MAX = 1.0 - 2.0 ** -20
 
 
 def check_mode(mode):
@@ -29,7 +30,7 @@ def check_mode(mode):
 def decode(v):
     """decode_lightmap: v in [-1, 1] -> y in [0, 1] -> y / (1 - y), capped at LIGHT_MAX (NaN -> 0)."""
     y = torch.nan_to_num((v + 1.0) * 0.5, nan=0.0).clamp(0.0, _Y_MAX)
-    return y / (1.0 - y)
+    return (y / (1.0 - y)).clamp(max=LIGHT_MAX)
 
 
 def encode(x):

@@ -187,9 +187,11 @@ def test_indirect_mode(ngi, dataset, work):
     v[0, 0, 0, :3] = [-1.0, 1.0, 0.999999]
     surround = ngi_py.Model(dev, str(work / "surround.safetensors"))
     want = pipe.front_lightmap(v, surround)
-    got = lightmap_loss.decode(torch.from_numpy(v).double())[0].numpy()
+    # In float32, as training runs it: near v = 1 the decoding x = y / (1 - y) amplifies any rounding of y, so the
+    # same arithmetic in float64 differs from the kernel by up to ~eps / (1 - y) relative (2.8e-5 measured here).
+    got = lightmap_loss.decode(torch.from_numpy(v))[0].numpy()
     dec_err = float(np.max(np.abs(got - want) / (1e-3 + np.abs(want))))
-    check(dec_err < 1e-5, f"lightmap_loss.decode == decode_lightmap: max relative |diff| {dec_err:.2g}")
+    check(dec_err < 1e-6, f"lightmap_loss.decode == decode_lightmap (float32): max relative |diff| {dec_err:.2g}")
 
     cfg_path = work / "indirect.json"
     cfg_path.write_text(json.dumps(dict(TRAIN, layout="surround", steps=30, output_mode="indirect", lambda_final=100,

@@ -16,6 +16,14 @@ Surround-aware rungs with a measured per-frame switch in the zoo are also tried 
 light outside the front view run the single-view twin; docs/RESULTS.md). --validate K renders K other frames of
 the path and checks that the chosen rung keeps its promise there; the plan records the answer.
 
+Candidates: the direct-light rung and the rungs whose network predicts indirect light (zoo "output_mode":
+"indirect": the pipeline adds it to the frame's direct light), each as exported. The thesis-mode rungs (the network
+predicts the whole lightmap; they lose to direct light alone on the held-out split, docs/RESULTS.md) and the other
+batch-norm mode of each rung are measured comparisons, tried only with --all-rungs. A zoo without indirect rungs
+offers all of its rungs. A rung with a measured per-frame guard in the zoo (rung "guard": {"max_indirect_share": t},
+training/gi_eval.py) runs with it (a frame whose indirect share exceeds t falls back to direct light: ngi.indirect_share,
+`ngi lightmap --guard`), and the plan records it.
+
 Nothing meets the budget: exit code 1, the closest rung named, nothing written. The plan is JSON
 ("format": "ngi-plan", version 1; docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder,
 bn_mode, face size n, the optional switch, and the calibration and validation evidence.
@@ -114,7 +122,11 @@ def score_all(ev, candidates, frame_sets):
                 rung = c["twin"]
                 scores[c["name"]]["switched"] += 1
             if rung["name"] not in cache:
-                cache[rung["name"]] = ref.score(ev.lightmap(rung, frames))["final"]
+                lm = ev.lightmap(rung, frames)
+                guard = (rung.get("guard") or {}).get("max_indirect_share")
+                if guard is not None and _ngi.indirect_share(frames[rung["n"]], lm) > guard:
+                    lm = frames[rung["n"]].feature("direct")[0]  # the guard's fallback: direct light alone
+                cache[rung["name"]] = ref.score(lm)["final"]
             s = cache[rung["name"]]
             scores[c["name"]]["ssim"].append(s["ssim"])
             scores[c["name"]]["psnr"].append(s["psnr"])
@@ -167,10 +179,18 @@ def budget_text(args):
     return ", ".join(parts)
 
 
+def default_rungs(zoo, all_rungs=False):
+    """The rungs the planner offers (module doc, "Candidates")."""
+    rungs = zoo["rungs"]
+    if all_rungs or not any(r.get("output_mode") == "indirect" for r in rungs):
+        return rungs
+    return [r for r in rungs if r["file"] is None or (r.get("output_mode") == "indirect" and r.get("kind") == "rung")]
+
+
 def candidates_of(zoo, ev, key, args, frames):
     by_name = {r["name"]: r for r in zoo["rungs"]}
     cands = []
-    for r in zoo["rungs"]:
+    for r in default_rungs(zoo, getattr(args, "all_rungs", False)):
         if key is not None:
             ms = r["cost"][key][f"{args.cost}_ms"]
             basis = f"zoo, {key}, {args.cost}"
@@ -178,8 +198,9 @@ def candidates_of(zoo, ev, key, args, frames):
             ms = ev.time_ms(r, frames)
             basis = "measured here (in-process pipeline)"
         cands.append({"name": r["name"], "rung": r, "ms": ms, "cost_basis": basis})
+    offered = {c["name"] for c in cands}
     for sw in zoo.get("switches") or []:
-        if sw["surround"] in by_name and sw["single_view"] in by_name and sw["below_outside_light_share"] > 0:
+        if sw["surround"] in offered and sw["single_view"] in by_name and sw["below_outside_light_share"] > 0:
             base = next(c for c in cands if c["name"] == sw["surround"])
             twin = next(c for c in cands if c["name"] == sw["single_view"])
             cands.append({"name": f"{sw['surround']}+switch", "rung": base["rung"], "twin": twin["rung"],
@@ -193,6 +214,8 @@ def rung_json(rung, plan_dir):
            "model": os.path.relpath(rung["path"], plan_dir) if rung["path"] else None}
     if rung["path"]:
         out["bn_mode"] = rung["bn_mode"]
+        if (rung.get("guard") or {}).get("max_indirect_share") is not None:
+            out["guard"] = {"max_indirect_share": rung["guard"]["max_indirect_share"]}
     return out
 
 
@@ -213,6 +236,8 @@ def main(argv=None):
     ap.add_argument("--feature-spp", type=int, default=64, help="direct-light feature spp [default: %(default)s]")
     ap.add_argument("--time", type=float, default=None, help="time of day (hours) [default: the scene's]")
     ap.add_argument("--device", default="", help="OpenCL device (ngi.Device spec) [default: ngi's choice]")
+    ap.add_argument("--all-rungs", action="store_true",
+                    help="also try the thesis-mode rungs and the other batch-norm modes (measured comparisons)")
     args = ap.parse_args(argv)
     if args.max_ms is None and args.min_ssim is None and args.min_psnr is None:
         ap.error("give a budget: --max-ms, --min-ssim and/or --min-psnr")
