@@ -224,7 +224,9 @@ class MergeCache:
         self.dir.mkdir(parents=True, exist_ok=True)
         if info_path.is_file():
             old = json.loads(info_path.read_text())
-            if old != info:
+            if old == dict(info, format=1):  # format 1 lacks front.npy: _fresh() re-merges its entries as needed
+                write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
+            elif old != info:
                 raise RuntimeError(f"{info_path} describes another cache ({old}); use another cache folder")
         else:
             write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")

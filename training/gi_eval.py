@@ -19,9 +19,10 @@ pipeline (Python bindings) and scored with ngi.scoring against path-traced refer
    configs/sequences_clean_n64.json, else only those 43 frames are rendered into WORK/seq, at its sample counts, with
    the cameras of a 1-spp `ngi dataset` run of the same sequence): MABD and warping error beside the reference's
    (ngi.temporal);
-4. the per-frame guard: for each indirect rung, the share of the final image's luminance its indirect light adds;
-   frames above a threshold fall back to direct light. The threshold is chosen on calibration frames (the first
-   GUARD_CAL frames of every held-out scene) and reported on the rest and on the .vox frames;
+4. the per-frame guard: for each indirect rung, the share of the final image's luminance its indirect light adds
+   (ngi.indirect_share); frames above a threshold fall back to direct light. The shipped threshold is the one with
+   the best mean PSNR on all held-out frames, then applied to the .vox frames; its held-out effect is estimated
+   leaving one scene out (each scene guarded with the threshold chosen on the others);
 5. inputs an engine has (issue 25 item 2): NOISE_FRAMES frames of every held-out scene rendered again with the
    same camera, time and seed but the direct-light feature at other sample counts (NOISE_SPP: a noisier host, and a
    converged one like a shadow-mapped sun and a prefiltered sky), scored against the dataset's reference;
@@ -61,7 +62,6 @@ OUTDOOR = ("street", "sculpture")
 VOX_GROUPS = {"monuments": ("monu0", "monu4", "monu5", "monu6-without-water", "monu7", "monu8-without-water", "monu9"),
               "procedural": ("nature", "menger", "maze", "snow"), "scans": ("dragon", "teapot"),
               "characters": ("chr_cat", "chr_fox", "chr_man", "T-Rex", "horse")}
-GUARD_CAL = 10  # calibration frames per held-out scene (its first ones); the guard is reported on the rest
 NOISE_FRAMES = (0, 10, 20)  # frame indices of every held-out scene re-rendered for the direct-light noise stage
 NOISE_SPP = (8, 1024)  # the dataset's direct feature has 64 spp
 CURVE_FRAMES = 48
@@ -149,27 +149,38 @@ def heldout_rows(args, runner, vs, work):
     """Per variant, per held-out frame: scores, family and the guard's signal (cached by model digest)."""
     cache_path = work / "gi_heldout.json"
     cache = le.read_json(cache_path, {})
-    todo = [v for v in vs if cache.get(v["name"], {}).get("digest") != v["digest"]]
+    frames = le.test_frames(args.data)
+    if args.max_frames:
+        frames = frames[::max(1, len(frames) // args.max_frames)]
+    key = data_digest(frames)
+    todo = [v for v in vs if cache.get(v["name"], {}).get("digest") != v["digest"]
+            or cache[v["name"]].get("frames_digest") != key]
     if todo:
-        frames = le.test_frames(args.data)
-        if args.max_frames:
-            frames = frames[::max(1, len(frames) // args.max_frames)]
         pairs = ((rel, ngi.read_frame(str(args.data / rel))) for rel in frames)
         rows, _ = score_frames(runner, todo, list(pairs), "held-out")
         for v in todo:
             for r in rows[v["name"]]:
                 r["family"] = le.family(r["frame"])
+                r["family_scene"] = r["frame"].split("/")[1]
                 r["index"] = int(Path(r["frame"]).name)
-            cache[v["name"]] = {"digest": v["digest"], "frames": rows[v["name"]]}
+            cache[v["name"]] = {"digest": v["digest"], "frames_digest": key, "frames": rows[v["name"]]}
         le.write_json(cache_path, cache)
     return {v["name"]: cache[v["name"]]["frames"] for v in vs}
+
+
+def data_digest(names):
+    import hashlib
+    return hashlib.sha1("\n".join(map(str, names)).encode()).hexdigest()[:16]
 
 
 def vox_rows(args, runner, vs, work):
     cache_path = work / "gi_vox.json"
     cache = le.read_json(cache_path, {})
-    todo = [v for v in vs if cache.get(v["name"], {}).get("digest") != v["digest"]]
     dirs = render_vox(args, work)
+    names = [f"{stem}/{d.name}" for stem, ds in dirs.items() for d in ds]
+    key = data_digest(names)
+    todo = [v for v in vs if cache.get(v["name"], {}).get("digest") != v["digest"]
+            or cache[v["name"]].get("frames_digest") != key]
     if todo:
         pairs = [(f"{stem}/{d.name}", ngi.read_frame(str(d))) for stem, ds in dirs.items() for d in ds]
         rows, skipped = score_frames(runner, todo, pairs, ".vox")
@@ -177,7 +188,8 @@ def vox_rows(args, runner, vs, work):
             for r in rows[v["name"]]:
                 r["family"] = r["frame"].split("/")[0]
                 r["group"] = vox_group(r["family"])
-            cache[v["name"]] = {"digest": v["digest"], "frames": rows[v["name"]], "skipped": skipped}
+            cache[v["name"]] = {"digest": v["digest"], "frames_digest": key, "frames": rows[v["name"]],
+                                "skipped": skipped}
         le.write_json(cache_path, cache)
     return {v["name"]: cache[v["name"]]["frames"] for v in vs}, cache[vs[0]["name"]]["skipped"], dirs
 
@@ -211,38 +223,55 @@ def by_group(rows, key):
 
 
 def guarded(rows, direct_rows, t):
-    """Rows with the guard at threshold t: frames whose indirect share exceeds t take direct light's scores."""
-    return [d if r["indirect_share"] > t else r for r, d in zip(rows, direct_rows)]
+    """Rows with the guard at threshold t: frames whose indirect share exceeds t take direct light's scores (matched
+    by frame name: both lists must hold the same frames)."""
+    direct = {d["frame"]: d for d in direct_rows}
+    if set(direct) != {r["frame"] for r in rows}:
+        raise RuntimeError("guard: the rung and direct light were scored on different frames")
+    return [direct[r["frame"]] if r["indirect_share"] > t else r for r in rows]
+
+
+def psnr_key(scores):
+    return -np.inf if scores is None or scores["psnr"] is None else round(scores["psnr"], 3)
+
+
+def choose_threshold(rows, direct_rows):
+    """The threshold with the best mean final PSNR on these frames (ties: the larger, i.e. fewer fallbacks)."""
+    table = []
+    for t in GUARD_THRESHOLDS:
+        m = mean_scores(guarded(rows, direct_rows, t))
+        table.append({"threshold": t, "fallbacks": sum(r["indirect_share"] > t for r in rows),
+                      "psnr": m["psnr"] if m else None, "ssim": m["ssim"] if m else None})
+    best = max(table, key=lambda x: (psnr_key(x), x["threshold"]))
+    return best["threshold"], table
 
 
 def guard_stage(held, vox, vs):
-    """Per indirect rung: the threshold with the best mean PSNR gain over direct light on the calibration frames
-    (ties: the larger threshold, i.e. fewer fallbacks), then its effect on the other held-out frames and .vox."""
+    """Per indirect rung: the guard's threshold chosen on every held-out frame (what the zoo ships, then applied to
+    the public .vox frames, which played no part in choosing it), and its held-out effect estimated honestly by
+    leaving one scene out: each held-out scene's frames are guarded with the threshold chosen on the other scenes."""
     out = {}
     direct = held["direct_only"]
     for v in vs:
-        if v["output_mode"] != "indirect":
+        rows = held.get(v["name"]) or []
+        if v["output_mode"] != "indirect" or not rows:
             continue
-        rows = held[v["name"]]
-        cal = [i for i, r in enumerate(rows) if r["index"] < GUARD_CAL]
-        rest = [i for i, r in enumerate(rows) if r["index"] >= GUARD_CAL]
-        pick = lambda rs, idx: [rs[i] for i in idx]  # noqa: E731
-        table = []
-        for t in GUARD_THRESHOLDS:
-            g = guarded(pick(rows, cal), pick(direct, cal), t)
-            table.append({"threshold": t, "fallbacks": sum(r["indirect_share"] > t for r in pick(rows, cal)),
-                          **{k: mean_scores(g)[k] for k in ("psnr", "ssim")}})
-        best = max(table, key=lambda x: (round(x["psnr"], 3), x["threshold"]))
-        t = best["threshold"]
-        entry = {"calibration_frames": len(cal), "thresholds": table, "chosen": t}
-        for label, r_rows, d_rows in (("heldout_rest", pick(rows, rest), pick(direct, rest)),
-                                      ("heldout_all", rows, direct),
-                                      ("vox", vox.get(v["name"], []), vox.get("direct_only", []))):
-            if not r_rows:
-                continue
-            entry[label] = {"frames": len(r_rows), "fallbacks": sum(r["indirect_share"] > t for r in r_rows),
-                            "off": mean_scores(r_rows), "on": mean_scores(guarded(r_rows, d_rows, t)),
-                            "direct": mean_scores(d_rows)}
+        t, table = choose_threshold(rows, direct)
+        loso = []
+        for scene in sorted({r["family_scene"] for r in rows}):
+            inside = [r for r in rows if r["family_scene"] == scene]
+            others = [r for r in rows if r["family_scene"] != scene]
+            names = {r["frame"] for r in others}
+            t_s, _ = choose_threshold(others, [d for d in direct if d["frame"] in names])
+            names_in = {r["frame"] for r in inside}
+            loso += guarded(inside, [d for d in direct if d["frame"] in names_in], t_s)
+        entry = {"calibration_frames": len(rows), "thresholds": table, "chosen": t,
+                 "heldout_leave_one_scene_out": {"frames": len(rows), "on": mean_scores(loso),
+                                                 "off": mean_scores(rows), "direct": mean_scores(direct)}}
+        vr, vd = vox.get(v["name"], []), vox.get("direct_only", [])
+        if vr:
+            entry["vox"] = {"frames": len(vr), "fallbacks": sum(r["indirect_share"] > t for r in vr),
+                            "off": mean_scores(vr), "on": mean_scores(guarded(vr, vd, t)), "direct": mean_scores(vd)}
         out[v["name"]] = entry
     return out
 
@@ -258,7 +287,7 @@ def direct_noise_stage(args, runner, vs, work):
         for scene_dir in tqdm.tqdm(scenes, desc="direct-light noise", unit="scene", **ngi_paths.progress_options()):
             info = le.read_json(scene_dir / "scene.json")
             renderer = ngi.Renderer(runner.device, ngi.Scene(info["spec"]))
-            for k in NOISE_FRAMES:
+            for k in (k for k in NOISE_FRAMES if k < len(info["frame_info"])):
                 fi = info["frame_info"][k]
                 base = ngi.read_frame(str(scene_dir / f"{k:04d}"))
                 for spp in NOISE_SPP:
@@ -363,7 +392,8 @@ def curves_stage(args, work, out_png):
         ckpts = sorted((run / "checkpoints").glob("step_*.pt"))
         entry = cache.setdefault(rung["name"], {"heldout": {}})
         for ck in ckpts:
-            if ck.name in entry["heldout"]:
+            stamp = f"{ck.name}@{ck.stat().st_mtime_ns}"
+            if stamp in entry["heldout"]:
                 continue
             state = checkpoint.load(ck)
             cfg = state["config"]
@@ -372,7 +402,8 @@ def curves_stage(args, work, out_png):
                                                       data.default_cache_dir(args.data, cfg["layout"]),
                                                       max_frames=CURVE_FRAMES)[0]
             s = evaluate.heldout_scores(state["model"]["G"], cfg, sets[cfg["layout"]], state["n"], "per_image")
-            entry["heldout"][ck.name] = {"step": state["step"], **s}
+            entry["heldout"] = {k: x for k, x in entry["heldout"].items() if not k.startswith(ck.name + "@")}
+            entry["heldout"][stamp] = {"step": state["step"], **s}
             le.write_json(cache_path, cache)
         log_path = run / "log.jsonl"
         if log_path.is_file():
@@ -477,13 +508,15 @@ def tables(summary):
         lines.append("")
     if summary.get("guard"):
         lines += ["## Per-frame guard (fall back to direct light when the added indirect share exceeds t)", "",
-                  "| rung | t (calibration) | set | fallbacks | off | on | direct |", "| --- | --- | --- | --- | --- | --- | --- |"]
+                  "t is chosen on all held-out frames (shipped in the zoo) and applied to the .vox frames; the "
+                  "held-out row guards each scene with the t chosen on the other scenes (leave one scene out).", "",
+                  "| rung | t | set | fallbacks | off | on | direct |", "| --- | --- | --- | --- | --- | --- | --- |"]
         for name, g in summary["guard"].items():
-            for label in ("heldout_rest", "heldout_all", "vox"):
+            for label in ("heldout_leave_one_scene_out", "vox"):
                 if label in g:
                     e = g[label]
                     cell = lambda s: f"{fmt(s['psnr'])} / {fmt(s['ssim'], '.3f')}"  # noqa: E731
-                    lines.append(f"| {name} | {g['chosen']:g} | {label} | {e['fallbacks']}/{e['frames']} | "
+                    lines.append(f"| {name} | {g['chosen']:g} | {label} | {e.get('fallbacks', '-')}/{e['frames']} | "
                                  f"{cell(e['off'])} | {cell(e['on'])} | {cell(e['direct'])} |")
         lines.append("")
     return "\n".join(lines) + "\n"
@@ -517,7 +550,7 @@ def merge_zoo(zoo_path, vs, summary, speed):
         g = summary["guard"].get(r["name"])
         if g and g["chosen"] <= 1.0:  # a threshold that falls back on some calibration frames
             r["guard"] = {"max_indirect_share": g["chosen"], "calibration_frames": g["calibration_frames"],
-                          "heldout_rest": g.get("heldout_rest"), "vox": g.get("vox")}
+                          "heldout_leave_one_scene_out": g.get("heldout_leave_one_scene_out"), "vox": g.get("vox")}
     names = {r["name"] for r in new}
     kept = [r for r in zoo["rungs"] if r["name"] not in names]
     for r in kept:
@@ -632,7 +665,7 @@ def main(argv=None):
     summary["guard"] = guard_stage(held, vox, vs)
     gi = [v for v in vs if v["output_mode"] == "indirect"]
     if gi:
-        best = max(gi, key=lambda v: summary["variants"][v["name"]]["heldout"]["all"]["psnr"])["name"]
+        best = max(gi, key=lambda v: psnr_key(summary["variants"][v["name"]]["heldout"]["all"]))["name"]
         summary["best_indirect_rung"] = best
         if vox_dirs:
             vox_strip(runner, vs, vox_dirs, best, args.out / "gi_vox_strip.png")

@@ -191,7 +191,7 @@ def candidates_of(zoo, ev, key, args, frames):
     by_name = {r["name"]: r for r in zoo["rungs"]}
     cands = []
     for r in default_rungs(zoo, getattr(args, "all_rungs", False)):
-        if key is not None:
+        if key is not None and key in r["cost"]:
             ms = r["cost"][key][f"{args.cost}_ms"]
             basis = f"zoo, {key}, {args.cost}"
         else:
@@ -200,7 +200,7 @@ def candidates_of(zoo, ev, key, args, frames):
         cands.append({"name": r["name"], "rung": r, "ms": ms, "cost_basis": basis})
     offered = {c["name"] for c in cands}
     for sw in zoo.get("switches") or []:
-        if sw["surround"] in offered and sw["single_view"] in by_name and sw["below_outside_light_share"] > 0:
+        if sw["surround"] in offered and sw["single_view"] in offered and sw["below_outside_light_share"] > 0:
             base = next(c for c in cands if c["name"] == sw["surround"])
             twin = next(c for c in cands if c["name"] == sw["single_view"])
             cands.append({"name": f"{sw['surround']}+switch", "rung": base["rung"], "twin": twin["rung"],
@@ -209,12 +209,13 @@ def candidates_of(zoo, ev, key, args, frames):
     return cands
 
 
-def rung_json(rung, plan_dir):
+def rung_json(rung, plan_dir, with_guard=True):
+    """A plan's rung entry; the guard only at the top level (ngi lightmap --plan applies it to the frame)."""
     out = {"rung": rung["name"], "n": rung["n"],
            "model": os.path.relpath(rung["path"], plan_dir) if rung["path"] else None}
     if rung["path"]:
         out["bn_mode"] = rung["bn_mode"]
-        if (rung.get("guard") or {}).get("max_indirect_share") is not None:
+        if with_guard and (rung.get("guard") or {}).get("max_indirect_share") is not None:
             out["guard"] = {"max_indirect_share": rung["guard"]["max_indirect_share"]}
     return out
 
@@ -260,7 +261,7 @@ def main(argv=None):
     scene = _ngi.Scene(args.scene)
     renderer = _ngi.Renderer(dev, scene)
     ev = Evaluator(dev, zoo)
-    ns = sorted({r["n"] for r in zoo["rungs"]})
+    ns = sorted({r["n"] for r in default_rungs(zoo, args.all_rungs)})  # the face sizes of the rungs offered
     cal_idx = frame_indices(args.frames, 0.25)
     cal = [render(renderer, ns, i, args) for i in progress(cal_idx, "calibration frames")]
     cands = candidates_of(zoo, ev, key, args, cal[0])
@@ -300,7 +301,7 @@ def main(argv=None):
     plan = {"format": "ngi-plan", "version": 1, **rung_json(pick["rung"], plan_dir)}
     if pick.get("switch"):
         plan["switch"] = {"below_outside_light_share": pick["switch"]["below_outside_light_share"],
-                          **rung_json(pick["twin"], plan_dir)}
+                          **rung_json(pick["twin"], plan_dir, with_guard=False)}
     plan.update({
         "scene": scene.name, "device": {"name": info.get("name"), "platform": info.get("platform"), "zoo_key": key},
         "budget": {"max_ms": args.max_ms, "min_ssim": args.min_ssim, "min_psnr": args.min_psnr, "cost": args.cost},
