@@ -101,7 +101,7 @@ TEST_CASE("orbit path: nothing to orbit or no room is a clear InputError", "[ren
     REQUIRE_THROWS_AS(make_orbit_path(orbit_model(), 0, 1), InputError);
 }
 
-TEST_CASE("camera path kind: auto keeps the fly-through of procedural scenes; names parse strictly",
+TEST_CASE("camera path kind: auto keeps the fly-through of procedural scenes, and names parse strictly",
           "[render][camera_path][orbit]") {
     const VoxelScene room = make_scene("room:seed=4");
     REQUIRE_FALSE(room.camera.orbit);

@@ -464,7 +464,7 @@ def vox_strip(runner, vs, dirs, best, out_png):
                 axes[i][j].set_title(("direct light", best, "reference")[j], fontsize=7)
         axes[i][0].set_ylabel(stem, fontsize=7)
     fig.tight_layout()
-    fig.savefig(out_png, dpi=110)
+    fig.savefig(out_png, dpi=72)
     plt.close(fig)
 
 
@@ -548,7 +548,9 @@ def merge_zoo(zoo_path, vs, summary, speed):
     for r in new:
         r["output_mode"] = "indirect"
         g = summary["guard"].get(r["name"])
-        if g and g["chosen"] <= 1.0:  # a threshold that falls back on some calibration frames
+        loso = (g or {}).get("heldout_leave_one_scene_out") or {}
+        # Shipped only where it falls back on some frames and, estimated leaving one scene out, improves PSNR.
+        if g and g["chosen"] <= 1.0 and psnr_key(loso.get("on")) > psnr_key(loso.get("off")):
             r["guard"] = {"max_indirect_share": g["chosen"], "calibration_frames": g["calibration_frames"],
                           "heldout_leave_one_scene_out": g.get("heldout_leave_one_scene_out"), "vox": g.get("vox")}
     names = {r["name"] for r in new}
