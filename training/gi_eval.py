@@ -529,6 +529,16 @@ def tables(summary):
 def merge_zoo(zoo_path, vs, summary, speed):
     """Adds (or replaces) the shipped GI rungs in the zoo manifest; the other rungs stay, each told its mode."""
     zoo = json.loads(Path(zoo_path).read_text())
+    # A device key names one device: costs measured on another CPU than the zoo's entry of that key get their own
+    # key (the planner matches keys by device name, and measures in process where a rung has no cost there).
+    keys = {}
+    for d, s in speed.items():
+        if not s:
+            continue
+        info = next(iter(s.values()))["device"]
+        known = zoo["devices"].get(d)
+        keys[d] = d if not known or known.get("name") == info.get("name") else f"{d}:{info.get('name')}"
+    speed = {keys[d]: s for d, s in speed.items() if d in keys}
     fake = {"variants": {}, "speed_devices": {d: next(iter(s.values()))["device"] for d, s in speed.items() if s},
             "dataset_configs": {}, "noise_floor": {}, "recipe": {}}
     for v in vs:
