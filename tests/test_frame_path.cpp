@@ -49,6 +49,14 @@ Frame random_frame(int n, std::mt19937& rng, bool emission, bool env) {
     return fr;
 }
 
+// The frame's packed planes on the device: all six faces for a surround model, the front face for a single-view one.
+DeviceBuffer upload_planes(Device& dev, const Frame& fr, const Model& model) {
+    const std::vector<float> planes = pack_frame_planes(fr, model.config().input_nc == 12 ? 6 : 1);
+    DeviceBuffer in = DeviceBuffer::allocate(dev, planes.size() * sizeof(float));
+    in.upload(planes.data(), in.bytes());
+    return in;
+}
+
 HostTransfers since(const Device& d, const HostTransfers& t0) {
     HostTransfers t = d.host_transfers();
     return {t.uploads - t0.uploads, t.downloads - t0.downloads, t.upload_bytes - t0.upload_bytes,
@@ -123,15 +131,12 @@ TEST_CASE("frame path: run() and enqueue() equal the step-by-step path bit for b
             REQUIRE(only.final_image.data == final_image.data);
 
             // Device in, device out.
-            const bool surround = model.config().input_nc == 12;
-            const std::vector<float> planes = pack_frame_planes(fr, surround ? 6 : 1);
-            DeviceBuffer in = DeviceBuffer::allocate(dev, planes.size() * sizeof(float));
-            in.upload(planes.data(), in.bytes());
+            DeviceBuffer in = upload_planes(dev, fr, model);
             FrameOutputs outs;
             outs.tonemap = tm;
             outs.lightmap = DeviceBuffer::allocate(dev, light.data.size() * sizeof(float));
             outs.display = DeviceBuffer::allocate(dev, light.data.size() * sizeof(float));
-            pl.enqueue(model, in, FrameDesc::of(fr, surround ? 6 : 1), outs);
+            pl.enqueue(model, in, FrameDesc::of(fr, model.config().input_nc == 12 ? 6 : 1), outs);
             REQUIRE(read_back(outs.lightmap) == light.data);
             REQUIRE(read_back(outs.display) == display.data);
         }
@@ -416,15 +421,12 @@ TEST_CASE("frame path: an indirect-mode model's lightmap is the lightmap mode's 
                             Catch::Matchers::Contains("needs the frame's front direct light"));
 
         // Device in, device out: the direct light is read from the planes on the device.
-        const bool surround = model.config().input_nc == 12;
-        const std::vector<float> planes = pack_frame_planes(fr, surround ? 6 : 1);
-        DeviceBuffer in = DeviceBuffer::allocate(dev, planes.size() * sizeof(float));
-        in.upload(planes.data(), in.bytes());
+        DeviceBuffer in = upload_planes(dev, fr, model);
         FrameOutputs outs;
         outs.tonemap = tm;
         outs.lightmap = DeviceBuffer::allocate(dev, d.size() * sizeof(float));
         outs.final_image = DeviceBuffer::allocate(dev, d.size() * sizeof(float));
-        pl.enqueue(model, in, FrameDesc::of(fr, surround ? 6 : 1), outs);
+        pl.enqueue(model, in, FrameDesc::of(fr, model.config().input_nc == 12 ? 6 : 1), outs);
         REQUIRE(read_back(outs.lightmap) == r.lightmap.data);
         REQUIRE(read_back(outs.final_image) == r.final_image.data);
     }
