@@ -1,0 +1,59 @@
+// The G-buffer pass: the six 90-degree faces of the camera cluster rasterized into one framebuffer object of
+// N x 6N texels (face f in rows [f N, f N + N), GL's bottom-up rows), six render targets with ngi's feature
+// conventions (docs/RENDERER.md "Feature buffers"):
+//
+//   attachment  format    holds
+//   0 albedo    RGBA16F   block albedo (linear), 0 on sky
+//   1 normal    RGBA16F   world-space unit face normal, 0 on sky
+//   2 depth     R32F      planar depth in metres along the face's look axis, 1e4 on sky
+//   3 direct    RGBA16F   irradiance / pi: sun x max(0, n.l) / pi x shadow map (PCF) + baked sky and emitters
+//                         + lamp_level x baked lamps, 0 on sky
+//   4 emission  RGBA16F   emitted radiance (lamps x lamp_level), 0 on sky
+//   5 env       RGBA16F   0 on surfaces; on sky the sky radiance toward the pixel (sun disc excluded), from a
+//                         full-screen pass evaluating ngi::sky_radiance's formula
+//
+// Read back with glReadPixels into one pixel buffer object per attachment and mapped: those mappings are what the
+// viewer hands to ngi as host images (ngi::ImageDesc, bottom_up = true), attachment by attachment, no repacking.
+#pragma once
+#include <array>
+
+#include <ngi/image.hpp>
+#include <ngi/image_desc.hpp>
+#include <ngi/render.hpp>
+
+#include "gl_context.hpp"
+#include "gpu_mesh.hpp"
+#include "shadow_map.hpp"
+
+namespace ngi_gl {
+
+class GBufferPass {
+public:
+    explicit GBufferPass(int n);
+    ~GBufferPass();
+    GBufferPass(const GBufferPass&) = delete;
+    GBufferPass& operator=(const GBufferPass&) = delete;
+    int n() const { return n_; }
+
+    // Rasterizes the six faces of the cluster at `pose` (look/up of the front camera).
+    void render(const GpuScene& scene, const ShadowMap& shadow, const ngi::CameraPose& pose,
+                const ngi::Lighting& lighting);
+    // glReadPixels of every attachment into its PBO, then maps them (blocks until GL has finished).
+    void read_back();
+    // The mapped attachments as ngi image descriptors ([face][feature]); valid until unmap().
+    ngi::FrameInputs inputs(const ngi::CameraPose& pose) const;
+    void unmap();
+    // The mapped attachments repacked into an ngi::Frame (planar, top row first): for EXR output and the agreement
+    // test only; the per-frame path hands the mappings over as they are.
+    ngi::Frame to_frame(const ngi::CameraPose& pose) const;
+
+    static constexpr int kTargets = 6;  // ngi::Feature order
+private:
+    int n_;
+    GLuint fbo_ = 0, depth_rb_ = 0, gbuffer_program_ = 0, sky_program_ = 0, empty_vao_ = 0;
+    std::array<GLuint, kTargets> tex_{}, pbo_{};
+    std::array<const void*, kTargets> mapped_{};
+    std::size_t bytes(int target) const;
+};
+
+}  // namespace ngi_gl

@@ -1,0 +1,341 @@
+// ngi_gl_viewer: an OpenGL 3.3 core-profile application lit by ngi. Each frame it rasterizes the six faces of the
+// camera cluster into a G-buffer (gbuffer_pass.hpp), reads the attachments back into pixel buffer objects, hands
+// them to ngi as image descriptors (ngi_handoff.hpp), runs the surround pipeline and shows the tone-mapped final
+// image with per-stage timings. Interactive (WASD + mouse) or headless along the scene's camera path.
+// samples/gl/README.md documents the options, the attachments and the measured agreement with the tracer.
+#include <epoxy/gl.h>  // before GLFW: epoxy must come before GL/gl.h
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <ngi/camera_path.hpp>
+#include <ngi/error.hpp>
+#include <ngi/image_io.hpp>
+
+#include "gbuffer_pass.hpp"
+#include "light_bake.hpp"
+#include "ngi_handoff.hpp"
+#include "overlay.hpp"
+#include "presenter.hpp"
+#include "shadow_map.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+struct Options {
+    std::string scene = "room:seed=3", model = NGI_GL_DEFAULT_MODEL, device, out;
+    int n = 64, frames = 30, warmup = 3, shadow = 2048, bake_texels = 0, bake_rays = 256, width = 768, height = 768;
+    float time = -1.0f;  // hours; < 0: the scene's default
+    unsigned seed = 0;
+    bool headless = false, exr = false;
+};
+
+struct FrameTiming {
+    double raster = 0, readback = 0, gather = 0, input = 0, network = 0, outputs = 0, frame = 0;
+    double transfer() const { return readback + gather; }
+    double ngi() const { return gather + input + network + outputs; }
+};
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+// The scene's static light for one time of day: bake, upload, shadow map.
+struct Lit {
+    ngi::Lighting lighting;
+    double bake_ms = 0;
+};
+
+class Viewer {
+public:
+    Viewer(const Options& o, ngi::Device& device, ngi::VoxelScene scene, ngi::Model& model)
+        : o_(o), device_(device), scene_(std::move(scene)), model_(model),
+          context_(o.width, o.height, !o.headless, "ngi_gl_viewer: " + scene_.name),
+          pipeline_(device, o.n), faces_(ngi_gl::exposed_faces(scene_)), shadow_(o.shadow), gbuffer_(o.n) {
+        hours_ = o.time >= 0 ? o.time : scene_.default_time;
+        transfer_ = ngi_gl::choose_transfer_path(device);
+        rung_ = std::filesystem::path(o.model).stem().string();
+        relight(true);
+    }
+
+    void relight(bool first) {
+        lighting_ = ngi::lighting_at(hours_, scene_.sun_azimuth);
+        ngi_gl::BakeSettings bs;
+        bs.texels = o_.bake_texels;
+        bs.sky_rays = o_.bake_rays;
+        bake_ = ngi_gl::bake_static_light(scene_, faces_, lighting_, bs);
+        if (first) {
+            const ngi_gl::LightBake& b = bake_;
+            gpu_ = std::make_unique<ngi_gl::GpuScene>(
+                ngi_gl::build_mesh(scene_, faces_, [&b](std::size_t i) { return b.tile_origin(i); }), bake_);
+        } else {
+            gpu_->update_bake(bake_);
+        }
+        shadow_.render(*gpu_, lighting_.sun.direction, scene_.size);
+        std::fprintf(stderr, "ngi_gl_viewer: %.1f h: baked %zu faces x %d^2 texels, %d sky rays each (%.0f ms, %.1f Mrays)\n",
+                     hours_, faces_.size(), bake_.k, o_.bake_rays, bake_.ms, double(bake_.rays) * 1e-6);
+    }
+
+    // One frame: raster, read-back, ngi, present. Returns the stage timings.
+    FrameTiming frame(const ngi::CameraPose& pose, ngi_gl::LitFrame* lit_out, bool capture, ngi::Image* window_png) {
+        FrameTiming t;
+        const auto t0 = Clock::now();
+        gbuffer_.render(*gpu_, shadow_, pose, lighting_);
+        glFinish();  // llvmpipe runs the draw calls here: the raster time is wall time up to this point
+        t.raster = ms_since(t0);
+        const auto t1 = Clock::now();
+        gbuffer_.read_back();
+        t.readback = ms_since(t1);
+        ngi_gl::LitFrame lit = ngi_gl::light_frame(pipeline_, model_, gbuffer_, pose, false, true);
+        t.gather = lit.timings.gather_ms;
+        t.input = lit.timings.input_ms;
+        t.network = lit.timings.network_ms;
+        t.outputs = lit.timings.outputs_ms;
+        int w = 0, h = 0;
+        glfwGetFramebufferSize(context_.window(), &w, &h);
+        presenter_.draw(lit.display, w, h);
+        overlay_.draw(overlay_text(), 8, 8, 2.0f, w, h);
+        if (capture && window_png) *window_png = read_window(w, h);
+        glfwSwapBuffers(context_.window());
+        t.frame = ms_since(t0);
+        if (lit_out) *lit_out = std::move(lit);
+        last_ = t;
+        fps_ = 1000.0 / std::max(t.frame, 1e-3);
+        return t;
+    }
+
+    std::string overlay_text() const {
+        char b[512];
+        std::snprintf(b, sizeof b,
+                      "%s  N=%d  %.1f fps\nraster %.1f  transfer %.1f (readback %.1f + gather %.1f) ms\n"
+                      "merge/input %.1f  network %.1f  compose/outputs %.1f ms\n%s  %.1f h  %s",
+                      rung_.c_str(), o_.n, fps_, last_.raster, last_.transfer(), last_.readback, last_.gather,
+                      last_.input, last_.network, last_.outputs, transfer_.used.c_str(), hours_,
+                      "no area-light shadows");
+        return b;
+    }
+
+    ngi::Image read_window(int w, int h) {
+        std::vector<unsigned char> px(std::size_t(w) * h * 3);
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadBuffer(GL_BACK);
+        glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+        ngi::Image img(w, h, 3);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) img.at(c, h - 1 - y, x) = px[(std::size_t(y) * w + x) * 3 + c] / 255.0f;
+        return img;
+    }
+
+    int run_interactive() {
+        GLFWwindow* win = context_.window();
+        ngi::CameraPath path = ngi::make_camera_path(scene_, ngi::CameraPathKind::Auto, 2, o_.seed);
+        ngi::CameraPose pose = path.at(0);
+        float yaw = std::atan2(pose.look.x, -pose.look.z), pitch = std::asin(std::clamp(pose.look.y, -1.0f, 1.0f));
+        double mx = 0, my = 0;
+        glfwGetCursorPos(win, &mx, &my);
+        auto last = Clock::now();
+        while (!glfwWindowShouldClose(win)) {
+            glfwPollEvents();
+            const float dt = float(ms_since(last) * 1e-3);
+            last = Clock::now();
+            if (glfwGetKey(win, GLFW_KEY_ESCAPE) == GLFW_PRESS) break;
+            double cx, cy;
+            glfwGetCursorPos(win, &cx, &cy);
+            if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {  // drag to look
+                yaw += float(cx - mx) * 0.005f;
+                pitch = std::clamp(pitch - float(cy - my) * 0.005f, -1.5f, 1.5f);
+            }
+            mx = cx;
+            my = cy;
+            pose.look = glm::vec3(std::sin(yaw) * std::cos(pitch), std::sin(pitch), -std::cos(yaw) * std::cos(pitch));
+            pose.up = glm::vec3(0, 1, 0);
+            const glm::vec3 fwd = glm::normalize(glm::vec3(pose.look.x, 0, pose.look.z));
+            const glm::vec3 right = glm::normalize(glm::cross(fwd, glm::vec3(0, 1, 0)));
+            const float speed = 3.0f * dt * (glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 3.0f : 1.0f);
+            if (glfwGetKey(win, GLFW_KEY_W) == GLFW_PRESS) pose.position += fwd * speed;
+            if (glfwGetKey(win, GLFW_KEY_S) == GLFW_PRESS) pose.position -= fwd * speed;
+            if (glfwGetKey(win, GLFW_KEY_D) == GLFW_PRESS) pose.position += right * speed;
+            if (glfwGetKey(win, GLFW_KEY_A) == GLFW_PRESS) pose.position -= right * speed;
+            if (glfwGetKey(win, GLFW_KEY_E) == GLFW_PRESS) pose.position.y += speed;
+            if (glfwGetKey(win, GLFW_KEY_Q) == GLFW_PRESS) pose.position.y -= speed;
+            const bool later = glfwGetKey(win, GLFW_KEY_T) == GLFW_PRESS, earlier = glfwGetKey(win, GLFW_KEY_G) == GLFW_PRESS;
+            if (later || earlier) {  // time of day in half-hour steps: re-bake and re-render the shadow map
+                hours_ = std::fmod(hours_ + (later ? 0.5f : -0.5f) + 24.0f, 24.0f);
+                relight(false);
+            }
+            frame(pose, nullptr, false, nullptr);
+        }
+        return 0;
+    }
+
+    int run_headless() {
+        namespace fs = std::filesystem;
+        fs::create_directories(o_.out);
+        const int total = o_.warmup + o_.frames;
+        ngi::CameraPath path = ngi::make_camera_path(scene_, ngi::CameraPathKind::Auto, std::max(o_.frames, 2), o_.seed);
+        std::vector<FrameTiming> times;
+        nlohmann::json frames = nlohmann::json::array();
+        for (int i = 0; i < total; ++i) {
+            const int k = std::max(0, i - o_.warmup);  // warm-up frames repeat the first pose
+            const ngi::CameraPose pose = path.at(float(k));
+            ngi_gl::LitFrame lit;
+            ngi::Image window;
+            const bool capture = i == o_.warmup;
+            const FrameTiming t = frame(pose, &lit, capture, &window);
+            if (i < o_.warmup) continue;
+            times.push_back(t);
+            char name[64];
+            std::snprintf(name, sizeof name, "frame_%04d", k);
+            ngi::write_png((fs::path(o_.out) / (std::string(name) + ".png")).string(), lit.display);
+            if (capture) ngi::write_png((fs::path(o_.out) / "capture.png").string(), window);
+            if (o_.exr) ngi::write_frame((fs::path(o_.out) / (std::string(name) + "_raster")).string(), gbuffer_.to_frame(pose));
+            frames.push_back({{"frame", k}, {"raster_ms", t.raster}, {"readback_ms", t.readback}, {"gather_ms", t.gather},
+                              {"transfer_ms", t.transfer()}, {"input_ms", t.input}, {"network_ms", t.network},
+                              {"outputs_ms", t.outputs}, {"ngi_ms", t.ngi()}, {"frame_ms", t.frame}});
+            gbuffer_.unmap();
+        }
+        auto med = [&](auto f) {
+            std::vector<double> v;
+            for (const FrameTiming& t : times) v.push_back(f(t));
+            return median(v);
+        };
+        nlohmann::json j;
+        j["scene"] = scene_.name;
+        j["n"] = o_.n;
+        j["rung"] = rung_;
+        j["model"] = o_.model;
+        j["device"] = device_.info().platform_name + " / " + device_.info().name;
+        j["gl_renderer"] = context_.renderer();
+        j["transfer_path"] = transfer_.used;
+        j["cl_khr_gl_sharing_offered"] = transfer_.gl_sharing_offered;
+        j["warmup_frames"] = o_.warmup;
+        j["bake"] = {{"faces", faces_.size()}, {"texels_per_edge", bake_.k}, {"sky_rays", o_.bake_rays}, {"ms", bake_.ms}};
+        j["shadow_map"] = o_.shadow;
+        j["frames"] = frames;
+        const double frame_med = med([](const FrameTiming& t) { return t.frame; });
+        j["median"] = {{"raster_ms", med([](const FrameTiming& t) { return t.raster; })},
+                       {"readback_ms", med([](const FrameTiming& t) { return t.readback; })},
+                       {"gather_ms", med([](const FrameTiming& t) { return t.gather; })},
+                       {"transfer_ms", med([](const FrameTiming& t) { return t.transfer(); })},
+                       {"input_ms", med([](const FrameTiming& t) { return t.input; })},
+                       {"network_ms", med([](const FrameTiming& t) { return t.network; })},
+                       {"outputs_ms", med([](const FrameTiming& t) { return t.outputs; })},
+                       {"ngi_ms", med([](const FrameTiming& t) { return t.ngi(); })},
+                       {"frame_ms", frame_med},
+                       {"fps", frame_med > 0 ? 1000.0 / frame_med : 0.0}};
+        j["not_modelled"] = "area light (lighting_at has none); cl_khr_gl_sharing interop path";
+        std::ofstream((std::filesystem::path(o_.out) / "timings.json").string()) << j.dump(2) << "\n";
+        std::printf("%s\n", j["median"].dump().c_str());
+        return 0;
+    }
+
+private:
+    Options o_;
+    ngi::Device& device_;
+    ngi::VoxelScene scene_;
+    ngi::Model& model_;
+    ngi_gl::GlContext context_;
+    ngi::SurroundPipeline pipeline_;
+    std::vector<ngi_gl::ExposedFace> faces_;
+    ngi_gl::ShadowMap shadow_;
+    ngi_gl::GBufferPass gbuffer_;
+    ngi_gl::Presenter presenter_;
+    ngi_gl::Overlay overlay_;
+    std::unique_ptr<ngi_gl::GpuScene> gpu_;
+    ngi_gl::LightBake bake_;
+    ngi::Lighting lighting_;
+    ngi_gl::TransferPath transfer_;
+    std::string rung_;
+    float hours_ = 13.0f;
+    FrameTiming last_;
+    double fps_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    CLI::App app{"ngi_gl_viewer: rasterize the camera cluster's six faces with OpenGL 3.3 and light them with ngi"};
+    app.add_option("--scene", o.scene, "room|street|cave|backlit|bleed|sculpture|cornell[:seed=S] or a .vox path")->capture_default_str();
+    app.add_option("--model", o.model, "surround generator (.safetensors)")->capture_default_str();
+    app.add_option("--n", o.n, "face size N (the model's)")->check(CLI::Range(2, 2048))->capture_default_str();
+    app.add_option("--device", o.device, "OpenCL device: cpu, gpu, P:D, pocl, rusticl (default $NGI_DEVICE)");
+    app.add_option("--time", o.time, "time of day in hours (default: the scene's)")->check(CLI::Range(0.0f, 24.0f));
+    app.add_flag("--headless", o.headless, "hidden window: move along the scene's camera path, write PNGs + timings.json");
+    app.add_option("--frames", o.frames, "headless: frames to write")->check(CLI::Range(1, 100000))->capture_default_str();
+    app.add_option("--warmup", o.warmup, "headless: untimed frames first")->check(CLI::Range(0, 1000))->capture_default_str();
+    app.add_option("--out", o.out, "headless: output folder");
+    app.add_flag("--exr", o.exr, "headless: also write each frame's raster features as a frame folder of EXRs");
+    app.add_option("--shadow-map", o.shadow, "shadow map resolution")->check(CLI::Range(64, 8192))->capture_default_str();
+    app.add_option("--bake-texels", o.bake_texels, "baked texels per face edge (0 = automatic)")->check(CLI::Range(0, 16))->capture_default_str();
+    app.add_option("--bake-rays", o.bake_rays, "sky rays per baked texel")->check(CLI::Range(1, 65536))->capture_default_str();
+    app.add_option("--seed", o.seed, "camera path seed")->capture_default_str();
+    app.add_option("--window", o.width, "window width and height in pixels")->check(CLI::Range(64, 4096))->capture_default_str();
+    try {
+        app.parse(argc, argv);
+        if (o.headless && o.out.empty()) throw CLI::RequiredError("--out (with --headless)");
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e) == 0 ? 0 : 2;
+    }
+    o.height = o.width;
+    // Which stage failed decides the message and the exit code: 1 bad input, 3 device / GL failure.
+    ngi::VoxelScene scene;
+    try {
+        scene = ngi::make_scene(o.scene);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: scene %s does not load: %s\n", o.scene.c_str(), e.what());
+        return 1;
+    }
+    std::optional<ngi::Device> device;
+    try {
+        device = ngi::Device::open(o.device);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: no OpenCL device: %s\n", e.what());
+        return 3;
+    }
+    std::optional<ngi::Model> model;
+    try {
+        model = ngi::Model::load(*device, o.model);
+        const ngi::ModelConfig& c = model->config();
+        if (c.input_nc != 12)
+            throw ngi::InputError("model " + o.model + " has input_nc " + std::to_string(c.input_nc) +
+                                  ": the viewer runs surround models (12 input channels)");
+    } catch (const ngi::ClError& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: device failure loading the model: %s\n", e.what());
+        return 3;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: model does not load: %s\n", e.what());
+        return 1;
+    }
+    try {
+        Viewer viewer(o, *device, std::move(scene), *model);
+        const ngi_gl::TransferPath t = ngi_gl::choose_transfer_path(*device);
+        std::fprintf(stderr, "ngi_gl_viewer: OpenCL %s; transfer path %s (%s)\n", device->info().name.c_str(),
+                     t.used.c_str(), t.note.c_str());
+        return o.headless ? viewer.run_headless() : viewer.run_interactive();
+    } catch (const ngi_gl::GlError& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        return 3;
+    } catch (const ngi::InputError& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        return 3;
+    }
+}
