@@ -44,6 +44,7 @@ void Presenter::draw(const ngi::Image& display, int window_w, int window_h) {
     std::vector<float> rgb(display.plane() * 3);
     for (std::size_t i = 0; i < display.plane(); ++i)
         for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = display.data[c * display.plane() + i];
+    glActiveTexture(GL_TEXTURE0);  // the G-buffer pass leaves another unit active
     glBindTexture(GL_TEXTURE_2D, tex_);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, display.width, display.height, 0, GL_RGB, GL_FLOAT, rgb.data());
