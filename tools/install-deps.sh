@@ -16,6 +16,7 @@ packages=(
   pybind11-dev python3-dev python3-pyopencl python3-pytest
   libopenmpi-dev openmpi-bin
   mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
+  libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri libstb-dev xvfb xauth
 )
 missing=()
 for p in "${packages[@]}"; do

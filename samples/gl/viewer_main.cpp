@@ -48,6 +48,14 @@ struct FrameTiming {
     double ngi() const { return gather + input + network + outputs; }
 };
 
+// Error messages stay on one line (ngi's device error lists the devices on further lines).
+std::string one_line(const char* what) {
+    std::string s(what);
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+    for (std::size_t p; (p = s.find('\n')) != std::string::npos;) s.replace(p, 1, "; ");
+    return s;
+}
+
 double median(std::vector<double> v) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
@@ -125,7 +133,7 @@ public:
                       "merge/input %.1f  network %.1f  compose/outputs %.1f ms\n%s  %.1f h  %s",
                       rung_.c_str(), o_.n, fps_, last_.raster, last_.transfer(), last_.readback, last_.gather,
                       last_.input, last_.network, last_.outputs, transfer_.used.c_str(), hours_,
-                      "no area-light shadows");
+                      "no area light");
         return b;
     }
 
@@ -298,14 +306,14 @@ int main(int argc, char** argv) {
     try {
         scene = ngi::make_scene(o.scene);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: scene %s does not load: %s\n", o.scene.c_str(), e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: scene %s does not load: %s\n", o.scene.c_str(), one_line(e.what()).c_str());
         return 1;
     }
     std::optional<ngi::Device> device;
     try {
         device = ngi::Device::open(o.device);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: no OpenCL device: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: no OpenCL device: %s\n", one_line(e.what()).c_str());
         return 3;
     }
     std::optional<ngi::Model> model;
@@ -316,10 +324,10 @@ int main(int argc, char** argv) {
             throw ngi::InputError("model " + o.model + " has input_nc " + std::to_string(c.input_nc) +
                                   ": the viewer runs surround models (12 input channels)");
     } catch (const ngi::ClError& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: device failure loading the model: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: device failure loading the model: %s\n", one_line(e.what()).c_str());
         return 3;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: model does not load: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: model does not load: %s\n", one_line(e.what()).c_str());
         return 1;
     }
     try {
@@ -329,13 +337,13 @@ int main(int argc, char** argv) {
                      t.used.c_str(), t.note.c_str());
         return o.headless ? viewer.run_headless() : viewer.run_interactive();
     } catch (const ngi_gl::GlError& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", one_line(e.what()).c_str());
         return 3;
     } catch (const ngi::InputError& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", one_line(e.what()).c_str());
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "ngi_gl_viewer: %s\n", e.what());
+        std::fprintf(stderr, "ngi_gl_viewer: %s\n", one_line(e.what()).c_str());
         return 3;
     }
 }

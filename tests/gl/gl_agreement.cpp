@@ -9,7 +9,9 @@
 //   - the shipped indirect-light rung's lightmap from the rasterized inputs (handed over as image descriptors, as the
 //     viewer does) against the one from the traced frame: SSIM (data_range = the traced lightmap's maximum,
 //     docs/CONVENTIONS.md section 11) >= 0.97.
-// Usage: ngi_gl_agreement MODEL.safetensors   (device: $NGI_TEST_DEVICE, default cpu = PoCL)
+// Usage: ngi_gl_agreement MODEL.safetensors [SCENE]   (device: $NGI_TEST_DEVICE, default cpu = PoCL)
+// With SCENE (a spec or .vox path) it measures instead of testing: frame 0 of the scene's camera path at its default
+// time, the viewer's default bake (automatic texels, 256 sky rays); it prints the same numbers (for the README).
 #include <epoxy/gl.h>  // before GLFW: epoxy must come before GL/gl.h
 #include <GLFW/glfw3.h>
 
@@ -19,6 +21,7 @@
 #include <cstdlib>
 #include <string>
 
+#include <ngi/camera_path.hpp>
 #include <ngi/metrics.hpp>
 #include <ngi/render.hpp>
 
@@ -64,27 +67,29 @@ struct Share {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: ngi_gl_agreement MODEL.safetensors\n");
+    if (argc != 2 && argc != 3) {
+        std::fprintf(stderr, "usage: ngi_gl_agreement MODEL.safetensors [SCENE]\n");
         return 2;
     }
     const auto t_start = Clock::now();
     const int n = 64, spp = 1024;
     const char* dev_env = std::getenv("NGI_TEST_DEVICE");
     ngi::Device device = ngi::Device::open(dev_env && *dev_env ? dev_env : "cpu");
-    const ngi::VoxelScene scene = agreement_scene();
+    const bool measure = argc == 3;
+    const ngi::VoxelScene scene = measure ? ngi::make_scene(argv[2]) : agreement_scene();
     const ngi::Lighting lighting = ngi::lighting_at(scene.default_time, scene.sun_azimuth);
     ngi::CameraPose pose;
     pose.position = glm::vec3(8.5f, 2.3f, 13.6f);
     pose.look = glm::normalize(glm::vec3(-0.25f, -0.3f, -1.0f));
     pose.up = glm::vec3(0, 1, 0);
+    if (measure) pose = ngi::make_camera_path(scene, ngi::CameraPathKind::Auto, 2, 0).at(0.0f);
 
     // Raster.
     ngi_gl::GlContext gl(64, 64, false, "ngi_gl_agreement");
     const auto faces = ngi_gl::exposed_faces(scene);
     ngi_gl::BakeSettings bs;
-    bs.texels = 4;
-    bs.sky_rays = 1024;
+    bs.texels = measure ? 0 : 4;
+    bs.sky_rays = measure ? 256 : 1024;
     const ngi_gl::LightBake bake = ngi_gl::bake_static_light(scene, faces, lighting, bs);
     ngi_gl::GpuScene gpu(ngi_gl::build_mesh(scene, faces, [&](std::size_t i) { return bake.tile_origin(i); }), bake);
     ngi_gl::ShadowMap shadow(2048);
@@ -199,6 +204,6 @@ int main(int argc, char** argv) {
                 argv[1], m.ssim, kMinLightmapSsim, m.psnr, range);
     if (!(m.ssim >= kMinLightmapSsim)) ok = false;
     gbuffer.unmap();
-    std::printf("%s in %.1f s\n", ok ? "PASS" : "FAIL", secs(t_start));
-    return ok ? 0 : 1;
+    std::printf("%s in %.1f s\n", measure ? "MEASURED" : ok ? "PASS" : "FAIL", secs(t_start));
+    return measure || ok ? 0 : 1;
 }
