@@ -116,7 +116,7 @@ public:
         int w = 0, h = 0;
         glfwGetFramebufferSize(context_.window(), &w, &h);
         presenter_.draw(lit.display, w, h);
-        overlay_.draw(overlay_text(), 8, 8, 2.0f, w, h);
+        overlay_.draw(overlay_text(), 8, 8, std::clamp(float(w) / 384.0f, 1.0f, 2.0f), w, h);  // ~46 characters fit
         if (capture && window_png) *window_png = read_window(w, h);
         glfwSwapBuffers(context_.window());
         t.frame = ms_since(t0);
@@ -129,11 +129,10 @@ public:
     std::string overlay_text() const {
         char b[512];
         std::snprintf(b, sizeof b,
-                      "%s  N=%d  %.1f fps\nraster %.1f  transfer %.1f (readback %.1f + gather %.1f) ms\n"
-                      "merge/input %.1f  network %.1f  compose/outputs %.1f ms\n%s  %.1f h  %s",
+                      "%s  N=%d  %.1f fps\nraster %.1f ms\ntransfer %.1f ms (readback %.1f + gather %.1f)\n"
+                      "merge %.1f  network %.1f  compose %.1f ms\n%s  %.1f h  no area light",
                       rung_.c_str(), o_.n, fps_, last_.raster, last_.transfer(), last_.readback, last_.gather,
-                      last_.input, last_.network, last_.outputs, transfer_.used.c_str(), hours_,
-                      "no area light");
+                      last_.input, last_.network, last_.outputs, transfer_.used.c_str(), hours_);
         return b;
     }
 
