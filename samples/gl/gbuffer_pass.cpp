@@ -43,7 +43,8 @@ uniform float u_lamp_level;
 uniform mat4 u_light_vp;
 uniform sampler2DShadow u_shadow;
 uniform float u_shadow_texel;      // 1 / resolution
-uniform float u_normal_offset;     // metres along the normal before the lookup (1.5 shadow texels)
+uniform float u_normal_offset;     // metres along the normal before the lookup
+uniform int u_pcf;                 // PCF taps: (2 u_pcf + 1)^2, each a bilinear 2 x 2 compare
 uniform float u_shadow_bias;       // depth units
 uniform sampler2D u_bake_static, u_bake_lamp;
 uniform float u_bake_k;
@@ -62,10 +63,11 @@ void main() {
     if (ndl > 0.0 && u_sun_e.r + u_sun_e.g + u_sun_e.b > 0.0) {
         vec3 c = (u_light_vp * vec4(v_world + n * u_normal_offset, 1.0)).xyz * 0.5 + 0.5;
         float vis = 0.0;
-        for (int j = -1; j <= 1; ++j)
-            for (int i = -1; i <= 1; ++i)
+        for (int j = -u_pcf; j <= u_pcf; ++j)
+            for (int i = -u_pcf; i <= u_pcf; ++i)
                 vis += texture(u_shadow, vec3(c.xy + vec2(i, j) * u_shadow_texel, c.z - u_shadow_bias));
-        sun = u_sun_e * (ndl * kInvPi * vis / 9.0);
+        float taps = float(2 * u_pcf + 1);
+        sun = u_sun_e * (ndl * kInvPi * vis / (taps * taps));
     }
     // Baked static light: bilinear between the face's texel centres, clamped inside its own tile.
     vec2 t = clamp(v_uv * u_bake_k, vec2(0.5), vec2(u_bake_k - 0.5)) + v_tile;
@@ -224,7 +226,8 @@ void GBufferPass::render(const GpuScene& scene, const ShadowMap& shadow, const n
     glUniform1f(loc(p, "u_lamp_level"), lighting.lamp_level);
     glUniformMatrix4fv(loc(p, "u_light_vp"), 1, GL_FALSE, glm::value_ptr(shadow.light_view_projection()));
     glUniform1f(loc(p, "u_shadow_texel"), 1.0f / float(shadow.resolution()));
-    glUniform1f(loc(p, "u_normal_offset"), 1.5f * shadow.texel_metres());
+    glUniform1f(loc(p, "u_normal_offset"), normal_offset_texels_ * shadow.texel_metres());
+    glUniform1i(loc(p, "u_pcf"), pcf_radius_);
     glUniform1f(loc(p, "u_shadow_bias"), 0.5f * shadow.texel_metres() / shadow.depth_range());
     glUniform1f(loc(p, "u_bake_k"), float(scene.bake_k()));
     glUniform2f(loc(p, "u_atlas_size"), scene.atlas_size().x, scene.atlas_size().y);

@@ -34,6 +34,12 @@ public:
     GBufferPass(const GBufferPass&) = delete;
     GBufferPass& operator=(const GBufferPass&) = delete;
     int n() const { return n_; }
+    // Shadow lookup: PCF radius r ((2r + 1)^2 hardware-bilinear taps) and the offset along the normal in shadow
+    // texels. Defaults measured against the tracer (samples/gl/README.md "Agreement with the tracer").
+    void set_shadow_filter(int pcf_radius, float normal_offset_texels) {
+        pcf_radius_ = pcf_radius;
+        normal_offset_texels_ = normal_offset_texels;
+    }
 
     // Rasterizes the six faces of the cluster at `pose` (look/up of the front camera).
     void render(const GpuScene& scene, const ShadowMap& shadow, const ngi::CameraPose& pose,
@@ -50,6 +56,8 @@ public:
     static constexpr int kTargets = 6;  // ngi::Feature order
 private:
     int n_;
+    int pcf_radius_ = 1;
+    float normal_offset_texels_ = 0.5f;
     GLuint fbo_ = 0, depth_rb_ = 0, gbuffer_program_ = 0, sky_program_ = 0, empty_vao_ = 0;
     std::array<GLuint, kTargets> tex_{}, pbo_{};
     std::array<const void*, kTargets> mapped_{};

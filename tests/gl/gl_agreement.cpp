@@ -9,7 +9,8 @@
 //   - the shipped indirect-light rung's lightmap from the rasterized inputs (handed over as image descriptors, as the
 //     viewer does) against the one from the traced frame: SSIM (data_range = the traced lightmap's maximum,
 //     docs/CONVENTIONS.md section 11) >= 0.97.
-// Usage: ngi_gl_agreement MODEL.safetensors [SCENE]   (device: $NGI_TEST_DEVICE, default cpu = PoCL)
+// Usage: ngi_gl_agreement MODEL.safetensors [SCENE [SKY_RAYS [TEXELS [all|sun|sky]]]]
+// (sun: the sky set to black; sky: the sun's irradiance set to 0; to tell which light limits the agreement)   (device: $NGI_TEST_DEVICE, default cpu = PoCL)
 // With SCENE (a spec or .vox path) it measures instead of testing: frame 0 of the scene's camera path at its default
 // time, the viewer's default bake (automatic texels, 256 sky rays); it prints the same numbers (for the README).
 #include <epoxy/gl.h>  // before GLFW: epoxy must come before GL/gl.h
@@ -67,17 +68,20 @@ struct Share {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc != 2 && argc != 3) {
-        std::fprintf(stderr, "usage: ngi_gl_agreement MODEL.safetensors [SCENE]\n");
+    if (argc < 2 || argc > 6) {
+        std::fprintf(stderr, "usage: ngi_gl_agreement MODEL.safetensors [SCENE [SKY_RAYS [TEXELS [all|sun|sky]]]]\n");
         return 2;
     }
     const auto t_start = Clock::now();
     const int n = 64, spp = 1024;
     const char* dev_env = std::getenv("NGI_TEST_DEVICE");
     ngi::Device device = ngi::Device::open(dev_env && *dev_env ? dev_env : "cpu");
-    const bool measure = argc == 3;
+    const bool measure = argc >= 3;
     const ngi::VoxelScene scene = measure ? ngi::make_scene(argv[2]) : agreement_scene();
-    const ngi::Lighting lighting = ngi::lighting_at(scene.default_time, scene.sun_azimuth);
+    ngi::Lighting lighting = ngi::lighting_at(scene.default_time, scene.sun_azimuth);
+    const std::string component = argc == 6 ? argv[5] : "all";
+    if (component == "sun") lighting.sky = ngi::Sky{};
+    if (component == "sky") lighting.sun.irradiance = glm::vec3(0.0f);
     ngi::CameraPose pose;
     pose.position = glm::vec3(8.5f, 2.3f, 13.6f);
     pose.look = glm::normalize(glm::vec3(-0.25f, -0.3f, -1.0f));
@@ -88,13 +92,18 @@ int main(int argc, char** argv) {
     ngi_gl::GlContext gl(64, 64, false, "ngi_gl_agreement");
     const auto faces = ngi_gl::exposed_faces(scene);
     ngi_gl::BakeSettings bs;
-    bs.texels = measure ? 0 : 4;
-    bs.sky_rays = measure ? 256 : 1024;
+    bs.texels = argc >= 5 ? std::atoi(argv[4]) : measure ? 0 : 4;
+    bs.sky_rays = argc >= 4 ? std::atoi(argv[3]) : measure ? 256 : 1024;
     const ngi_gl::LightBake bake = ngi_gl::bake_static_light(scene, faces, lighting, bs);
     ngi_gl::GpuScene gpu(ngi_gl::build_mesh(scene, faces, [&](std::size_t i) { return bake.tile_origin(i); }), bake);
     ngi_gl::ShadowMap shadow(2048);
     shadow.render(gpu, lighting.sun.direction, scene.size);
     ngi_gl::GBufferPass gbuffer(n);
+    if (const char* f = std::getenv("NGI_GL_SHADOW_FILTER")) {  // "r,offset": for measuring other filters
+        int r = 1;
+        float off = 0.5f;
+        if (std::sscanf(f, "%d,%f", &r, &off) == 2) gbuffer.set_shadow_filter(r, off);
+    }
     gbuffer.render(gpu, shadow, pose, lighting);
     gbuffer.read_back();
     const ngi::Frame raster = gbuffer.to_frame(pose);
@@ -200,8 +209,12 @@ int main(int argc, char** argv) {
     float range = 0;
     for (float v : lm_traced.data) range = std::max(range, v);
     const ngi::ImageMetrics m = ngi::compare_images(device, lm_traced, lit.lightmap, range);
-    std::printf("lightmap (%s, rasterized vs traced inputs): SSIM %.4f (bound %.2f), PSNR %.2f dB, data_range %.3f\n",
-                argv[1], m.ssim, kMinLightmapSsim, m.psnr, range);
+    // The same network on the second trace: how far the tracer's own noise moves the lightmap.
+    const ngi::Image lm_traced2 = pipeline.run(model, traced2, true, false, false).lightmap;
+    const ngi::ImageMetrics m2 = ngi::compare_images(device, lm_traced, lm_traced2, range);
+    std::printf("lightmap (%s, rasterized vs traced inputs): SSIM %.4f (bound %.2f), PSNR %.2f dB, data_range %.3f; "
+                "traced vs traced (another seed): SSIM %.4f, PSNR %.2f dB\n",
+                argv[1], m.ssim, kMinLightmapSsim, m.psnr, range, m2.ssim, m2.psnr);
     if (!(m.ssim >= kMinLightmapSsim)) ok = false;
     gbuffer.unmap();
     std::printf("%s in %.1f s\n", measure ? "MEASURED" : ok ? "PASS" : "FAIL", secs(t_start));
