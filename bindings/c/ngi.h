@@ -233,6 +233,46 @@ NGI_API ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model
 NGI_API ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, const float* planes, size_t planes_bytes,
                                     int faces, unsigned flags, float* lightmap, size_t lightmap_bytes,
                                     float* final_image, size_t final_bytes, float* display, size_t display_bytes);
+/* --- frames as an engine holds them: one image descriptor per face and feature --------------------------------
+ * Each image is N x N, stored in host memory or a device buffer with its own format, channel count, byte offset and
+ * strides (ngi/image_desc.hpp has the rules); ngi gathers it on the device (one kernel per image; host images are
+ * uploaded in one transfer first). See the C example in bindings/c/README.md. */
+typedef NGI_ENUM(ngi_pixel_format) {
+    NGI_FORMAT_F32 = 0,       /* float32 */
+    NGI_FORMAT_F16 = 1,       /* IEEE half (no cl_khr_fp16 needed) */
+    NGI_FORMAT_U8_UNORM = 2,  /* uint8 / 255 */
+    NGI_FORMAT_U8_SRGB = 3,   /* uint8 / 255 through the sRGB EOTF (e.g. albedo in an RGBA8_SRGB target) */
+    NGI_PIXEL_FORMAT_MAX_ENUM = 0x7FFFFFFF
+} ngi_pixel_format;
+typedef NGI_ENUM(ngi_feature) {
+    NGI_FEATURE_ALBEDO = 0, NGI_FEATURE_NORMAL = 1, NGI_FEATURE_DEPTH = 2, NGI_FEATURE_DIRECT = 3,
+    NGI_FEATURE_EMISSION = 4, NGI_FEATURE_ENV = 5, NGI_FEATURE_COUNT = 6,
+    NGI_FEATURE_MAX_ENUM = 0x7FFFFFFF
+} ngi_feature;
+typedef struct ngi_image_desc {
+    const void* host;        /* host memory, or NULL */
+    size_t host_bytes;       /* bytes readable from host */
+    ngi_buffer* buffer;      /* or a device buffer (exactly one of host / buffer; both NULL = the image is absent) */
+    ngi_pixel_format format;
+    int channels;            /* stored per pixel, 1..4; albedo, normal, direct, emission, env read 3, depth 1 */
+    int width, height;       /* the pipeline's N x N */
+    size_t offset;           /* bytes to channel 0 of the first stored row's first pixel */
+    size_t pixel_stride;     /* bytes between pixels of a row; 0 = channels x value size */
+    size_t row_stride;       /* bytes between stored rows; 0 = width x pixel_stride */
+    size_t channel_stride;   /* bytes between a pixel's channels; 0 = the value size (interleaved) */
+    int bottom_up;           /* 1: the first stored row is the image's bottom (OpenGL) */
+    float scale, bias;       /* value = decoded x scale + bias; a scale of 0 is taken as 1 (a zeroed descriptor reads
+                                values as stored) */
+} ngi_image_desc;
+/* images: 36 descriptors, images[face * 6 + feature] (faces front, back, left, right, up, down; ngi_feature order).
+ * A surround model reads all six faces, a single-view model the front face. Emission and env are optional: given for
+ * every face read, or for none. The camera is ngi_pipeline_set_camera's. A descriptor that does not fit is an
+ * NGI_ERROR_INPUT naming the face and feature, and nothing is enqueued. */
+NGI_API ngi_status ngi_pipeline_enqueue_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                               ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display);
+NGI_API ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                           float* lightmap, size_t lightmap_bytes, float* final_image,
+                                           size_t final_bytes, float* display, size_t display_bytes);
 NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
 /* --- files ---------------------------------------------------------------------------------------------------- */
 /* A frame folder (docs/CONVENTIONS.md: <face>_<feature>.exr, camera.json) into frame planes of `faces` (1 or 6) faces.

@@ -536,19 +536,106 @@ ngi::FrameDesc frame_desc(const ngi_pipeline& p, int faces, unsigned flags) {
 }
 }  // namespace
 
+static_assert(int(NGI_FORMAT_F32) == int(ngi::PixelFormat::F32) && int(NGI_FORMAT_F16) == int(ngi::PixelFormat::F16) &&
+                  int(NGI_FORMAT_U8_UNORM) == int(ngi::PixelFormat::U8Unorm) &&
+                  int(NGI_FORMAT_U8_SRGB) == int(ngi::PixelFormat::U8Srgb),
+              "ngi_pixel_format mirrors ngi::PixelFormat");
+static_assert(int(NGI_FEATURE_ENV) == int(ngi::Feature::Env) && int(NGI_FEATURE_DEPTH) == int(ngi::Feature::Depth) &&
+                  NGI_FEATURE_COUNT == ngi::kFeatureCount,
+              "ngi_feature mirrors ngi::Feature");
+
+namespace {
+
+ngi::FrameInputs frame_inputs(const ngi_pipeline& p, const ngi_image_desc* images) {
+    require(images, "images is NULL (36 descriptors expected)");
+    ngi::FrameInputs in;
+    in.look = p.look;
+    in.up = p.up;
+    for (int f = 0; f < ngi::kFaceCount; ++f)
+        for (int k = 0; k < ngi::kFeatureCount; ++k) {
+            const ngi_image_desc& c = images[f * ngi::kFeatureCount + k];
+            ngi::ImageDesc& d = in.images[std::size_t(f)][std::size_t(k)];
+            if (c.buffer) d.buffer = live(c.buffer, "image buffer").buffer;
+            d.host = c.host;
+            d.host_bytes = c.host_bytes;
+            d.format = ngi::PixelFormat(int(c.format));
+            d.channels = c.channels;
+            d.width = c.width;
+            d.height = c.height;
+            d.offset = c.offset;
+            d.pixel_stride = c.pixel_stride;
+            d.row_stride = c.row_stride;
+            d.channel_stride = c.channel_stride;
+            d.bottom_up = c.bottom_up != 0;
+            d.scale = c.scale == 0.0f ? 1.0f : c.scale;
+            d.bias = c.bias;
+        }
+    return in;
+}
+
+// The sizes of host outputs: each given one must hold N x N x 3 floats.
+void check_output_sizes(const ngi_pipeline& p, const float* lightmap, std::size_t lightmap_bytes, const float* final_image,
+                        std::size_t final_bytes, const float* display, std::size_t display_bytes) {
+    require(lightmap || final_image || display, "lightmap, final_image and display are all NULL: nothing to make");
+    const std::size_t need = 3 * std::size_t(p.pipeline.n()) * std::size_t(p.pipeline.n()) * sizeof(float);
+    const std::pair<std::size_t, const char*> sizes[3] = {{lightmap ? lightmap_bytes : need, "lightmap_bytes"},
+                                                          {final_image ? final_bytes : need, "final_bytes"},
+                                                          {display ? display_bytes : need, "display_bytes"}};
+    for (const auto& [bytes, name] : sizes)
+        require(bytes >= need, std::string(name) + " is " + std::to_string(bytes) + ", an N x N x 3 image needs " +
+                                   std::to_string(need));
+}
+
+void copy_outputs(const ngi::FrameImages& r, float* lightmap, float* final_image, float* display) {
+    if (lightmap) std::memcpy(lightmap, r.lightmap.data.data(), r.lightmap.data.size() * sizeof(float));
+    if (final_image) std::memcpy(final_image, r.final_image.data.data(), r.final_image.data.size() * sizeof(float));
+    if (display) std::memcpy(display, r.display.data.data(), r.display.data.size() * sizeof(float));
+}
+
+ngi::FrameOutputs device_outputs(const ngi_pipeline& p, ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display) {
+    require(lightmap || final_image || display, "lightmap, final_image and display are all NULL: nothing to make");
+    ngi::FrameOutputs outs;
+    if (lightmap) outs.lightmap = live(lightmap, "lightmap").buffer;
+    if (final_image) outs.final_image = live(final_image, "final_image").buffer;
+    if (display) outs.display = live(display, "display").buffer;
+    outs.tonemap = p.tonemap;
+    return outs;
+}
+
+}  // namespace
+
 ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model, ngi_buffer* planes, int faces, unsigned flags,
                                 ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display) {
     return guarded(__func__, [&] {
         ngi_pipeline& p = live(pipeline, "pipeline");
         ngi_model& m = live(model, "model");
         const ngi_buffer& in = live(planes, "planes");
-        require(lightmap || final_image || display, "lightmap, final_image and display are all NULL: nothing to make");
-        ngi::FrameOutputs outs;
-        if (lightmap) outs.lightmap = live(lightmap, "lightmap").buffer;
-        if (final_image) outs.final_image = live(final_image, "final_image").buffer;
-        if (display) outs.display = live(display, "display").buffer;
-        outs.tonemap = p.tonemap;
-        p.pipeline.enqueue(m.model, in.buffer, frame_desc(p, faces, flags), outs);
+        p.pipeline.enqueue(m.model, in.buffer, frame_desc(p, faces, flags),
+                           device_outputs(p, lightmap, final_image, display));
+        m.last_was_enqueue = true;
+    });
+}
+
+ngi_status ngi_pipeline_enqueue_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                       ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display) {
+    return guarded(__func__, [&] {
+        ngi_pipeline& p = live(pipeline, "pipeline");
+        ngi_model& m = live(model, "model");
+        p.pipeline.enqueue(m.model, frame_inputs(p, images), device_outputs(p, lightmap, final_image, display));
+        m.last_was_enqueue = true;
+    });
+}
+
+ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                   float* lightmap, size_t lightmap_bytes, float* final_image, size_t final_bytes,
+                                   float* display, size_t display_bytes) {
+    return guarded(__func__, [&] {
+        ngi_pipeline& p = live(pipeline, "pipeline");
+        ngi_model& m = live(model, "model");
+        check_output_sizes(p, lightmap, lightmap_bytes, final_image, final_bytes, display, display_bytes);
+        copy_outputs(p.pipeline.run(m.model, frame_inputs(p, images), lightmap != nullptr, final_image != nullptr,
+                                    display != nullptr, p.tonemap),
+                     lightmap, final_image, display);
         m.last_was_enqueue = true;
     });
 }
@@ -560,21 +647,10 @@ ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, const floa
         ngi_pipeline& p = live(pipeline, "pipeline");
         ngi_model& m = live(model, "model");
         require(planes, "planes is NULL");
-        require(lightmap || final_image || display, "lightmap, final_image and display are all NULL: nothing to make");
-        const std::size_t need = 3 * std::size_t(p.pipeline.n()) * std::size_t(p.pipeline.n()) * sizeof(float);
-        const std::pair<std::size_t, const char*> sizes[3] = {
-            {lightmap ? lightmap_bytes : need, "lightmap_bytes"},
-            {final_image ? final_bytes : need, "final_bytes"},
-            {display ? display_bytes : need, "display_bytes"}};
-        for (const auto& [bytes, name] : sizes)
-            require(bytes >= need, std::string(name) + " is " + std::to_string(bytes) + ", an N x N x 3 image needs " +
-                                       std::to_string(need));
-        const ngi::FrameImages r = p.pipeline.run(m.model, planes, planes_bytes, frame_desc(p, faces, flags),
-                                                  lightmap != nullptr, final_image != nullptr, display != nullptr,
-                                                  p.tonemap);
-        if (lightmap) std::memcpy(lightmap, r.lightmap.data.data(), need);
-        if (final_image) std::memcpy(final_image, r.final_image.data.data(), need);
-        if (display) std::memcpy(display, r.display.data.data(), need);
+        check_output_sizes(p, lightmap, lightmap_bytes, final_image, final_bytes, display, display_bytes);
+        copy_outputs(p.pipeline.run(m.model, planes, planes_bytes, frame_desc(p, faces, flags), lightmap != nullptr,
+                                    final_image != nullptr, display != nullptr, p.tonemap),
+                     lightmap, final_image, display);
         m.last_was_enqueue = true;
     });
 }

@@ -244,6 +244,44 @@ static void test_pipeline(ngi_device* dev, const char* models) {
     CHECK(memcmp(light, light2, out_bytes) == 0);
     CHECK(memcmp(disp, disp2, out_bytes) == 0);
 
+    /* The same frame as image descriptors (each feature a planar float image inside the planes), from host memory
+       and from the device buffer: the same bits. A descriptor that does not fit names its face and feature. */
+    {
+        static const int first_plane[6] = {0, 3, 6, 7, 10, 13};
+        ngi_image_desc images[36];
+        int f, k;
+        memset(images, 0, sizeof images);
+        for (f = 0; f < 6; ++f)
+            for (k = 0; k < NGI_FEATURE_EMISSION; ++k) { /* emission and env absent: flags 0 above */
+                ngi_image_desc* d = &images[f * 6 + k];
+                d->host = planes;
+                d->host_bytes = plane_bytes;
+                d->format = NGI_FORMAT_F32;
+                d->channels = k == NGI_FEATURE_DEPTH ? 1 : 3;
+                d->width = d->height = n;
+                d->offset = ((size_t)f * 16 + (size_t)first_plane[k]) * (size_t)n * n * sizeof(float);
+                d->pixel_stride = sizeof(float);
+                d->channel_stride = (size_t)n * n * sizeof(float);
+            }
+        CHECK(ngi_pipeline_run_images(p, m, images, light2, out_bytes, NULL, 0, disp2, out_bytes) == NGI_OK);
+        CHECK(memcmp(light, light2, out_bytes) == 0);
+        CHECK(memcmp(disp, disp2, out_bytes) == 0);
+        for (f = 0; f < 36; ++f) {
+            images[f].host = NULL;
+            images[f].host_bytes = 0;
+            if (images[f].channels) images[f].buffer = planes_b;
+        }
+        memset(light2, 0, out_bytes);
+        CHECK(ngi_pipeline_enqueue_images(p, m, images, light_b, NULL, NULL) == NGI_OK);
+        CHECK(ngi_buffer_read(light_b, 0, light2, out_bytes) == NGI_OK);
+        CHECK(memcmp(light, light2, out_bytes) == 0);
+        images[2 * 6 + NGI_FEATURE_NORMAL].channels = 2;
+        CHECK_FAILS(ngi_pipeline_enqueue_images(p, m, images, light_b, NULL, NULL), NGI_ERROR_INPUT,
+                    "ngi_pipeline_enqueue_images", "image 'normal' of face 'left' has 2 channels");
+        CHECK_FAILS(ngi_pipeline_run_images(p, m, NULL, light2, out_bytes, NULL, 0, NULL, 0), NGI_ERROR_INVALID_ARGUMENT,
+                    "ngi_pipeline_run_images", "images is NULL");
+    }
+
     /* Out of memory is its own status. */
     {
         ngi_buffer* huge = NULL;

@@ -3,6 +3,7 @@
 
 #include "common.hpp"
 #include "model_ref.hpp"
+#include "ngi/image_desc.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/pipeline.hpp"
 
@@ -108,6 +109,56 @@ std::vector<float> planes_from_dict(const py::dict& d, ngi::FrameDesc& desc, int
     if (d.contains("look")) desc.look = vec3(d["look"], "frame['look']");
     if (d.contains("up")) desc.up = vec3(d["up"], "frame['up']");
     return planes;
+}
+
+// An engine's render target as an image descriptor over a NumPy array (no copy): [H, W] or [H, W, C], float32,
+// float16 or uint8, any positive strides (views, padded pitches, channel slices). `spec` is the array or a dict
+// {"array": a, "srgb": bool, "scale": float, "bias": float, "bottom_up": bool}. `keep` holds the arrays alive.
+ngi::ImageDesc image_desc_from(const py::handle& spec, const std::string& what, std::vector<py::array>& keep) {
+    py::object obj = py::reinterpret_borrow<py::object>(spec);
+    bool srgb = false, bottom_up = false;
+    float scale = 1.0f, bias = 0.0f;
+    if (py::isinstance<py::dict>(obj)) {
+        py::dict d = obj.cast<py::dict>();
+        for (auto item : d) {
+            const std::string key = py::str(item.first);
+            if (key != "array" && key != "srgb" && key != "scale" && key != "bias" && key != "bottom_up")
+                throw py::value_error(what + ": unknown key '" + key + "' (array, srgb, scale, bias, bottom_up)");
+        }
+        if (!d.contains("array")) throw py::value_error(what + ": the dict has no 'array'");
+        if (d.contains("srgb")) srgb = d["srgb"].cast<bool>();
+        if (d.contains("bottom_up")) bottom_up = d["bottom_up"].cast<bool>();
+        if (d.contains("scale")) scale = d["scale"].cast<float>();
+        if (d.contains("bias")) bias = d["bias"].cast<float>();
+        obj = d["array"];
+    }
+    if (!py::isinstance<py::array>(obj)) throw py::type_error(what + ": expected a NumPy array");
+    py::array a = obj.cast<py::array>();
+    if (a.ndim() != 2 && a.ndim() != 3) throw py::value_error(what + ": expected [H, W] or [H, W, C]");
+    const py::dtype dt = a.dtype();
+    ngi::ImageDesc d;
+    if (dt.is(py::dtype::of<float>())) d.format = ngi::PixelFormat::F32;
+    else if (dt.kind() == 'f' && dt.itemsize() == 2) d.format = ngi::PixelFormat::F16;
+    else if (dt.is(py::dtype::of<std::uint8_t>())) d.format = srgb ? ngi::PixelFormat::U8Srgb : ngi::PixelFormat::U8Unorm;
+    else throw py::type_error(what + ": dtype " + dt.attr("name").cast<std::string>() + " is not float32, float16 or uint8");
+    if (srgb && d.format != ngi::PixelFormat::U8Srgb) throw py::value_error(what + ": srgb needs a uint8 array");
+    for (int i = 0; i < a.ndim(); ++i)
+        if (a.strides(i) <= 0)
+            throw py::value_error(what + ": stride " + std::to_string(a.strides(i)) + " of axis " + std::to_string(i) +
+                                  " is not positive (flipped rows: pass the unflipped array with bottom_up=True)");
+    d.height = int(a.shape(0));
+    d.width = int(a.shape(1));
+    d.channels = a.ndim() == 3 ? int(a.shape(2)) : 1;
+    d.row_stride = std::size_t(a.strides(0));
+    d.pixel_stride = std::size_t(a.strides(1));
+    d.channel_stride = a.ndim() == 3 ? std::size_t(a.strides(2)) : std::size_t(dt.itemsize());
+    d.host = a.data();
+    d.host_bytes = d.span_bytes();
+    d.bottom_up = bottom_up;
+    d.scale = scale;
+    d.bias = bias;
+    keep.push_back(a);
+    return d;
 }
 
 ngi::ToneMapOptions tonemap_options(float exposure_ev, const std::string& curve, bool srgb) {
@@ -286,6 +337,64 @@ Frame.from_dict), packed straight into the device layout. Returns a dict with th
 [3, N, N] float32: 'lightmap' (linear HDR), 'final' (lightmap x albedo + emission + env, linear), 'display'
 (tone-mapped to [0, 1]: exposure_ev, curve 'aces' | 'reinhard' | 'clamp', srgb); with stats=True also 'stats'
 (non-finite values replaced per feature, sky normals, far depths).)doc")
+        .def("run_images", [](PyPipeline& p, PyModel& model, const py::dict& images, const py::object& look,
+                              const py::object& up, const std::vector<std::string>& outputs, float exposure_ev,
+                              const std::string& curve, bool srgb, bool stats, bool timings) {
+            p.device->get("Pipeline.run_images");
+            model.device->get("Pipeline.run_images: model");
+            const Wanted w = wanted_outputs(outputs);
+            const ngi::ToneMapOptions tm = tonemap_options(exposure_ev, curve, srgb);
+            ngi::FrameInputs in;
+            in.look = vec3(look, "Pipeline.run_images: look");
+            in.up = vec3(up, "Pipeline.run_images: up");
+            std::vector<py::array> keep;
+            for (auto item : images) {
+                if (!py::isinstance<py::tuple>(item.first) || py::len(item.first) != 2)
+                    throw py::value_error("Pipeline.run_images: keys are (face, feature) tuples, e.g. ('front', 'albedo')");
+                const py::tuple key = item.first.cast<py::tuple>();
+                const std::string face = py::str(key[0]), feature = py::str(key[1]);
+                const ngi::Face f = ngi::face_from_name(face);
+                int k = -1;
+                for (ngi::Feature ft : kFeatures)
+                    if (feature == ngi::feature_name(ft)) k = int(ft);
+                if (k < 0) throw py::value_error("Pipeline.run_images: unknown feature '" + feature + "'");
+                in.at(f, ngi::Feature(k)) =
+                    image_desc_from(item.second, "Pipeline.run_images: images[('" + face + "', '" + feature + "')]", keep);
+            }
+            ngi::PreprocessStats st;
+            ngi::FrameTimings tt;
+            ngi::FrameImages r;
+            {
+                py::gil_scoped_release release;
+                r = p.pipeline.run(model.model, in, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr,
+                                   timings ? &tt : nullptr);
+            }
+            py::dict out;
+            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
+            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
+            if (w.display) out["display"] = from_image(std::move(r.display));
+            if (stats) out["stats"] = stats_dict(st);
+            if (timings) {
+                py::dict t;
+                t["gather_ms"] = tt.gather_ms;
+                t["input_ms"] = tt.input_ms;
+                t["network_ms"] = tt.network_ms;
+                t["outputs_ms"] = tt.outputs_ms;
+                out["timings"] = t;
+            }
+            return out;
+        }, py::arg("model"), py::arg("images"), py::arg("look") = std::vector<float>{0, 0, -1},
+           py::arg("up") = std::vector<float>{0, 1, 0},
+           py::arg("outputs") = std::vector<std::string>{"lightmap", "final"}, py::arg("exposure_ev") = 0.0f,
+           py::arg("curve") = "aces", py::arg("srgb") = true, py::arg("stats") = false, py::arg("timings") = false,
+           R"doc(
+One frame from render targets as an engine holds them (image descriptors, ngi/image_desc.hpp), without repacking:
+`images` maps (face, feature) -> a NumPy array [N, N] or [N, N, C] (float32, float16 or uint8; C up to 4, the first
+3 read, 1 for depth; any positive strides, e.g. a channel slice or a padded pitch) or a dict {"array": a, "srgb":
+bool (uint8 sRGB albedo), "scale": s, "bias": b (value = stored x s + b, e.g. 2, -1 for unorm normals), "bottom_up":
+bool (OpenGL row order)}. Faces 'front', 'back', 'left', 'right', 'up', 'down' (a single-view model reads 'front');
+features 'albedo', 'normal', 'depth', 'direct' and optionally 'emission', 'env' on every face or none. Outputs as
+run(); timings=True adds 'timings' (ms per stage: gather, input, network, outputs).)doc")
         .def("enqueue", [](PyPipeline& p, PyModel& model, const py::object& planes, const py::object& look,
                            const py::object& up, int faces, bool has_emission, bool has_env, const py::object& lightmap,
                            const py::object& final_image, const py::object& display) {

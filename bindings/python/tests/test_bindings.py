@@ -115,6 +115,49 @@ def test_pipeline_single_view_from_front_face_only(dev, frame):
     np.testing.assert_array_equal(pipe.run(model, front)["lightmap"], full)
 
 
+def test_pipeline_run_images_engine_layouts(dev, frame):
+    """Render targets as an engine holds them (interleaved RGBA half with bottom-up rows, a padded R32F depth, unorm8
+    normals) give what the same values give as a frame dict; bad descriptors name the face and feature."""
+    model = ngi.Model(dev, MODELS / "ladder" / "gi_single_view_n64_ngf16.safetensors")
+    pipe = ngi.Pipeline(dev, 64)
+    d = frame.to_dict()
+    images, as_dict = {}, {"look": d["look"], "up": d["up"]}
+    for feature in ("albedo", "normal", "depth", "direct", "emission", "env"):
+        planes = d[feature][:1]                                   # [1, C, N, N]: the front face
+        hwc = np.moveaxis(planes[0], 0, -1)                       # [N, N, C]
+        if feature == "normal":                                   # RGBA8, n / 2 + 1/2
+            stored = np.zeros((64, 64, 4), np.uint8)
+            stored[..., :3] = np.round(np.clip(hwc * 0.5 + 0.5, 0, 1) * 255)
+            images[("front", feature)] = {"array": stored, "scale": 2.0, "bias": -1.0}
+            decoded = stored[..., :3].astype(np.float32) * np.float32(1 / 255) * 2 - 1
+        elif feature == "depth":                                  # R32F in a padded pitch: a view of a wider array
+            wide = np.zeros((64, 80), np.float32)
+            wide[:, :64] = hwc[..., 0]
+            images[("front", feature)] = wide[:, :64]
+            decoded = hwc
+        else:                                                     # RGBA16F, bottom-up rows
+            stored = np.zeros((64, 64, 4), np.float16)
+            stored[..., :3] = hwc[::-1]
+            images[("front", feature)] = {"array": stored, "bottom_up": True}
+            decoded = stored[::-1, :, :3].astype(np.float32)
+        as_dict[feature] = np.ascontiguousarray(np.moveaxis(decoded, -1, 0)[None])
+    want = pipe.run(model, as_dict, outputs=["lightmap", "final"])
+    got = pipe.run_images(model, images, look=d["look"], up=d["up"], outputs=["lightmap", "final"], timings=True)
+    # unorm normals: the device's x * scale + bias may be fused (one rounding), NumPy's is not
+    np.testing.assert_allclose(got["lightmap"], want["lightmap"], rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(got["final"], want["final"], rtol=1e-4, atol=1e-5)
+    assert got["timings"]["network_ms"] > 0
+    bad = dict(images)
+    bad[("front", "direct")] = np.zeros((64, 64, 2), np.float32)
+    with pytest.raises(ngi.InputError, match="image 'direct' of face 'front' has 2 channels"):
+        pipe.run_images(model, bad)
+    bad[("front", "direct")] = np.zeros((64, 64, 3), np.float32)[::-1]
+    with pytest.raises(ValueError, match="bottom_up"):
+        pipe.run_images(model, bad)
+    with pytest.raises(TypeError, match="float64"):
+        pipe.run_images(model, {("front", "albedo"): np.zeros((64, 64, 3))})
+
+
 def test_frame_round_trip(frame, frame_dir):
     back = ngi.read_frame(frame_dir)
     assert back.n == frame.n and back.look == pytest.approx(frame.look)

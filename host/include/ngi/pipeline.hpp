@@ -19,6 +19,7 @@
 #include "ngi/device.hpp"
 #include "ngi/device_buffer.hpp"
 #include "ngi/image.hpp"
+#include "ngi/image_desc.hpp"
 #include "ngi/model.hpp"
 #include "ngi/tensor.hpp"
 
@@ -123,6 +124,15 @@ struct FrameImages {
     Image lightmap, final_image, display;
 };
 
+// Wall-clock milliseconds of a frame's stages, measured when asked for by waiting for the device after each stage
+// (so a timed frame runs slightly slower than an untimed one: one queue drain per stage). gather: host images'
+// upload + the descriptors' gather (0 for frame planes); input: preprocessing, merge and coordinate map; network:
+// the generator; outputs: front-view extraction, decode, compose and tone map.
+struct FrameTimings {
+    double gather_ms = 0, input_ms = 0, network_ms = 0, outputs_ms = 0;
+    double total_ms() const { return gather_ms + input_ms + network_ms + outputs_ms; }
+};
+
 class SurroundPipeline {
 public:
     // n: face size, even, 2 <= n <= 2048. Builds the merge and extract lookup tables and the coordinate map.
@@ -144,17 +154,31 @@ public:
     // `stats` is given: then it blocks to download the preprocessing counters. `planes` is only read.
     // Throws InputError for buffers too small, read-only outputs, buffers of another device, or a model that does
     // not fit (its input width, input_layout or size).
+    // `timings`, when given, receives each stage's wall-clock time (waiting for the device after each stage).
     void enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc, const FrameOutputs& outputs,
-                 PreprocessStats* stats = nullptr);
+                 PreprocessStats* stats = nullptr, FrameTimings* timings = nullptr);
 
     // The same from host memory: exactly one upload (the frame's planes, packed) and one download (the outputs
     // asked for, side by side), plus the counters' download when `stats` is given.
     FrameImages run(Model& model, const Frame& frame, bool lightmap, bool final_image, bool display,
-                    const ToneMapOptions& tonemap = {}, PreprocessStats* stats = nullptr);
+                    const ToneMapOptions& tonemap = {}, PreprocessStats* stats = nullptr,
+                    FrameTimings* timings = nullptr);
     // The same from frame planes already packed in host memory (layout above; planes_bytes >= what desc needs).
     FrameImages run(Model& model, const float* planes, std::size_t planes_bytes, const FrameDesc& desc, bool lightmap,
                     bool final_image, bool display, const ToneMapOptions& tonemap = {},
-                    PreprocessStats* stats = nullptr);
+                    PreprocessStats* stats = nullptr, FrameTimings* timings = nullptr);
+
+    // One frame from image descriptors (ngi/image_desc.hpp: an engine's render targets as they are, host memory or
+    // device buffers, any of the formats, strides and row orders it describes). Each image is gathered on the device
+    // into the pipeline's frame planes by one kernel; the host images are uploaded first, all in one transfer (device
+    // images need none). Then as enqueue() above. Throws InputError naming the face and feature of a descriptor that
+    // does not fit (validate_image_desc), before anything is enqueued.
+    void enqueue(Model& model, const FrameInputs& inputs, const FrameOutputs& outputs,
+                 PreprocessStats* stats = nullptr, FrameTimings* timings = nullptr);
+    // The same, blocking, with host outputs (one download of the outputs asked for).
+    FrameImages run(Model& model, const FrameInputs& inputs, bool lightmap, bool final_image, bool display,
+                    const ToneMapOptions& tonemap = {}, PreprocessStats* stats = nullptr,
+                    FrameTimings* timings = nullptr);
 
     // One raw feature of all six faces merged into a 4N x 2N image (no preprocessing, no sanitizing).
     Image global_view(const Frame& frame, Feature feature);

@@ -2,6 +2,7 @@
 // enqueue with one upload and one download). The stages are those of the step-by-step calls (preprocess.cpp,
 // compose.cpp); here they stay on the device from the raw planes to the outputs.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "models/model_access.hpp"
@@ -13,6 +14,7 @@ namespace ngi {
 namespace {
 
 const std::size_t kLocal1[1] = {64};
+using Clock = std::chrono::steady_clock;
 
 void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
     const std::string where = std::string("enqueue frame: the ") + what + " buffer";
@@ -81,7 +83,7 @@ void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, cons
 }
 
 void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc,
-                               const FrameOutputs& outputs, PreprocessStats* stats) {
+                               const FrameOutputs& outputs, PreprocessStats* stats, FrameTimings* timings) {
     Impl& im = *impl_;
     const ModelConfig& config = model.config();
     const bool surround = detail::check_model_input(config);
@@ -117,18 +119,30 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
         if (*outs[i]) check_buffer(*outs[i], im.device, out_bytes, true, names[i]);
     if (outputs.display) check_tonemap(outputs.tonemap);
 
+    // Timed stages end with a wait for the device; the gather (descriptor inputs) was timed by the caller.
+    auto t = Clock::now();
+    auto lap = [&](double FrameTimings::*field) {
+        if (!timings) return;
+        im.ctx.finish();
+        const auto now = Clock::now();
+        timings->*field = std::chrono::duration<double, std::milli>(now - t).count();
+        t = now;
+    };
     const detail::Buffer& input = im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
                                                    desc.look, desc.up, config, surround);
+    lap(&FrameTimings::input_ms);
     detail::ensure_buffer(im.ctx, im.frame_out, std::size_t(3) * h * w * sizeof(float), "model output");
     detail::ModelAccess::enqueue(model, input.get(), 0, im.frame_out.get(), 0, h, w);
+    lap(&FrameTimings::network_ms);
     im.enqueue_outputs(im.frame_out.get(), surround, config, planes.opencl_mem(), desc.has_emission, desc.has_env,
                        outputs.lightmap.opencl_mem(), outputs.final_image.opencl_mem(), outputs.display.opencl_mem(),
                        outputs.tonemap);
+    lap(&FrameTimings::outputs_ms);
     if (stats) im.read_stats(*stats);
 }
 
 FrameImages SurroundPipeline::run(Model& model, const Frame& frame, bool lightmap, bool final_image, bool display,
-                                  const ToneMapOptions& tonemap, PreprocessStats* stats) {
+                                  const ToneMapOptions& tonemap, PreprocessStats* stats, FrameTimings* timings) {
     const bool surround = detail::check_model_input(model.config());
     if (frame.n != 0 && frame.n != impl_->n)
         throw InputError("run frame: the frame has N = " + std::to_string(frame.n) + ", this pipeline N = " +
@@ -136,12 +150,12 @@ FrameImages SurroundPipeline::run(Model& model, const Frame& frame, bool lightma
     const int faces = surround ? kFaceCount : 1;
     const std::vector<float> planes = pack_frame_planes(frame, faces);  // checks every image it packs
     return run(model, planes.data(), planes.size() * sizeof(float), FrameDesc::of(frame, faces), lightmap,
-               final_image, display, tonemap, stats);
+               final_image, display, tonemap, stats, timings);
 }
 
 FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t planes_bytes, const FrameDesc& desc,
                                   bool lightmap, bool final_image, bool display, const ToneMapOptions& tonemap,
-                                  PreprocessStats* stats) {
+                                  PreprocessStats* stats, FrameTimings* timings) {
     Impl& im = *impl_;
     if (!planes) throw InputError("run frame: the planes pointer is NULL");
     if (desc.faces != 1 && desc.faces != kFaceCount)
@@ -153,28 +167,43 @@ FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t
                          std::to_string(need));
     if (display) check_tonemap(tonemap);
 
-    // The raw planes and the results live in pipeline-owned buffers, handed to enqueue() as DeviceBuffers; the
-    // outputs are copied side by side on the device so that one download returns all of them.
-    const std::size_t out_bytes = 3 * std::size_t(im.n) * im.n * sizeof(float);
-    const int wanted = int(lightmap) + int(final_image) + int(display);
+    // The raw planes live in a pipeline-owned buffer, handed to enqueue() as a DeviceBuffer; their upload is the
+    // frame's "gather" stage.
+    const auto t0 = Clock::now();
     if (detail::ensure_buffer(im.ctx, im.raw, need, "frame planes") || !im.raw_handle)
         im.raw_handle = DeviceBuffer::wrap(im.device, im.raw.get(), 0, im.raw.bytes());
-    detail::ensure_buffer(im.ctx, im.frame_result, std::size_t(std::max(1, wanted)) * out_bytes, "frame results");
     im.ctx.write(im.raw, 0, need, planes, "frame planes");
+    if (timings) timings->gather_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const FrameOutputs outs = im.scratch_outputs(lightmap, final_image, display, tonemap);
+    enqueue(model, im.raw_handle, desc, outs, nullptr, timings);  // checks the model against the frame
+    FrameImages result = im.download_outputs(outs, timings);
+    if (stats) im.read_stats(*stats);
+    return result;
+}
 
+FrameOutputs SurroundPipeline::Impl::scratch_outputs(bool lightmap, bool final_image, bool display,
+                                                     const ToneMapOptions& tonemap) {
+    // Each wanted output gets its own scratch DeviceBuffer, kept between frames.
+    const std::size_t out_bytes = 3 * std::size_t(n) * n * sizeof(float);
     FrameOutputs outs;
     outs.tonemap = tonemap;
-    // Each wanted output gets its own scratch DeviceBuffer; they are copied side by side on the device and
-    // downloaded at once.
     auto scratch = [&](int i) -> const DeviceBuffer& {
-        if (!im.out_handles[i]) im.out_handles[i] = DeviceBuffer::allocate(im.device, out_bytes);
-        return im.out_handles[i];
+        if (!out_handles[i]) out_handles[i] = DeviceBuffer::allocate(device, out_bytes);
+        return out_handles[i];
     };
     if (lightmap) outs.lightmap = scratch(0);
     if (final_image) outs.final_image = scratch(1);
     if (display) outs.display = scratch(2);
-    enqueue(model, im.raw_handle, desc, outs, nullptr);  // checks the model against the frame
+    return outs;
+}
 
+FrameImages SurroundPipeline::Impl::download_outputs(const FrameOutputs& outs, FrameTimings* timings) {
+    // The outputs are copied side by side on the device and downloaded at once (the download counts as part of
+    // the outputs stage).
+    const auto t0 = Clock::now();
+    const std::size_t out_bytes = 3 * std::size_t(n) * n * sizeof(float);
+    const int wanted = int(bool(outs.lightmap)) + int(bool(outs.final_image)) + int(bool(outs.display));
+    detail::ensure_buffer(ctx, frame_result, std::size_t(std::max(1, wanted)) * out_bytes, "frame results");
     FrameImages result;
     std::vector<Image*> images;
     const DeviceBuffer* sources[3] = {&outs.lightmap, &outs.final_image, &outs.display};
@@ -182,19 +211,19 @@ FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t
     std::size_t at = 0;
     for (int i = 0; i < 3; ++i) {
         if (!*sources[i]) continue;
-        im.ctx.copy(sources[i]->opencl_mem(), 0, im.frame_result.get(), at, out_bytes, "frame results");
-        *targets[i] = Image(im.n, im.n, 3);
+        ctx.copy(sources[i]->opencl_mem(), 0, frame_result.get(), at, out_bytes, "frame results");
+        *targets[i] = Image(n, n, 3);
         images.push_back(targets[i]);
         at += out_bytes;
     }
     if (at) {
         std::vector<float> all(at / sizeof(float));
-        im.ctx.read(im.frame_result, 0, at, all.data(), "frame results");
+        ctx.read(frame_result, 0, at, all.data(), "frame results");
         for (std::size_t k = 0; k < images.size(); ++k)
             std::copy(all.begin() + std::ptrdiff_t(k * out_bytes / sizeof(float)),
                       all.begin() + std::ptrdiff_t((k + 1) * out_bytes / sizeof(float)), images[k]->data.begin());
     }
-    if (stats) im.read_stats(*stats);
+    if (timings) timings->outputs_ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     return result;
 }
 

@@ -2,9 +2,11 @@
 // (exposed here so tests can check them against naive references).
 #pragma once
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "ngi/pipeline.hpp"
+#include "ops/gather_image.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {
@@ -80,6 +82,13 @@ struct SurroundPipeline::Impl {
     void enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes, bool has_emission,
                          bool has_env, cl_mem light_dst, cl_mem final_dst, cl_mem display_dst,
                          const ToneMapOptions& tonemap);
+    // run(): scratch device outputs for the images asked for, and their one download (timed into outputs_ms).
+    FrameOutputs scratch_outputs(bool lightmap, bool final_image, bool display, const ToneMapOptions& tonemap);
+    FrameImages download_outputs(const FrameOutputs& outputs, FrameTimings* timings);
+
+    // Image descriptors (frame_inputs.cpp): the gather op, built on first use, and the staging buffer of host images.
+    std::unique_ptr<detail::GatherImage> gather_image;
+    detail::Buffer staging;
 };
 
 }  // namespace ngi

@@ -1,0 +1,33 @@
+// One application image (an image descriptor's memory, format, strides and row order) gathered into float planes
+// on the device (kernels/gather_image.cl): what lets the pipeline take an engine's render targets as they are.
+#pragma once
+#include <cstddef>
+
+#include "ngi/image_desc.hpp"
+#include "runtime/context.hpp"
+
+namespace ngi::detail {
+
+// Where the pixels are and how they are stored; strides resolved (no zero "default" left), checked by the caller
+// (validate_image_desc: aligned, in bounds).
+struct GatherSource {
+    cl_mem memory = nullptr;
+    std::size_t offset = 0, pixel_stride = 0, row_stride = 0, channel_stride = 0;
+    PixelFormat format = PixelFormat::F32;
+    bool bottom_up = false;
+    float scale = 1.0f, bias = 0.0f;
+};
+
+class GatherImage {
+public:
+    explicit GatherImage(Context& ctx);
+    // The first `channels` channels of the n x n image `src` into dst: channel c of pixel p (row-major, row 0 = top)
+    // at float index dst_offset + c * dst_channel_stride + p.
+    void enqueue(Context& ctx, const GatherSource& src, int channels, int n, cl_mem dst, int dst_offset,
+                 int dst_channel_stride);
+
+private:
+    Kernel kernel_;
+};
+
+}  // namespace ngi::detail

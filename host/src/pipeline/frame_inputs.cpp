@@ -1,0 +1,126 @@
+// One frame from image descriptors (ngi/image_desc.hpp): every image is checked, host images are uploaded in one
+// transfer, each image is gathered into the pipeline's frame planes by one kernel, and the frame then runs as frame
+// planes do (frame.cpp). The planes are the pipeline's own buffer, so the application's memory is only read.
+#include <chrono>
+#include <cstring>
+
+#include "ngi/error.hpp"
+#include "pipeline/pipeline_impl.hpp"
+
+namespace ngi {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Host images are packed into the staging upload at this alignment, above every format's value size (and a
+// multiple of what vload_half and float reads need).
+constexpr std::size_t kStagingAlign = 64;
+
+// The faces a model reads, and whether emission / env are given (on all of them, or on none).
+struct InputPlan {
+    int faces = 0;
+    bool has_emission = false, has_env = false;
+};
+
+InputPlan plan_inputs(const FrameInputs& in, const ModelConfig& config, int n, const Device& device) {
+    InputPlan plan;
+    plan.faces = detail::check_model_input(config) ? kFaceCount : 1;
+    for (int f = 0; f < plan.faces; ++f)
+        for (Feature feat : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct})
+            validate_image_desc(in.at(Face(f), feat), Face(f), feat, n, device);
+    for (Feature feat : {Feature::Emission, Feature::Env}) {
+        int present = 0;
+        for (int f = 0; f < plan.faces; ++f) present += in.at(Face(f), feat).present();
+        if (present != 0 && present != plan.faces)
+            for (int f = 0; f < plan.faces; ++f)
+                if (!in.at(Face(f), feat).present())
+                    throw InputError(std::string("image '") + feature_name(feat) + "' of face '" + face_name(Face(f)) +
+                                     "' is missing while other faces have one (give it for every face or none)");
+        for (int f = 0; present && f < plan.faces; ++f) validate_image_desc(in.at(Face(f), feat), Face(f), feat, n, device);
+        (feat == Feature::Emission ? plan.has_emission : plan.has_env) = present != 0;
+    }
+    return plan;
+}
+
+}  // namespace
+
+void SurroundPipeline::enqueue(Model& model, const FrameInputs& inputs, const FrameOutputs& outputs,
+                               PreprocessStats* stats, FrameTimings* timings) {
+    Impl& im = *impl_;
+    const auto t0 = Clock::now();
+    const InputPlan plan = plan_inputs(inputs, model.config(), im.n, im.device);
+    const std::size_t planes_bytes = frame_planes_bytes(im.n, plan.faces);
+    if (detail::ensure_buffer(im.ctx, im.raw, planes_bytes, "frame planes") || !im.raw_handle)
+        im.raw_handle = DeviceBuffer::wrap(im.device, im.raw.get(), 0, im.raw.bytes());
+    if (!im.gather_image) im.gather_image = std::make_unique<detail::GatherImage>(im.ctx);
+
+    // The images in use, in [face][feature] order.
+    std::vector<std::pair<int, Feature>> used;
+    for (int f = 0; f < plan.faces; ++f)
+        for (int k = 0; k < kFeatureCount; ++k) {
+            const Feature feat = Feature(k);
+            if ((feat == Feature::Emission && !plan.has_emission) || (feat == Feature::Env && !plan.has_env)) continue;
+            used.emplace_back(f, feat);
+        }
+    // Host images: each one's byte span [offset, offset + span) packed at an aligned place of one staging upload.
+    std::vector<std::size_t> staged(used.size(), 0);
+    std::size_t staging_bytes = 0;
+    for (std::size_t i = 0; i < used.size(); ++i) {
+        const ImageDesc& d = inputs.images[std::size_t(used[i].first)][std::size_t(used[i].second)];
+        if (!d.host) continue;
+        staged[i] = staging_bytes;
+        staging_bytes += (d.span_bytes() + kStagingAlign - 1) / kStagingAlign * kStagingAlign;
+    }
+    if (staging_bytes) {
+        std::vector<unsigned char> host(staging_bytes);
+        for (std::size_t i = 0; i < used.size(); ++i) {
+            const ImageDesc& d = inputs.images[std::size_t(used[i].first)][std::size_t(used[i].second)];
+            if (d.host) std::memcpy(host.data() + staged[i], static_cast<const unsigned char*>(d.host) + d.offset, d.span_bytes());
+        }
+        detail::ensure_buffer(im.ctx, im.staging, staging_bytes, "staged host images");
+        im.ctx.write(im.staging, 0, staging_bytes, host.data(), "staged host images");
+    }
+    const int plane = im.n * im.n;
+    for (std::size_t i = 0; i < used.size(); ++i) {
+        const auto [face, feat] = used[i];
+        const ImageDesc& d = inputs.images[std::size_t(face)][std::size_t(feat)];
+        detail::GatherSource src;
+        const std::size_t elem = pixel_format_bytes(d.format);
+        src.memory = d.host ? im.staging.get() : d.buffer.opencl_mem();
+        src.offset = d.host ? staged[i] : d.offset;
+        src.channel_stride = d.channel_stride ? d.channel_stride : elem;
+        src.pixel_stride = d.pixel_stride ? d.pixel_stride : std::size_t(d.channels) * elem;
+        src.row_stride = d.row_stride ? d.row_stride : std::size_t(im.n) * src.pixel_stride;
+        src.format = d.format;
+        src.bottom_up = d.bottom_up;
+        src.scale = d.scale;
+        src.bias = d.bias;
+        im.gather_image->enqueue(im.ctx, src, feature_channels(feat), im.n, im.raw.get(),
+                                 (face * kFramePlanes + frame_plane(feat)) * plane, plane);
+    }
+    if (timings) {
+        im.ctx.finish();
+        timings->gather_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    }
+    FrameDesc desc;
+    desc.faces = plan.faces;
+    desc.has_emission = plan.has_emission;
+    desc.has_env = plan.has_env;
+    desc.look = inputs.look;
+    desc.up = inputs.up;
+    enqueue(model, im.raw_handle, desc, outputs, stats, timings);
+}
+
+FrameImages SurroundPipeline::run(Model& model, const FrameInputs& inputs, bool lightmap, bool final_image,
+                                  bool display, const ToneMapOptions& tonemap, PreprocessStats* stats,
+                                  FrameTimings* timings) {
+    Impl& im = *impl_;
+    const FrameOutputs outs = im.scratch_outputs(lightmap, final_image, display, tonemap);
+    enqueue(model, inputs, outs, nullptr, timings);
+    FrameImages result = im.download_outputs(outs, timings);
+    if (stats) im.read_stats(*stats);
+    return result;
+}
+
+}  // namespace ngi
