@@ -331,6 +331,37 @@ TEST_CASE("frame path: device buffers and interop objects that do not fit are re
     clReleaseContext(other);
 }
 
+// The tracer half of the device path (runs on every stack: no network) ...
+TEST_CASE("frame path: the path tracer renders frame planes on the device, bit for bit its faces", "[frame][render]") {
+    Device& dev = test::device();
+    const int n = 32;
+    const VoxelScene scene = generate_scene("room", 5);
+    Renderer renderer(dev, scene);
+    CameraPose pose;
+    pose.position = glm::vec3(scene.size) * 0.5f;
+    pose.look = glm::normalize(glm::vec3(0.4f, -0.1f, -1.0f));
+    const Lighting lighting = lighting_at(15.0f, 0.7f);
+    RenderSettings rs;
+    rs.n = n;
+    rs.feature_spp = 2;
+    rs.reference = false;
+    const Frame fr = renderer.render(pose, lighting, rs);
+    DeviceBuffer planes = DeviceBuffer::allocate(dev, frame_planes_bytes(n, 6));
+    renderer.render_planes(pose, lighting, rs, planes);  // warm-up
+    dev.finish();
+    const HostTransfers t0 = dev.host_transfers();
+    renderer.render_planes(pose, lighting, rs, planes);
+    dev.finish();
+    const HostTransfers t = since(dev, t0);
+    CHECK(t.downloads == 0);
+    CHECK(t.upload_bytes < (long long)(n * n * sizeof(float)));
+    REQUIRE(read_back(planes) == pack_frame_planes(fr, 6));
+    DeviceBuffer small = DeviceBuffer::allocate(dev, 64);
+    REQUIRE_THROWS_WITH(renderer.render_planes(pose, lighting, rs, small), Catch::Contains("planes buffer holds"));
+}
+
+// ... and the whole device path with the generator (host plumbing: PoCL, the sanitizers; the rusticl stage leaves it
+// out, as every network-running frame-path case: each generator run takes ~40 s on llvmpipe).
 TEST_CASE("frame path: the path tracer feeds the pipeline without the frame leaving the device", "[frame][render]") {
     Device& dev = test::device();
     const int n = 64;

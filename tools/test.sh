@@ -12,16 +12,21 @@
 #   fuzz      every libFuzzer target for a bounded time (tools/fuzz.sh)
 # NGI_TEST_STAGES="pocl rusticl" runs a subset. A stage whose platform is missing fails (install-deps.sh installs
 # them all); NGI_TEST_ALLOW_MISSING=1 turns that into a skip with the reason printed.
+#
+# Two lanes run side by side (NGI_TEST_LANES=1: one after the other): lane A = pocl, install, oclgrind, tsan, fuzz;
+# lane B = rusticl, sanitize. Much of a cold test run is one LLVM thread compiling kernels (PoCL, llvmpipe), so two
+# lanes keep both cores busy. Each lane has its own TMPDIR (tests write fixed names under it); the sanitize stage
+# waits for the pocl stage, whose kernel cache it reuses. Lane output is prefixed "A|" / "B|"; stage times are
+# printed at the end (docs/RELIABILITY.md records them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 stages=${NGI_TEST_STAGES:-pocl install rusticl oclgrind sanitize tsan fuzz}
 bash tools/install-deps.sh
 
-passed=0 failed=0 report=()
+results=$(mktemp)   # one line per stage: name status tests seconds (lanes are subshells: they append here)
 stage_result() {  # name, status, tests, seconds
-  report+=("$(printf '%-9s %-7s %5s tests %6ss' "$1" "$2" "$3" "$4")")
-  if [ "$2" = ok ]; then passed=$((passed + $3)); else failed=$((failed + 1)); fi
+  echo "$1 $2 $3 $4" >> "$results"
 }
 # Runs ctest in a build tree with the given extra arguments; echoes the number of tests run.
 run_ctest() {
@@ -40,7 +45,7 @@ caches() {  # compiled kernels are cached per build tree (PoCL's work-group func
 }
 missing() {  # stage, reason
   if [ "${NGI_TEST_ALLOW_MISSING:-0}" = 1 ]; then
-    echo "== $1: SKIPPED: $2" >&2; report+=("$(printf '%-9s skipped (%s)' "$1" "$2")")
+    echo "== $1: SKIPPED: $2" >&2; stage_result "$1" skipped 0 0
   else
     echo "== $1: FAILED: $2" >&2; stage_result "$1" failed 0 0
   fi
@@ -50,14 +55,15 @@ needs_release_build=0
 for s in $stages; do case $s in pocl|install|rusticl|oclgrind) needs_release_build=1 ;; esac; done
 [ $needs_release_build = 1 ] && bash tools/build.sh
 
-for stage in $stages; do
-  start=$SECONDS
+run_stage() {
+  local stage=$1 start=$SECONDS n
   echo "== stage $stage ($(date -u +%H:%M:%S))" >&2
   case $stage in
     pocl)
       caches "$root/build"
       if n=$(NGI_TEST_DEVICE=pocl run_ctest build); then stage_result pocl ok "$n" $((SECONDS - start))
-      else stage_result pocl failed "$n" $((SECONDS - start)); fi ;;
+      else stage_result pocl failed "$n" $((SECONDS - start)); fi
+      touch "$pocl_done" ;;
     install)
       caches "$root/build"
       if ! command -v pkg-config > /dev/null; then missing install "pkg-config not installed"
@@ -79,7 +85,7 @@ for stage in $stages; do
       # the pipeline stays. The indirect output mode's frame-path case runs the shipped generators through the same
       # plumbing; its kernel (decode_indirect) is tested here on its own.
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(ci_sanitizer_triage|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model).*|neural_gi( model files match|: hostile).*|neural GI on a frame: .*)$'); then
+                 -E '^(ci_sanitizer_triage|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model|the path tracer feeds).*|image descriptors: (an engine|device buffers).*|gl_agreement|neural_gi( model files match|: hostile).*|neural GI on a frame: .*)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;
@@ -95,7 +101,10 @@ for stage in $stages; do
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
         -DNGI_BUILD_PERF=OFF
       # The kernels the pocl stage compiled are reused (same sources, options and device: the cache keys say so):
-      # compiling them again, with LLVM inside a sanitized process, only costs time.
+      # compiling them again, with LLVM inside a sanitized process, only costs time. So wait for that stage.
+      if [ -n "${lane_a_pid:-}" ] && [[ " $lane_a " == *" pocl "* ]]; then
+        while [ ! -e "$pocl_done" ] && kill -0 "$lane_a_pid" 2> /dev/null; do sleep 5; done
+      fi
       caches "$root/build"
       # Leaks inside the OpenCL driver (PoCL, LLVM) are not ngi's; ngi's own are reported (tools/ci/lsan.supp).
       export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0" LSAN_OPTIONS="suppressions=$root/tools/ci/lsan.supp:print_suppressions=0"
@@ -141,9 +150,45 @@ for stage in $stages; do
       rm -f "$fuzz_out" ;;
     *) echo "unknown stage '$stage' (pocl install rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;;
   esac
-done
+}
 
-echo "== summary" >&2
-printf '%s\n' "${report[@]}" >&2
+for s in $stages; do
+  case $s in pocl|install|rusticl|oclgrind|sanitize|tsan|fuzz) ;;
+    *) echo "unknown stage '$s' (pocl install rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;; esac
+done
+pocl_done=$(mktemp -u)   # created when the pocl stage ends
+lane_a="" lane_b=""
+for s in $stages; do
+  case $s in rusticl|sanitize) lane_b+=" $s" ;; *) lane_a+=" $s" ;; esac
+done
+run_lane() {  # name, stages...: the stages one after the other, in their own TMPDIR, output prefixed
+  local name=$1; shift
+  local tmp; tmp=$(mktemp -d "/tmp/ngi-lane-$name.XXXXXX")
+  (
+    export TMPDIR=$tmp
+    for stage in "$@"; do run_stage "$stage"; done
+  ) 2>&1 | sed -u "s/^/$name| /" >&2
+  rm -rf "$tmp"
+}
+begin=$SECONDS
+if [ "${NGI_TEST_LANES:-2}" = 1 ] || [ -z "$lane_a" ] || [ -z "$lane_b" ]; then
+  for stage in $stages; do run_stage "$stage"; done
+else
+  # shellcheck disable=SC2086
+  run_lane A $lane_a &
+  lane_a_pid=$!
+  # shellcheck disable=SC2086
+  run_lane B $lane_b
+  wait "$lane_a_pid"
+fi
+
+echo "== summary (stage times; lanes A and B ran side by side: $((SECONDS - begin)) s after the build)" >&2
+passed=0 failed=0
+while read -r name status tests seconds; do
+  if [ "$status" = skipped ]; then printf '%-9s skipped\n' "$name" >&2; continue; fi
+  printf '%-9s %-7s %5s tests %6ss\n' "$name" "$status" "$tests" "$seconds" >&2
+  if [ "$status" = ok ]; then passed=$((passed + tests)); else failed=$((failed + 1)); fi
+done < "$results"
+rm -f "$results" "$pocl_done"
 echo "ngi-ci: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
