@@ -236,7 +236,27 @@ NGI_API ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, co
 /* --- frames as an engine holds them: one image descriptor per face and feature --------------------------------
  * Each image is N x N, stored in host memory or a device buffer with its own format, channel count, byte offset and
  * strides (ngi/image_desc.hpp has the rules); ngi gathers it on the device (one kernel per image; host images are
- * uploaded in one transfer first). See the C example in bindings/c/README.md. */
+ * uploaded in one transfer first). Example: a G-buffer of RGBA16F render targets (depth R32F), one per feature, each
+ * holding the six faces in GL rows [face N, face N + N), read back with glReadPixels (rows bottom-up, `pitch[k]`
+ * bytes apart) into mapped pixel buffers `target[k]`:
+ *
+ *     ngi_image_desc images[36] = {0};                  // zeroed = absent; a scale of 0 is taken as 1
+ *     for (int face = 0; face < 6; ++face)
+ *         for (int k = 0; k < NGI_FEATURE_COUNT; ++k) {
+ *             ngi_image_desc* d = &images[face * NGI_FEATURE_COUNT + k];
+ *             int depth = k == NGI_FEATURE_DEPTH;
+ *             d->host = target[k];
+ *             d->host_bytes = target_bytes[k];
+ *             d->format = depth ? NGI_FORMAT_F32 : NGI_FORMAT_F16;
+ *             d->channels = depth ? 1 : 4;               // RGBA: the first 3 are read
+ *             d->width = d->height = n;
+ *             d->row_stride = pitch[k];
+ *             d->offset = (size_t)face * n * pitch[k];   // the face's bottom row (GL order)
+ *             d->bottom_up = 1;
+ *         }
+ *     status = ngi_pipeline_run_images(pipeline, model, images, lightmap, lightmap_bytes, NULL, 0, NULL, 0);
+ *
+ * samples/gl/gbuffer_pass.cpp does the same in C++; tests/c/test_c_api.c checks descriptors against frame planes. */
 typedef NGI_ENUM(ngi_pixel_format) {
     NGI_FORMAT_F32 = 0,       /* float32 */
     NGI_FORMAT_F16 = 1,       /* IEEE half (no cl_khr_fp16 needed) */
