@@ -331,21 +331,34 @@ TEST_CASE("frame path: device buffers and interop objects that do not fit are re
     clReleaseContext(other);
 }
 
+// A room traced at face size n from its middle, the frame rendered on the host: what the two tracer cases share.
+struct TracedRoom {
+    VoxelScene scene = generate_scene("room", 5);
+    Renderer renderer;
+    CameraPose pose;
+    Lighting lighting = lighting_at(15.0f, 0.7f);
+    RenderSettings rs;
+    Frame fr;
+    TracedRoom(Device& dev, int n) : renderer(dev, scene) {
+        pose.position = glm::vec3(scene.size) * 0.5f;
+        pose.look = glm::normalize(glm::vec3(0.4f, -0.1f, -1.0f));
+        rs.n = n;
+        rs.feature_spp = 2;
+        rs.reference = false;
+        fr = renderer.render(pose, lighting, rs);
+    }
+};
+
 // The tracer half of the device path (runs on every stack: no network) ...
 TEST_CASE("frame path: the path tracer renders frame planes on the device, bit for bit its faces", "[frame][render]") {
     Device& dev = test::device();
     const int n = 32;
-    const VoxelScene scene = generate_scene("room", 5);
-    Renderer renderer(dev, scene);
-    CameraPose pose;
-    pose.position = glm::vec3(scene.size) * 0.5f;
-    pose.look = glm::normalize(glm::vec3(0.4f, -0.1f, -1.0f));
-    const Lighting lighting = lighting_at(15.0f, 0.7f);
-    RenderSettings rs;
-    rs.n = n;
-    rs.feature_spp = 2;
-    rs.reference = false;
-    const Frame fr = renderer.render(pose, lighting, rs);
+    TracedRoom room(dev, n);
+    Renderer& renderer = room.renderer;
+    const CameraPose& pose = room.pose;
+    const Lighting& lighting = room.lighting;
+    const RenderSettings& rs = room.rs;
+    const Frame& fr = room.fr;
     DeviceBuffer planes = DeviceBuffer::allocate(dev, frame_planes_bytes(n, 6));
     renderer.render_planes(pose, lighting, rs, planes);  // warm-up
     dev.finish();
@@ -365,17 +378,12 @@ TEST_CASE("frame path: the path tracer renders frame planes on the device, bit f
 TEST_CASE("frame path: the path tracer feeds the pipeline without the frame leaving the device", "[frame][render]") {
     Device& dev = test::device();
     const int n = 64;
-    const VoxelScene scene = generate_scene("room", 5);
-    Renderer renderer(dev, scene);
-    CameraPose pose;
-    pose.position = glm::vec3(scene.size) * 0.5f;
-    pose.look = glm::normalize(glm::vec3(0.4f, -0.1f, -1.0f));
-    const Lighting lighting = lighting_at(15.0f, 0.7f);
-    RenderSettings rs;
-    rs.n = n;
-    rs.feature_spp = 2;
-    rs.reference = false;
-    const Frame fr = renderer.render(pose, lighting, rs);
+    TracedRoom room(dev, n);
+    Renderer& renderer = room.renderer;
+    const CameraPose& pose = room.pose;
+    const Lighting& lighting = room.lighting;
+    const RenderSettings& rs = room.rs;
+    const Frame& fr = room.fr;
 
     Model model = Model::load(dev, kModels[0]);
     SurroundPipeline pl(dev, n);
