@@ -50,6 +50,8 @@ struct ImageDesc {
     float scale = 1.0f, bias = 0.0f;  // value = decoded x scale + bias (normals stored as n / 2 + 1/2: 2, -1)
 
     bool present() const { return buffer || host != nullptr; }
+    // This descriptor with every 0 ("packed") stride replaced by the stride it stands for.
+    ImageDesc resolved() const;
     // The bytes the image spans from `offset` on (the end of its last channel of its last pixel), with strides
     // resolved. Throws nothing; meaningful after validation.
     std::size_t span_bytes() const;

@@ -73,7 +73,8 @@ void SurroundPipeline::enqueue(Model& model, const FrameInputs& inputs, const Fr
         staging_bytes += (d.span_bytes() + kStagingAlign - 1) / kStagingAlign * kStagingAlign;
     }
     if (staging_bytes) {
-        std::vector<unsigned char> host(staging_bytes);
+        std::vector<unsigned char>& host = im.staging_host;  // kept between frames: no allocation per frame
+        host.resize(staging_bytes);
         for (std::size_t i = 0; i < used.size(); ++i) {
             const ImageDesc& d = inputs.images[std::size_t(used[i].first)][std::size_t(used[i].second)];
             if (d.host) std::memcpy(host.data() + staged[i], static_cast<const unsigned char*>(d.host) + d.offset, d.span_bytes());
@@ -84,14 +85,13 @@ void SurroundPipeline::enqueue(Model& model, const FrameInputs& inputs, const Fr
     const int plane = im.n * im.n;
     for (std::size_t i = 0; i < used.size(); ++i) {
         const auto [face, feat] = used[i];
-        const ImageDesc& d = inputs.images[std::size_t(face)][std::size_t(feat)];
+        const ImageDesc d = inputs.images[std::size_t(face)][std::size_t(feat)].resolved();
         detail::GatherSource src;
-        const std::size_t elem = pixel_format_bytes(d.format);
         src.memory = d.host ? im.staging.get() : d.buffer.opencl_mem();
         src.offset = d.host ? staged[i] : d.offset;
-        src.channel_stride = d.channel_stride ? d.channel_stride : elem;
-        src.pixel_stride = d.pixel_stride ? d.pixel_stride : std::size_t(d.channels) * elem;
-        src.row_stride = d.row_stride ? d.row_stride : std::size_t(im.n) * src.pixel_stride;
+        src.channel_stride = d.channel_stride;
+        src.pixel_stride = d.pixel_stride;
+        src.row_stride = d.row_stride;
         src.format = d.format;
         src.bottom_up = d.bottom_up;
         src.scale = d.scale;

@@ -43,12 +43,8 @@ struct Strides {
 };
 
 Strides resolve(const ImageDesc& d) {
-    Strides s;
-    s.elem = pixel_format_bytes(d.format);
-    s.channel = d.channel_stride ? d.channel_stride : s.elem;
-    s.pixel = d.pixel_stride ? d.pixel_stride : std::size_t(d.channels > 0 ? d.channels : 0) * s.elem;
-    s.row = d.row_stride ? d.row_stride : std::size_t(d.width > 0 ? d.width : 0) * s.pixel;
-    return s;
+    const ImageDesc r = d.resolved();
+    return {pixel_format_bytes(d.format), r.channel_stride, r.pixel_stride, r.row_stride};
 }
 
 // a * b + c without wrapping; false when it would.
@@ -65,6 +61,15 @@ bool span(const ImageDesc& d, const Strides& s, std::size_t& out) {
 }
 
 }  // namespace
+
+ImageDesc ImageDesc::resolved() const {
+    ImageDesc r = *this;
+    const std::size_t elem = pixel_format_bytes(format);
+    if (!r.channel_stride) r.channel_stride = elem;
+    if (!r.pixel_stride) r.pixel_stride = std::size_t(channels > 0 ? channels : 0) * elem;
+    if (!r.row_stride) r.row_stride = std::size_t(width > 0 ? width : 0) * r.pixel_stride;
+    return r;
+}
 
 std::size_t ImageDesc::span_bytes() const {
     if (channels < 1 || width < 1 || height < 1) return 0;

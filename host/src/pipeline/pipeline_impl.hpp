@@ -89,6 +89,7 @@ struct SurroundPipeline::Impl {
     // Image descriptors (frame_inputs.cpp): the gather op, built on first use, and the staging buffer of host images.
     std::unique_ptr<detail::GatherImage> gather_image;
     detail::Buffer staging;
+    std::vector<unsigned char> staging_host;
 };
 
 }  // namespace ngi
