@@ -2,7 +2,10 @@
 // lighting of one face. Host side: host/src/render/renderer.cpp; definitions: docs/RENDERER.md.
 //
 // Scene: a grid of palette indices (uchar, 0 = air), x + sx * (y + sy * z); block (x, y, z) covers the unit cube
-// at that corner. Rays are traversed with Amanatides & Woo's 3D DDA.
+// at that corner; rays are traversed with Amanatides & Woo's 3D DDA. Beside it an optional triangle mesh behind a
+// BVH (kernels/bvh.cl, built before this file as the program "bvh+pathtrace"); a ray's hit is the closer of the two.
+// Triangles are two-sided; light transport uses their geometric normal (facing the incoming ray), the features
+// and the AO network's geometry the interpolated vertex normal.
 // Lighting buffers hold irradiance / pi ("lighting without albedo"); emission and sky values are radiance.
 // One work-item per pixel; every random number comes from a counter-based hash of (pixel, sample, seed, counter),
 // so the result does not depend on scheduling, work-group size or device.
@@ -56,6 +59,13 @@ typedef struct {
     __global const int* face_slot;
     __global const int* face_index;
     int use_patches;
+    // Triangles (kernels/bvh.cl layout); has_mesh 0: none (the buffers are placeholders). has_blocks 0: the grid
+    // holds no block, so rays skip the DDA walk (a mesh-only scene's grid is all air).
+    __global const float4* bvh_nodes;
+    __global const float4* tri_v;
+    __global const int4* tri_info;
+    __global const float4* vnormals;
+    int has_mesh, has_blocks;
 } Scene;
 
 // Where a ray first leaves covered air into open air (or out of the grid): the covered cell and its face.
@@ -68,9 +78,11 @@ typedef struct {
 
 typedef struct {
     float t;      // distance along the (unit) ray
-    int3 cell;
-    int face;     // outward normal of the face hit: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z
+    int3 cell;    // block hit; (-1, -1, -1) for a triangle
+    int face;     // outward normal of the face hit: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z; -1 for a triangle
     int mat;      // palette index; 0 = the ray left the grid
+    int prim;     // BVH slot of the triangle hit, -1 for a block (or no hit)
+    float2 uv;    // barycentric weights of the triangle's vertices 1 and 2
 } Hit;
 
 // ---- random numbers: PCG4D (Jarzynski & Olano 2020), a counter-based hash ----------------------------------
@@ -137,11 +149,12 @@ static inline float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 // pt_patch_weights when this took an optional `Crossing* x` and callers passed 0: after inlining, the loads and
 // stores through the null private pointer stayed in code the compiler could not prove dead (guarded by the
 // loop-carried `covered`), and gallivm crashed translating them. PoCL and oclgrind were fine.
-static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax, uint* rays, int track, Crossing* x) {
+static inline Hit trace_grid(const Scene* s, float3 o, float3 d, float tmax, uint* rays, int track, Crossing* x) {
     Hit h;
-    h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0;
+    h.t = tmax; h.cell = (int3)(0); h.face = 0; h.mat = 0; h.prim = -1; h.uv = (float2)(0.0f);
     x->found = 0;
     ++*rays;
+    if (!s->has_blocks) return h;
     const float3 inv = (float3)(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
     const float3 ta = -o * inv, tb = (convert_float3(s->dims) - o) * inv;
     const float3 lo = fmin(ta, tb), hi = fmax(ta, tb);
@@ -199,16 +212,77 @@ static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax,
     return h;
 }
 
-// First solid block along o + t d (d unit), t in [0, tmax], no crossing tracking. Counts one ray.
+// The closest triangle in front of a grid hit (or within tmax when the ray leaves the grid) replaces it.
+static inline void trace_mesh(const Scene* s, float3 o, float3 d, Hit* h) {
+    const BvhRay r = bvh_ray(o, d);
+    float t;
+    float2 uv;
+    uint steps = 0;
+    const int k = bvh_intersect(s->bvh_nodes, s->tri_v, &r, h->t, 0, &t, &uv, &steps);
+    if (k < 0) return;
+    h->t = t; h->prim = k; h->uv = uv; h->mat = s->tri_info[k].w; h->cell = (int3)(-1); h->face = -1;
+}
+
+// First surface (block or triangle) along o + t d (d unit), t in [0, tmax]. Counts one ray. Crossing tracking as
+// trace_grid (the crossing is of blocks only; it is used only when the ray escapes).
+static inline Hit trace_crossing(const Scene* s, float3 o, float3 d, float tmax, uint* rays, int track, Crossing* x) {
+    Hit h = trace_grid(s, o, d, tmax, rays, track, x);
+    if (s->has_mesh) trace_mesh(s, o, d, &h);
+    return h;
+}
+
+// First surface along o + t d (d unit), t in [0, tmax], no crossing tracking. Counts one ray.
 static inline Hit trace(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
     Crossing unused;
     return trace_crossing(s, o, d, tmax, rays, 0, &unused);
 }
 
+// Whether any surface lies along o + t d, t in [0, tmax] (shadow rays: the BVH stops at the first triangle it
+// finds). Counts one ray. Same answer as trace(...).mat != 0.
+static inline int occluded(const Scene* s, float3 o, float3 d, float tmax, uint* rays) {
+    Crossing unused;
+    const Hit h = trace_grid(s, o, d, tmax, rays, 0, &unused);
+    if (h.mat != 0) return 1;
+    if (!s->has_mesh) return 0;
+    const BvhRay r = bvh_ray(o, d);
+    float t;
+    float2 uv;
+    uint steps = 0;
+    return bvh_intersect(s->bvh_nodes, s->tri_v, &r, tmax, 1, &t, &uv, &steps) >= 0;
+}
+
+// Geometric normal of a triangle (BVH slot k), unit, not oriented.
+static inline float3 triangle_normal(const Scene* s, int k) {
+    const float3 a = s->tri_v[3 * k].xyz;
+    return normalize(cross(s->tri_v[3 * k + 1].xyz - a, s->tri_v[3 * k + 2].xyz - a));
+}
+
+// The normal light transport uses at a hit: the block face's, or the triangle's geometric normal turned toward the
+// side the ray came from (surfaces are two-sided).
+static inline float3 hit_normal(const Scene* s, float3 d, const Hit* h) {
+    if (h->prim < 0) return face_normal(h->face);
+    const float3 n = triangle_normal(s, h->prim);
+    return dot(n, d) > 0.0f ? -n : n;
+}
+
+// The shading normal at a hit: the block face's, or the triangle's vertex normals interpolated at the hit and
+// turned to the side of the geometric normal `ng` (hit_normal).
+static inline float3 hit_shading_normal(const Scene* s, float3 ng, const Hit* h) {
+    if (h->prim < 0) return ng;
+    const int4 v = s->tri_info[h->prim];
+    const float3 n = (1.0f - h->uv.x - h->uv.y) * s->vnormals[v.x].xyz + h->uv.x * s->vnormals[v.y].xyz +
+                     h->uv.y * s->vnormals[v.z].xyz;
+    const float len = length(n);
+    if (!(len > 1.0e-12f)) return ng;
+    return dot(n, ng) < 0.0f ? -n / len : n / len;
+}
+
 // The hit point, snapped onto the face's plane (removes the DDA's rounding along the normal), then lifted off
-// the surface so that a ray leaving it starts in the air cell in front of the face.
-static inline float3 hit_origin(float3 o, float3 d, const Hit* h) {
+// the surface so that a ray leaving it starts in the air cell in front of the face. On a triangle: lifted along
+// hit_normal.
+static inline float3 hit_origin(const Scene* s, float3 o, float3 d, const Hit* h) {
     float3 p = o + d * h->t;
+    if (h->prim >= 0) return p + hit_normal(s, d, h) * RAY_OFFSET;
     const int a = h->face >> 1;
     const float plane = (a == 0 ? (float)h->cell.x : (a == 1 ? (float)h->cell.y : (float)h->cell.z)) +
                         ((h->face & 1) ? 0.0f : 1.0f);
@@ -242,8 +316,7 @@ static inline float3 sun_light(const Scene* s, float3 p, float3 n, Rng* r, uint*
     const float3 w = t * (sr * native_cos(phi)) + b * (sr * native_sin(phi)) + sd * z;
     const float c = dot(n, w);
     if (c <= 0.0f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, T_INF, rays);
-    return h.mat ? (float3)(0.0f) : E * (c * M_1_PI_F);
+    return occluded(s, p, w, T_INF, rays) ? (float3)(0.0f) : E * (c * M_1_PI_F);
 }
 
 // Rectangular area light (not geometry: no ray ever hits it, the camera does not see it), lit by next-event
@@ -262,8 +335,7 @@ static inline float3 area_light(const Scene* s, float3 p, float3 n, Rng* r, uint
     w /= dist;
     const float cos_x = dot(n, w), cos_y = -dot(lv(s->light, L_AREA_NORMAL), w);
     if (cos_x <= 0.0f || cos_y <= 0.0f) return (float3)(0.0f);
-    const Hit h = trace(s, p, w, dist - RAY_OFFSET, rays);
-    if (h.mat != 0) return (float3)(0.0f);  // a block between x and y
+    if (occluded(s, p, w, dist - RAY_OFFSET, rays)) return (float3)(0.0f);  // a surface between x and y
     return lv(s->light, L_AREA_RADIANCE) * (s->light[L_AREA_AREA] * cos_x * cos_y * M_1_PI_F / d2);
 }
 
@@ -414,13 +486,17 @@ static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max
         }
         const float3 Le = s->mats[2 * h.mat + 1].xyz;
         if (Le.x + Le.y + Le.z > 0.0f) {
-            const float cos_l = fabs(dot(face_normal(h.face), w));
-            const float pl = emitter_pdf(s, Le, h.t, cos_l), pb = dot(n, w) * M_1_PI_F;
-            sum += beta * Le * power_heuristic(pb, pl);
+            if (h.prim >= 0) {  // emissive triangles are not in the emitter list: only this strategy finds them
+                sum += beta * Le;
+            } else {
+                const float cos_l = fabs(dot(face_normal(h.face), w));
+                const float pl = emitter_pdf(s, Le, h.t, cos_l), pb = dot(n, w) * M_1_PI_F;
+                sum += beta * Le * power_heuristic(pb, pl);
+            }
         }
         if (depth >= max_bounces) break;
         sun_mis = 1.0f;
-        if (prange.y > 0) {
+        if (prange.y > 0 && h.prim < 0) {
             const float prob = patch_probability(s, reg, h.cell, h.face);
             if (prob > 0.0f) {
                 const float cos_y = fabs(dot(face_normal(h.face), w));
@@ -433,8 +509,8 @@ static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max
             if (rng2(r).x >= q) break;
             beta /= q;
         }
-        p = hit_origin(p, w, &h);
-        n = face_normal(h.face);
+        n = hit_normal(s, w, &h);
+        p = hit_origin(s, p, w, &h);
     }
     return sum;
 }
@@ -447,7 +523,9 @@ static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max
         __global const int *region, __global const int4 *portals, __global const int2 *portal_range,            \
         int use_regions, int use_portals, __global const int4 *patches, __global const float *patch_prob,         \
         __global const float *patch_cdf, __global const int2 *patch_range, __global const int *face_slot,        \
-        __global const int *face_index, int use_patches
+        __global const int *face_index, int use_patches, __global const float4 *bvh_nodes,                     \
+        __global const float4 *tri_v, __global const int4 *tri_info, __global const float4 *vnormals, int has_mesh, \
+        int has_blocks
 
 #define MAKE_SCENE(s)                                                                                       \
     Scene s;                                                                                                \
@@ -455,7 +533,8 @@ static inline float3 lighting_sample(const Scene* s, float3 p, float3 n, int max
     s.nlights = nlights; s.inv_total = inv_total; s.light = light; s.region = region; s.portals = portals; \
     s.portal_range = portal_range; s.use_regions = use_regions; s.use_portals = use_portals;                   \
     s.patches = patches; s.patch_prob = patch_prob; s.patch_cdf = patch_cdf; s.patch_range = patch_range;     \
-    s.face_slot = face_slot; s.face_index = face_index; s.use_patches = use_patches
+    s.face_slot = face_slot; s.face_index = face_index; s.use_patches = use_patches; s.bvh_nodes = bvh_nodes;   \
+    s.tri_v = tri_v; s.tri_info = tri_info; s.vnormals = vnormals; s.has_mesh = has_mesh; s.has_blocks = has_blocks
 
 // cam: centre (3), then per face look, right, up (9 each) in camera.hpp's face order.
 // Unit direction through the centre of pixel (col, row) of face f (camera.hpp: face_pixel_direction).
@@ -511,9 +590,10 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
     } else {
         albedo = mats[2 * h.mat].xyz;
         emission = mats[2 * h.mat + 1].xyz;
-        normal = face_normal(h.face);
+        const float3 ng = hit_normal(&s, d, &h);
+        normal = hit_shading_normal(&s, ng, &h);
         depth = h.t * dot(d, look);  // planar depth along the face's look axis
-        const float3 p = hit_origin(o, d, &h);
+        const float3 p = hit_origin(&s, o, d, &h);
         if (first > 0)
             direct = (float3)(q[(size_t)F_DIRECT * npix], q[(size_t)(F_DIRECT + 1) * npix],
                               q[(size_t)(F_DIRECT + 2) * npix]);
@@ -521,7 +601,7 @@ __kernel void pt_features(SCENE_ARGS, __global const float* cam, int n, int spp,
         r.a = (uint)gid; r.c = seed ^ 0x68e31da4u;
         for (int i = first; i < last; ++i) {
             r.b = (uint)i; r.n = 0;
-            direct += lighting_sample(&s, p, normal, 0, 0, &r, &rays);
+            direct += lighting_sample(&s, p, ng, 0, 0, &r, &rays);
         }
         if (last >= spp) direct /= (float)max(spp, 1);
     }
@@ -556,7 +636,7 @@ __kernel void pt_reference(SCENE_ARGS, __global const float* cam, int face, int 
         m2 = (float3)(var_out[pix], var_out[npix + pix], var_out[2 * npix + pix]);
     }
     if (h.mat != 0) {
-        const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
+        const float3 p = hit_origin(&s, o, d, &h), nrm = hit_normal(&s, d, &h);
         Rng r;
         r.a = (uint)(face * npix + pix); r.c = seed ^ 0x2545f491u;
         for (int i = first; i < last; ++i) {  // Welford: stable mean and variance in float
@@ -614,15 +694,14 @@ __kernel void pt_ao(SCENE_ARGS, __global const float* cam, int face, int n, int 
         out[pix] = 1.0f;
         return;
     }
-    const float3 p = hit_origin(o, d, &h), nrm = face_normal(h.face);
+    const float3 p = hit_origin(&s, o, d, &h), nrm = hit_normal(&s, d, &h);
     float open = first > 0 ? out[pix] : 0.0f;
     Rng r;
     r.a = (uint)(face * npix + pix); r.c = seed ^ 0x5bd1e995u;
     for (int i = first; i < last; ++i) {
         r.b = (uint)i; r.n = 0;
         const float3 w = cosine_sample(nrm, rng2(&r));
-        const Hit q = trace(&s, p + RAY_OFFSET * nrm, w, max_dist, &rays);
-        if (q.mat == 0) open += 1.0f;
+        if (!occluded(&s, p + RAY_OFFSET * nrm, w, max_dist, &rays)) open += 1.0f;
     }
     out[pix] = last >= spp ? open / (float)max(spp, 1) : open;
 }
@@ -650,10 +729,10 @@ __kernel void pt_geometry(SCENE_ARGS, __global const float* cam, int face, int n
         q[(size_t)6 * npix] = SKY_DEPTH;
         return;
     }
-    const float3 nf = face_normal(h.face);
-    const float3 p = hit_origin(o, d, &h) - nf * RAY_OFFSET;  // on the face
-    float3 ns = nf;
-    if (sigma > 0.0f) {
+    const float3 nf = hit_normal(&s, d, &h);
+    const float3 p = hit_origin(&s, o, d, &h) - nf * RAY_OFFSET;  // on the face
+    float3 ns = hit_shading_normal(&s, nf, &h);  // triangles: the interpolated vertex normal
+    if (sigma > 0.0f && h.prim < 0) {
         const int r = (int)ceil(2.0f * sigma) + 1;
         const int3 c0 = convert_int3(floor(p));
         const float k = -0.5f / (sigma * sigma), reach2 = (float)(r * r);
@@ -764,7 +843,7 @@ __kernel void vf_sh(SCENE_ARGS, __global const float* probe, __global const int4
         } else if (vf_block_id((int4)(h.cell, 0), sx, sy) != id) {
             L = mats[2 * h.mat + 1].xyz;
             if (max_bounces > 0)
-                L += mats[2 * h.mat].xyz * lighting_sample(&s, hit_origin(p, w, &h), face_normal(h.face),
+                L += mats[2 * h.mat].xyz * lighting_sample(&s, hit_origin(&s, p, w, &h), hit_normal(&s, w, &h),
                                                            max_bounces - 1, inner_rr, &r, &rays);
         }
         sh9(w.x, w.y, w.z, Y);

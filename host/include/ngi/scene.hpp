@@ -11,14 +11,10 @@
 
 #include <glm/glm.hpp>
 
-namespace ngi {
+#include "ngi/material.hpp"
+#include "ngi/mesh.hpp"
 
-// A Lambertian block material. Colours are linear RGB.
-struct Material {
-    glm::vec3 albedo{0.8f};
-    glm::vec3 emission{0.0f};  // emitted radiance (same unit as the sky and the lighting buffers), all faces
-    bool lamp = false;         // emission is scaled by Lighting::lamp_level (lamps switch on at dusk)
-};
+namespace ngi {
 
 // Where the automatic camera path may go, and which way it prefers to look (scene-family knowledge).
 struct CameraHints {
@@ -37,6 +33,7 @@ struct VoxelScene {
     glm::ivec3 size{0};                        // blocks per axis
     std::vector<std::uint8_t> voxels;          // palette index per block, 0 = empty; x + size.x * (y + size.y * z)
     std::vector<Material> palette{Material{}}; // palette[0] = air (never looked up)
+    TriangleMesh mesh;                         // triangles beside the blocks (world metres; materials index palette)
     float sun_azimuth = 0.6f;                  // radians about +y; the sun's heading at noon (see lighting)
     float default_time = 13.0f;                // hours, for renders that do not give a time of day
     CameraHints camera;

@@ -10,6 +10,7 @@
 #include "ngi/error.hpp"
 #include "ngi/render.hpp"
 #include "ngi/voxel_field.hpp"
+#include "render/bvh.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi {
@@ -34,10 +35,13 @@ constexpr int kLightParams = 36;
 // The sun and sky part (what the sunlit-patch weights depend on, with the materials).
 constexpr int kSunSkyParams = 20;
 
+// The tracer's program: the BVH traversal (kernels/bvh.cl) first, then the path tracer that uses it.
+constexpr const char* kPathtraceProgram = "bvh+pathtrace";
+
 std::string pathtrace_defines() {
     std::string d;
     for (const LightSlot& l : kLightLayout) d += std::string(d.empty() ? "" : " ") + "-D" + l.name + "=" + std::to_string(l.offset);
-    return d;
+    return d + " " + detail::bvh_defines();
 }
 
 float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
@@ -167,6 +171,9 @@ struct Renderer::Impl {
     glm::ivec3 size;
     detail::Buffer grid, mats, lights, cdf, light, cam, region, portals, portal_range;
     detail::Buffer patches, patch_prob, patch_cdf, patch_range, face_slot, face_index, patch_weight;
+    detail::Buffer bvh_nodes, tri_v, tri_info, vnormals;  // the triangle mesh (placeholders when there is none)
+    bool has_mesh = false, has_blocks = false;
+    int bvh_depth = 0;
     bool have_regions = false, have_portals = false;
     int npatches = 0;
     std::vector<std::int32_t> patch_static_range;  // per region: first, count
@@ -267,7 +274,7 @@ struct Renderer::Impl {
     int samples_per_launch(int max_bounces, const char* what) const {
         const long limit = ctx->loop_limit();
         if (limit <= 0) return std::numeric_limits<int>::max();
-        const long walk = long(size.x) + size.y + size.z + 3;
+        const long walk = trace_loops();
         const long per_bounce = (area_on ? 7 : 6) * walk + 3 * 32;
         const long per_sample = (long(max_bounces) + 1) * per_bounce;
         const long fixed = walk + 64;  // the primary ray and the kernel's own loops
@@ -297,7 +304,8 @@ struct Renderer::Impl {
     void set_scene_args(detail::Kernel& k, const RenderSettings& rs, const A&... rest) {
         k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, region, portals,
                portal_range, int(have_regions), int(rs.sky_portals && have_portals), patches, patch_prob, patch_cdf,
-               patch_range, face_slot, face_index, int(rs.sunlit_patches && patches_lit), rest...);
+               patch_range, face_slot, face_index, int(rs.sunlit_patches && patches_lit), bvh_nodes, tri_v, tri_info,
+               vnormals, int(has_mesh), int(has_blocks), rest...);
     }
 
     // Per-frame patch probabilities (only when the sun or the materials changed): weights on the device, then
@@ -355,8 +363,14 @@ struct Renderer::Impl {
         if (cap > 0) n = std::min<long>(n, cap);
         return int(n);
     }
-    long dda_walk() const { return long(size.x) + size.y + size.z + 3; }  // steps of one trace() at most
-    long bounce_loops() const { return 6 * dda_walk() + 3 * 32; }         // as samples_per_launch
+    // Loop iterations of one trace(): the DDA walk at most, plus the BVH's node visits and triangle tests. The
+    // latter have no useful bound (a ray may visit every node); 32 per level of the tree is an estimate well
+    // above what rays measure (bvh_trace_rays reports the steps; tests/test_bvh.cpp), so a launch's loop budget
+    // on llvmpipe holds in practice, not by proof (docs/RELIABILITY.md).
+    long trace_loops() const {
+        return (has_blocks ? long(size.x) + size.y + size.z + 3 : 1) + (has_mesh ? 32L * bvh_depth : 0);
+    }
+    long bounce_loops() const { return 6 * trace_loops() + 3 * 32; }  // as samples_per_launch
 
     std::uint64_t sum_rays(const detail::Buffer& b, std::size_t count) {
         std::vector<std::uint32_t> r(count);
@@ -390,6 +404,25 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
                 for (int f = 0; f < 6; ++f)
                     if (scene.inside(c + dirs[f]) && !scene.solid(c + dirs[f])) m.emitters.push_back({c, f, mat});
             }
+    m.has_blocks = std::any_of(scene.voxels.begin(), scene.voxels.end(), [](std::uint8_t v) { return v != 0; });
+    m.has_mesh = !scene.mesh.empty();
+    {
+        // The mesh: validated, its BVH built here and uploaded once. Without triangles, one-element placeholders
+        // (OpenCL refuses zero-sized buffers; the kernels never read them when has_mesh is 0).
+        if (m.has_mesh) validate_mesh(scene.mesh, scene.palette.size(), "scene " + scene.name);
+        const detail::Bvh bvh = detail::build_bvh(scene.mesh);
+        m.bvh_depth = bvh.depth;
+        auto upload = [&](const void* data, std::size_t bytes, const char* what) {
+            const std::vector<float> zero(8, 0.0f);
+            detail::Buffer b = m.ctx->alloc(bytes ? bytes : zero.size() * 4, what);
+            m.ctx->write(b, 0, bytes ? bytes : zero.size() * 4, bytes ? data : zero.data(), what);
+            return b;
+        };
+        m.bvh_nodes = upload(bvh.nodes.data(), bvh.nodes.size() * 4, "render: BVH nodes");
+        m.tri_v = upload(bvh.tri_vertices.data(), bvh.tri_vertices.size() * 4, "render: triangles");
+        m.tri_info = upload(bvh.tri_info.data(), bvh.tri_info.size() * 4, "render: triangle materials");
+        m.vnormals = upload(bvh.vertex_normals.data(), bvh.vertex_normals.size() * 4, "render: vertex normals");
+    }
     m.grid = m.ctx->alloc(blocks, "render: voxel grid");
     m.ctx->write(m.grid, 0, blocks, scene.voxels.data(), "render: upload voxel grid");
     m.mats = m.ctx->alloc(scene.palette.size() * 8 * sizeof(float), "render: materials");
@@ -420,11 +453,11 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.patch_prob = m.ctx->alloc(np, "render: patch probabilities");
     m.patch_cdf = m.ctx->alloc(np, "render: patch CDF");
     m.patch_weight = m.ctx->alloc(np, "render: patch weights");
-    m.k_patch = m.ctx->kernel("pathtrace", "pt_patch_weights", pathtrace_defines());
-    m.k_features = m.ctx->kernel("pathtrace", "pt_features", pathtrace_defines());
-    m.k_reference = m.ctx->kernel("pathtrace", "pt_reference", pathtrace_defines());
-    m.k_ao = m.ctx->kernel("pathtrace", "pt_ao", pathtrace_defines());
-    m.k_geometry = m.ctx->kernel("pathtrace", "pt_geometry", pathtrace_defines());
+    m.k_patch = m.ctx->kernel(kPathtraceProgram, "pt_patch_weights", pathtrace_defines());
+    m.k_features = m.ctx->kernel(kPathtraceProgram, "pt_features", pathtrace_defines());
+    m.k_reference = m.ctx->kernel(kPathtraceProgram, "pt_reference", pathtrace_defines());
+    m.k_ao = m.ctx->kernel(kPathtraceProgram, "pt_ao", pathtrace_defines());
+    m.k_geometry = m.ctx->kernel(kPathtraceProgram, "pt_geometry", pathtrace_defines());
     for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry}) {
         std::size_t wg = 0;
         if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
@@ -682,10 +715,10 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
     const auto t0 = std::chrono::steady_clock::now();
     detail::Context& ctx = *m.ctx;
     if (!m.k_vf_sh.get()) {
-        m.k_vf_sun = ctx.kernel("pathtrace", "vf_sun_visibility", pathtrace_defines());
-        m.k_vf_sh = ctx.kernel("pathtrace", "vf_sh", pathtrace_defines());
-        m.k_vf_probe = ctx.kernel("pathtrace", "vf_probe_lighting", pathtrace_defines());
-        m.k_vf_face = ctx.kernel("pathtrace", "vf_face_lighting", pathtrace_defines());
+        m.k_vf_sun = ctx.kernel(kPathtraceProgram, "vf_sun_visibility", pathtrace_defines());
+        m.k_vf_sh = ctx.kernel(kPathtraceProgram, "vf_sh", pathtrace_defines());
+        m.k_vf_probe = ctx.kernel(kPathtraceProgram, "vf_probe_lighting", pathtrace_defines());
+        m.k_vf_face = ctx.kernel(kPathtraceProgram, "vf_face_lighting", pathtrace_defines());
     }
     RenderSettings rs;
     rs.max_bounces = s.max_bounces;
@@ -706,7 +739,7 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
     const std::uint32_t seed = s.seed;
     const std::size_t global = V, global6 = 6 * V;
     VoxelField out;
-    const long walk = m.dda_walk(), bounce = m.bounce_loops();
+    const long walk = m.trace_loops(), bounce = m.bounce_loops();
     const int cap = s.max_samples_per_launch;
 
     // The sun's visibility first: vf_sh's last launch adds the sun with it.
@@ -778,11 +811,11 @@ std::vector<std::uint32_t> Renderer::voxel_visibility(const SurfaceVoxels& voxel
     Impl& m = *impl_;
     check_voxels(voxels, m.size, "voxel visibility", kMaxVisibilityVoxels);
     detail::Context& ctx = *m.ctx;
-    if (!m.k_vf_vis.get()) m.k_vf_vis = ctx.kernel("pathtrace", "vf_visibility", pathtrace_defines());
+    if (!m.k_vf_vis.get()) m.k_vf_vis = ctx.kernel(kPathtraceProgram, "vf_visibility", pathtrace_defines());
     const std::size_t V = voxels.size(), words = (V + 31) / 32;
     const VoxelBuffers in = upload_voxels(ctx, voxels, false);
     detail::Buffer mask = ctx.alloc(V * words * 4, "voxel visibility: mask");
-    const int chunk = std::min(32, m.items_per_launch(64, m.dda_walk() + 8, 0, "voxel visibility"));
+    const int chunk = std::min(32, m.items_per_launch(64, m.trace_loops() + 8, 0, "voxel visibility"));
     const std::size_t global[2] = {V, words}, local[2] = {m.local, 1};
     for (int first = 0; first < 32; first += chunk) {
         const int last = std::min(32, first + chunk);

@@ -97,6 +97,19 @@ const EmbeddedKernel& embedded(const std::string& file) {
     throw Error("load kernel source: no embedded kernel file '" + file + ".cl'");
 }
 
+// The source of a program: kernels/common.cl, then each file of `files` ("a" or "a+b+c", in that order), as one
+// translation unit (OpenCL 1.2 has no linking of headers from the library). Line numbers restart in each file.
+std::string program_source(const std::string& files) {
+    std::string source = embedded("common").source;
+    for (std::size_t pos = 0; pos <= files.size();) {
+        const std::size_t plus = std::min(files.find('+', pos), files.size());
+        source += "\n#line 1\n";
+        source += embedded(files.substr(pos, plus - pos)).source;
+        pos = plus + 1;
+    }
+    return source;
+}
+
 std::string build_log(cl_program prog, cl_device_id dev) {
     std::size_t n = 0;
     if (clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, 0, nullptr, &n) != CL_SUCCESS) return "";
@@ -217,9 +230,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     const std::string key = file + '\n' + defines;
     if (auto it = programs_.find(key); it != programs_.end()) return it->second;
 
-    // Every program = kernels/common.cl + kernels/<file>.cl (one translation unit; OpenCL 1.2 has no linking
-    // of headers from the library).
-    const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
+    const std::string source = program_source(file);
     const std::string options = build_options(defines);
     const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
     const std::filesystem::path cached = cache_dir() / (file + "-" + variant_key(file, defines) + ".bin");
@@ -266,7 +277,7 @@ cl_program Context::program(const std::string& file, const std::string& defines)
 }
 
 std::string Context::variant_key(const std::string& file, const std::string& defines) const {
-    const std::string source = std::string(embedded("common").source) + "\n#line 1\n" + embedded(file).source;
+    const std::string source = program_source(file);
     const std::uint64_t h = fnv1a(source, fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
                                                  '\n' + info_.device_version + '\n' + build_options(defines)));
     char hex[17];
