@@ -759,6 +759,26 @@ __kernel void pt_geometry(SCENE_ARGS, __global const float* cam, int face, int n
     q[(size_t)6 * npix] = h.t * dot(d, look);
 }
 
+// What pixel (col, row) of face `face` sees of the mesh, for per-vertex baking (seed 001's baseline): out[plane][pix]
+// = the three vertex indices of the triangle hit (exact in float up to kMaxMeshVertices = 2^24) and its barycentric
+// weights; indices -1 and weights 0 where the pixel sees a block or nothing. global size n^2.
+__kernel void pt_surface(SCENE_ARGS, __global const float* cam, int face, int n, __global float* out) {
+    const int pix = get_global_id(0);
+    const int npix = n * n;
+    if (pix >= npix) return;
+    MAKE_SCENE(s);
+    float3 o, d, look;
+    uint rays = 0;
+    const Hit h = primary_hit(&s, cam, face, pix, n, &o, &d, &look, &rays);
+    float3 index = (float3)(-1.0f), weight = (float3)(0.0f);
+    if (h.mat != 0 && h.prim >= 0) {
+        index = convert_float3(s.tri_info[h.prim].xyz);
+        weight = (float3)(1.0f - h.uv.x - h.uv.y, h.uv.x, h.uv.y);
+    }
+    store3(out + pix, 0, npix, index);
+    store3(out + pix, 3, npix, weight);
+}
+
 // ---- voxel radiance field (seed 004): docs/VOXEL_FIELD.md; host side renderer.cpp (render_voxel_field) --------
 // Per surface voxel (kernels/voxel_compact.cl made the list): probe[V][3] the probe point, shade_normal[V][3] the
 // unit normal at it (normalize(probe - centre): the voxel's Eq. 3 normal except at creases, docs/VOXEL_FIELD.md),

@@ -206,3 +206,47 @@ TEST_CASE("mesh render: AO of a floor under a triangle box = 1 - the box bottom'
             REQUIRE(std::abs(ao.at(0, y, x) - expect) <= 5.0 * sigma + 1e-4);
         }
 }
+
+TEST_CASE("mesh render: surface ids and barycentric weights reproduce the visible point", "[render][mesh]") {
+    VoxelScene s({16, 10, 16}, "box over floor");
+    const auto m = s.add_material({glm::vec3(0.5f), glm::vec3(0.0f), false});
+    s.fill({0, 0, 0}, {16, 1, 16}, m);
+    s.mesh = test::box_mesh({6.0f, 3.0f, 6.5f}, {10.0f, 5.0f, 9.5f}, m);
+    Renderer r(test::device(), s);
+    CameraPose pose;
+    pose.position = glm::vec3(13.0f, 7.0f, 14.0f);
+    pose.look = glm::normalize(glm::vec3(8.0f, 3.0f, 8.0f) - pose.position);
+    RenderSettings rs;
+    rs.n = 32;
+    const Image surf = r.render_surface(pose, rs);
+    const Image geo = r.render_geometry(pose, rs, 0.0f);
+    const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
+    int on_mesh = 0, on_blocks = 0;
+    for (int y = 0; y < rs.n; ++y)
+        for (int x = 0; x < rs.n; ++x) {
+            const glm::vec3 d = face_pixel_direction(b, x, y, rs.n);
+            const float depth = geo.at(6, y, x);
+            if (surf.at(0, y, x) < 0.0f) {
+                ++on_blocks;
+                REQUIRE(surf.at(3, y, x) == 0.0f);
+                continue;
+            }
+            ++on_mesh;
+            // The weighted vertices = the point at the pixel's planar depth along its ray.
+            glm::vec3 p(0.0f);
+            float wsum = 0;
+            for (int k = 0; k < 3; ++k) {
+                const float idx = surf.at(k, y, x), w = surf.at(3 + k, y, x);
+                REQUIRE(idx == std::floor(idx));
+                REQUIRE(w >= -1e-6f);
+                p += w * s.mesh.positions[std::size_t(idx)];
+                wsum += w;
+            }
+            REQUIRE(std::abs(wsum - 1.0f) < 1e-5f);
+            const glm::vec3 seen = pose.position + d * (depth / glm::dot(d, b.look));
+            CAPTURE(x, y);
+            REQUIRE(glm::length(p - seen) < 1e-3f);
+        }
+    REQUIRE(on_mesh >= 25);
+    REQUIRE(on_blocks >= 25);
+}

@@ -119,6 +119,11 @@ public:
     Image render_geometry(const CameraPose& pose, const RenderSettings& settings, float smooth_sigma,
                           Face face = Face::Front);
 
+    // What each pixel of one face sees of the scene's triangle mesh, 6 x N x N: the three vertex indices of the
+    // triangle (TriangleMesh::triangles order; -1 where the pixel sees a block or nothing) and the barycentric
+    // weights of those vertices at the visible point (0 there). For baking values per vertex from rendered views.
+    Image render_surface(const CameraPose& pose, const RenderSettings& settings, Face face = Face::Front);
+
     // The reference lighting of one face (3 x N x N) and, if `variance` is given, the per-pixel variance of that
     // estimate (the sample variance / spp, per channel), for error bars.
     Image render_reference(const CameraPose& pose, const Lighting& lighting, const RenderSettings& settings,

@@ -185,9 +185,9 @@ struct Renderer::Impl {
     int nlights = 0;
     float inv_total = 0.0f;
     bool area_on = false;  // this frame has an area light (one more shadow ray per path vertex)
-    detail::Kernel k_features, k_reference, k_ao, k_geometry;
+    detail::Kernel k_features, k_reference, k_ao, k_geometry, k_surface;
     detail::Buffer ao;  // render_ao's output
-    detail::Buffer geometry;  // render_geometry's output
+    detail::Buffer geometry;  // render_geometry's and render_surface's output
     // Work-group size of every path-tracer launch: kLocal, or less where the driver allows fewer work-items for
     // these register-heavy kernels than kLocal (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE
     // of 32 and a conforming driver rejects a larger local size). Results do not depend on it.
@@ -458,7 +458,8 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.k_reference = m.ctx->kernel(kPathtraceProgram, "pt_reference", pathtrace_defines());
     m.k_ao = m.ctx->kernel(kPathtraceProgram, "pt_ao", pathtrace_defines());
     m.k_geometry = m.ctx->kernel(kPathtraceProgram, "pt_geometry", pathtrace_defines());
-    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry}) {
+    m.k_surface = m.ctx->kernel(kPathtraceProgram, "pt_surface", pathtrace_defines());
+    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry, &m.k_surface}) {
         std::size_t wg = 0;
         if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
                 CL_SUCCESS &&
@@ -575,6 +576,20 @@ Image Renderer::render_geometry(const CameraPose& pose, const RenderSettings& s,
     m.ctx->launch(m.k_geometry, 1, &npix, &m.local);
     Image g(s.n, s.n, 7);
     m.ctx->read(m.geometry, 0, 7 * npix * sizeof(float), g.data.data(), "render: read geometry");
+    return g;
+}
+
+Image Renderer::render_surface(const CameraPose& pose, const RenderSettings& s, Face face) {
+    check_settings(s);
+    Impl& m = *impl_;
+    m.upload_frame(pose, Lighting{}, s);
+    const std::size_t npix = std::size_t(s.n) * s.n;
+    if (m.geometry.bytes() < 7 * npix * sizeof(float))
+        m.geometry = m.ctx->alloc(7 * npix * sizeof(float), "render: geometry");
+    m.set_scene_args(m.k_surface, s, m.cam, int(face), s.n, m.geometry);
+    m.ctx->launch(m.k_surface, 1, &npix, &m.local);
+    Image g(s.n, s.n, 6);
+    m.ctx->read(m.geometry, 0, 6 * npix * sizeof(float), g.data.data(), "render: read surface");
     return g;
 }
 
