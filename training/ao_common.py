@@ -3,7 +3,8 @@
 
 An AO frame folder (written by `ngi ao-data`) holds normal.npy [3, N, N] (smooth object-space normals, zero where
 no surface), face_normal.npy [3, N, N], depth.npy [1, N, N] (planar, 1e4 = no surface), ao.npy [1, N, N] (the
-ray-traced reference in [0, 1], 1 = unoccluded) and view.json (camera position, look, up).
+ray-traced reference in [0, 1], 1 = unoccluded) and view.json (camera position, look, up); scenes with triangles
+also surface.npy [6, N, N] (the visible triangle's three vertex indices, -1 where none, and barycentric weights).
 
 The network input of a pixel is 48 floats: the normals at 16 points on a circle of `radius_px` pixels around it,
 point k at angle 2 pi k / 16 (k = 0 to the right, counter-clockwise on screen, i.e. towards smaller rows), each
@@ -38,6 +39,8 @@ def load_view(folder):
     v = {name: np.load(folder / f"{name}.npy").astype(np.float32)
          for name in ("normal", "face_normal", "depth", "ao")}
     v["view"] = json.loads((folder / "view.json").read_text())
+    if (folder / "surface.npy").exists():
+        v["surface"] = np.load(folder / "surface.npy").astype(np.float32)
     v["mask"] = np.abs(v["face_normal"]).sum(0) > 0
     return v
 

@@ -11,8 +11,11 @@ Methods, each evaluated on every held-out view (`ngi ao-data`'s "heldout" orbit)
   constant        the mean AO of the training samples
   sh2             an order-2 SH fit (9 coefficients, least squares on the training samples) of AO against the
                   pixel's smooth normal: the best any function of the normal alone can do up to band 2
-  baked           per-voxel-face baked AO: the mean reference AO of every training-view pixel on that face
-                  (what vertex/face colours store); faces no training view saw get the constant
+  baked           baked AO, what vertex/face colours store: on blocks per voxel face (the mean reference AO of
+                  every training-view pixel on that face); on triangles per vertex (each training pixel adds its
+                  AO with its barycentric weight to the triangle's three vertices; a pixel gets the weighted
+                  mean of its vertices' bakes, i.e. the interpolated vertex colour); faces and vertices no
+                  training view saw get the constant
   ssao            screen-space AO from the view's depth and normals (16 hemisphere samples, range check), its
                   radius picked on 8 training views from {0.5, 1, 2, 4} m
 Metrics over the object's pixels: SSIM (Wang: Gaussian 11x11 window, sigma 1.5, K1 0.01, K2 0.03, population
@@ -69,6 +72,44 @@ def surface_cells(v):
     return key[v["mask"]]
 
 
+class VertexBake:
+    """AO baked per mesh vertex from training views (surface.npy): sum of w * ao and of w per vertex index."""
+
+    def __init__(self):
+        self.sums = np.zeros(0)
+        self.weights = np.zeros(0)
+
+    @staticmethod
+    def _pixels(v):
+        s = v["surface"][:, v["mask"]]  # [6, P]
+        idx = s[:3].astype(np.int64)
+        return idx, s[3:].astype(np.float64), idx[0] >= 0
+
+    def add(self, v):
+        idx, w, tri = self._pixels(v)
+        ao = v["ao"][0][v["mask"]].astype(np.float64)
+        size = max(len(self.sums), int(idx.max()) + 1 if tri.any() else 0)
+        self.sums = np.pad(self.sums, (0, size - len(self.sums)))
+        self.weights = np.pad(self.weights, (0, size - len(self.weights)))
+        for k in range(3):
+            self.sums += np.bincount(idx[k][tri], weights=(w[k] * ao)[tri], minlength=size)
+            self.weights += np.bincount(idx[k][tri], weights=w[k][tri], minlength=size)
+
+    def predict(self, v, fallback):
+        """Per object pixel: the interpolated bake, NaN where the pixel is not on a triangle; vertices no training
+        pixel touched take `fallback`."""
+        idx, w, tri = self._pixels(v)
+        out = np.full(idx.shape[1], np.nan)
+        safe = np.clip(idx, 0, max(len(self.sums) - 1, 0))
+        known = (safe < len(self.sums)) & (idx >= 0)
+        vals = np.where(known & (self.weights[safe] > 0), self.sums[safe] / np.maximum(self.weights[safe], 1e-30), fallback)
+        out[tri] = (w * vals).sum(0)[tri] / np.maximum(w.sum(0)[tri], 1e-30)
+        return out
+
+    def vertices(self):
+        return int((self.weights > 0).sum())
+
+
 def ssao(v, radius, samples=16, seed=7):
     """Normal-oriented hemisphere SSAO (Crytek/LearnOpenGL style) with a range check."""
     n = v["normal"].shape[1]
@@ -114,13 +155,19 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
     X, y, _ = ao_common.sample(data, 3.0)
     mean_ao = float(y.mean())
     coef, *_ = np.linalg.lstsq(sh9(X[:, :3].astype(np.float64)), y.astype(np.float64), rcond=None)
-    # Bake per face from every training view.
+    # Bake per face (blocks) and per vertex (triangles) from every training view.
     sums, counts = {}, {}
+    vertex_bake = VertexBake()
     train = ao_common.views(data, "orbit")
     for folder in train:
         v = ao_common.load_view(folder)
+        if "surface" in v:
+            vertex_bake.add(v)
         keys = surface_cells(v)
         ao = v["ao"][0][v["mask"]]
+        if "surface" in v:  # the per-face table holds block pixels only
+            blocks = v["surface"][0][v["mask"]] < 0
+            keys, ao = keys[blocks], ao[blocks]
         uk, inv = np.unique(keys, return_inverse=True)
         s = np.bincount(inv, weights=ao)
         c = np.bincount(inv)
@@ -163,6 +210,10 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
         preds["sh2"] = sh
         baked = np.ones_like(ref)
         baked[mask] = [baked_table.get(k, mean_ao) for k in surface_cells(v)]
+        if "surface" in v:  # triangle pixels: the per-vertex bake (block pixels keep the per-face one)
+            per_vertex = vertex_bake.predict(v, mean_ao)
+            on_tri = ~np.isnan(per_vertex)
+            baked[mask] = np.where(on_tri, per_vertex, baked[mask])
         preds["baked"] = baked
         preds["ssao"] = ssao(v, best_r)
         for m in methods:
@@ -177,7 +228,7 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
                for m in methods}
     save_compare(Path(out_dir) / f"{name}_compare.png", example)
     return {"views": len(held), "training_samples": int(len(y)), "constant": mean_ao, "ssao_radius": best_r,
-            "baked_faces": len(baked_table), "methods": summary}
+            "baked_faces": len(baked_table), "baked_vertices": vertex_bake.vertices(), "methods": summary}
 
 
 def save_compare(path, example):
@@ -187,7 +238,7 @@ def save_compare(path, example):
     preds, ref, mask = example
     cols = [("mlp 16x8 ring", "network 16x8 (ring)"), ("mlp 64x32 ring", "network 64x32 (ring)"),
             ("mlp 16x8 r=0", "network 16x8 (r = 0)"), (None, "ray-traced reference"),
-            ("diff", "|16x8 ring - reference|"), ("sh2", "SH-2 fit"), ("baked", "baked per face"), ("ssao", "SSAO")]
+            ("diff", "|16x8 ring - reference|"), ("sh2", "SH-2 fit"), ("baked", "baked per face / vertex"), ("ssao", "SSAO")]
     fig, axes = plt.subplots(2, 4, figsize=(13, 6.8))
     for ax, (key, title) in zip(axes.ravel(), cols):
         if key is None:
