@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what ngi needs on Debian 12 (as root), skipping packages that are already there.
 # Build: cmake, ninja, g++, OpenCL headers + ICD loader, PoCL (the CPU OpenCL device every test runs on),
-# Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser). Python side (parity oracle,
+# Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser), assimp (mesh files: OBJ, PLY, glTF;
+# the path tracer's ngi_render links it). Python side (parity oracle,
 # training, perf baseline): Debian's python3-torch/numpy/skimage/matplotlib/tqdm, and OpenBLAS so PyTorch's BLAS is
 # not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest.
 # Distributed dataset rendering (ngi-dataset-mpi): OpenMPI.
@@ -11,7 +12,7 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
-  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev
+  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev libassimp-dev
   python3-torch python3-numpy python3-skimage python3-matplotlib python3-tqdm libopenblas0-pthread
   pybind11-dev python3-dev python3-pyopencl python3-pytest
   libopenmpi-dev openmpi-bin
@@ -28,3 +29,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
 fi
+# Optional assets, with NGI_FETCH_ASSETS=1: the Stanford bunny as build/assets/bunny.obj (tools/fetch_bunny.sh: npm,
+# non-fatal when offline). No build or test needs it.
+if [ "${NGI_FETCH_ASSETS:-0}" = 1 ]; then bash "$(dirname "$0")/fetch_bunny.sh" > /dev/null; fi

@@ -1,0 +1,401 @@
+// Mesh files through assimp: OBJ (+ .mtl), PLY, glTF 2.0 (.gltf, .glb) -> LoadedMesh (ngi/mesh.hpp says what
+// comes out). The file is read once, checked by mesh_precheck.cpp, and handed to assimp from memory through an
+// IOSystem that serves only those bytes and, for load_mesh, the files the mesh names (read by ngi's own rule:
+// regular files only, within kMaxMeshFileBytes in all). assimp's logging stays off: ngi never creates its
+// DefaultLogger, so assimp writes to its NullLogger, and everything it has to say reaches the user as the InputError.
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <tuple>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
+#include "ngi/mesh.hpp"
+#include "render/mesh_precheck.hpp"
+
+namespace ngi {
+namespace {
+
+// ---- assimp I/O: the bytes already read and checked, plus the files they name ----------------------------------
+
+class BytesStream : public Assimp::IOStream {
+public:
+    explicit BytesStream(const std::string& b) : b_(b) {}
+    size_t Read(void* out, size_t size, size_t count) override {
+        if (size == 0) return 0;
+        const size_t n = std::min(count, (b_.size() - pos_) / size);
+        if (n > 0) std::memcpy(out, b_.data() + pos_, n * size);
+        pos_ += n * size;
+        return n;
+    }
+    size_t Write(const void*, size_t, size_t) override { return 0; }
+    aiReturn Seek(size_t offset, aiOrigin origin) override {
+        const size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? pos_ : b_.size();
+        if (origin == aiOrigin_END) {  // assimp's own streams count the offset back from the end
+            if (offset > b_.size()) return AI_FAILURE;
+            pos_ = b_.size() - offset;
+            return AI_SUCCESS;
+        }
+        if (offset > b_.size() - base) return AI_FAILURE;
+        pos_ = base + offset;
+        return AI_SUCCESS;
+    }
+    size_t Tell() const override { return pos_; }
+    size_t FileSize() const override { return b_.size(); }
+    void Flush() override {}
+
+private:
+    const std::string& b_;
+    size_t pos_ = 0;
+};
+
+class GuardedIO : public Assimp::IOSystem {
+public:
+    // `main` is served under `main_name`; other names are read from disk only when `sidecars` (load_mesh).
+    GuardedIO(std::string main_name, const std::string& main, bool sidecars)
+        : main_name_(std::move(main_name)), main_(main), sidecars_(sidecars), used_(main.size()) {}
+
+    bool Exists(const char* file) const override {
+        if (file == main_name_) return true;
+        std::error_code ec;
+        return sidecars_ && std::filesystem::exists(file, ec);
+    }
+    char getOsSeparator() const override { return '/'; }
+    Assimp::IOStream* Open(const char* file, const char* mode) override {
+        if (mode && std::strchr(mode, 'w')) return nullptr;
+        if (file == main_name_) return new BytesStream(main_);
+        if (!sidecars_) return nullptr;
+        std::error_code ec;
+        if (!std::filesystem::exists(file, ec)) return nullptr;  // assimp decides: an OBJ loads without its .mtl
+        try {
+            return new BytesStream(read(file));
+        } catch (const InputError& e) {  // assimp would swallow it: kept, and thrown after ReadFile
+            if (error_.empty()) error_ = e.what();
+            return nullptr;
+        }
+    }
+    void Close(Assimp::IOStream* f) override { delete f; }
+
+    // A file the mesh names, read once (the precheck's external buffers are the bytes assimp then gets):
+    // directories, FIFOs and devices refused as for every ngi input, the budget spanning all files.
+    const std::string& read(const std::string& file) {
+        const std::string key = std::filesystem::path(file).lexically_normal().string();
+        const auto it = files_.find(key);
+        if (it != files_.end()) return it->second;
+        detail::require_readable_file(file);
+        std::string bytes = detail::read_file(file, "load mesh " + main_name_ + ": read", kMaxMeshFileBytes - used_);
+        used_ += bytes.size();
+        return files_.emplace(key, std::move(bytes)).first->second;
+    }
+    const std::string& error() const { return error_; }
+    std::size_t files_read() const { return files_.size(); }
+
+private:
+    std::string main_name_;
+    const std::string& main_;
+    bool sidecars_;
+    std::uint64_t used_;
+    std::map<std::string, std::string> files_;  // node-based: stable addresses for the streams
+    std::string error_;
+};
+
+// ---- colours -----------------------------------------------------------------------------------------------
+
+enum class Format { Obj, Ply, Gltf };
+
+float srgb_to_linear(float c) {
+    c = std::clamp(c, 0.0f, 1.0f);
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+glm::vec3 srgb_to_linear(glm::vec3 c) { return {srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)}; }
+float linear_to_srgb(float c) {
+    c = std::clamp(c, 0.0f, 1.0f);
+    return c <= 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// What one assimp material gives a triangle: an albedo of its own (or none: the vertex colours or the default
+// decide), a glTF base colour the vertex colours multiply, and its emission.
+struct MaterialInfo {
+    bool has_colour = false;
+    glm::vec3 albedo{0.8f};  // linear
+    glm::vec3 emission{0.0f};
+};
+
+MaterialInfo material_info(const aiMaterial* m, Format format, bool no_material_colours, const std::string& where,
+                           const std::function<void(const std::string&)>& fail) {
+    MaterialInfo info;
+    aiString name;
+    m->Get(AI_MATKEY_NAME, name);
+    aiColor4D c;
+    if (format == Format::Gltf) {
+        // glTF colour factors are linear (glTF 2.0 §3.9.2); a material without one has base colour 1.
+        info.has_colour = true;
+        info.albedo = glm::vec3(1.0f);
+        if (m->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || m->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS)
+            info.albedo = {c.r, c.g, c.b};
+    } else if (format == Format::Obj && !no_material_colours &&
+               std::strcmp(name.C_Str(), AI_DEFAULT_MATERIAL_NAME) != 0 &&
+               m->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) {
+        // An .mtl's Kd; assimp's own default material (no usemtl / no .mtl) is not the file's colour.
+        info.has_colour = true;
+        info.albedo = {c.r, c.g, c.b};
+        if (!finite(info.albedo)) fail(where + " diffuse colour is not finite");
+        info.albedo = srgb_to_linear(info.albedo);
+    }
+    // A PLY's material is always assimp's invention (PLY files colour their vertices): no colour of its own.
+    if (!finite(info.albedo)) fail(where + " base colour is not finite");
+    if (m->Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS) {
+        info.emission = {c.r, c.g, c.b};
+        float strength = 1.0f;
+        if (m->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) info.emission *= strength;
+        if (!finite(info.emission)) fail(where + " emissive colour is not finite");
+        info.emission = glm::max(info.emission, glm::vec3(0.0f));
+    }
+    return info;
+}
+
+// Per-triangle materials -> at most 255 palette entries. Exact duplicates share an entry. When more remain, colours
+// are binned on a grid in sRGB (perceptually even steps; 64, 32, 16, 8, 4, 2, then 1 level per channel, the first
+// that fits) and emission on a log2 grid of as many steps per 8 octaves; each bin becomes the mean of its
+// triangles' linear colours. The last resort (one level) leaves two bins, emissive or not. Entries are numbered in
+// order of first use, so the result depends only on the file.
+std::vector<Material> quantize(std::vector<Material>& tri, std::vector<std::uint8_t>& index) {
+    constexpr std::size_t kMax = 255;
+    using Key = std::tuple<std::int64_t, std::int64_t, std::int64_t, std::int64_t, std::int64_t, std::int64_t>;
+    auto bits = [](float f) { std::int32_t i; std::memcpy(&i, &f, 4); return std::int64_t(i); };
+    auto group = [&](auto&& key_of) {
+        std::map<Key, std::size_t> ids;
+        std::vector<std::size_t> id(tri.size());
+        for (std::size_t i = 0; i < tri.size() && ids.size() <= kMax; ++i)
+            id[i] = ids.emplace(key_of(tri[i]), ids.size()).first->second;
+        return std::make_pair(ids.size(), id);
+    };
+    auto exact = group([&](const Material& m) {
+        return Key{bits(m.albedo.x), bits(m.albedo.y), bits(m.albedo.z), bits(m.emission.x), bits(m.emission.y),
+                   bits(m.emission.z)};
+    });
+    for (int levels : {0, 64, 32, 16, 8, 4, 2, 1, -1}) {
+        auto g = levels == 0 ? exact : group([&](const Material& m) {
+            if (levels < 0) return Key{0, 0, 0, m.emission != glm::vec3(0.0f), 0, 0};
+            auto a = [&](float v) { return std::int64_t(std::lround(linear_to_srgb(v) * float(levels - 1))); };
+            auto e = [&](float v) {
+                if (v <= 0.0f) return std::int64_t(-1000000);
+                return std::int64_t(std::floor(std::log2(v) * float(levels) / 8.0f));
+            };
+            return Key{a(m.albedo.x), a(m.albedo.y), a(m.albedo.z), e(m.emission.x), e(m.emission.y), e(m.emission.z)};
+        });
+        if (g.first > kMax) continue;
+        std::vector<glm::dvec3> albedo(g.first, glm::dvec3(0.0)), emission(g.first, glm::dvec3(0.0));
+        std::vector<std::size_t> n(g.first, 0);
+        for (std::size_t i = 0; i < tri.size(); ++i) {
+            albedo[g.second[i]] += glm::dvec3(tri[i].albedo);
+            emission[g.second[i]] += glm::dvec3(tri[i].emission);
+            ++n[g.second[i]];
+        }
+        std::vector<Material> out(g.first);
+        for (std::size_t k = 0; k < g.first; ++k)
+            out[k] = {glm::vec3(albedo[k] / double(n[k])), glm::vec3(emission[k] / double(n[k])), false};
+        index.resize(tri.size());
+        for (std::size_t i = 0; i < tri.size(); ++i) index[i] = std::uint8_t(g.second[i] + 1);
+        return out;
+    }
+    throw std::logic_error("quantize: the last level always fits");  // two bins at most
+}
+
+// ---- the scene graph -> one TriangleMesh ------------------------------------------------------------------
+
+LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours, const std::string& name) {
+    auto fail = [&](const std::string& what) { throw InputError("load mesh " + name + ": " + what); };
+    if (!scene->mRootNode) fail("no scene graph");
+    std::vector<MaterialInfo> infos;
+    for (unsigned i = 0; i < scene->mNumMaterials; ++i)
+        infos.push_back(
+            material_info(scene->mMaterials[i], format, no_material_colours, "material " + std::to_string(i), fail));
+
+    LoadedMesh out;
+    TriangleMesh& m = out.mesh;
+    std::vector<Material> tri_material;
+    std::vector<char> has_normal;
+    // Depth-first over the node tree with an explicit stack (assimp's tree came from a checked file, but a walk
+    // that cannot overflow the stack needs no argument).
+    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{scene->mRootNode, scene->mRootNode->mTransformation}};
+    while (!stack.empty()) {
+        const auto [node, xf] = stack.back();
+        stack.pop_back();
+        for (unsigned c = node->mNumChildren; c-- > 0;)
+            if (node->mChildren[c]) stack.push_back({node->mChildren[c], xf * node->mChildren[c]->mTransformation});
+        const glm::mat4 M = glm::transpose(glm::make_mat4(&xf.a1));  // assimp is row-major
+        const glm::mat3 L(M);
+        const glm::mat3 N = glm::inverseTranspose(L);
+        const bool mirrored = glm::determinant(L) < 0.0f;
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+            if (node->mMeshes[k] >= scene->mNumMeshes) fail("node refers to a mesh that does not exist");
+            const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
+            const std::string where = "mesh " + std::to_string(node->mMeshes[k]);
+            if (std::uint64_t(m.positions.size()) + mesh->mNumVertices > kMaxMeshVertices)
+                fail("more than " + std::to_string(kMaxMeshVertices) + " vertices (every node's instance counted)");
+            if (std::uint64_t(m.triangles.size()) + mesh->mNumFaces > kMaxMeshTriangles)
+                fail("more than " + std::to_string(kMaxMeshTriangles) + " triangles (every node's instance counted)");
+            const std::uint32_t base = std::uint32_t(m.positions.size());
+            for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+                const aiVector3D& p = mesh->mVertices[v];
+                const glm::vec3 w = glm::vec3(M * glm::vec4(p.x, p.y, p.z, 1.0f));
+                if (!finite(glm::vec3(p.x, p.y, p.z)) || !finite(w))
+                    fail(where + " vertex " + std::to_string(v) + ": position is not finite");
+                m.positions.push_back(w);
+                glm::vec3 n(0.0f);
+                bool ok = false;
+                if (mesh->HasNormals()) {
+                    const aiVector3D& q = mesh->mNormals[v];
+                    if (!finite(glm::vec3(q.x, q.y, q.z)))
+                        fail(where + " vertex " + std::to_string(v) + ": normal is not finite");
+                    n = N * glm::vec3(q.x, q.y, q.z);
+                    const float len = glm::length(n);
+                    ok = len > 1e-20f && std::isfinite(len);  // a zero normal says nothing: computed below
+                    if (ok) n /= len;
+                }
+                m.normals.push_back(n);
+                has_normal.push_back(ok);
+            }
+            const MaterialInfo info =
+                mesh->mMaterialIndex < infos.size() ? infos[mesh->mMaterialIndex] : MaterialInfo{};
+            const aiColor4D* colours = mesh->HasVertexColors(0) ? mesh->mColors[0] : nullptr;
+            for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+                const aiFace& face = mesh->mFaces[f];
+                if (face.mNumIndices != 3) {
+                    ++out.dropped_primitives;
+                    continue;
+                }
+                glm::uvec3 t(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
+                for (int j = 0; j < 3; ++j)
+                    if (t[j] >= mesh->mNumVertices)
+                        fail(where + " face " + std::to_string(f) + ": vertex index " + std::to_string(t[j]) +
+                             " is out of range (" + std::to_string(mesh->mNumVertices) + " vertices)");
+                Material mat;
+                mat.emission = info.emission;
+                glm::vec3 vc(1.0f);
+                if (colours) {
+                    glm::vec3 sum(0.0f);
+                    for (int j = 0; j < 3; ++j) {
+                        const aiColor4D& c = colours[t[j]];
+                        const glm::vec3 rgb(c.r, c.g, c.b);
+                        if (!finite(rgb)) fail(where + " vertex " + std::to_string(t[j]) + ": colour is not finite");
+                        sum += format == Format::Gltf ? glm::clamp(rgb, 0.0f, 1.0f) : srgb_to_linear(rgb);
+                    }
+                    vc = sum / 3.0f;
+                }
+                if (format == Format::Gltf) mat.albedo = info.albedo * vc;  // COLOR_0 multiplies the base colour
+                else if (info.has_colour) mat.albedo = info.albedo;
+                else if (colours) mat.albedo = vc;
+                else mat.albedo = Material{}.albedo;
+                mat.albedo = glm::clamp(mat.albedo, glm::vec3(0.0f), glm::vec3(0.95f));
+                if (mirrored) std::swap(t.y, t.z);  // keep counter-clockwise seen from the front
+                m.triangles.push_back(t + base);
+                tri_material.push_back(mat);
+            }
+        }
+    }
+
+    // Zero-area triangles cannot be hit and have no normal: dropped (counted). Cross product in double, so only
+    // truly degenerate ones (repeated or collinear corners) go.
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+        const glm::uvec3 t = m.triangles[i];
+        const glm::dvec3 a(m.positions[t.x]), b(m.positions[t.y]), c(m.positions[t.z]);
+        if (glm::length(glm::cross(b - a, c - a)) == 0.0) {
+            ++out.dropped_degenerate;
+            continue;
+        }
+        m.triangles[kept] = t;
+        tri_material[kept] = tri_material[i];
+        ++kept;
+    }
+    m.triangles.resize(kept);
+    tri_material.resize(kept);
+    if (kept == 0)
+        fail(out.dropped_degenerate + out.dropped_primitives > 0
+                 ? "no triangle with an area (" + std::to_string(out.dropped_degenerate) + " degenerate, " +
+                       std::to_string(out.dropped_primitives) + " points or lines)"
+                 : "the file has no triangles");
+
+    // Only the vertices the kept triangles use, in order of first use (a stable, file-determined numbering).
+    std::vector<std::uint32_t> remap(m.positions.size(), UINT32_MAX);
+    TriangleMesh c;
+    std::vector<char> c_has;
+    for (glm::uvec3& t : m.triangles)
+        for (int j = 0; j < 3; ++j) {
+            std::uint32_t& r = remap[t[j]];
+            if (r == UINT32_MAX) {
+                r = std::uint32_t(c.positions.size());
+                c.positions.push_back(m.positions[t[j]]);
+                c.normals.push_back(m.normals[t[j]]);
+                c_has.push_back(has_normal[t[j]]);
+            }
+            t[j] = r;
+        }
+    c.triangles = std::move(m.triangles);
+    // The file's normals where it has them, else area-weighted ones.
+    TriangleMesh smooth = c;
+    compute_vertex_normals(smooth);
+    for (std::size_t i = 0; i < c.normals.size(); ++i)
+        if (!c_has[i]) c.normals[i] = smooth.normals[i];
+    out.materials = quantize(tri_material, c.materials);
+    out.mesh = std::move(c);
+    validate_mesh(out.mesh, out.materials.size() + 1, name);
+    return out;
+}
+
+LoadedMesh import(const std::string& bytes, const std::string& name, bool sidecars) {
+    const std::string ext = detail::lower_extension(name);
+    const std::filesystem::path dir = std::filesystem::path(name).parent_path();
+    Assimp::Importer importer;
+    auto* io = new GuardedIO(name, bytes, sidecars);
+    importer.SetIOHandler(io);  // owned by the importer from here
+    detail::precheck_mesh(bytes, name, ext, [&](const std::string& uri) -> const std::string& {
+        if (!sidecars)
+            throw InputError("load mesh " + name + ": external buffer '" + uri + "' (only the file's own bytes are "
+                             "read here)");
+        return io->read((dir / uri).string());
+    });
+    const Format format = ext == ".obj" ? Format::Obj : ext == ".ply" ? Format::Ply : Format::Gltf;
+    // Points and lines reach convert() as 1- and 2-index faces: counted and dropped there.
+    const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
+    const aiScene* scene = importer.ReadFile(name, flags);
+    if (!io->error().empty()) throw InputError(io->error());
+    if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
+    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError("load mesh " + name + ": the file is incomplete");
+    // An OBJ's materials have colours of the file's only when its .mtl was read (assimp invents the rest).
+    return convert(scene, format, format == Format::Obj && io->files_read() == 0, name);
+}
+
+}  // namespace
+
+LoadedMesh load_mesh(const std::string& path) {
+    if (!is_mesh_path(path))
+        throw InputError("load mesh " + path + ": not a mesh file extension (.obj, .ply, .gltf, .glb)");
+    detail::require_readable_file(path);
+    const std::string bytes = detail::read_file(path, "load mesh", kMaxMeshFileBytes);
+    return import(bytes, path, true);
+}
+
+LoadedMesh parse_mesh(const std::string& bytes, const std::string& name) {
+    if (!is_mesh_path(name))
+        throw InputError("load mesh " + name + ": not a mesh file extension (.obj, .ply, .gltf, .glb)");
+    return import(bytes, name, false);
+}
+
+}  // namespace ngi
