@@ -8,6 +8,8 @@
 # Distributed dataset rendering (ngi-dataset-mpi): OpenMPI.
 # Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
 # simulator), clang-15 + libFuzzer (fuzz targets).
+# Benchmark baseline: Intel Embree 3 (libembree-dev, with TBB), the CPU ray tracer perf/bench_bvh compares the
+# triangle BVH with (optional: CMake skips bench_bvh where it is missing).
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
@@ -18,6 +20,7 @@ packages=(
   libopenmpi-dev openmpi-bin
   mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
   libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri libstb-dev xvfb xauth
+  libembree-dev
 )
 missing=()
 for p in "${packages[@]}"; do
