@@ -1,7 +1,9 @@
 // ngi ao-data: the data of seed 001's ambient-occlusion MLP for one object: views on an orbit around its bounding
 // sphere, each an "AO frame folder" (docs/RESULTS_AO.md): normal.npy (smooth object-space normals, [3, N, N]),
 // face_normal.npy ([3, N, N]), depth.npy ([1, N, N], planar depth, 1e4 = no surface) and ao.npy ([1, N, N], the
-// ray-traced reference, 1 = unoccluded). Two orbits: "orbit" (the seed's rotating camera, training data) and
+// ray-traced reference, 1 = unoccluded); for scenes with triangles also surface.npy ([6, N, N]: the visible
+// triangle's vertex indices, -1 where none, and barycentric weights; Renderer::render_surface). Two orbits: "orbit"
+// (the seed's rotating camera, training data) and
 // "heldout" (other azimuths and heights, for evaluation). Resumable: finished views are kept, a view is written
 // all-or-nothing; progress with an ETA on stderr.
 #include <unistd.h>
@@ -31,27 +33,35 @@ struct Sphere {
     float radius = 0.0f;
 };
 
-// Bounding sphere of the solid blocks: the centre of their bounding box, the farthest block corner from it.
+// Bounding sphere of the object: the solid blocks and the triangle mesh's vertices (a mesh scene's grid is only
+// air around its mesh). Centre: the centre of their joint bounding box; radius: the farthest block corner or vertex.
 Sphere bounding_sphere(const ngi::VoxelScene& s) {
-    glm::ivec3 lo(s.size), hi(-1);
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
     for (int z = 0; z < s.size.z; ++z)
         for (int y = 0; y < s.size.y; ++y)
             for (int x = 0; x < s.size.x; ++x)
                 if (s.solid({x, y, z})) {
-                    lo = glm::min(lo, glm::ivec3(x, y, z));
-                    hi = glm::max(hi, glm::ivec3(x, y, z));
+                    lo = glm::min(lo, glm::vec3(x, y, z));
+                    hi = glm::max(hi, glm::vec3(x + 1, y + 1, z + 1));
                 }
-    if (hi.x < 0) throw ngi::InputError("ngi ao-data: scene " + s.name + " has no solid block");
+    if (!s.mesh.empty()) {
+        const auto [mlo, mhi] = ngi::mesh_bounds(s.mesh);
+        lo = glm::min(lo, mlo);
+        hi = glm::max(hi, mhi);
+    }
+    if (!(lo.x <= hi.x)) throw ngi::InputError("ngi ao-data: scene " + s.name + " has no solid block and no triangle");
     Sphere b;
-    b.centre = (glm::vec3(lo) + glm::vec3(hi + 1)) * 0.5f;
-    for (int z = lo.z; z <= hi.z; ++z)
-        for (int y = lo.y; y <= hi.y; ++y)
-            for (int x = lo.x; x <= hi.x; ++x)
+    b.centre = (lo + hi) * 0.5f;
+    for (int z = 0; z < s.size.z; ++z)
+        for (int y = 0; y < s.size.y; ++y)
+            for (int x = 0; x < s.size.x; ++x)
                 if (s.solid({x, y, z}))
                     for (int c = 0; c < 8; ++c) {
                         const glm::vec3 p(x + (c & 1), y + (c >> 1 & 1), z + (c >> 2 & 1));
                         b.radius = std::max(b.radius, glm::length(p - b.centre));
                     }
+    for (const glm::uvec3& t : s.mesh.triangles)
+        for (int k = 0; k < 3; ++k) b.radius = std::max(b.radius, glm::length(s.mesh.positions[t[k]] - b.centre));
     return b;
 }
 
@@ -137,8 +147,15 @@ int run(const Options& o) {
             rs.seed = std::uint32_t(split * 100000 + k + 1);
             const ngi::Image g = renderer.render_geometry(pose, rs, sigma);
             const ngi::Image ao = renderer.render_ao(pose, rs, rays, max_distance);
-            ngi::OutputFolder f(dir, "write",
-                                std::vector<std::string>{"normal.npy", "face_normal.npy", "depth.npy", "ao.npy", "view.json"});
+            // Mesh scenes also get surface.npy: the triangle's vertex indices and barycentric weights per pixel,
+            // from which an evaluation bakes AO per vertex (the mesh analogue of the per-face bake).
+            std::vector<std::string> files{"normal.npy", "face_normal.npy", "depth.npy", "ao.npy", "view.json"};
+            if (!scene.mesh.empty()) files.push_back("surface.npy");
+            ngi::OutputFolder f(dir, "write", files);
+            if (!scene.mesh.empty()) {
+                const ngi::Image sf = renderer.render_surface(pose, rs);
+                f.write("surface.npy", [&](const std::string& p) { ngi::write_npy(p, planes(sf, 0, 6)); });
+            }
             f.write("normal.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 0, 3)); });
             f.write("face_normal.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 3, 3)); });
             f.write("depth.npy", [&](const std::string& p) { ngi::write_npy(p, planes(g, 6, 1)); });
@@ -173,8 +190,8 @@ Run add_ao_data(CLI::App& app) {
         "Per view: smooth normals, face normals, depth and the ray-traced AO (normal.npy, face_normal.npy, depth.npy, "
         "ao.npy, view.json) in DIR/orbit/vNNNN (training) and DIR/heldout/vNNNN (evaluation). Resumable: finished "
         "views are kept. Progress with an ETA on stderr.");
-    add_path(*cmd, "--scene", o->spec, "SPEC", "room|street|cave|backlit|bleed|sculpture[:seed=S], or a .vox file",
-             true);
+    add_path(*cmd, "--scene", o->spec, "SPEC",
+             "a procedural family[:seed=S] (sculpture, knot, superquadric, blob, ...), or a .vox or mesh file", true);
     add_path(*cmd, "--out", o->out, "DIR", "the data folder", true);
     add_integer(*cmd, "--views", o->views, 0, 100000, "V", "views on the training orbit");
     add_integer(*cmd, "--heldout-views", o->heldout, 0, 100000, "V", "views on the held-out orbit");

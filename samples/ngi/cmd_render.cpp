@@ -139,7 +139,8 @@ Run add_render(CLI::App& app) {
                                 "The features of the six faces and the front view's reference lighting; the camera "
                                 "and the seed of frame K of the scene in a dataset.");
     add_path(*cmd, "--scene", o->spec, "SPEC",
-             "room|street|cave|backlit|bleed|sculpture[:seed=S], or a .vox file", true);
+             "room|street|cave|backlit|bleed|sculpture|cornell|knot|superquadric|blob[:seed=S,...], or a .vox or "
+             "mesh file (.obj, .ply, .gltf, .glb)", true);
     add_path(*cmd, "--out", o->out, "DIR", "the frame folder to write", true);
     // The limits are those of a dataset config.
     add_integer(*cmd, "--frame", o->frame, 0, 999999, "K", "the frame of the camera path, below --path-frames");

@@ -1,7 +1,8 @@
 // Keyframed camera fly-throughs for the dataset (the thesis: a keyframe every 25 frames, Blender's smooth
 // interpolation). Positions follow a uniform Catmull-Rom spline through the keyframes; orientations are slerped
 // between consecutive keyframes. Two kinds: a fly-through of the scene's free space (worlds: the procedural
-// families) and an orbit around the occupied blocks (models: .vox files).
+// families) and an orbit around the occupied blocks (models: .vox files, mesh scenes). A scene's triangle mesh counts
+// as the blocks it passes through or encloses (block resolution, conservative): every function below sees it so.
 #pragma once
 #include <cstdint>
 #include <string>

@@ -61,6 +61,11 @@ struct VoxelScene {
 //   sculpture  one free-standing smooth object (metaballs, a torus, dents) in a 64^3 grid: per-object networks (AO)
 //   cornell    seed 004's voxel Cornell boxes: a closed 40^3 box (red, green, white walls), 1-2 ceiling panels, a
 //              skylight for the sun, 2-4 coloured boxes; cornell_pink: one more box and a pink back wall (its test)
+// and three families of smooth triangle-mesh objects (VoxelScene::mesh, ~40 m across like a sculpture, in a grid of
+// air around them; orbit camera like a .vox model; docs/RENDERER.md "Triangle meshes"):
+//   knot          a (p, q) torus-knot tube
+//   superquadric  a superellipsoid or supertoroid
+//   blob          a displaced icosphere (bumps and dents)
 const std::vector<std::string>& scene_families();
 VoxelScene generate_scene(const std::string& family, std::uint32_t seed);
 
@@ -84,10 +89,13 @@ VoxelScene load_vox(const std::string& path);
 // The same from the file's bytes; `name` stands for the path in errors and VoxelScene::name.
 VoxelScene parse_vox(const std::string& bytes, const std::string& name);
 
-// "family:seed=S" (any key=value list after the colon; only seed is defined, default 0) or a path to a .vox file.
+// "family:seed=S" (a key=value list after the colon: seed, default 0; for the mesh families also floor=0|1, a
+// one-block-thick floor of blocks under the object), a path to a .vox file, or a path to a mesh file (is_mesh_path:
+// load_mesh, in the file's units taken as metres, in a grid of air around it like the mesh families).
 // Throws InputError for unknown families, keys or bad numbers.
 VoxelScene make_scene(const std::string& spec);
-// The canonical name of a spec ("room" -> "room:seed=0"; a .vox path stays as it is), validated like make_scene
+// The canonical name of a spec ("room" -> "room:seed=0", "knot:floor=1" -> "knot:seed=0,floor=1" (floor=0 is left
+// out); a .vox or mesh path stays as it is), validated like make_scene
 // but without building the scene. VoxelScene::name of make_scene(spec) equals it.
 std::string scene_spec_name(const std::string& spec);
 

@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <glm/gtc/constants.hpp>
 
 #include "ngi/camera.hpp"
 #include "ngi/error.hpp"
+#include "render/mesh_scene.hpp"
 #include "render/rand.hpp"
 
 namespace ngi {
@@ -19,6 +21,17 @@ constexpr float kPathClearance = 0.3f;  // every interpolated position
 constexpr int kAttempts = 48;
 
 std::string scene_label(const VoxelScene& s) { return s.name.empty() ? std::string("(unnamed)") : s.name; }
+
+// The geometry every test below sees: the scene's blocks plus the blocks its triangle mesh occupies (its bounds,
+// its inside), so that paths orbit a mesh and keep clear of it as of blocks. `scene` itself when it has no mesh;
+// else with_mesh_blocks' copy, kept in `storage`.
+// (An optional: these functions run in the path search's inner loops, where a default VoxelScene's palette
+// allocation per call would be the main cost for block scenes.)
+const VoxelScene& camera_geometry(const VoxelScene& scene, std::optional<VoxelScene>& storage) {
+    if (scene.mesh.empty()) return scene;
+    storage = detail::with_mesh_blocks(scene);  // without the mesh: its blocks stand for it
+    return *storage;
+}
 
 glm::vec3 catmull_rom(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3, float s) {
     const float s2 = s * s, s3 = s2 * s;
@@ -113,7 +126,9 @@ CameraPose CameraPath::at(float frame) const {
     return pose;
 }
 
-bool clear_of_blocks_in_open_air(const VoxelScene& scene, glm::vec3 p, float radius) {
+bool clear_of_blocks_in_open_air(const VoxelScene& scene_in, glm::vec3 p, float radius) {
+    std::optional<VoxelScene> storage;
+    const VoxelScene& scene = camera_geometry(scene_in, storage);
     const glm::ivec3 lo = glm::max(glm::ivec3(glm::floor(p - radius)), glm::ivec3(0));
     const glm::ivec3 hi = glm::min(glm::ivec3(glm::floor(p + radius)), scene.size - 1);
     for (int z = lo.z; z <= hi.z; ++z)  // empty loops when the box misses the grid
@@ -123,7 +138,9 @@ bool clear_of_blocks_in_open_air(const VoxelScene& scene, glm::vec3 p, float rad
     return true;
 }
 
-float front_geometry_share(const VoxelScene& scene, const CameraPose& pose, int n) {
+float front_geometry_share(const VoxelScene& scene_in, const CameraPose& pose, int n) {
+    std::optional<VoxelScene> storage;
+    const VoxelScene& scene = camera_geometry(scene_in, storage);
     if (n < 1) throw InputError("front_geometry_share: the face size must be positive");
     const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
     int hits = 0;
@@ -149,7 +166,9 @@ const char* camera_path_kind_name(CameraPathKind kind) {
     return "auto";
 }
 
-bool clear_of_blocks(const VoxelScene& scene, glm::vec3 p, float radius) {
+bool clear_of_blocks(const VoxelScene& scene_in, glm::vec3 p, float radius) {
+    std::optional<VoxelScene> storage;
+    const VoxelScene& scene = camera_geometry(scene_in, storage);
     const glm::ivec3 lo(glm::floor(p - radius)), hi(glm::floor(p + radius));
     for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y)
@@ -158,7 +177,9 @@ bool clear_of_blocks(const VoxelScene& scene, glm::vec3 p, float radius) {
     return true;
 }
 
-CameraPath make_camera_path(const VoxelScene& scene, int frames, std::uint32_t seed, int interval) {
+CameraPath make_camera_path(const VoxelScene& scene_in, int frames, std::uint32_t seed, int interval) {
+    std::optional<VoxelScene> storage;
+    const VoxelScene& scene = camera_geometry(scene_in, storage);
     if (frames < 1 || interval < 1) throw InputError("camera path: frames and interval must be positive");
     const int nkeys = std::max(2, (frames - 1 + interval - 1) / interval + 1);
     detail::Rand r(seed, 0x70617468u);
@@ -220,7 +241,9 @@ CameraPath make_camera_path(const VoxelScene& scene, int frames, std::uint32_t s
     return path;
 }
 
-CameraPath make_orbit_path(const VoxelScene& scene, int frames, std::uint32_t seed, int interval) {
+CameraPath make_orbit_path(const VoxelScene& scene_in, int frames, std::uint32_t seed, int interval) {
+    std::optional<VoxelScene> storage;
+    const VoxelScene& scene = camera_geometry(scene_in, storage);
     if (frames < 1 || interval < 1) throw InputError("camera orbit: frames and interval must be positive");
     const int nkeys = std::max(2, (frames - 1 + interval - 1) / interval + 1);
     const Occupied m = occupied_blocks(scene);

@@ -29,10 +29,12 @@ std::uint32_t mix32(std::uint32_t x) {  // a 32-bit finalizer (lowbias32): sprea
     return x;
 }
 
+// A scene given by a file (.vox or a mesh) rather than a family spec: resolved against the config's folder, and
+// its dataset folder named after the file.
 bool is_vox(const std::string& spec) {
     std::string e = fs::path(spec).extension().string();
     for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return e == ".vox";
+    return e == ".vox" || is_mesh_path(spec);
 }
 
 struct ConfigReader {

@@ -1,4 +1,5 @@
-// Seeded procedural voxel scenes (families: room, street, cave, backlit, bleed, sculpture, cornell, cornell_pink). Deterministic across platforms:
+// Seeded procedural voxel scenes (families: room, street, cave, backlit, bleed, sculpture, cornell, cornell_pink; the
+// mesh families knot, superquadric and blob are built in mesh_procedural.cpp). Deterministic across platforms:
 // std::mt19937 is fully specified; distributions are our own (the standard ones are implementation-defined).
 #include <algorithm>
 #include <cmath>
@@ -6,6 +7,7 @@
 
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
+#include "render/mesh_scene.hpp"
 #include "render/rand.hpp"
 
 namespace ngi {
@@ -489,8 +491,8 @@ VoxelScene cornell(std::uint32_t seed, bool pink) {
 }  // namespace
 
 const std::vector<std::string>& scene_families() {
-    static const std::vector<std::string> f = {"room",  "street",    "cave",   "backlit",
-                                               "bleed", "sculpture", "cornell", "cornell_pink"};
+    static const std::vector<std::string> f = {"room",    "street",       "cave", "backlit",      "bleed", "sculpture",
+                                               "cornell", "cornell_pink", "knot", "superquadric", "blob"};
     return f;
 }
 
@@ -504,6 +506,7 @@ VoxelScene generate_scene(const std::string& family, std::uint32_t seed) {
     else if (family == "sculpture") s = sculpture(seed);
     else if (family == "cornell") s = cornell(seed, false);
     else if (family == "cornell_pink") s = cornell(seed, true);
+    else if (detail::is_mesh_family(family)) s = detail::mesh_family_scene(family, seed, false, family);  // no floor
     else throw InputError("unknown scene family '" + family + "'");
     s.name = family + ":seed=" + std::to_string(seed);
     return s;

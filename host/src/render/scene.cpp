@@ -5,6 +5,7 @@
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
+#include "render/mesh_scene.hpp"
 
 namespace ngi {
 
@@ -42,39 +43,58 @@ bool has_vox_extension(const std::string& spec) {
     return lower.size() > 4 && lower.compare(lower.size() - 4, 4, ".vox") == 0;
 }
 
-// "family[:seed=S]" -> (family, seed), validated.
-std::pair<std::string, std::uint32_t> parse_family_spec(const std::string& spec) {
+struct FamilySpec {
+    std::string family;
+    std::uint32_t seed = 0;
+    bool floor = false;  // mesh families: a floor of blocks under the object
+};
+
+// "family[:key=value,...]" -> FamilySpec, validated: seed=N for every family, floor=0|1 for the mesh families.
+FamilySpec parse_family_spec(const std::string& spec) {
     const auto colon = spec.find(':');
-    const std::string family = spec.substr(0, colon);
+    FamilySpec out;
+    out.family = spec.substr(0, colon);
     const auto& families = scene_families();
-    if (std::find(families.begin(), families.end(), family) == families.end()) {
+    if (std::find(families.begin(), families.end(), out.family) == families.end()) {
         std::string list;
         for (const auto& f : families) list += (list.empty() ? "" : ", ") + f;
-        throw InputError("scene '" + spec + "': unknown family '" + family + "' (" + list + ", or a .vox file)");
+        throw InputError("scene '" + spec + "': unknown family '" + out.family + "' (" + list +
+                         ", or a .vox or mesh file: .obj, .ply, .gltf, .glb)");
     }
-    std::uint32_t seed = 0;
-    if (colon == std::string::npos) return {family, seed};
+    const bool mesh = detail::is_mesh_family(out.family);
+    if (colon == std::string::npos) return out;
     const std::string rest = spec.substr(colon + 1);
     for (std::size_t pos = 0; pos <= rest.size();) {
         const auto comma = std::min(rest.find(',', pos), rest.size());
         const std::string item = rest.substr(pos, comma - pos);
         const auto eq = item.find('=');
         const std::string key = item.substr(0, eq), value = eq == std::string::npos ? "" : item.substr(eq + 1);
-        if (key != "seed") throw InputError("scene '" + spec + "': unknown option '" + key + "' (expected seed=N)");
-        const auto r = std::from_chars(value.data(), value.data() + value.size(), seed);
-        if (value.empty() || r.ec != std::errc() || r.ptr != value.data() + value.size())
-            throw InputError("scene '" + spec + "': seed must be an unsigned 32-bit integer, got '" + value + "'");
+        if (key == "seed") {
+            const auto r = std::from_chars(value.data(), value.data() + value.size(), out.seed);
+            if (value.empty() || r.ec != std::errc() || r.ptr != value.data() + value.size())
+                throw InputError("scene '" + spec + "': seed must be an unsigned 32-bit integer, got '" + value + "'");
+        } else if (key == "floor" && mesh) {
+            if (value != "0" && value != "1")
+                throw InputError("scene '" + spec + "': floor must be 0 or 1, got '" + value + "'");
+            out.floor = value == "1";
+        } else {
+            throw InputError("scene '" + spec + "': unknown option '" + key + "' (expected " +
+                             (mesh ? "seed=N, floor=0|1)" : "seed=N)"));
+        }
         pos = comma + 1;
     }
-    return {family, seed};
+    return out;
+}
+
+std::string canonical_name(const FamilySpec& f) {
+    return f.family + ":seed=" + std::to_string(f.seed) + (f.floor ? ",floor=1" : "");
 }
 
 }  // namespace
 
 std::string scene_spec_name(const std::string& spec) {
-    if (has_vox_extension(spec)) return spec;
-    const auto [family, seed] = parse_family_spec(spec);
-    return family + ":seed=" + std::to_string(seed);
+    if (has_vox_extension(spec) || is_mesh_path(spec)) return spec;
+    return canonical_name(parse_family_spec(spec));
 }
 
 VoxelScene make_scene(const std::string& spec) {
@@ -82,8 +102,11 @@ VoxelScene make_scene(const std::string& spec) {
         detail::require_readable_file(spec);  // the .vox reader streams: a directory or device fails inside it
         return load_vox(spec);
     }
-    const auto [family, seed] = parse_family_spec(spec);
-    return generate_scene(family, seed);
+    if (is_mesh_path(spec)) return detail::mesh_scene(load_mesh(spec), spec, false);
+    const FamilySpec f = parse_family_spec(spec);
+    if (detail::is_mesh_family(f.family))
+        return detail::mesh_family_scene(f.family, f.seed, f.floor, canonical_name(f));
+    return generate_scene(f.family, f.seed);
 }
 
 }  // namespace ngi
