@@ -406,4 +406,13 @@ expect_usage probe_sh "$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --s
 expect=--directions
 expect_usage voxel_dirs "$ngi" voxel-data --scene room:seed=1 --out "$work/out_voxel_dirs" --directions 0
 
+# ---- Issue 31 (reliability, round two).
+# A FIFO named like a scene is refused at once by every command that reads scenes (the .vox loader blocked in open()).
+mkfifo "$work/fifo.vox"
+expect="fifo.vox: cannot open file: it is a FIFO"
+expect_failure fifo_render timeout 60 "$ngi" render --scene "$work/fifo.vox" --face 8 --spp 1 --out "$work/out_fifo_render"
+expect_failure fifo_voxel_data timeout 60 "$ngi" voxel-data --scene "$work/fifo.vox" --out "$work/out_fifo_voxel_data"
+expect_failure fifo_ao_data timeout 60 "$ngi" ao-data --scene "$work/fifo.vox" --out "$work/out_fifo_ao_data"
+for name in fifo_render fifo_voxel_data fifo_ao_data; do no_unexpected $name; done
+
 echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

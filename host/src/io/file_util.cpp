@@ -17,18 +17,28 @@
 
 namespace ngi::detail {
 
-void require_readable_file(const std::string& path) {
-    std::error_code ec;
-    const auto st = std::filesystem::status(path, ec);
-    if (std::filesystem::is_directory(st))
-        throw InputError("read " + path + ": cannot open file: it is a directory");
-    // A device (/dev/zero, /dev/urandom, a terminal) is endless: reading it would only end in an out-of-memory.
-    if (std::filesystem::is_character_file(st) || std::filesystem::is_block_file(st))
-        throw InputError("read " + path + ": cannot open file: it is a device, not a regular file");
+namespace {
+
+// What a file that is not regular is, for the messages of require_readable_file and read_file.
+const char* not_regular_kind(mode_t mode) {
+    return S_ISDIR(mode)                   ? "it is a directory"
+           : S_ISCHR(mode) || S_ISBLK(mode) ? "it is a device, not a regular file"
+           : S_ISFIFO(mode)                 ? "it is a FIFO, not a regular file"
+           : S_ISSOCK(mode)                 ? "it is a socket, not a regular file"
+                                            : "not a regular file";
+}
+
+}  // namespace
+
+void require_readable_file(const std::string& path, const std::string& op) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return;  // absent (or unreachable): the reader's open says why
+    if (!S_ISREG(st.st_mode)) throw InputError(op + " " + path + ": cannot open file: " + not_regular_kind(st.st_mode));
 }
 
 std::string read_file(const std::string& path, const std::string& op, std::uint64_t max_bytes) {
     const std::string what = op + " " + path + ": ";
+    require_readable_file(path, op);  // by stat, before opening anything: no open() of a device or FIFO at all
     // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer. It changes nothing for the regular
     // files that pass the check below. fstat on the open descriptor (not a stat of the path before opening), so the
     // check and the read see the same file. Only regular files: a directory opens but cannot be read, and
@@ -37,10 +47,7 @@ std::string read_file(const std::string& path, const std::string& op, std::uint6
     if (fd < 0) throw InputError(what + "cannot open file: " + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        const char* kind = S_ISDIR(st.st_mode)                          ? "it is a directory"
-                           : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "it is a device, not a regular file"
-                           : S_ISFIFO(st.st_mode)                       ? "it is a FIFO, not a regular file"
-                                                                        : "not a regular file";
+        const char* kind = not_regular_kind(st.st_mode);
         ::close(fd);
         throw InputError(what + "cannot open file: " + kind);
     }

@@ -5,10 +5,14 @@
 
 namespace ngi::detail {
 
-// Throws InputError("read <path>: cannot open file: it is a directory / a device") for paths that a std::ifstream
-// would open and then fail on with a std::ios_base::failure or read forever (/dev/zero). Absent files pass: the
-// reader's own open reports them.
-void require_readable_file(const std::string& path);
+// ngi's one rule for opening an input file: only a regular file is read. Throws InputError("<op> <path>: cannot
+// open file: it is a directory / a device / a FIFO / not a regular file") for anything else that exists, judged
+// by stat(), which never blocks: a FIFO would block an open() forever waiting for a writer, a device such as
+// /dev/zero never ends, a directory opens but cannot be read. Absent files pass: the reader's own open reports them.
+// read_file applies the same rule to the descriptor it opened (O_NONBLOCK, fstat), so a file swapped for a FIFO
+// between the two checks cannot block either. A reader that hands a path to a library (assimp, OpenEXR) calls
+// this first.
+void require_readable_file(const std::string& path, const std::string& op = "read");
 
 // Largest file read_file accepts: 4 GiB. Every file ngi reads (models, images, frames, configs) is far smaller
 // (the thesis-sized generator is ~220 MB); the cap turns a wrong path or a runaway file into a clear error

@@ -2,7 +2,6 @@
 
 #include <map>
 
-#include "io/file_util.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
 #include "models/mlp_model.hpp"
@@ -45,7 +44,6 @@ Model& Model::operator=(Model&&) noexcept = default;
 Model::~Model() = default;
 
 Model Model::load(const Device& device, const std::string& path, const ModelOptions& options) {
-    detail::require_readable_file(path);  // the safetensors reader streams: a directory or device fails inside it
     const detail::SafetensorsFile file = detail::read_safetensors(path);
     auto meta = file.metadata.find("ngi");
     if (meta == file.metadata.end())

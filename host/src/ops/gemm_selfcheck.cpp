@@ -1,10 +1,11 @@
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/gemm_tuning.hpp"
+#include "io/file_util.hpp"
+#include "ngi/error.hpp"
 
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
-#include <fstream>
 #include <random>
 #include <sstream>
 #include <utility>
@@ -199,7 +200,14 @@ GemmSelection select_gemm(Context& ctx, const std::vector<GemmParams>& chain, co
 
 GemmVerdict cached_check(Context& ctx, const GemmParams& p) {
     const auto path = verdict_path(ctx, p);
-    if (std::ifstream in{path}) {
+    std::string text;  // ngi's file rule (read_file): a FIFO or device here is a cache miss, never a blocked open
+    try {
+        text = read_file(path.string(), "read GEMM self-check cache", 4096);
+    } catch (const InputError&) {
+        text.clear();
+    }
+    if (!text.empty()) {
+        std::istringstream in(text);
         std::string status;
         GemmVerdict v;
         if (in >> status >> v.worst && (status == "ok" || status == "fail")) {

@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <charconv>
 
-#include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
 #include "render/mesh_scene.hpp"
@@ -98,10 +97,7 @@ std::string scene_spec_name(const std::string& spec) {
 }
 
 VoxelScene make_scene(const std::string& spec) {
-    if (has_vox_extension(spec)) {
-        detail::require_readable_file(spec);  // the .vox reader streams: a directory or device fails inside it
-        return load_vox(spec);
-    }
+    if (has_vox_extension(spec)) return load_vox(spec);  // read_file's rule: regular files only, never blocks
     if (is_mesh_path(spec)) return detail::mesh_scene(load_mesh(spec), spec, false);
     const FamilySpec f = parse_family_spec(spec);
     if (detail::is_mesh_family(f.family))

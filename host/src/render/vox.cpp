@@ -7,10 +7,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <stdexcept>
 
+#include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
 
@@ -176,11 +176,9 @@ float parse_float(const Reader& rd, const std::string& s, const char* what) {
 }  // namespace
 
 VoxelScene load_vox(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError("read " + path + ": cannot open file");
-    const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw InputError("read " + path + ": I/O error");
-    return parse_vox(b, path);
+    // ngi's file rule (detail::read_file): a FIFO named x.vox once blocked this reader's std::ifstream in open()
+    // forever; read_file refuses anything but a regular file before opening it, and caps the size.
+    return parse_vox(detail::read_file(path), path);
 }
 
 VoxelScene parse_vox(const std::string& b, const std::string& path) {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "io/file_util.hpp"
 #include "runtime/embedded_kernels.hpp"
 
 namespace ngi {
@@ -238,8 +239,15 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     cl_int err = CL_SUCCESS;
     cl_program prog = nullptr;
     // 1. A binary cached on disk by an earlier process (same device, driver, source and options).
-    if (std::ifstream in{cached, std::ios::binary}) {
-        std::string bin((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // Read by ngi's file rule (read_file): a FIFO or device in the cache folder must not block or exhaust memory.
+    // Anything unreadable is a cache miss.
+    std::string bin;
+    try {
+        bin = read_file(cached.string(), "read kernel cache");
+    } catch (const InputError&) {
+        bin.clear();
+    }
+    if (!bin.empty()) {
         const unsigned char* ptr = reinterpret_cast<const unsigned char*>(bin.data());
         std::size_t len = bin.size();
         cl_int status = CL_SUCCESS;

@@ -1,0 +1,85 @@
+// Issue 31 ("Reliability, round two"): the reproducers of a hostile-user probe, each now a clear InputError (or a
+// correct result) instead of a hang, a silent NaN, a black light or a lenient parse. docs/RELIABILITY.md lists them.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <climits>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <future>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "io/file_util.hpp"
+#include "io_test_support.hpp"
+#include "models/safetensors.hpp"
+#include "models/unet.hpp"
+#include "ngi/area_light.hpp"
+#include "ngi/dataset.hpp"
+#include "ngi/error.hpp"
+#include "ngi/mesh.hpp"
+#include "ngi/output_folder.hpp"
+#include "ngi/scene.hpp"
+#include "ngi/tensor.hpp"
+#include "vox_writer.hpp"
+
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+using ngi::test::TempDir;
+
+namespace {
+
+// The InputError message of `read` on the FIFO `fifo` ("" if it returned). A reader that opens the FIFO blocking
+// waits for a writer forever: after 10 s the test plays that writer (open + close gives the reader end of file),
+// so a regression fails here instead of hanging the suite.
+std::string error_on_fifo(const std::string& fifo, const std::function<void()>& read) {
+    auto result = std::async(std::launch::async, [&]() -> std::string {
+        try {
+            read();
+        } catch (const ngi::InputError& e) {
+            return e.what();
+        }
+        return "";
+    });
+    if (result.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
+        const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+        if (fd >= 0) ::close(fd);
+        result.wait();
+        FAIL("reading " << fifo << " blocked for 10 s (it opened the FIFO)");
+    }
+    return result.get();
+}
+
+}  // namespace
+
+TEST_CASE("round 2: a FIFO where a file is expected is refused at once by every reader", "[io][limits][reliability2]") {
+    TempDir dir("r2-fifo");
+    // The .vox loader once opened its file with a blocking std::ifstream: `ngi render --scene x.vox`, voxel-data and
+    // ao-data waited forever for a writer. Every reader now goes through read_file's rule (stat first: only
+    // regular files are opened).
+    for (const char* name : {"x.vox", "x.obj", "x.ply", "m.safetensors", "c.json", "i.npy"})
+        REQUIRE(::mkfifo((dir / name).c_str(), 0600) == 0);
+    CHECK_THAT(error_on_fifo(dir / "x.vox", [&] { ngi::make_scene(dir / "x.vox"); }),
+               Contains("x.vox") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "x.vox", [&] { ngi::load_vox(dir / "x.vox"); }), Contains("FIFO"));
+    // The mesh loader follows the same rule (its sidecar files too: tests/test_mesh.cpp).
+    CHECK_THAT(error_on_fifo(dir / "x.obj", [&] { ngi::make_scene(dir / "x.obj"); }),
+               Contains("x.obj") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "x.ply", [&] { ngi::load_mesh(dir / "x.ply"); }), Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "m.safetensors", [&] { ngi::detail::read_safetensors(dir / "m.safetensors"); }),
+               Contains("load model") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "c.json", [&] { ngi::DatasetConfig::load(dir / "c.json"); }),
+               Contains("dataset config") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "i.npy", [&] { ngi::read_npy(dir / "i.npy"); }), Contains("FIFO"));
+    // The rule itself: judged by stat, so nothing is opened; sockets, directories and devices too; absent passes.
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file(dir / "x.vox", "load scene"),
+                      Contains("load scene") && Contains("it is a FIFO, not a regular file"));
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file("/dev/null"), Contains("device"));
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file(dir.path.string()), Contains("directory"));
+    CHECK_NOTHROW(ngi::detail::require_readable_file(dir / "absent.vox"));
+}
