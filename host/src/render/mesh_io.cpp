@@ -372,9 +372,26 @@ LoadedMesh import(const std::string& bytes, const std::string& name, bool sideca
         return io->read((dir / uri).string());
     });
     const Format format = ext == ".obj" ? Format::Obj : ext == ".ply" ? Format::Ply : Format::Gltf;
+    // Two steps: import and validate (indices in range, counts consistent), then post-process. In between, each
+    // mesh's primitive-type flags are recomputed from its faces: importers set them themselves, and
+    // TriangulateProcess asserts -- aborting the process, in Debian's build -- when a mesh flagged as holding
+    // polygons holds none (fuzz_mesh found a PLY doing that).
+    const aiScene* scene = importer.ReadFile(name, aiProcess_ValidateDataStructure);
+    if (!io->error().empty()) throw InputError(io->error());
+    if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
+    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+        aiMesh* mesh = scene->mMeshes[i];
+        unsigned types = 0;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const unsigned n = mesh->mFaces[f].mNumIndices;
+            types |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE : n == 3 ? aiPrimitiveType_TRIANGLE
+                                                                                            : aiPrimitiveType_POLYGON;
+        }
+        mesh->mPrimitiveTypes = types;
+    }
     // Points and lines reach convert() as 1- and 2-index faces: counted and dropped there.
-    const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
-    const aiScene* scene = importer.ReadFile(name, flags);
+    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                         aiProcess_ValidateDataStructure);
     if (!io->error().empty()) throw InputError(io->error());
     if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
     if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError("load mesh " + name + ": the file is incomplete");

@@ -29,6 +29,21 @@ struct Fail {
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
+// `s` for an error message: control characters and bytes beyond ASCII as \xNN, at most 40 characters.
+std::string printable(std::string_view s) {
+    std::string out;
+    for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
+        const unsigned char c = static_cast<unsigned char>(s[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += char(c);
+        } else {
+            static const char* hex = "0123456789abcdef";
+            out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+        }
+    }
+    return s.size() > 40 ? out + "..." : out;
+}
+
 // Whitespace-separated tokens of one line.
 std::vector<std::string_view> tokens(std::string_view line) {
     std::vector<std::string_view> t;
@@ -86,7 +101,7 @@ int ply_type_size(std::string_view t, bool* is_signed = nullptr, bool* is_float 
     return 0;
 }
 
-bool is_face_element(const std::string& n) { return n == "face" || n == "tristrips"; }
+bool is_face_element(const std::string& n) { return n == "face"; }
 
 void check_ply(const std::string& b, const Fail& fail) {
     // The header: text lines up to "end_header". 64 KiB is far more than any real header (a few hundred bytes).
@@ -100,6 +115,9 @@ void check_ply(const std::string& b, const Fail& fail) {
         const std::size_t nl = b.find('\n', pos);
         const std::string_view line(b.data() + pos, (nl == std::string::npos ? b.size() : nl) - pos);
         pos = nl == std::string::npos ? b.size() : nl + 1;
+        for (char ch : line)
+            if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t' && ch != '\r') || ch == 0x7f)
+                fail("PLY header line " + std::to_string(line_no + 1) + ": control character (not a text header)");
         const auto t = tokens(line);
         if (line_no == 0) {
             if (t.size() != 1 || (t[0] != "ply" && t[0] != "PLY")) fail("not a PLY file (no \"ply\" first line)");
@@ -122,6 +140,9 @@ void check_ply(const std::string& b, const Fail& fail) {
             const auto n = parse_int<std::uint64_t>(t[2]);
             if (!n) fail("PLY header: element '" + std::string(t[1]) + "' count '" + std::string(t[2]) +
                          "' is not a non-negative integer");
+            // assimp 5.2.5 reads a tristrips element wrongly (one triangle per strip) and leaks its indices:
+            // refused rather than loaded wrong. Real PLY files (scans, exporters) write faces.
+            if (t[1] == "tristrips") fail("PLY tristrips elements are not supported (write faces)");
             elements.push_back({std::string(t[1]), *n, {}});
             const std::uint64_t limit = elements.back().name == "vertex" ? kMaxMeshVertices : kMaxMeshTriangles;
             // Every element is a vertex, a face or something else the same size or larger: the triangle limit
@@ -157,6 +178,20 @@ void check_ply(const std::string& b, const Fail& fail) {
     if (!have_format) fail("PLY header has no format line");
     for (const auto& e : elements)
         if (e.count > 0 && e.props.empty()) fail("PLY element '" + e.name + "' has no properties");
+    // A triangle mesh: vertices with x, y, z and faces with a vertex-index list. Anything else has no triangle to
+    // load, and assimp's paths for it (point clouds, vertices without a coordinate) leak what they allocated
+    // (fuzz_mesh): refused here instead.
+    auto find = [&](const std::string& element, const std::string& property, bool list) {
+        for (const auto& e : elements)
+            if (e.name == element)
+                for (const auto& p : e.props)
+                    if (p.name == property && p.list == list) return true;
+        return false;
+    };
+    for (const char* c : {"x", "y", "z"})
+        if (!find("vertex", c, false)) fail(std::string("PLY has no vertex element with a scalar property ") + c);
+    if (!find("face", "vertex_indices", true) && !find("face", "vertex_index", true))
+        fail("PLY has no face element with a vertex_indices list (a point cloud has no triangles)");
 
     // The least the body can hold: each scalar once, each list's count (binary), or one character and a separator
     // per value (text). Checked first, so a short file claiming millions of elements is refused without a walk.
@@ -192,6 +227,14 @@ void check_ply(const std::string& b, const Fail& fail) {
                     const std::size_t nl = b.find('\n', p);
                     t = tokens(std::string_view(b.data() + p, (nl == std::string::npos ? b.size() : nl) - p));
                     p = nl == std::string::npos ? b.size() : nl + 1;
+                }
+                // Every value a number: assimp's text parser fails on anything else, and its failure path leaks
+                // the mesh it had begun (fuzz_mesh).
+                for (std::string_view tok : t) {
+                    double v;
+                    const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+                    if (r.ec == std::errc::invalid_argument || r.ptr != tok.data() + tok.size())
+                        fail("PLY " + e.name + " " + std::to_string(i) + ": '" + printable(tok) + "' is not a number");
                 }
                 std::size_t k = 0;
                 for (const auto& prop : e.props) {
@@ -244,6 +287,20 @@ void check_ply(const std::string& b, const Fail& fail) {
 // texture coordinates and normals the file has.
 
 void check_obj(const std::string& b, const Fail& fail) {
+    // Text only: control characters other than tab, and a carriage return anywhere but before a line feed, would
+    // make assimp split lines where this scan does not (it ends a line at a lone CR), so that the two would count
+    // different vertices (fuzz_mesh: an index this scan passed was out of range for assimp, whose error path
+    // leaks). A backslash continuing a line is refused for the same reason.
+    for (std::size_t i = 0, line = 1; i < b.size(); ++i) {
+        const unsigned char c = static_cast<unsigned char>(b[i]);
+        if (c == '\n') { ++line; continue; }
+        if ((c < 0x20 && c != '\t' && !(c == '\r' && i + 1 < b.size() && b[i + 1] == '\n')) || c == 0x7f)
+            fail("OBJ line " + std::to_string(line) + ": control character " + std::to_string(int(c)) +
+                 " (not a text file?)");
+        const std::string_view rest(b.data() + i + 1, std::min<std::size_t>(2, b.size() - i - 1));
+        if (c == '\\' && (rest.empty() || rest[0] == '\n' || rest == "\r\n"))
+            fail("OBJ line " + std::to_string(line) + ": a line continued with a backslash (not supported)");
+    }
     std::uint64_t counts[3] = {0, 0, 0};           // v, vt, vn
     std::uint64_t max_index[3] = {0, 0, 0}, max_line[3] = {0, 0, 0};
     std::uint64_t triangles = 0, indices = 0;
@@ -257,10 +314,29 @@ void check_obj(const std::string& b, const Fail& fail) {
         while (s < line.size() && is_space(line[s])) ++s;
         if (s + 1 >= line.size()) continue;
         const char c0 = line[s], c1 = line[s + 1];
-        if (c0 == 'v' && is_space(c1)) { ++counts[0]; continue; }
-        if (c0 == 'v' && c1 == 't') { ++counts[1]; continue; }
-        if (c0 == 'v' && c1 == 'n') { ++counts[2]; continue; }
-        if (!((c0 == 'f' || c0 == 'l' || c0 == 'p') && is_space(c1))) continue;
+        if (c0 == 'v' && (is_space(c1) || ((c1 == 't' || c1 == 'n') && s + 2 < line.size() && is_space(line[s + 2])))) {
+            // As many numbers as assimp takes, all numbers: a vertex line it would skip (5 numbers, say) shifts
+            // every later index by one against this count (fuzz_mesh; assimp's error path then leaks).
+            const int k = c1 == 't' ? 1 : c1 == 'n' ? 2 : 0;
+            std::string_view rest = line.substr(s + (k ? 2 : 1));
+            rest = rest.substr(0, rest.find('#'));
+            const auto t = tokens(rest);
+            for (std::string_view tok : t) {
+                double v;
+                const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+                if (r.ec == std::errc::invalid_argument || r.ptr != tok.data() + tok.size())
+                    fail("OBJ line " + std::to_string(line_no) + ": '" + printable(tok) + "' is not a number");
+            }
+            const std::size_t n = t.size();
+            if (k == 0 ? !(n == 3 || n == 4 || n == 6) : k == 1 ? !(n == 2 || n == 3) : n != 3)
+                fail("OBJ line " + std::to_string(line_no) + ": " + std::to_string(n) + " numbers for a " + kinds[k] +
+                     (k == 0 ? " (3, 4 or 6: x y z [w | r g b])" : k == 1 ? " (2 or 3)" : " (3)"));
+            ++counts[k];
+            continue;
+        }
+        // assimp takes every line starting with f, l or p for a face, line or point ("fnf 612 5" included):
+        // so does this scan, and its strict index syntax refuses what is not one.
+        if (!(c0 == 'f' || c0 == 'l' || c0 == 'p')) continue;
         const auto t = tokens(line.substr(s + 1));
         if (c0 == 'f' && t.size() >= 3) triangles += t.size() - 2;
         indices += t.size();
