@@ -162,6 +162,28 @@ TEST_CASE("broken model files give clear errors", "[model][file][oclgrind]") {
     SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
 }
 
+TEST_CASE("round 2: a bn_eps that is 0 in float32, or a negative running variance, is refused at load",
+          "[model][file][reliability2]") {
+    // Issue 31: bn_eps 1e-300 passed "(0, 1]" as a double and became 0 in float32; per-image batch norm of an
+    // all-zero input then divided 0 by sqrt(0 + 0): every output NaN, exit 0, no warning.
+    auto cfg = tiny_config();
+    cfg["bn_mode"] = "per_image";
+    auto m = ngi::Model::load(ngi::test::device(), write_file("eps_ok", tiny_entries(), cfg));
+    const ngi::Tensor zeros({1, 1, 32, 32});
+    CHECK(ngi::test::all_finite(m.run(zeros).data));
+    for (double eps : {1e-300, 1e-40}) {
+        cfg["bn_eps"] = eps;
+        INFO("bn_eps " << eps);
+        expect_error(write_file("eps_tiny", tiny_entries(), cfg), "field 'bn_eps' must be a number in (0, 1]");
+        expect_error(write_file("eps_tiny", tiny_entries(), cfg), "representable in float32");
+    }
+    // Running statistics: a negative variance made the folded scale sqrt(< 0) = NaN.
+    auto e = tiny_entries();
+    for (auto& t : e)
+        if (t.name.ends_with(".running_var")) t.value = -1.0f;
+    expect_error(write_file("var_negative", e, tiny_config()), ".running_var' channel 0 is -1");
+}
+
 TEST_CASE("output_mode: lightmap by default, indirect for pix2pix_unet, anything else refused", "[model][file]") {
     const auto entries = tiny_entries();
     auto cfg = tiny_config();

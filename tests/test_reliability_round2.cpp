@@ -55,6 +55,15 @@ std::string error_on_fifo(const std::string& fifo, const std::function<void()>& 
     return result.get();
 }
 
+std::string config_error(const nlohmann::json& config) {
+    try {
+        ngi::detail::parse_model_config(config.dump(), "m.safetensors");
+    } catch (const ngi::InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
 }  // namespace
 
 TEST_CASE("round 2: a FIFO where a file is expected is refused at once by every reader", "[io][limits][reliability2]") {
@@ -82,4 +91,50 @@ TEST_CASE("round 2: a FIFO where a file is expected is refused at once by every 
     CHECK_THROWS_WITH(ngi::detail::require_readable_file("/dev/null"), Contains("device"));
     CHECK_THROWS_WITH(ngi::detail::require_readable_file(dir.path.string()), Contains("directory"));
     CHECK_NOTHROW(ngi::detail::require_readable_file(dir / "absent.vox"));
+}
+
+TEST_CASE("round 2: every float field of a model config must survive float32", "[model][limits][reliability2]") {
+    const nlohmann::json unet = {{"family", "pix2pix_unet"}, {"input_nc", 12}, {"output_nc", 3}, {"ngf", 8},
+                                 {"num_downs", 6}, {"bn_eps", 1e-5}, {"leaky_slope", 0.2}, {"dropout_p", 0.5},
+                                 {"input_range", {-1, 1}}, {"output_range", {-1, 1}}};
+    REQUIRE(config_error(unet).empty());
+    // bn_eps 1e-300 passed "(0, 1]" as a double and was 0 in float32: an all-zero input gave 49,152 NaN outputs.
+    for (const auto& [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+             {"bn_eps", 1e-300}, {"bn_eps", 1e-40}, {"leaky_slope", 1e-300}, {"dropout_p", 1e-45},
+             {"input_range", {1e-300, 2e-300}}, {"output_range", {-1e-39, 1e-39}}}) {
+        nlohmann::json c = unet;
+        c[key] = value;
+        INFO(key << " = " << value.dump());
+        CHECK_THAT(config_error(c),
+                   Contains("m.safetensors") && Contains("'" + key + "'") && Contains("representable in float32"));
+    }
+    nlohmann::json ok = unet;
+    ok["bn_eps"] = 1.2e-38;  // a normal float: kept
+    ok["leaky_slope"] = 0.0;  // zero is exact
+    CHECK(config_error(ok).empty());
+
+    // The other families: an MLP layer's slope, neural_gi's scene box, voxel_sh's statistics.
+    const nlohmann::json mlp = {{"family", "mlp"}, {"input_nc", 3},
+                                {"layers", {{{"out", 1}, {"activation", "leaky_relu"}, {"slope", 0.1}}}}};
+    REQUIRE(config_error(mlp).empty());
+    nlohmann::json bad = mlp;
+    bad["layers"][0]["slope"] = 1e-300;
+    CHECK_THAT(config_error(bad), Contains("layers[0].slope") && Contains("float32"));
+
+    const nlohmann::json neural = {
+        {"family", "neural_gi"}, {"input_nc", 18}, {"output_nc", 3}, {"ngf", 8}, {"num_downs", 5},
+        {"dropout", "off"},
+        {"neural_gi", {{"buffer_channels", 4}, {"mlp_width", 8}, {"mlp_depth", 2}, {"skip_layer", 1}, {"decode", "exp"},
+                       {"scene_box", {{"min", {0, 0, 0}}, {"max", {8, 8, 8}}}}}}};
+    REQUIRE(config_error(neural).empty());
+    bad = neural;
+    bad["neural_gi"]["scene_box"]["min"] = {1e-300, 0, 0};
+    CHECK_THAT(config_error(bad), Contains("neural_gi.scene_box") && Contains("float32"));
+
+    nlohmann::json voxel = {{"family", "voxel_sh"}, {"architecture", "mlp"}, {"grid", {4, 4, 4}}, {"hidden", {8}},
+                            {"input_lo", std::vector<double>(10, 0.0)}, {"input_hi", std::vector<double>(10, 1.0)},
+                            {"output_mean", std::vector<double>(27, 0.0)}, {"output_std", std::vector<double>(27, 1.0)}};
+    REQUIRE(config_error(voxel).empty());
+    voxel["output_std"][3] = 1e-300;  // would be 0 in float32: every output the mean
+    CHECK_THAT(config_error(voxel), Contains("output_std") && Contains("float32"));
 }

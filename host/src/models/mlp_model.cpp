@@ -1,5 +1,7 @@
 #include "models/mlp_model.hpp"
 
+#include "models/float_field.hpp"
+
 #include <cmath>
 #include <set>
 
@@ -52,8 +54,9 @@ void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string
         }
         if (l.contains("slope")) {
             if (!l["slope"].is_number() || !std::isfinite(l["slope"].get<double>()) ||
-                std::abs(l["slope"].get<double>()) > 1.0)
-                throw fail(key + ".slope", "a number in [-1, 1]");
+                std::abs(l["slope"].get<double>()) > 1.0 || !float32_representable(l["slope"].get<double>()))
+                throw fail(key + ".slope", std::string("a number in [-1, 1] ") + kFloat32Rule + ", got " +
+                                               l["slope"].dump().substr(0, 40));
             layer.slope = l["slope"].get<float>();
         }
         c.layers.push_back(layer);

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "graph/nodes.hpp"
+#include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
 
 namespace ngi::detail {
@@ -82,13 +83,15 @@ void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::
     g.skip_layer = integer("skip_layer", 0, g.mlp_depth - 1);
     if (n.contains("scene_box")) {
         const nlohmann::json& b = n["scene_box"];
-        const std::string rule = "{\"min\": [x, y, z], \"max\": [x, y, z]}, finite (|v| <= 1e30), min <= max";
+        const std::string rule = std::string("{\"min\": [x, y, z], \"max\": [x, y, z]}, finite (|v| <= 1e30), ") +
+                                 kFloat32Rule + ", min <= max";
         auto vec3 = [&](const char* k, float* out) {
             if (!b.is_object() || !b.contains(k) || !b[k].is_array() || b[k].size() != 3) throw fail("neural_gi.scene_box", rule);
             for (int i = 0; i < 3; ++i) {
                 if (!b[k][i].is_number()) throw fail("neural_gi.scene_box", rule);
                 const double v = b[k][i].get<double>();
-                if (!std::isfinite(v) || std::abs(v) > 1e30) throw fail("neural_gi.scene_box", rule);
+                if (!std::isfinite(v) || std::abs(v) > 1e30 || !float32_representable(v))
+                    throw fail("neural_gi.scene_box", rule);
                 out[i] = float(v);
             }
         };

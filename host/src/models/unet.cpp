@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "graph/nodes.hpp"
+#include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
 #include "models/neural_gi_model.hpp"
 #include "models/voxel_sh_model.hpp"
@@ -102,6 +103,12 @@ ChannelAffine fold(const SafetensorsFile& f, const std::string& bias, const std:
             const float s = float(double(g[c]) / std::sqrt(double(v[c]) + eps));
             a.shift[c] = float(double(b[c]) + (double(a.shift[c]) - m[c]) * s);
             a.scale[c] = s;
+            // A negative running variance gives sqrt(< 0) = NaN, a tiny one a scale beyond float: either would
+            // turn every output of the layer into NaN or Inf without a word.
+            if (!(double(v[c]) + eps > 0.0) || !std::isfinite(a.scale[c]) || !std::isfinite(a.shift[c]))
+                throw InputError("load model: tensor '" + bn + ".running_var' channel " + std::to_string(c) + " is " +
+                                 std::to_string(v[c]) + ": batch norm's folded scale " + bn + ".weight / sqrt(var + " +
+                                 "bn_eps) and shift are not finite in float32");
         }
     }
     return a;
@@ -155,6 +162,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         if (!v.is_number()) throw fail(key, rule);
         const double x = v.get<double>();
         if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo) || (hi_open && x == hi)) throw fail(key, rule);
+        if (!float32_representable(x)) throw fail(key, rule + " and " + kFloat32Rule);
         return float(x);
     };
     auto string = [&](const char* key, const std::vector<std::string>& allowed, const std::string& fallback,
@@ -182,6 +190,9 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const double lo = v[0].get<double>(), hi = v[1].get<double>();
         if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi) || std::abs(lo) > 1e30 || std::abs(hi) > 1e30)
             throw fail(key, "[lo, hi], two finite numbers with lo < hi");
+        // In float32 too: [1e-300, 2e-300] is [0, 0] there, and the scaling divides by hi - lo.
+        if (!float32_representable(lo) || !float32_representable(hi) || !(float(lo) < float(hi)))
+            throw fail(key, std::string("[lo, hi] with lo < hi, both ") + kFloat32Rule + " and still lo < hi there");
         out[0] = float(lo);
         out[1] = float(hi);
     };

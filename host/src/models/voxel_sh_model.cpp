@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "models/float_field.hpp"
 #include "models/unet.hpp"  // kModelFormatVersion
 
 namespace ngi {
@@ -80,13 +81,14 @@ ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::str
     };
     auto numbers = [&](const char* key, std::size_t n, double lo) {
         const std::string rule = "a list of " + std::to_string(n) + " finite numbers in [" +
-                                 (lo == 0 ? std::string("0") : "-1e30") + ", 1e30]";
+                                 (lo == 0 ? std::string("0") : "-1e30") + ", 1e30], each " + kFloat32Rule;
         if (!j.contains(key) || !j[key].is_array() || j[key].size() != n) throw fail(key, rule);
         std::vector<double> v;
         for (const auto& x : j[key]) {
             if (!x.is_number()) throw fail(key, rule);
             const double d = x.get<double>();
-            if (!std::isfinite(d) || d < lo || d > kMaxStat) throw fail(key, rule);
+            // float32 too: an output_std of 1e-300 is 0 there, and every output would be the mean.
+            if (!std::isfinite(d) || d < lo || d > kMaxStat || !float32_representable(d)) throw fail(key, rule);
             v.push_back(d);
         }
         return v;
@@ -244,6 +246,10 @@ VoxelShRunner::VoxelShRunner(Context& ctx, const ModelConfig& config, const Safe
         for (int k = 0; k < kVoxelShOutputs; ++k) {
             scale[k] = float(cfg_.output_std[k]);
             shift[k] = float(cfg_.output_std[k] * double(b[k]) + cfg_.output_mean[k]);
+            if (!std::isfinite(shift[k]))  // std up to 1e30 times a bias up to 3e38: beyond float
+                throw InputError(where + "output_std[" + std::to_string(k) + "] x tensor '" + prefix + ".bias'[" +
+                                 std::to_string(k) + "] + output_mean[" + std::to_string(k) +
+                                 "] is not finite in float32");
         }
         layers_.emplace_back(ctx, gemm, in, kVoxelShOutputs, w, scale, shift, Act::none());
     };

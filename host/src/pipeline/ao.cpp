@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "models/float_field.hpp"
 #include "ngi/error.hpp"
 #include "runtime/context.hpp"
 
@@ -40,9 +41,11 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
     const nlohmann::json& a = j["ao"];
     if (!a.contains("neighbours") || !a["neighbours"].is_number_integer() || a["neighbours"].get<long long>() != kRingPoints)
         throw fail("field 'ao.neighbours' must be 16");
+    // float32-representable too: a radius of 1e-300 is 0 in float, the seed's "no neighbours" inference.
     if (!a.contains("radius_px") || !a["radius_px"].is_number() || !std::isfinite(a["radius_px"].get<double>()) ||
-        a["radius_px"].get<double>() < 0 || a["radius_px"].get<double>() > 1024)
-        throw fail("field 'ao.radius_px' must be a number in 0..1024");
+        a["radius_px"].get<double>() < 0 || a["radius_px"].get<double>() > 1024 ||
+        !detail::float32_representable(a["radius_px"].get<double>()))
+        throw fail(std::string("field 'ao.radius_px' must be a number in 0..1024 ") + detail::kFloat32Rule);
     if (!a.contains("at_size") || !a["at_size"].is_number_integer() || a["at_size"].get<long long>() < 1 ||
         a["at_size"].get<long long>() > 65536)
         throw fail("field 'ao.at_size' must be an integer in 1..65536");

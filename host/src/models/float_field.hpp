@@ -1,0 +1,21 @@
+// Model configs store numbers as JSON doubles; the kernels compute in float32. A config number is usable only if
+// the conversion keeps it: a double check alone let bn_eps 1e-300 pass "(0, 1]" and become 0 in float32, and an
+// all-zero input then gave NaN everywhere (issue 31). Library-internal.
+#pragma once
+#include <cfloat>
+#include <cmath>
+
+namespace ngi::detail {
+
+// Whether float(x) stands for x: finite, |x| <= FLT_MAX, and either 0 or at least FLT_MIN (a normal float). A
+// nonzero value below FLT_MIN rounds to 0 or to a subnormal, which loses precision and which devices may flush to
+// zero (OpenCL does not require single-precision denormals), so a positive field would become 0 on some devices.
+inline bool float32_representable(double x) {
+    const double a = std::abs(x);
+    return std::isfinite(x) && a <= double(FLT_MAX) && (a == 0.0 || a >= double(FLT_MIN));
+}
+
+// The rule's words for error messages.
+inline constexpr const char* kFloat32Rule = "representable in float32 (0, or 1.2e-38 <= |v| <= 3.4e38)";
+
+}  // namespace ngi::detail
