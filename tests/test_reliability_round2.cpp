@@ -138,3 +138,52 @@ TEST_CASE("round 2: every float field of a model config must survive float32", "
     voxel["output_std"][3] = 1e-300;  // would be 0 in float32: every output the mean
     CHECK_THAT(config_error(voxel), Contains("output_std") && Contains("float32"));
 }
+
+TEST_CASE("round 2: .vox emission that overflows after the flux scaling is refused", "[vox][render][reliability2]") {
+    using namespace vox_test;
+    const std::string cube = size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 7}});
+    auto matl = [&](const Dict& d) { return vox_file(cube + chunk("MATL", i32(7) + dict(d))); };
+    auto error = [](const std::string& bytes) -> std::string {
+        try {
+            ngi::parse_vox(bytes, "lamp.vox");
+        } catch (const ngi::InputError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    // Finite in the file, Inf after x 4 x 2^flux in float: the light then lit nothing and the reference was black.
+    for (const Dict& d : {Dict{{"_type", "_emit"}, {"_emit", "3e38"}},
+                          Dict{{"_type", "_emit"}, {"_emit", "1e37"}, {"_flux", "4"}},
+                          Dict{{"_type", "_emit"}, {"_emit", "1100"}, {"_flux", "4"}}}) {  // 70,400 > 65,504
+        INFO(d[1].second);
+        CHECK_THAT(error(matl(d)), Contains("lamp.vox") && Contains("colour index 7") && Contains("exceeds the bound"));
+    }
+    // At the bound's edge: 1000 x 4 x 2^4 = 64,000 is accepted.
+    const ngi::VoxelScene s = ngi::parse_vox(matl({{"_type", "_emit"}, {"_emit", "1000"}, {"_flux", "4"}}), "lamp.vox");
+    CHECK(s.palette[s.at({0, 0, 0})].emission.r <= ngi::kMaxEmission);
+    CHECK(s.palette[s.at({0, 0, 0})].emission.r > 1000.0f);
+
+    // Every loader's materials pass through add_material, which holds the bound (procedural, meshes, API callers).
+    ngi::VoxelScene api({2, 2, 2}, "api scene");
+    CHECK_THROWS_WITH(api.add_material({glm::vec3(0.5f), glm::vec3(1e30f), false}),
+                      Contains("api scene") && Contains("material 1") && Contains("emission"));
+    CHECK_THROWS_AS(api.add_material({glm::vec3(0.5f), glm::vec3(std::nanf("")), false}), ngi::InputError);
+    CHECK_THROWS_AS(api.add_material({glm::vec3(0.5f), glm::vec3(-1.0f), false}), ngi::InputError);
+    CHECK(api.add_material({glm::vec3(0.5f), glm::vec3(ngi::kMaxEmission), false}) == 1);
+
+    // A mesh's emission (OBJ Ke) meets the same bound, naming the file.
+    TempDir dir("r2-emission");
+    ngi::test::spit(dir / "hot.obj", "mtllib hot.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n");
+    ngi::test::spit(dir / "hot.mtl", "newmtl hot\nKd 1 1 1\nKe 1e30 1e30 1e30\n");
+    CHECK_THROWS_WITH(ngi::make_scene(dir / "hot.obj"), Contains("hot.obj") && Contains("emission"));
+
+    // The area light too.
+    ngi::AreaLight l;
+    l.centre = {1, 2, 3};
+    l.half_u = {1, 0, 0};
+    l.half_v = {0, 0, 1};
+    l.radiance = {1e5f, 1, 1};
+    CHECK_THROWS_WITH(ngi::check_area_light(l, "--area-light"), Contains("--area-light") && Contains("emission bound"));
+    l.radiance = {60, 56, 50};
+    CHECK_NOTHROW(ngi::check_area_light(l, "--area-light"));
+}

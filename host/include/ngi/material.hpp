@@ -4,6 +4,13 @@
 
 namespace ngi {
 
+// The brightest emission a scene may hold (radiance, each channel): the largest half float, which is also the
+// lightmap decode's cap (docs/CONVENTIONS.md section 8). Brighter values are almost surely a unit mistake, and the
+// tracer's sums must stay finite: a MATL _emit of 3e38 became Inf after the .vox flux scaling, and an Inf emitter
+// lit nothing (Inf x 0 = NaN, sanitized to 0), so the reference came out black with exit 0. VoxelScene::add_material
+// refuses emission beyond this bound (or not finite, or negative); the loaders name the file and the material.
+inline constexpr float kMaxEmission = 65504.0f;
+
 // A Lambertian material. Colours are linear RGB.
 struct Material {
     glm::vec3 albedo{0.8f};

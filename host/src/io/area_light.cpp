@@ -1,6 +1,7 @@
 // Validation of the rectangular area light (ngi/area_light.hpp). In ngi_io: frame folders record the light, and
 // ngi_io is below ngi_render (which checks it before every frame).
 #include "ngi/area_light.hpp"
+#include "ngi/material.hpp"
 
 #include <cmath>
 
@@ -34,6 +35,10 @@ void check_area_light(const AreaLight& l, const std::string& operation) {
                          " are not orthogonal (cosine " + std::to_string(cosine) + "; a rectangle needs 0)");
     for (int k = 0; k < 3; ++k)
         if (l.radiance[k] < 0.0f) throw InputError(what + "radiance " + text(l.radiance) + " is negative");
+    for (int k = 0; k < 3; ++k)  // the bound every emitter has (ngi/material.hpp): the tracer's sums stay finite
+        if (l.radiance[k] > kMaxEmission)
+            throw InputError(what + "radiance " + text(l.radiance) + " exceeds the emission bound of " +
+                             std::to_string(int(kMaxEmission)));
 }
 
 }  // namespace ngi

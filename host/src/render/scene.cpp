@@ -24,6 +24,13 @@ void VoxelScene::fill(glm::ivec3 lo, glm::ivec3 hi, std::uint8_t m) {
 }
 
 std::uint8_t VoxelScene::add_material(const Material& m) {
+    // Every loader's materials pass here (procedural, .vox, meshes): the one place the bound holds for all.
+    for (int k = 0; k < 3; ++k)
+        if (!(m.emission[k] >= 0.0f && m.emission[k] <= kMaxEmission))  // also false for NaN
+            throw InputError("scene " + name + ": material " + std::to_string(palette.size()) + ": emission (" +
+                             std::to_string(m.emission.r) + ", " + std::to_string(m.emission.g) + ", " +
+                             std::to_string(m.emission.b) + ") is not in [0, " + std::to_string(int(kMaxEmission)) +
+                             "] (the bound of ngi/material.hpp)");
     if (palette.size() >= std::size_t(kMaxMaterials))
         throw Error("scene " + name + ": more than " + std::to_string(kMaxMaterials - 1) + " materials");
     palette.push_back(m);

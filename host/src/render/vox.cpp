@@ -250,7 +250,14 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
             if (d["_type"] == "_emit" && id >= 1 && id <= 255) {
                 const float e = d.count("_emit") ? parse_float(r, d["_emit"], "MATL _emit") : 1.0f;
                 const float flux = d.count("_flux") ? parse_float(r, d["_flux"], "MATL _flux") : 0.0f;
-                emit[id] = glm::vec3(std::max(0.0f, e) * 4.0f * std::exp2(std::clamp(flux, 0.0f, 4.0f)));
+                // In double, then bounded: a finite _emit of 3e38 (or 1e37 with _flux 4) overflowed float to Inf
+                // here, and an Inf light renders black (ngi/material.hpp, kMaxEmission).
+                const double scaled = std::max(0.0, double(e)) * 4.0 * std::exp2(double(std::clamp(flux, 0.0f, 4.0f)));
+                if (!(scaled <= double(kMaxEmission)))
+                    r.fail("MATL of colour index " + std::to_string(id) + ": emission _emit " + d["_emit"] + " x 4 x 2^" +
+                           "_flux (" + (d.count("_flux") ? d["_flux"] : std::string("0")) + ") = " +
+                           std::to_string(scaled) + " exceeds the bound of " + std::to_string(int(kMaxEmission)));
+                emit[id] = glm::vec3(std::max(0.0f, e) * 4.0f * std::exp2(std::clamp(flux, 0.0f, 4.0f)));  // as before
             }
         } else if (c.id == "nTRN" || c.id == "nGRP" || c.id == "nSHP") {
             const int id = r.i32(c.id.c_str());
