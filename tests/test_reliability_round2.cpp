@@ -187,3 +187,33 @@ TEST_CASE("round 2: .vox emission that overflows after the flux scaling is refus
     l.radiance = {60, 56, 50};
     CHECK_NOTHROW(ngi::check_area_light(l, "--area-light"));
 }
+
+TEST_CASE("round 2: OutputFolder::commit_all puts every folder in place or none", "[io][output][reliability2]") {
+    TempDir dir("r2-commit");
+    fs::create_directories(dir / "a");
+    ngi::test::spit(dir / "a/x.txt", "old a");
+    {  // Both staged; then b's target gains a foreign file, so b cannot be committed: a must stay as it was.
+        ngi::OutputFolder a(dir / "a", "write", std::vector<std::string>{"x.txt"});
+        ngi::OutputFolder b(dir / "b", "write", std::vector<std::string>{"y.txt"});
+        a.write_text("x.txt", "new a");
+        b.write_text("y.txt", "new b");
+        fs::create_directories(dir / "b");
+        ngi::test::spit(dir / "b/foreign.txt", "not ours");
+        CHECK_THROWS_WITH(ngi::OutputFolder::commit_all({&a, &b}), Contains("foreign.txt"));
+    }
+    CHECK(ngi::test::slurp(dir / "a/x.txt") == "old a");
+    CHECK(ngi::test::slurp(dir / "b/foreign.txt") == "not ours");
+    CHECK(!fs::exists(dir / "b/y.txt"));
+    CHECK(dir.list() == std::vector<std::string>{"a", "b"});  // no staging or .old folder left
+    fs::remove_all(dir / "b");
+    {  // Now both commit.
+        ngi::OutputFolder a(dir / "a", "write", std::vector<std::string>{"x.txt"});
+        ngi::OutputFolder b(dir / "b", "write", std::vector<std::string>{"y.txt"});
+        a.write_text("x.txt", "new a");
+        b.write_text("y.txt", "new b");
+        ngi::OutputFolder::commit_all({&a, &b});
+    }
+    CHECK(ngi::test::slurp(dir / "a/x.txt") == "new a");
+    CHECK(ngi::test::slurp(dir / "b/y.txt") == "new b");
+    CHECK(dir.list() == std::vector<std::string>{"a", "b"});
+}

@@ -97,7 +97,10 @@ int run(Options o) {
         }
         return "";
     });
-    if (!o.write_frame.empty()) ngi::check_frame_folder_target(o.write_frame);
+    // --out and --write-frame are written all or none: both are staged and committed together at the end (the frame
+    // folder used to be written after --out was committed, so a failing frame write left --out behind with exit 1).
+    std::unique_ptr<ngi::OutputFolder> frame_out;
+    if (!o.write_frame.empty()) frame_out = ngi::frame_output_folder(o.write_frame);  // its checks, before any work
 
     ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(o.spec);
@@ -277,9 +280,13 @@ int run(Options o) {
                        "lightmap_linear: front-view lighting (irradiance / pi), data_range = max of the reference"},
         {"methods", per_method}};
     out.write_text("metrics.json", metrics.dump(2) + "\n");
-    out.commit();
-    if (!o.write_frame.empty()) ngi::write_frame(o.write_frame, frame);
-    std::printf("written    %s\n", o.out.c_str());
+    if (frame_out) {
+        ngi::write_frame_files(*frame_out, frame);
+        ngi::OutputFolder::commit_all({&out, frame_out.get()});
+    } else {
+        out.commit();
+    }
+    std::printf("written    %s%s%s\n", o.out.c_str(), frame_out ? " and " : "", o.write_frame.c_str());
     return 0;
 }
 

@@ -407,6 +407,12 @@ expect=--directions
 expect_usage voxel_dirs "$ngi" voxel-data --scene room:seed=1 --out "$work/out_voxel_dirs" --directions 0
 
 # ---- Issue 31 (reliability, round two).
+# probe-gi writes --out and --write-frame all or none: a frame folder that cannot be written leaves no --out behind
+# (it was committed first, then the frame write failed: exit 1 with --out in place).
+expect="write frame $work/precious/frame"
+expect_failure probe_write_frame "$ngi" probe-gi --scene room:seed=1 --field "$work/vd" --face 16 --spp 4 \
+  --ltf-bounces 0 --out "$work/out_probe_write_frame" --write-frame "$work/precious/frame"
+no_unexpected probe_write_frame
 # A FIFO named like a scene is refused at once by every command that reads scenes (the .vox loader blocked in open()).
 mkfifo "$work/fifo.vox"
 expect="fifo.vox: cannot open file: it is a FIFO"

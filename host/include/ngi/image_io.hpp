@@ -7,10 +7,12 @@
 // Images are planar CHW float, row 0 = top (ngi/image.hpp).
 #pragma once
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "ngi/image.hpp"
+#include "ngi/output_folder.hpp"
 
 namespace ngi {
 
@@ -111,6 +113,13 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats = nullptr);
 // existing <dir> is replaced only if it is empty or a frame folder (holds camera.json); anything else is an
 // InputError, so a mistyped path never deletes unrelated files.
 void write_frame(const std::string& dir, const Frame& frame);
+
+// write_frame in two steps, for a command that writes a frame folder together with other outputs and commits them
+// all or none (OutputFolder::commit_all; ngi probe-gi --write-frame): frame_output_folder makes the OutputFolder of a
+// frame folder at <dir> (write_frame's target checks, InputError up front), write_frame_files validates the frame
+// and writes its files into that folder's staging area. Nothing is visible under <dir> before the caller commits.
+std::unique_ptr<OutputFolder> frame_output_folder(const std::string& dir);
+void write_frame_files(const OutputFolder& out, const Frame& frame);
 
 // The target checks of write_frame alone (InputError if <dir> is a file or a non-empty folder without camera.json),
 // so that a caller can refuse a bad --out before spending minutes on the render. Writes nothing.

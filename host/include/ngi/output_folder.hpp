@@ -43,9 +43,21 @@ public:
     // removing the staging folder.
     void commit();
 
+    // Commits several folders as one: either every folder is in place afterwards, or none is and every target is
+    // as it was (a command writing two folders, e.g. ngi probe-gi --out and --write-frame, must not leave one of
+    // them behind when the other fails). Each existing target is moved aside first and deleted only after every
+    // new folder is in place; on a failure the folders already moved in are removed again and the old ones put
+    // back. Throws the first failure's InputError after that rollback (the staging folders are removed).
+    static void commit_all(const std::vector<OutputFolder*>& folders);
+
 private:
     void check_replaceable() const;
     void stage() const;
+    // commit() in two steps: put the new folder in place, keeping the old one aside (its path is returned, "" if
+    // there was none); then finish_commit deletes it, or roll_back restores it.
+    std::string commit_keep_old();
+    void finish_commit(const std::string& old);
+    void roll_back(const std::string& old);
 
     std::string what_, target_, staging_;
     ReplaceCheck may_replace_;

@@ -244,7 +244,11 @@ Frame read_frame(const std::string& dir, FrameReadStats* stats) {
     return frame;
 }
 
-void write_frame(const std::string& dir, const Frame& frame) {
+namespace {
+
+// Everything write_frame checks before touching the disk (sizes, channel counts, the camera, the area light);
+// returns which optional features are absent.
+std::array<bool, kFeatureCount> validate_frame_for_writing(const std::string& dir, const Frame& frame) {
     const std::string what = "write frame " + dir + ": ";
     // Validate everything before touching the disk.
     if (frame.n <= 0) throw InputError(what + "frame.n is " + std::to_string(frame.n));
@@ -266,8 +270,11 @@ void write_frame(const std::string& dir, const Frame& frame) {
                             std::isfinite(frame.position->z)))
         throw InputError(what + "position is not finite");
     if (frame.area_light) check_area_light(*frame.area_light, "write frame " + dir);
+    return absent;
+}
 
-    OutputFolder out(dir, "write frame", frame_folder_replaceable);
+// The files of a validated frame, into the staging folder of `out`.
+void write_frame_into(const OutputFolder& out, const Frame& frame, const std::array<bool, kFeatureCount>& absent) {
     for (int fi = 0; fi < kFeatureCount; ++fi) {
         const Feature f = Feature(fi);
         for (int k = 0; k < kFaceCount && !absent[fi]; ++k) {
@@ -294,7 +301,24 @@ void write_frame(const std::string& dir, const Frame& frame) {
                                 {"half_v", vec(frame.area_light->half_v)},
                                 {"radiance", vec(frame.area_light->radiance)}};
     out.write_text("camera.json", camera.dump(2) + "\n");
+}
+
+}  // namespace
+
+void write_frame(const std::string& dir, const Frame& frame) {
+    const std::array<bool, kFeatureCount> absent = validate_frame_for_writing(dir, frame);  // before the disk
+    OutputFolder out(dir, "write frame", frame_folder_replaceable);
+    write_frame_into(out, frame, absent);
     out.commit();
 }
+
+std::unique_ptr<OutputFolder> frame_output_folder(const std::string& dir) {
+    return std::make_unique<OutputFolder>(dir, "write frame", frame_folder_replaceable);
+}
+
+void write_frame_files(const OutputFolder& out, const Frame& frame) {
+    write_frame_into(out, frame, validate_frame_for_writing(out.target(), frame));
+}
+
 
 }  // namespace ngi

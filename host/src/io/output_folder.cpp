@@ -97,7 +97,9 @@ void OutputFolder::write_text(const std::string& name, const std::string& text) 
     write(name, [&](const std::string& path) { detail::write_file_atomic(path, text); });
 }
 
-void OutputFolder::commit() {
+void OutputFolder::commit() { finish_commit(commit_keep_old()); }
+
+std::string OutputFolder::commit_keep_old() {
     if (finished_) throw Error(what_ + " " + target_ + ": committed twice");
     std::error_code ec;
     try {
@@ -119,12 +121,43 @@ void OutputFolder::commit() {
             throw InputError(what_ + " " + target_ + ": cannot move the finished folder into place: " + reason);
         }
         finished_ = true;
-        if (exists) fs::remove_all(old, ec);
+        return old;
     } catch (...) {
         fs::remove_all(staging_, ec);
         finished_ = true;  // nothing left to clean up
         throw;
     }
+}
+
+void OutputFolder::finish_commit(const std::string& old) {
+    std::error_code ec;
+    if (!old.empty()) fs::remove_all(old, ec);
+}
+
+void OutputFolder::roll_back(const std::string& old) {
+    // The new folder goes (it was in place for a moment only), the old one, if any, comes back.
+    std::error_code ec;
+    fs::remove_all(target_, ec);
+    if (!old.empty()) fs::rename(old, target_, ec);
+}
+
+void OutputFolder::commit_all(const std::vector<OutputFolder*>& folders) {
+    std::vector<std::pair<OutputFolder*, std::string>> done;  // committed, with the old folder kept aside
+    try {
+        for (OutputFolder* f : folders) {
+            std::string old = f->commit_keep_old();
+            done.emplace_back(f, std::move(old));
+        }
+    } catch (...) {
+        for (auto it = done.rbegin(); it != done.rend(); ++it) it->first->roll_back(it->second);
+        for (OutputFolder* f : folders) {  // those not reached yet: their staging folders go too
+            std::error_code ec;
+            if (!f->finished_ && f->staged_) fs::remove_all(f->staging_, ec);
+            f->finished_ = true;
+        }
+        throw;
+    }
+    for (auto& [f, old] : done) f->finish_commit(old);
 }
 
 }  // namespace ngi
