@@ -55,6 +55,12 @@ std::string error_on_fifo(const std::string& fifo, const std::function<void()>& 
     return result.get();
 }
 
+std::string safetensors(const std::string& header_json, const std::string& data) {
+    std::string b(8, '\0');
+    for (int i = 0; i < 8; ++i) b[i] = char((std::uint64_t(header_json.size()) >> (8 * i)) & 0xff);
+    return b + header_json + data;
+}
+
 std::string config_error(const nlohmann::json& config) {
     try {
         ngi::detail::parse_model_config(config.dump(), "m.safetensors");
@@ -188,6 +194,60 @@ TEST_CASE("round 2: .vox emission that overflows after the flux scaling is refus
     CHECK_NOTHROW(ngi::check_area_light(l, "--area-light"));
 }
 
+TEST_CASE("round 2: safetensors with trailing bytes or a NUL-padded header are refused", "[model][limits][reliability2]") {
+    const std::string header = R"({"w": {"dtype": "F32", "shape": [2], "data_offsets": [0, 8]}})";
+    const std::string data(8, '\0');
+    REQUIRE(ngi::detail::parse_safetensors(safetensors(header, data), "ok").tensors.size() == 1);
+    // Space padding is the format's own: accepted.
+    REQUIRE(ngi::detail::parse_safetensors(safetensors(header + "    ", data), "ok").tensors.size() == 1);
+    CHECK_THROWS_WITH(ngi::detail::parse_safetensors(safetensors(header, data + "junk"), "tail.safetensors"),
+                      Contains("tail.safetensors") && Contains("4 trailing bytes after the last tensor"));
+    CHECK_THROWS_WITH(ngi::detail::parse_safetensors(safetensors(header + std::string(6, '\0'), data), "nul.safetensors"),
+                      Contains("nul.safetensors") && Contains("NUL byte"));
+    // A header of only metadata holds no data: any byte after it is trailing.
+    CHECK_THROWS_WITH(ngi::detail::parse_safetensors(safetensors(R"({"__metadata__": {}})", "x"), "meta"),
+                      Contains("1 trailing bytes"));
+}
+
+TEST_CASE("round 2: dataset configs refuse duplicate keys and backwards time ranges", "[render][dataset][reliability2]") {
+    const std::string train = R"("train": [{"scene": "room:seed=1"}])";
+    REQUIRE_NOTHROW(ngi::DatasetConfig::parse("{\"n\": 8, " + train + "}", "/tmp/c.json"));
+    // nlohmann keeps the last of two equal keys silently: {"n": 64, "n": 8} rendered at 8.
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse("{\"n\": 64, \"n\": 8, " + train + "}", "/tmp/c.json"),
+                      Contains("/tmp/c.json") && Contains("duplicate key 'n'"));
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "frames": 2, "frames": 3}]})",
+                                                "/tmp/c.json"),
+                      Contains("duplicate key 'frames'"));
+    // Equal keys in different objects are fine.
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(
+        R"({"train": [{"scene": "room:seed=1", "frames": 2}], "test": [{"scene": "room:seed=2", "frames": 2}]})",
+        "/tmp/c.json"));
+    // A time range runs forward; hours go to 48 so that a night crosses midnight forward.
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [20, 10]}]})",
+                                                "/tmp/c.json"),
+                      Contains("train[0]") && Contains("end is before the start"));
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [22, 26]}]})", "/tmp/c.json"));
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [12, 12]}]})", "/tmp/c.json"));
+    // Model metadata too.
+    REQUIRE(config_error(nlohmann::json::parse(R"({"family": "mlp", "input_nc": 3, "layers": [{"out": 1}]})")).empty());
+    CHECK_THROWS_WITH(ngi::detail::parse_model_config(
+                          R"({"family": "mlp", "input_nc": 3, "input_nc": 4, "layers": [{"out": 1}]})", "dup.safetensors"),
+                      Contains("dup.safetensors") && Contains("duplicate key 'input_nc'"));
+}
+
+TEST_CASE("round 2: a .vox nTRN frame count beyond its bytes is refused", "[vox][reliability2]") {
+    using namespace vox_test;
+    // nTRN: id, attributes, child, reserved, layer, frame count, frames (a dictionary each; only frame 0 is read).
+    auto ntrn_frames = [](int frames) {
+        return chunk("nTRN", i32(0) + dict({}) + i32(1) + i32(-1) + i32(-1) + i32(frames) + dict({}));
+    };
+    const std::string model = size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 1}});
+    const std::string shape = nshp(1, 0);
+    CHECK_THROWS_WITH(ngi::parse_vox(vox_file(model + ntrn_frames(INT_MAX) + shape), "frames.vox"),
+                      Contains("frames.vox") && Contains("nTRN declares 2147483647 frames"));
+    CHECK(ngi::parse_vox(vox_file(model + ntrn_frames(1) + shape), "frames.vox").solid_count() == 1);
+}
+
 TEST_CASE("round 2: OutputFolder::commit_all puts every folder in place or none", "[io][output][reliability2]") {
     TempDir dir("r2-commit");
     fs::create_directories(dir / "a");
@@ -216,4 +276,34 @@ TEST_CASE("round 2: OutputFolder::commit_all puts every folder in place or none"
     CHECK(ngi::test::slurp(dir / "a/x.txt") == "new a");
     CHECK(ngi::test::slurp(dir / "b/y.txt") == "new b");
     CHECK(dir.list() == std::vector<std::string>{"a", "b"});
+}
+
+TEST_CASE("round 2: output names up to NAME_MAX work: staging names are shortened to fit", "[io][output][reliability2]") {
+    TempDir dir("r2-names");
+    for (std::size_t len : {std::size_t(240), std::size_t(241), std::size_t(250), std::size_t(NAME_MAX)}) {
+        INFO(len);
+        const std::string name(len, 'n');
+        const std::string tmp = ngi::detail::temp_name(dir / name);
+        CHECK(fs::path(tmp).filename().string().size() <= std::size_t(NAME_MAX));
+        CHECK(tmp.find(".tmp-") != std::string::npos);
+        // A folder (the staging folder and the .old name of a re-run) and a single file (write_file_atomic).
+        for (int run = 0; run < 2; ++run) {
+            ngi::OutputFolder f(dir / name, "write", std::vector<std::string>{"a.txt"});
+            f.write_text("a.txt", "run " + std::to_string(run));
+            f.commit();
+        }
+        CHECK(ngi::test::slurp(dir / name + "/a.txt") == "run 1");
+        fs::remove_all(dir / name);
+        ngi::detail::write_file_atomic(dir / name, "file");
+        CHECK(ngi::test::slurp(dir / name) == "file");
+        fs::remove(dir / name);
+    }
+    CHECK(dir.list().empty());
+    // A long name of multi-byte characters is cut at a character boundary.
+    std::string wide;
+    while (wide.size() + 2 <= 254) wide += "\xc3\xa9";  // U+00E9, two bytes
+    const std::string cut = fs::path(ngi::detail::temp_name(dir / wide)).filename().string();
+    const std::string stem = cut.substr(0, cut.find(".tmp-"));
+    CHECK(stem.size() % 2 == 0);
+    CHECK(cut.size() <= std::size_t(NAME_MAX));
 }

@@ -96,6 +96,37 @@ ngi::Tensor planes(const ngi::Image& img, int first, int count) {
     return t;
 }
 
+// ao-data resumes into its own folder, so it cannot stage the whole folder as the other commands do; it refuses,
+// as they do, a folder holding anything it does not write (it used to add its views to any folder, e.g. a frame
+// folder or a home directory). Its own: ao_data.json, orbit/ and heldout/ holding vNNNN view folders (and the
+// vNNNN.tmp-* staging folders a killed run leaves behind).
+void check_ao_data_folder(const std::string& out) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_directory(out, ec)) return;  // absent: created later
+    auto refuse = [&](const fs::path& p) {
+        throw ngi::InputError("write " + out + ": holds '" + p.lexically_relative(out).string() +
+                              "', which ngi ao-data does not write; refusing to write into it (remove it or choose "
+                              "another --out)");
+    };
+    auto is_view = [](const std::string& name) {
+        const std::string stem = name.substr(0, name.find(".tmp-"));
+        return stem.size() >= 5 && stem[0] == 'v' && stem.find_first_not_of("0123456789", 1) == std::string::npos;
+    };
+    for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name == "ao_data.json" && it->is_regular_file(ec)) continue;
+        if ((name == "orbit" || name == "heldout") && it->is_directory(ec)) {
+            for (fs::directory_iterator v(it->path(), ec), vend; !ec && v != vend; v.increment(ec))
+                if (!is_view(v->path().filename().string()) || !v->is_directory(ec)) refuse(v->path());
+            if (ec) break;
+            continue;
+        }
+        refuse(it->path());
+    }
+    if (ec) throw ngi::InputError("write " + out + ": cannot be listed: " + ec.message());
+}
+
 struct Options {
     std::string spec, out, device;
     int views = 128, heldout = 32, n = 256, rays = 256;
@@ -111,6 +142,7 @@ int run(const Options& o) {
     std::error_code ec;
     if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
         throw ngi::InputError("ngi ao-data: " + out + " exists and is not a folder");
+    check_ao_data_folder(out);  // before the device and the scene: a mistyped --out costs nothing
     ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const Sphere b = bounding_sphere(scene);

@@ -316,8 +316,8 @@ Run add_probe_gi(CLI::App& app) {
                  "also run a thesis generator on the view, for comparison");
     add_integer(*cmd, "--ltf-bounces", o->ltf_bounces, 0, 64, "T", "bounces of both LTF variants (0: no LTF)");
     add_real(*cmd, "--time", o->time, 0.0, 48.0, "HOURS", "time of day (as the field's)", "the scene's");
-    add_integer(*cmd, "--frame", o->frame, 0, 999999, "K", "the view: frame K of the scene's camera path");
-    add_integer(*cmd, "--path-frames", o->frames, 1, 1000000, "P", "frames of the scene's camera path");
+    add_integer(*cmd, "--frame", o->frame, 0, ngi::kMaxPathFrames - 1, "K", "the view: frame K of the scene's camera path");
+    add_integer(*cmd, "--path-frames", o->frames, 1, ngi::kMaxPathFrames, "P", "frames of the scene's camera path");
     add_integer(*cmd, "--face", o->rs.n, 2, 2048, "N", "view size in pixels (even)");
     add_integer(*cmd, "--spp", o->rs.reference_spp, 1, 1 << 20, "S", "samples per pixel of the reference");
     add_integer(*cmd, "--bounces", o->rs.max_bounces, 0, 1000, "B", "indirect bounces of the reference");

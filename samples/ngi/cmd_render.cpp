@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "io/file_util.hpp"
 #include "ngi/camera_path.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
@@ -98,7 +99,7 @@ int run(const Options& o) {
             img.data[i] = light * fr.get(ngi::Feature::Albedo, f).data[i] + fr.get(ngi::Feature::Emission, f).data[i] +
                           fr.get(ngi::Feature::Env, f).data[i];
         }
-        preview_tmp = preview + ".tmp-" + std::to_string(::getpid());
+        preview_tmp = ngi::detail::temp_name(preview);  // within NAME_MAX however long the name is
         ngi::write_png(preview_tmp, img, ngi::PngEncoding::Srgb);
     }
     try {
@@ -143,14 +144,14 @@ Run add_render(CLI::App& app) {
              "mesh file (.obj, .ply, .gltf, .glb)", true);
     add_path(*cmd, "--out", o->out, "DIR", "the frame folder to write", true);
     // The limits are those of a dataset config.
-    add_integer(*cmd, "--frame", o->frame, 0, 999999, "K", "the frame of the camera path, below --path-frames");
+    add_integer(*cmd, "--frame", o->frame, 0, ngi::kMaxPathFrames - 1, "K", "the frame of the camera path, below --path-frames");
     add_integer(*cmd, "--face", rs.n, 1, 8192, "N", "face size in pixels");
     add_integer(*cmd, "--spp", rs.reference_spp, 1, 1 << 20, "S", "samples per pixel of the reference");
     add_real(*cmd, "--time", o->time, 0.0, 48.0, "HOURS", "time of day", "the scene's");
     add_device(*cmd, o->device);
     add_integer(*cmd, "--feature-spp", rs.feature_spp, 1, 1 << 20, "F", "samples per pixel of the direct feature");
     add_integer(*cmd, "--bounces", rs.max_bounces, 0, 1000, "B", "indirect bounces of the reference");
-    add_integer(*cmd, "--path-frames", o->frames, 1, 1000000, "P", "frames of the scene's camera path");
+    add_integer(*cmd, "--path-frames", o->frames, 1, ngi::kMaxPathFrames, "P", "frames of the scene's camera path");
     add_choice(*cmd, "--camera-path", o->camera_path, {"auto", "fly", "orbit"},
                "the camera path: fly = through the scene's free space, orbit = around its solid blocks looking at "
                "them, auto = orbit for a .vox file, fly for a procedural scene (as a dataset's \"camera_path\")",

@@ -90,6 +90,9 @@ int run_command(const CLI::App& cmd, const ngi_cli::Run& run) {
     } catch (const ngi::OutOfMemoryError& e) {
         std::fprintf(stderr, "ngi %s: device error: %s\n", name, e.what());
         return ngi_cli::kExitDevice;
+    } catch (const ngi::DeviceNotFoundError& e) {  // before Error: "no device" is a device failure (exit 3)
+        std::fprintf(stderr, "ngi %s: device error: %s\n", name, e.what());
+        return ngi_cli::kExitDevice;
     } catch (const ngi::Error& e) {
         std::fprintf(stderr, "ngi %s: error: %s\n", name, e.what());
         return ngi_cli::kExitInput;

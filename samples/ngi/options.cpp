@@ -175,7 +175,8 @@ CLI::Option* add_device(CLI::App& cmd, std::string& device) {
     return cmd.add_option("--device", device,
                           "OpenCL device: cpu | gpu | P:D (platform:device, see `ngi devices`) | a platform name "
                           "(pocl, rusticl) [default: $NGI_DEVICE, else the first GPU, else the first CPU]")
-        ->type_name("D");
+        ->type_name("D")
+        ->check(non_empty());  // --device '' meant the default silently; leaving the option out says that
 }
 
 CLI::Option* add_integer(CLI::App& cmd, const std::string& name, int& value, int lo, int hi, const std::string& metavar,

@@ -419,6 +419,51 @@ expect="fifo.vox: cannot open file: it is a FIFO"
 expect_failure fifo_render timeout 60 "$ngi" render --scene "$work/fifo.vox" --face 8 --spp 1 --out "$work/out_fifo_render"
 expect_failure fifo_voxel_data timeout 60 "$ngi" voxel-data --scene "$work/fifo.vox" --out "$work/out_fifo_voxel_data"
 expect_failure fifo_ao_data timeout 60 "$ngi" ao-data --scene "$work/fifo.vox" --out "$work/out_fifo_ao_data"
-for name in fifo_render fifo_voxel_data fifo_ao_data; do no_unexpected $name; done
+# --device: a device this machine does not have is a device failure (exit 3, as documented); '' is a usage error.
+set +e
+"$ngi" generate --model "$model" --input "$work/merged/input.npy" --output "$work/out_device.npy" --device 9:9 \
+  > "$work/device_99.out" 2> "$work/device_99.err"
+rc=$?
+set -e
+[ $rc -eq 3 ] || fail "--device 9:9: exit code $rc, expected 3: $(cat "$work/device_99.err")"
+grep -q "no device matches '9:9'" "$work/device_99.err" || fail "--device 9:9: $(cat "$work/device_99.err")"
+[ ! -e "$work/out_device.npy" ] || fail "--device 9:9 wrote its output"
+expect=--device; expect_usage device_empty "$ngi" generate --model "$model" --input "$work/merged/input.npy" \
+  --output "$work/out_device_empty.npy" --device ""
+# ao-data refuses a folder of foreign files, as every other command does (it wrote its views into any folder).
+expect="which ngi ao-data does not write"
+expect_failure ao_data_foreign "$ngi" ao-data --scene sculpture:seed=1 --out "$work/frame" --views 1 --heldout-views 0 --n 16 --rays 1
+[ ! -e "$work/frame/orbit" ] && [ ! -e "$work/frame/ao_data.json" ] || fail "ao_data_foreign: wrote into the frame folder"
+# Output names of 241..255 bytes: the staging name (<name>.tmp-<pid>-<n>) is shortened to fit NAME_MAX.
+long=$(printf 'n%.0s' $(seq 1 255))
+"$ngi" merge --frame "$work/frame" --out "$work/$long" --npy-only > /dev/null || fail "merge into a 255-byte name"
+[ -s "$work/$long/input.npy" ] || fail "merge into a 255-byte name wrote no input.npy"
+"$ngi" merge --frame "$work/frame" --out "$work/$long" --npy-only > /dev/null || fail "merge re-run into a 255-byte name"
+"$ngi" generate --model "$model" --input "$work/merged/input.npy" --output "$work/${long:0:251}.npy" > /dev/null ||
+  fail "generate --output with a 255-byte name"
+ls "$work" | grep -q "\.tmp-" && fail "long names: staging left behind: $(ls "$work" | grep "\.tmp-")"
+# neural-gi refuses a model whose input_layout is not what the frame's inputs are.
+/usr/bin/python3 - "$work/ngi_parity/paper_mlp_f16.safetensors" "$work/ngi_layout.safetensors" <<'PY'
+import json, struct, sys
+b = open(sys.argv[1], "rb").read()
+n = struct.unpack("<Q", b[:8])[0]
+h = json.loads(b[8:8 + n])
+c = json.loads(h["__metadata__"]["ngi"])
+c["input_layout"] = ["depth"] + [f"c{i}" for i in range(1, c["input_nc"])]
+h["__metadata__"]["ngi"] = json.dumps(c)
+t = json.dumps(h).encode()
+t += b" " * (-len(t) % 8)
+open(sys.argv[2], "wb").write(struct.pack("<Q", len(t)) + t + b[8 + n:])
+PY
+expect="input_layout differs from the assembled inputs at channel 0: model 'depth', assembled 'position.x'"
+expect_failure ngi_layout "$ngi" neural-gi --frame "$work/area_frame" --model "$work/ngi_layout.safetensors" --out "$work/out_ngi_layout"
+# Camera paths are built whole to render one frame: bounded at 10,000 frames (1,000,000 took 69 s before frame 0).
+expect=--path-frames; expect_usage path_frames_big "${render[@]}" --path-frames 1000000 --out "$work/out_path_frames_big"
+expect="frames_per_scene"
+printf '{"frames_per_scene": 20000, "train": [{"scene": "room:seed=1"}]}\n' > "$work/ds_frames.json"
+expect_failure ds_frames "$ngi" dataset --config "$work/ds_frames.json" --out "$work/out_ds_frames"
+for name in fifo_render fifo_voxel_data fifo_ao_data device_empty ao_data_foreign ngi_layout path_frames_big ds_frames; do
+  no_unexpected $name
+done
 
 echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

@@ -39,6 +39,13 @@ bool clear_of_blocks_in_open_air(const VoxelScene& scene, glm::vec3 p, float rad
 // a host-side DDA over the grid (outside the grid is air, as in the tracer). 0 = the front view sees only sky.
 float front_geometry_share(const VoxelScene& scene, const CameraPose& pose, int n);
 
+// The most frames a camera path may have. The path search costs ~0.1-0.2 ms per frame at 25 frames per keyframe (each
+// keyframe tries 80 hops, each checked for clearance every 0.1 m; a dead end anywhere restarts the whole walk),
+// and it is built whole even to render one frame: `ngi render --path-frames 1000000` spent 69-205 s before frame 0.
+// 10,000 frames take ~1.5 s; dataset entries and the CLI's --path-frames are bounded by the same number, so that
+// every dataset frame can still be rendered alone. make_camera_path / make_orbit_path refuse more (InputError).
+inline constexpr int kMaxPathFrames = 10000;
+
 // Which automatic path: `Fly` = make_camera_path below, `Orbit` = make_orbit_path, `Auto` = Orbit when
 // scene.camera.orbit (.vox files) and Fly otherwise (procedural scenes: their paths are what they always were).
 enum class CameraPathKind { Auto, Fly, Orbit };

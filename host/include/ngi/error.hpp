@@ -27,6 +27,14 @@ public:
     using Error::Error;
 };
 
+// No OpenCL platform, or no device matching the spec given to Device::open ("9:9", "nvidia" on a machine without
+// one). An InputError (the spec is the caller's input: the C ABI and Python report it as one), typed apart so that
+// the CLI can exit with its device-failure code (3) as documented, not 1 as for a bad file.
+class DeviceNotFoundError : public InputError {
+public:
+    using InputError::InputError;
+};
+
 // Memory exhausted: a request beyond the device's limits (CL_DEVICE_MAX_MEM_ALLOC_SIZE). OpenCL's own allocation
 // failures are ClErrors with CL_MEM_OBJECT_ALLOCATION_FAILURE / CL_OUT_OF_RESOURCES / CL_OUT_OF_HOST_MEMORY.
 class OutOfMemoryError : public Error {

@@ -5,6 +5,8 @@
 // Conventions: docs/MODEL_FORMAT.md "neural_gi" (inputs), docs/CONVENTIONS.md section 18 (upsampling).
 #pragma once
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "ngi/device.hpp"
 #include "ngi/image.hpp"
@@ -28,6 +30,11 @@ struct NeuralGiImages {
     int jbu_fallbacks = 0;       // pixels the upsampling filled bilinearly (no low-resolution tap matched)
     int sanitized_inputs = 0;    // network input values the model's guard replaced (0 for a sound frame)
 };
+
+// The channels NeuralGiRenderer assembles, in order (kernels/neural_gi.cl; training's ngi.neural_gi.INPUT_LAYOUT):
+// position, normal, albedo, view, log1p_direct, light_dir, each .x/.y/.z or .r/.g/.b. A model whose input_layout
+// is not empty must list exactly these.
+const std::vector<std::string>& neural_gi_input_channels();
 
 class NeuralGiRenderer {
 public:

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -91,7 +92,19 @@ std::string read_file(const std::string& path, const std::string& op, std::uint6
 
 std::string temp_name(const std::string& path) {
     static std::atomic<unsigned> counter{0};
-    return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    const std::string suffix = ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    // A file name has at most NAME_MAX (255) bytes: an output named with 241..255 bytes is valid, but its staging
+    // name with the suffix was not (ENAMETOOLONG, the command failed). The last component is shortened instead;
+    // the pid and counter keep the name unique, ".tmp-" keeps it recognizable as a leftover.
+    const std::size_t slash = path.find_last_of('/');
+    const std::size_t base = slash == std::string::npos ? 0 : slash + 1;
+    std::size_t keep = path.size() - base;
+    if (keep + suffix.size() > std::size_t(NAME_MAX)) {
+        keep = std::size_t(NAME_MAX) - suffix.size();
+        // Not inside a UTF-8 sequence: back up over continuation bytes (10xxxxxx) to a character's first byte.
+        while (keep > 0 && (static_cast<unsigned char>(path[base + keep]) & 0xc0) == 0x80) --keep;
+    }
+    return path.substr(0, base + keep) + suffix;
 }
 
 void write_file_atomic(const std::string& path, const std::string& bytes) {

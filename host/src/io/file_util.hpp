@@ -24,7 +24,8 @@ inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(4) << 30;
 // ("read", "load model", "dataset config").
 std::string read_file(const std::string& path, const std::string& op = "read", std::uint64_t max_bytes = kMaxFileBytes);
 
-// A name next to `path` that no other writer in any process uses: "<path>.tmp-<pid>-<n>".
+// A name next to `path` that no other writer in any process uses: "<path>.tmp-<pid>-<n>", with the last component
+// of <path> shortened so that the name stays within NAME_MAX (255 bytes) however long `path`'s own name is.
 std::string temp_name(const std::string& path);
 
 // Writes `bytes` to temp_name(path), then renames it to `path` (atomic on POSIX within one file system).

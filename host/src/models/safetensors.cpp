@@ -1,5 +1,6 @@
 #include "models/safetensors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -26,6 +27,13 @@ SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& p
     if (header_len > bytes.size() - 8)
         throw InputError(what + "header length " + std::to_string(header_len) + " runs beyond the end of the file (" +
                          std::to_string(bytes.size()) + " bytes): truncated or not a safetensors file");
+    // The format pads the header with spaces only (0x20). nlohmann's parser stops at a NUL as at the end of its
+    // input, so NUL padding (or a NUL inside the header) used to pass: a file with bytes after its JSON that are
+    // not whitespace is not what a safetensors writer produces.
+    if (const void* nul = std::memchr(bytes.data() + 8, '\0', std::size_t(header_len)))
+        throw InputError(what + "the JSON header holds a NUL byte at offset " +
+                         std::to_string(static_cast<const char*>(nul) - bytes.data()) +
+                         " (the header may be padded with spaces only): not a safetensors file");
     nlohmann::json header;
     try {
         header = nlohmann::json::parse(bytes.begin() + 8, bytes.begin() + 8 + std::ptrdiff_t(header_len));
@@ -36,6 +44,7 @@ SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& p
     const std::size_t data_start = 8 + header_len, data_size = bytes.size() - data_start;
 
     SafetensorsFile file;
+    std::uint64_t data_end = 0;  // where the last tensor's data ends
     for (auto& [name, entry] : header.items()) {
         if (name == "__metadata__") {
             if (!entry.is_object()) throw InputError(what + "__metadata__ is not an object");
@@ -76,6 +85,7 @@ SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& p
                 throw InputError(tw + "data_offsets span " + std::to_string(offsets[1] - offsets[0]) + " bytes, shape " +
                                  shape_string(t.shape) + " of " + t.dtype + " needs " +
                                  (need ? std::to_string(*need) : "more than the file's " + std::to_string(data_size)));
+            data_end = std::max<std::uint64_t>(data_end, offsets[1]);
             const std::size_t n = std::size_t(*need / elem);
             const char* p = bytes.data() + data_start + offsets[0];
             t.data.resize(n);
@@ -97,6 +107,13 @@ SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& p
             throw InputError(tw + "bad header entry: " + e.what());
         }
     }
+    // The data buffer ends with the last tensor (the format: "entirely indexed"). Bytes after it were accepted
+    // before: a file with something appended (a second file concatenated, a download that did not stop) is not
+    // what its header describes.
+    if (data_end != data_size)
+        throw InputError(what + std::to_string(data_size - data_end) + " trailing bytes after the last tensor's data " +
+                         "(the tensors end at data byte " + std::to_string(data_end) + " of " +
+                         std::to_string(data_size) + "): not a safetensors file as written, or corrupted");
     return file;
 }
 

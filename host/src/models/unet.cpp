@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "graph/nodes.hpp"
+#include "io/json_strict.hpp"
 #include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
 #include "models/neural_gi_model.hpp"
@@ -120,7 +121,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     const std::string what = "load model " + path + ": metadata 'ngi': ";
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        j = parse_json_unique_keys(text, what);  // {"bn_eps": 1e-5, "bn_eps": 0.5} is not a config
     } catch (const nlohmann::json::exception& e) {
         throw InputError(what + "malformed JSON: " + e.what());
     }

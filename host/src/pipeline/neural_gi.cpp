@@ -100,6 +100,14 @@ struct NeuralGiRenderer::Impl {
     }
 };
 
+const std::vector<std::string>& neural_gi_input_channels() {
+    static const std::vector<std::string> names = {
+        "position.x", "position.y", "position.z", "normal.x", "normal.y", "normal.z",
+        "albedo.r", "albedo.g", "albedo.b", "view.x", "view.y", "view.z",
+        "log1p_direct.r", "log1p_direct.g", "log1p_direct.b", "light_dir.x", "light_dir.y", "light_dir.z"};
+    return names;
+}
+
 NeuralGiRenderer::NeuralGiRenderer(const Device& device) : impl_(std::make_unique<Impl>(device)) {}
 NeuralGiRenderer::NeuralGiRenderer(NeuralGiRenderer&&) noexcept = default;
 NeuralGiRenderer& NeuralGiRenderer::operator=(NeuralGiRenderer&&) noexcept = default;
@@ -113,6 +121,20 @@ NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const Neu
     if (!config.neural_gi.has_scene_box)
         throw InputError("neural GI: the model file has no neural_gi.scene_box (the box its positions were "
                          "normalized with): export it with ngi.neural_gi.export_model(..., scene_box=...)");
+    // The model must read what the kernel assembles: 18 channels, and if it names them, these names in this order
+    // (a model trained on other inputs ran here before, its output meaningless, without a word).
+    const std::vector<std::string>& names = neural_gi_input_channels();
+    if (config.input_nc != kInputChannels)
+        throw InputError("neural GI: the model takes " + std::to_string(config.input_nc) + " input channels; the " +
+                         "frame's assembled inputs are " + std::to_string(kInputChannels));
+    if (!config.input_layout.empty() && config.input_layout != names) {
+        std::size_t i = 0;
+        while (i < names.size() && i < config.input_layout.size() && config.input_layout[i] == names[i]) ++i;
+        throw InputError("neural GI: the model's input_layout differs from the assembled inputs at channel " +
+                         std::to_string(i) + ": model '" +
+                         (i < config.input_layout.size() ? config.input_layout[i] : std::string("(none)")) +
+                         "', assembled '" + (i < names.size() ? names[i] : std::string("(none)")) + "'");
+    }
     if (detail::shared_context_of(detail::ModelAccess::device(model)) != detail::shared_context_of(im.device))
         throw InputError("neural GI: the model was loaded on another device than the renderer's");
     if (!frame.area_light || !frame.position)

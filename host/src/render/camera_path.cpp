@@ -181,6 +181,9 @@ CameraPath make_camera_path(const VoxelScene& scene_in, int frames, std::uint32_
     std::optional<VoxelScene> storage;
     const VoxelScene& scene = camera_geometry(scene_in, storage);
     if (frames < 1 || interval < 1) throw InputError("camera path: frames and interval must be positive");
+    if (frames > kMaxPathFrames)
+        throw InputError("camera path: " + std::to_string(frames) + " frames, more than the limit of " +
+                         std::to_string(kMaxPathFrames) + " (ngi/camera_path.hpp)");
     const int nkeys = std::max(2, (frames - 1 + interval - 1) / interval + 1);
     detail::Rand r(seed, 0x70617468u);
 
@@ -245,6 +248,9 @@ CameraPath make_orbit_path(const VoxelScene& scene_in, int frames, std::uint32_t
     std::optional<VoxelScene> storage;
     const VoxelScene& scene = camera_geometry(scene_in, storage);
     if (frames < 1 || interval < 1) throw InputError("camera orbit: frames and interval must be positive");
+    if (frames > kMaxPathFrames)
+        throw InputError("camera orbit: " + std::to_string(frames) + " frames, more than the limit of " +
+                         std::to_string(kMaxPathFrames) + " (ngi/camera_path.hpp)");
     const int nkeys = std::max(2, (frames - 1 + interval - 1) / interval + 1);
     const Occupied m = occupied_blocks(scene);
     // Look at the box's centre pulled halfway to the centroid: models with much empty box (a character's arms,

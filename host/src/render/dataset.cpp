@@ -8,6 +8,7 @@
 #include <set>
 
 #include "io/file_util.hpp"
+#include "io/json_strict.hpp"
 #include "render/rand.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -73,11 +74,16 @@ struct ConfigReader {
                     if (t.size() != 2) fail("'time' in " + where + " must be hours or [start, end]");
                     proto.time_start = hours(t[0], where);
                     proto.time_end = hours(t[1], where);
+                    // Frames interpolate from start to end; hours run to 48 so that a night crosses midnight
+                    // forward ([22, 26]), and a range that runs backwards is a typo, not a path.
+                    if (proto.time_end < proto.time_start)
+                        fail("'time' in " + where + " is [" + t[0].dump() + ", " + t[1].dump() +
+                             "]: the end is before the start (hours run to 48: [22, 26] crosses midnight)");
                 } else {
                     proto.time_start = proto.time_end = hours(t, where);
                 }
             }  // else: negative, the scene's own default time
-            proto.frames = integer(e, "frames", 0, 1, 1000000);
+            proto.frames = integer(e, "frames", 0, 1, kMaxPathFrames);  // one camera path per entry
             const int kinds = int(e.contains("scene")) + int(e.contains("family")) + int(e.contains("vox"));
             if (kinds != 1) fail(where + " needs exactly one of 'scene', 'family' (+ 'seeds') or 'vox'");
             auto add = [&](std::string spec) {
@@ -202,7 +208,7 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     ConfigReader r{path};
     json j;
     try {
-        j = json::parse(text);
+        j = detail::parse_json_unique_keys(text, "dataset config " + path + ": ");
     } catch (const json::exception& e) {
         r.fail(std::string("not valid JSON: ") + e.what());
     }
@@ -216,7 +222,7 @@ DatasetConfig DatasetConfig::parse(const std::string& text, const std::string& p
     c.test_reference_spp = r.integer(j, "test_reference_spp", 0, 0, 1 << 20);
     c.render.max_bounces = r.integer(j, "max_bounces", c.render.max_bounces, 0, 1000);
     c.render.rr_start = r.integer(j, "rr_start", c.render.rr_start, 0, 1000);
-    c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, 1000000);
+    c.frames_per_scene = r.integer(j, "frames_per_scene", c.frames_per_scene, 1, kMaxPathFrames);
     c.keyframe_interval = r.integer(j, "keyframe_interval", c.keyframe_interval, 1, 100000);
     if (j.contains("area_light")) c.area_light = r.area_light(j["area_light"]);
     if (j.contains("camera_path")) {

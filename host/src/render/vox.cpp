@@ -270,6 +270,11 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
                 r.i32("nTRN");  // layer
                 const int frames = r.i32("nTRN");
                 if (frames < 1) r.fail("nTRN without frames");
+                // Only frame 0 is read, but the count must be one the chunk can hold: each frame is a dictionary
+                // of at least 4 bytes (its entry count). INT_MAX frames in a 60-byte chunk is a broken file.
+                if (std::size_t(frames) > r.left() / 4)
+                    r.fail("nTRN declares " + std::to_string(frames) + " frames, more than its " +
+                           std::to_string(r.left()) + " bytes can hold");
                 auto f = r.dict("nTRN");  // frame 0; animation frames are ignored
                 if (f.count("_r")) node.rot = decode_rotation(r, parse_int(r, f["_r"], "nTRN _r"));
                 if (f.count("_t")) node.t = parse_translation(r, f["_t"]);

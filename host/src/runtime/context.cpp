@@ -468,7 +468,7 @@ Device Device::open(const std::string& spec_in, DeviceOptions options) {
         if (const char* e = std::getenv("NGI_DEVICE")) spec = e;
     auto ps = detail::platforms();
     if (ps.empty())
-        throw Error("open device: no OpenCL platform found (is an ICD such as pocl-opencl-icd installed, and "
+        throw DeviceNotFoundError("open device: no OpenCL platform found (is an ICD such as pocl-opencl-icd installed, and "
                     "/etc/OpenCL/vendors populated?)");
     struct Candidate { cl_platform_id p; cl_device_id d; DeviceInfo info; };
     std::vector<Candidate> all;
@@ -509,7 +509,7 @@ Device Device::open(const std::string& spec_in, DeviceOptions options) {
         for (auto& c : all)
             have += "\n  " + std::to_string(c.info.platform_index) + ":" + std::to_string(c.info.device_index) + " " +
                     c.info.name + (c.info.is_gpu ? " (gpu)" : c.info.is_cpu ? " (cpu)" : "");
-        throw InputError("open device: no device matches '" + spec + "'; available:" + (have.empty() ? " none" : have));
+        throw DeviceNotFoundError("open device: no device matches '" + spec + "'; available:" + (have.empty() ? " none" : have));
     }
     return Device(std::make_shared<detail::Context>(pick->p, pick->d, pick->info, options));
 }
