@@ -24,6 +24,12 @@ struct Options {
 };
 
 int run(const Options& o) {
+    // The library's bound on a positive range (compare_images), as a usage error before reading anything.
+    if (o.range > 0.0 && o.range < 1e-15) {
+        char got[32];
+        std::snprintf(got, sizeof got, "%g", o.range);
+        throw UsageError(std::string("--range needs 0 or a finite number in 1e-15..1e15, got '") + got + "'");
+    }
     const ngi::Image a = ngi::read_image(o.a);
     const ngi::Image b = ngi::read_image(o.b);
     auto dims = [](const ngi::Image& i) {
@@ -47,7 +53,7 @@ Run add_metrics(CLI::App& app) {
                                 "for images smaller than 11x11; a note says why.");
     cmd->add_option("A", o->a, "the first image (.exr, .png or .npy)")->required();
     cmd->add_option("B", o->b, "the second image, of the same size and channel count")->required();
-    add_real(*cmd, "--range", o->range, 0.0, std::numeric_limits<double>::max(), "R", "the data range");
+    add_real(*cmd, "--range", o->range, 0.0, 1e15, "R", "the data range (0, or 1e-15..1e15)");
     add_device(*cmd, o->device);
     return [o] { return run(*o); };
 }

@@ -462,7 +462,12 @@ expect=--path-frames; expect_usage path_frames_big "${render[@]}" --path-frames 
 expect="frames_per_scene"
 printf '{"frames_per_scene": 20000, "train": [{"scene": "room:seed=1"}]}\n' > "$work/ds_frames.json"
 expect_failure ds_frames "$ngi" dataset --config "$work/ds_frames.json" --out "$work/out_ds_frames"
-for name in fifo_render fifo_voxel_data fifo_ao_data device_empty ao_data_foreign ngi_layout path_frames_big ds_frames; do
+# metrics: a data range whose SSIM constants are not float32 numbers (1e38: "ssim": null with an empty note; 1e-45:
+# PSNR -892 dB) is a usage error.
+expect=--range; expect_usage range_huge "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range 1e38
+expect=--range; expect_usage range_tiny "$ngi" metrics "$work/lm/final.png" "$work/lm/final.png" --range 1e-45
+for name in fifo_render fifo_voxel_data fifo_ao_data device_empty ao_data_foreign ngi_layout path_frames_big ds_frames \
+            range_huge range_tiny; do
   no_unexpected $name
 done
 

@@ -52,10 +52,31 @@ void check_inputs(const Image& a, const Image& b, const char* op) {
 
 // allow_zero: compare_images reports the metrics a zero range leaves undefined instead of failing (the range of an
 // all-zero reference is 0, and a sky-only frame has an all-zero lightmap reference).
+// A positive range lies in [kMinRange, kMaxRange]: the values' own bound above, and below it SSIM's constants
+// C1 = (0.01 R)^2, C2 = (0.03 R)^2 stay normal float32 numbers. Outside, the kernel's float(C1) was Inf (R = 1e38:
+// SSIM NaN with no note) or 0 (R = 1e-45: 0 / 0 in constant windows), and PSNR said -892 dB of an image whose
+// values are 10^45 ranges away from the one it names.
+constexpr double kMinRange = 1e-15, kMaxRange = 1e15;  // (1e15 itself: float(1e15) is a little below it)
+
+bool range_usable(double data_range) {
+    return data_range == 0.0 || (data_range >= kMinRange && data_range <= kMaxRange);
+}
+
+std::string range_text(double data_range) {
+    char got[32];
+    std::snprintf(got, sizeof got, "%g", data_range);
+    return got;
+}
+
+// compare_images (allow_zero) reports a range outside [kMinRange, kMaxRange] as undefined metrics with a note;
+// ssim() has no room for a note and refuses it.
 void check_range(double data_range, const char* op, bool allow_zero) {
     if (!(allow_zero ? data_range >= 0.0 : data_range > 0.0) || !std::isfinite(data_range))
         throw InputError(std::string(op) + ": data_range must be finite and " + (allow_zero ? ">= 0" : "> 0") +
                          ", got " + std::to_string(data_range));
+    if (!allow_zero && !range_usable(data_range))
+        throw InputError(std::string(op) + ": data_range must be in [1e-15, 1e15] (the values' bound; beyond it "
+                         "SSIM's constants are not float32 numbers), got " + range_text(data_range));
 }
 
 struct Pair {
@@ -185,10 +206,17 @@ ImageMetrics compare_images(const Device& device, const Image& a, const Image& b
     ImageMetrics m;
     m.mse = run_mse(ctx, p, a.data.size());
     m.psnr = psnr_from_mse(m.mse, data_range);
-    if (m.mse == 0.0)
+    const bool usable = range_usable(data_range);
+    const std::string unusable = "data_range " + range_text(data_range) + " is outside [1e-15, 1e15] (the values' "
+                                 "bound; beyond it SSIM's constants are not float32 numbers): ";
+    if (m.mse == 0.0) {
         m.psnr_note = "mse is 0 (identical images): PSNR is +infinity";
-    else if (data_range == 0.0)
+    } else if (data_range == 0.0) {
         m.psnr_note = "data_range is 0 (e.g. an all-zero reference): PSNR is undefined";
+    } else if (!usable) {
+        m.psnr = std::numeric_limits<double>::quiet_NaN();
+        m.psnr_note = unusable + "PSNR is not reported";
+    }
     // Exact equality on the host (the MSE cannot tell: squares of differences below 1e-19 underflow to 0).
     const bool identical = a.data == b.data;
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
@@ -197,6 +225,9 @@ ImageMetrics compare_images(const Device& device, const Image& a, const Image& b
         m.ssim_note = ssim_size_message(a);
     } else if (identical) {
         m.ssim = 1.0;  // by definition, also where C1 = C2 = 0 would make the formula 0 / 0
+    } else if (!usable) {
+        m.ssim = nan;
+        m.ssim_note = unusable + "SSIM is not reported";
     } else if (data_range == 0.0) {
         m.ssim = nan;
         m.ssim_note = "data_range is 0 (e.g. an all-zero reference): SSIM's constants C1 = C2 = 0 leave it "
