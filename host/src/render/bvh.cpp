@@ -23,6 +23,13 @@ struct Box {
     }
 };
 
+// The bin of a centroid coordinate: clamped in float before the conversion, so that a denormal extent (scale
+// infinite, 0 * inf = NaN) or rounding past the last bin never reaches an undefined float -> int conversion.
+int bin_of(float c, float lo, float scale) {
+    const float f = (c - lo) * scale;
+    return f >= float(kBvhBins - 1) ? kBvhBins - 1 : (f > 0.0f ? int(f) : 0);
+}
+
 struct Builder {
     std::vector<Box> tri_box;
     std::vector<glm::vec3> centroid;
@@ -64,7 +71,7 @@ struct Builder {
             const float scale = float(kBvhBins) / extent[axis];
             for (std::uint32_t i = first; i < first + count; ++i) {
                 const std::uint32_t t = idx[i];
-                const int k = std::min(kBvhBins - 1, int((centroid[t][axis] - cbox.lo[axis]) * scale));
+                const int k = bin_of(centroid[t][axis], cbox.lo[axis], scale);
                 bins[std::size_t(k)].grow(tri_box[t]);
                 ++n[std::size_t(k)];
             }
@@ -96,7 +103,7 @@ struct Builder {
         if (!near_limit && best_axis >= 0) {
             const float scale = float(kBvhBins) / extent[axis];
             const auto it = std::partition(idx.begin() + first, idx.begin() + first + count, [&](std::uint32_t t) {
-                return std::min(kBvhBins - 1, int((centroid[t][axis] - cbox.lo[axis]) * scale)) <= best_bin;
+                return bin_of(centroid[t][axis], cbox.lo[axis], scale) <= best_bin;
             });
             mid = std::uint32_t(it - idx.begin());
         } else {

@@ -223,12 +223,14 @@ LoadedMesh blob(std::uint32_t seed) {
         }
         b.t = std::move(next);
     }
-    // The radius over the unit sphere: 1 plus 6-10 Gaussian bumps (and dents) of seeded size, place and width.
+    // The radius over the unit sphere: 1 plus 48-72 Gaussian bumps (and dents) of seeded size, place and width.
+    // Narrow (1.5-4 m at the object's size) and many that the creases between them hold ambient occlusion within seed
+    // 001's 4 m rays; broad bumps alone leave a nearly convex object whose AO is 1 everywhere.
     struct Bump { glm::dvec3 c; double amp, width; };
     std::vector<Bump> bumps;
-    for (int k = 0, n = r.irange(6, 10); k < n; ++k) {
+    for (int k = 0, n = r.irange(48, 72); k < n; ++k) {
         const double z = r.range(-1.0f, 1.0f), phi = r.range(0.0f, 6.2831853f), s = std::sqrt(1.0 - z * z);
-        bumps.push_back({{s * std::cos(phi), s * std::sin(phi), z}, r.range(-0.25f, 0.6f), r.range(0.3f, 0.75f)});
+        bumps.push_back({{s * std::cos(phi), s * std::sin(phi), z}, r.range(-0.12f, 0.3f), r.range(0.08f, 0.2f)});
     }
     const glm::dvec3 stretch(1.0, r.range(0.7f, 1.0f), r.range(0.7f, 1.0f));
     for (auto& v : b.p) {
