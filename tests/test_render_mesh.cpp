@@ -32,15 +32,28 @@ float ray_box(glm::vec3 o, glm::vec3 d, glm::vec3 lo, glm::vec3 hi) {
     return t0 <= t1 ? t0 : -1.0f;
 }
 
+// A camera at `position` whose front face looks straight down (-y), up = -z.
+CameraPose looking_down(glm::vec3 position) {
+    CameraPose pose;
+    pose.position = position;
+    pose.look = glm::vec3(0, -1, 0);
+    pose.up = glm::vec3(0, 0, -1);
+    return pose;
+}
+
+// The point of the plane y = y0 that pixel (x, y) of the front face of `pose` sees.
+glm::vec3 plane_point(const CameraPose& pose, int x, int y, int n, float y0) {
+    const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
+    const glm::vec3 d = face_pixel_direction(b, x, y, n);
+    return pose.position + d * ((y0 - pose.position.y) / d.y);
+}
+
 // A floor at height y0 seen from `pose` looking straight down, lit by a hard sun only: every pixel that sees the
 // floor holds E cos / pi, or 0 where the box [lo, hi] shadows it; pixels that see the box (or within 0.05 m of the
 // shadow's edge, where a pixel's point lies on the boundary) are skipped. Returns the pixels checked.
 int check_sun_floor(const VoxelScene& scene, float y0, glm::vec3 lo, glm::vec3 hi) {
     Renderer r(test::device(), scene);
-    CameraPose pose;
-    pose.position = glm::vec3(8.0f, 5.0f, 8.0f);
-    pose.look = glm::vec3(0, -1, 0);
-    pose.up = glm::vec3(0, 0, -1);
+    const CameraPose pose = looking_down(glm::vec3(8.0f, 5.0f, 8.0f));
     Lighting light;
     light.sun.direction = glm::normalize(glm::vec3(0.35f, 1.0f, 0.2f));
     light.sun.irradiance = glm::vec3(2.0f, 1.5f, 1.0f);
@@ -110,10 +123,7 @@ TEST_CASE("mesh render: lighting from an emissive triangle follows Lambert's pol
     s.mesh.triangles = {{0, 1, 2}};
     s.mesh.materials = {lamp};
     Renderer r(test::device(), s);
-    CameraPose pose;
-    pose.position = glm::vec3(8.0f, 2.0f, 8.0f);
-    pose.look = glm::vec3(0, -1, 0);
-    pose.up = glm::vec3(0, 0, -1);
+    const CameraPose pose = looking_down(glm::vec3(8.0f, 2.0f, 8.0f));
     RenderSettings rs;
     rs.n = 8;
     rs.reference_spp = 8192;
@@ -121,12 +131,10 @@ TEST_CASE("mesh render: lighting from an emissive triangle follows Lambert's pol
     rs.seed = 11;
     Image var;
     const Image ref = r.render_reference(pose, Lighting{}, rs, &var);
-    const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
     double worst_z = 0;
     for (int y = 0; y < rs.n; ++y)
         for (int x = 0; x < rs.n; ++x) {
-            const glm::vec3 d = face_pixel_direction(b, x, y, rs.n);
-            const glm::vec3 p = pose.position + d * ((1.0f - pose.position.y) / d.y);
+            const glm::vec3 p = plane_point(pose, x, y, rs.n, 1.0f);
             const double expect =
                 L * test::polygon_form_factor(glm::dvec3(p), {0, 1, 0}, {glm::dvec3(tri[0]), glm::dvec3(tri[1]), glm::dvec3(tri[2])});
             const double err = std::abs(ref.at(0, y, x) - expect), sigma = std::sqrt(double(var.at(0, y, x)));
@@ -184,21 +192,16 @@ TEST_CASE("mesh render: AO of a floor under a triangle box = 1 - the box bottom'
     const glm::vec3 lo(6.0f, 3.0f, 6.5f), hi(10.0f, 5.0f, 9.5f);
     s.mesh = test::box_mesh(lo, hi, m);
     Renderer r(test::device(), s);
-    CameraPose pose;
-    pose.position = glm::vec3(8.0f, 2.0f, 8.0f);
-    pose.look = glm::vec3(0, -1, 0);
-    pose.up = glm::vec3(0, 0, -1);
+    const CameraPose pose = looking_down(glm::vec3(8.0f, 2.0f, 8.0f));
     RenderSettings rs;
     rs.n = 8;
     rs.seed = 3;
     const int rays = 8192;
     const Image ao = r.render_ao(pose, rs, rays, INFINITY);
-    const FaceBasis b = CameraCluster::from_look_up(pose.look, pose.up).face(Face::Front);
     const std::vector<glm::dvec3> bottom = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z}};
     for (int y = 0; y < rs.n; ++y)
         for (int x = 0; x < rs.n; ++x) {
-            const glm::vec3 d = face_pixel_direction(b, x, y, rs.n);
-            const glm::vec3 p = pose.position + d * ((1.0f - pose.position.y) / d.y);
+            const glm::vec3 p = plane_point(pose, x, y, rs.n, 1.0f);
             // From below the box, a ray that meets the box crosses its bottom face first (module docs above).
             const double expect = 1.0 - test::polygon_form_factor(glm::dvec3(p), {0, 1, 0}, bottom);
             const double sigma = std::sqrt(expect * (1.0 - expect) / rays);
