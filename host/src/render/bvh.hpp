@@ -79,7 +79,7 @@ public:
 
     // rays: 8 floats per ray (origin x, y, z, tmax, direction x, y, z, unused). Closest hits (any hits: the first
     // found, for shadow rays) with prim as the mesh's triangle index. steps (if given): node visits + triangle
-    // tests per ray. device_ms (if given): the kernel's device time (profiling events; 0 where unavailable).
+    // tests per ray. device_ms (if given): the wall time of the launch and clFinish around the kernel (no transfers).
     std::vector<RayHit> trace(const std::vector<float>& rays, bool any, std::vector<std::uint32_t>* steps = nullptr,
                               double* device_ms = nullptr);
 
