@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "frame_folder_format.hpp"
@@ -28,7 +29,12 @@ namespace {
 
 fs::path root;
 
+// Each target folder this program writes is emptied the first time it is written to, so a rerun drops seeds it
+// no longer makes; the folders of targets with their own seed scripts (vox, mesh: make_*_seeds.py and the
+// fuzzers' reproducers) are never touched.
 void put(const std::string& target, const std::string& name, const std::string& bytes) {
+    static std::set<std::string> emptied;
+    if (emptied.insert(target).second) fs::remove_all(root / target);
     fs::create_directories(root / target);
     std::ofstream(root / target / name, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
 }

@@ -26,7 +26,8 @@ cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/build.log" 2>&1 ||
     { tail -50 "$out/build.log" >&2; exit 2; }
 
 if [[ "${1:-}" == "--corpus" ]]; then
-    rm -rf "$src/fuzz/corpus"
+    # ngi_make_corpus replaces only the target folders it writes; vox and mesh keep their seed scripts' files and
+    # the reproducers of earlier findings.
     exec "$out/fuzz/ngi_make_corpus" "$src/fuzz/corpus"
 fi
 
