@@ -64,6 +64,7 @@
 #include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
 
+#include "bench_args.hpp"
 #include "ngi/device.hpp"
 #include "ngi/mesh.hpp"
 #include "ngi/scene.hpp"
@@ -81,19 +82,8 @@ double now_ms() {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-std::string arg(int argc, char** argv, const char* name, const std::string& fallback) {
-    for (int i = 1; i + 1 < argc; ++i)
-        if (!std::strcmp(argv[i], name)) return argv[i + 1];
-    return fallback;
-}
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, ',');)
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
+using ngi_perf::arg;
+using ngi_perf::split;
 
 std::string loadavg() {
     std::ifstream f("/proc/loadavg");

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.hpp"
 #include "ngi/camera_path.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/render.hpp"
@@ -24,19 +25,8 @@ using json = nlohmann::json;
 
 namespace {
 
-std::string arg(int argc, char** argv, const char* name, const std::string& fallback) {
-    for (int i = 1; i + 1 < argc; ++i)
-        if (!std::strcmp(argv[i], name)) return argv[i + 1];
-    return fallback;
-}
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, ',');)
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
+using ngi_perf::arg;
+using ngi_perf::split;
 
 }  // namespace
 
