@@ -12,9 +12,11 @@
 
 namespace ngi::detail {
 
-// Build options shared with kernels/bvh.cl (passed as -D options by bvh_defines(): defined only here).
-constexpr int kBvhStackSize = 64;   // traversal stack entries per work-item: the tree's depth is kept below it
-constexpr int kBvhMaxLeaf = 4;      // triangles per leaf at most (the SAH may stop earlier)
+// The traversal stack of kernels/bvh.cl (passed as -D BVH_STACK by bvh_defines(): defined only here); the builder
+// keeps the tree's depth below it.
+constexpr int kBvhStackSize = 64;
+// Builder knobs (host only).
+constexpr int kBvhMaxLeaf = 4;      // triangles per leaf at most
 constexpr int kBvhBins = 16;        // SAH bins per axis and split
 
 // The flattened tree. Node i is two float4s (nodes[2i], nodes[2i+1]):
@@ -67,9 +69,11 @@ class Device;
 namespace ngi::detail {
 
 class Context;
+class Buffer;
 
-// A Bvh uploaded to a device, queried with batches of rays through kernels/bvh.cl's bvh_trace_rays (the BVH tests
-// and perf/bench_bvh; the renderer binds the same buffers to its own kernels).
+// A Bvh uploaded to a device: its nodes, triangles, triangle info and vertex normals (one-element placeholders
+// for an empty mesh: OpenCL refuses zero-sized buffers). The renderer binds them to the path tracer's kernels;
+// trace() queries batches of rays through kernels/bvh.cl's bvh_trace_rays (the BVH tests and perf/bench_bvh).
 class DeviceBvh {
 public:
     DeviceBvh(const Device& device, const Bvh& bvh);
@@ -82,6 +86,11 @@ public:
     // tests per ray. device_ms (if given): the wall time of the launch and clFinish around the kernel (no transfers).
     std::vector<RayHit> trace(const std::vector<float>& rays, bool any, std::vector<std::uint32_t>* steps = nullptr,
                               double* device_ms = nullptr);
+
+    const Buffer& nodes() const;
+    const Buffer& triangles() const;
+    const Buffer& triangle_info() const;
+    const Buffer& vertex_normals() const;
 
 private:
     struct Impl;

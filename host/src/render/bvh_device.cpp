@@ -10,7 +10,7 @@ namespace ngi::detail {
 
 struct DeviceBvh::Impl {
     std::shared_ptr<Context> ctx;
-    Buffer nodes, tris;
+    Buffer nodes, tris, info, normals;
     std::vector<std::uint32_t> order;
     Kernel kernel;
     Buffer rays, hits, steps;
@@ -21,19 +21,27 @@ DeviceBvh::DeviceBvh(const Device& device, const Bvh& bvh) : impl_(std::make_uni
     Impl& m = *impl_;
     m.ctx = shared_context_of(device);
     m.order = bvh.order;
-    auto upload = [&](const std::vector<float>& v, const char* what) {
-        const std::vector<float> zero(8, 0.0f);
-        const std::vector<float>& data = v.empty() ? zero : v;  // OpenCL refuses zero-sized buffers
-        Buffer b = m.ctx->alloc(data.size() * 4, what);
-        m.ctx->write(b, 0, data.size() * 4, data.data(), what);
+    auto upload = [&](const void* data, std::size_t bytes, const char* what) {
+        const std::vector<float> zero(8, 0.0f);  // OpenCL refuses zero-sized buffers
+        if (bytes == 0) {
+            data = zero.data();
+            bytes = zero.size() * 4;
+        }
+        Buffer b = m.ctx->alloc(bytes, what);
+        m.ctx->write(b, 0, bytes, data, what);
         return b;
     };
-    m.nodes = upload(bvh.nodes, "bvh: nodes");
-    m.tris = upload(bvh.tri_vertices, "bvh: triangles");
-    m.kernel = m.ctx->kernel("bvh", "bvh_trace_rays", bvh_defines());
+    m.nodes = upload(bvh.nodes.data(), bvh.nodes.size() * 4, "bvh: nodes");
+    m.tris = upload(bvh.tri_vertices.data(), bvh.tri_vertices.size() * 4, "bvh: triangles");
+    m.info = upload(bvh.tri_info.data(), bvh.tri_info.size() * 4, "bvh: triangle materials");
+    m.normals = upload(bvh.vertex_normals.data(), bvh.vertex_normals.size() * 4, "bvh: vertex normals");
 }
 
 DeviceBvh::~DeviceBvh() = default;
+const Buffer& DeviceBvh::nodes() const { return impl_->nodes; }
+const Buffer& DeviceBvh::triangles() const { return impl_->tris; }
+const Buffer& DeviceBvh::triangle_info() const { return impl_->info; }
+const Buffer& DeviceBvh::vertex_normals() const { return impl_->normals; }
 DeviceBvh::DeviceBvh(DeviceBvh&&) noexcept = default;
 DeviceBvh& DeviceBvh::operator=(DeviceBvh&&) noexcept = default;
 
@@ -50,6 +58,8 @@ std::vector<RayHit> DeviceBvh::trace(const std::vector<float>& rays, bool any, s
         m.steps = m.ctx->alloc(count * 4, "bvh trace: steps");
         m.capacity = count;
     }
+    // Built at the first query: a renderer holds a DeviceBvh only for its buffers and never pays for this program.
+    if (!m.kernel.get()) m.kernel = m.ctx->kernel("bvh", "bvh_trace_rays", bvh_defines());
     m.ctx->write(m.rays, 0, count * 32, rays.data(), "bvh trace: upload rays");
     m.kernel.args(m.nodes, m.tris, int(m.order.size()), m.rays, int(count), int(any), m.hits, m.steps);
     const std::size_t global = count, local = 64;

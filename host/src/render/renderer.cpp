@@ -171,7 +171,7 @@ struct Renderer::Impl {
     glm::ivec3 size;
     detail::Buffer grid, mats, lights, cdf, light, cam, region, portals, portal_range;
     detail::Buffer patches, patch_prob, patch_cdf, patch_range, face_slot, face_index, patch_weight;
-    detail::Buffer bvh_nodes, tri_v, tri_info, vnormals;  // the triangle mesh (placeholders when there is none)
+    std::unique_ptr<detail::DeviceBvh> bvh;  // the triangle mesh (placeholder buffers when there is none)
     bool has_mesh = false, has_blocks = false;
     int bvh_depth = 0;
     bool have_regions = false, have_portals = false;
@@ -304,8 +304,8 @@ struct Renderer::Impl {
     void set_scene_args(detail::Kernel& k, const RenderSettings& rs, const A&... rest) {
         k.args(grid, size.x, size.y, size.z, mats, lights, cdf, nlights, inv_total, light, region, portals,
                portal_range, int(have_regions), int(rs.sky_portals && have_portals), patches, patch_prob, patch_cdf,
-               patch_range, face_slot, face_index, int(rs.sunlit_patches && patches_lit), bvh_nodes, tri_v, tri_info,
-               vnormals, int(has_mesh), int(has_blocks), rest...);
+               patch_range, face_slot, face_index, int(rs.sunlit_patches && patches_lit), bvh->nodes(),
+               bvh->triangles(), bvh->triangle_info(), bvh->vertex_normals(), int(has_mesh), int(has_blocks), rest...);
     }
 
     // Per-frame patch probabilities (only when the sun or the materials changed): weights on the device, then
@@ -407,21 +407,11 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.has_blocks = std::any_of(scene.voxels.begin(), scene.voxels.end(), [](std::uint8_t v) { return v != 0; });
     m.has_mesh = !scene.mesh.empty();
     {
-        // The mesh: validated, its BVH built here and uploaded once. Without triangles, one-element placeholders
-        // (OpenCL refuses zero-sized buffers; the kernels never read them when has_mesh is 0).
+        // The mesh: validated, its BVH built here and uploaded once.
         if (m.has_mesh) validate_mesh(scene.mesh, scene.palette.size(), "scene " + scene.name);
         const detail::Bvh bvh = detail::build_bvh(scene.mesh);
         m.bvh_depth = bvh.depth;
-        auto upload = [&](const void* data, std::size_t bytes, const char* what) {
-            const std::vector<float> zero(8, 0.0f);
-            detail::Buffer b = m.ctx->alloc(bytes ? bytes : zero.size() * 4, what);
-            m.ctx->write(b, 0, bytes ? bytes : zero.size() * 4, bytes ? data : zero.data(), what);
-            return b;
-        };
-        m.bvh_nodes = upload(bvh.nodes.data(), bvh.nodes.size() * 4, "render: BVH nodes");
-        m.tri_v = upload(bvh.tri_vertices.data(), bvh.tri_vertices.size() * 4, "render: triangles");
-        m.tri_info = upload(bvh.tri_info.data(), bvh.tri_info.size() * 4, "render: triangle materials");
-        m.vnormals = upload(bvh.vertex_normals.data(), bvh.vertex_normals.size() * 4, "render: vertex normals");
+        m.bvh = std::make_unique<detail::DeviceBvh>(device, bvh);
     }
     m.grid = m.ctx->alloc(blocks, "render: voxel grid");
     m.ctx->write(m.grid, 0, blocks, scene.voxels.data(), "render: upload voxel grid");
