@@ -1,19 +1,25 @@
-/* ngi C API: the stable contract of the ngi library (libngi_c, C99).
+/* ngi C API: the stable contract of the ngi library (libngi_c, C99). The rules in full: bindings/c/README.md.
  *
- * Handles are opaque and reference-counted: every *_new / *_open / *_load call returns a handle with one
- * reference; *_retain adds one, *_release drops one, and the object is destroyed with its last reference. An object
- * keeps what it was made from alive (a model its device, a buffer its device), so handles may be released in any
- * order. A handle used after its last release is detected and refused (NGI_ERROR_INVALID_HANDLE), not a crash.
+ * Handles are opaque, typed and reference-counted: every *_new / *_open / *_load / *_read call returns a handle with
+ * one reference; *_retain adds one, *_release drops one, and the object is destroyed with its last reference. An
+ * object keeps what it was made from alive (a model its device, a buffer its device), so handles may be released in
+ * any order. Every call checks each handle it is given against the live handles and their types: a handle used
+ * after its last release is refused (NGI_ERROR_INVALID_HANDLE), a handle of another type (an ngi_device cast to
+ * ngi_model*) is refused with NGI_ERROR_INVALID_ARGUMENT naming both types; neither is a crash or garbage.
  *
- * Errors: every call returns an ngi_status. On failure, ngi_last_error() returns a message that names the call, the
- * argument or file and, for OpenCL failures, the CL error name; it is thread-local and reset by every call (""
- * after a success). An error callback (ngi_set_error_callback) sees every failure as it happens.
+ * Errors: every call returns an ngi_status, one per kind of error (see ngi_status below). On failure,
+ * ngi_last_error() returns a message that names the call, the argument or file and, for OpenCL failures, the CL
+ * error name; it is thread-local and reset by every call ("" after a success). An error callback
+ * (ngi_set_error_callback) sees every failure as it happens. A failing call writes none of its outputs (out
+ * handles are set to NULL).
  *
- * Threading: a device may be used by any number of threads at once; a model or a pipeline is used by one thread at
- * a time (different models and pipelines on one device may run concurrently). See docs/ARCHITECTURE.md.
+ * Threading: a device may be used by any number of threads at once; every other handle (buffer, model, pipeline,
+ * frame, AO network, voxels, Neural GI renderer) is used by one thread at a time, as the object of a call or as an
+ * argument; different objects on one device may be used from different threads concurrently.
  *
- * Sizes: every buffer argument comes with its size in bytes; a size smaller than the call needs is refused.
- * Layouts and value ranges: docs/CONVENTIONS.md. Frames: bindings/c/README.md and ngi/pipeline.hpp.
+ * Sizes: every buffer argument comes with its size in bytes; a size (or device buffer) smaller than the call needs
+ * is NGI_ERROR_INVALID_ARGUMENT. Layouts and value ranges: docs/CONVENTIONS.md. Frames: bindings/c/README.md and
+ * ngi/pipeline.hpp.
  */
 #ifndef NGI_H
 #define NGI_H
@@ -60,8 +66,10 @@ struct _cl_event;
 
 typedef NGI_ENUM(ngi_status) {
     NGI_OK = 0,
-    NGI_ERROR_INVALID_ARGUMENT = 1, /* a NULL pointer, an impossible size or value passed to the API */
-    NGI_ERROR_INPUT = 2,            /* bad user input: file, shape, device spec, a cl_mem of another context */
+    NGI_ERROR_INVALID_ARGUMENT = 1, /* the call's own arguments: a NULL pointer, a value out of range, a size or
+                                       device buffer smaller than the call needs, a handle of another type */
+    NGI_ERROR_INPUT = 2,            /* bad content: a file, model file, scene spec or frame; a shape the model does
+                                       not take; an image descriptor that does not fit; a cl_mem of another context */
     NGI_ERROR_OPENCL = 3,           /* an OpenCL call failed; see ngi_last_cl_error() */
     NGI_ERROR_OUT_OF_MEMORY = 4,    /* host or device memory exhausted (also CL_OUT_OF_RESOURCES, ...) */
     NGI_ERROR_INVALID_HANDLE = 5,   /* a NULL handle, or one whose last reference was released */
@@ -73,6 +81,10 @@ typedef struct ngi_device ngi_device;
 typedef struct ngi_model ngi_model;
 typedef struct ngi_buffer ngi_buffer;
 typedef struct ngi_pipeline ngi_pipeline;
+typedef struct ngi_frame ngi_frame;         /* a frame's features on the host (one camera cluster) */
+typedef struct ngi_ao ngi_ao;               /* seed 001's ambient-occlusion network */
+typedef struct ngi_voxels ngi_voxels;       /* seed 004: a voxel scene's surface voxels (field, LTF, shading) */
+typedef struct ngi_neural_gi ngi_neural_gi; /* seed 002's Neural GI renderer */
 
 /* --- version and errors ------------------------------------------------------------------------------------- */
 NGI_API int ngi_version(void);              /* NGI_VERSION of the loaded library */
@@ -175,11 +187,28 @@ typedef NGI_ENUM(ngi_output_mode) {
 } ngi_output_mode;
 /* The model's output mode into *mode (not NULL). */
 NGI_API ngi_status ngi_model_output_mode(const ngi_model* model, ngi_output_mode* mode);
+/* The model file's family. */
+typedef NGI_ENUM(ngi_family) {
+    NGI_FAMILY_PIX2PIX_UNET = 0,     /* image generators (surround, single view, the ladder) */
+    NGI_FAMILY_DEEPILLUMINATION = 1,
+    NGI_FAMILY_MLP = 2,              /* per-item networks (the AO MLPs: see also ngi_ao_*) */
+    NGI_FAMILY_VOXEL_SH = 3,         /* seed 004: [V, 10] voxel attributes -> [V, 27] SH (see ngi_voxels_predict_sh) */
+    NGI_FAMILY_NEURAL_GI = 4,        /* seed 002: [1, 18, H, W] -> [1, 3, H, W] (see ngi_neural_gi_run) */
+    NGI_FAMILY_GRAPH = 5,            /* a converted graph (python3 -m ngi.convert; docs/MODEL_FORMAT.md "graph") */
+    NGI_FAMILY_MAX_ENUM = 0x7FFFFFFF
+} ngi_family;
+NGI_API ngi_status ngi_model_family(const ngi_model* model, ngi_family* family);
 /* input: input_nc x height x width floats (CHW, batch 1, input_bytes >= that many bytes); output: output_nc x height
- * x width floats. height and width must be positive multiples of 2^num_downs. Blocking. */
+ * x width floats. height and width must be positive multiples of 2^num_downs. Families mlp and voxel_sh take
+ * height x width items stored planar ([input_nc][items] -> [output_nc][items], as ngi_model_enqueue; voxel_sh: the
+ * voxels of one scene). Blocking. */
 NGI_API ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
                                  float* output, size_t output_bytes);
-/* The same on device buffers, asynchronous (ngi_device_sync waits): no host transfer. */
+/* Families mlp and voxel_sh: `count` items stored by item, [count][input_nc] -> [count][output_nc] (row-major, as
+ * Model::run takes them; voxel_sh: the count voxels of one scene, e.g. ngi_voxels_attributes). Blocking. */
+NGI_API ngi_status ngi_model_run_items(ngi_model* model, const float* input, size_t input_bytes, int count,
+                                       float* output, size_t output_bytes);
+/* The same as ngi_model_run on device buffers, asynchronous (ngi_device_sync waits): no host transfer. */
 NGI_API ngi_status ngi_model_enqueue(ngi_model* model, ngi_buffer* input, ngi_buffer* output, int height, int width);
 /* Input values the last run/enqueue replaced before the first layer (NaN -> 0; +-Inf and values far outside the
  * model's input range -> its nearer end; docs/CONVENTIONS.md section 7); 0 before any run. May block. */
@@ -228,8 +257,9 @@ NGI_API ngi_status ngi_pipeline_set_tonemap(ngi_pipeline* pipeline, float exposu
 NGI_API ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model, ngi_buffer* planes, int faces,
                                         unsigned flags, ngi_buffer* lightmap, ngi_buffer* final_image,
                                         ngi_buffer* display);
-/* Host in, host out, blocking: one upload and one download. Each output pointer may be NULL (not made); its size
- * in bytes must be at least N * N * 3 * 4. */
+/* Host in, host out, blocking: one upload and one download. planes_bytes must be at least
+ * ngi_pipeline_frame_bytes(faces). Each output pointer may be NULL (not made); its size in bytes must be at least
+ * N * N * 3 * 4. */
 NGI_API ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, const float* planes, size_t planes_bytes,
                                     int faces, unsigned flags, float* lightmap, size_t lightmap_bytes,
                                     float* final_image, size_t final_bytes, float* display, size_t display_bytes);
@@ -294,6 +324,7 @@ NGI_API ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* mo
                                            float* lightmap, size_t lightmap_bytes, float* final_image,
                                            size_t final_bytes, float* display, size_t display_bytes);
 NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
+NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
 /* --- files ---------------------------------------------------------------------------------------------------- */
 /* A frame folder (docs/CONVENTIONS.md: <face>_<feature>.exr, camera.json) into frame planes of `faces` (1 or 6) faces.
  * Call with planes = NULL to learn *n and *bytes; then with a buffer of at least *bytes bytes. *flags receives the
@@ -304,7 +335,116 @@ NGI_API ngi_status ngi_read_frame_planes(const char* folder, int faces, float* p
  * [0, 1], linear), .npy (float32), by extension. The file appears whole or not at all. */
 NGI_API ngi_status ngi_write_image(const char* path, const float* data, size_t bytes, int width, int height,
                                    int channels);
-NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
+/* --- frames as objects: what the Neural GI renderer and voxel shading read ---------------------------------------
+ * A frame holds every feature of its faces on the host, the front camera (look, up) and, optionally, the camera
+ * cluster's position (world metres) and a rectangular area light (ngi/area_light.hpp). */
+NGI_API ngi_status ngi_frame_read(const char* folder, ngi_frame** out);
+/* From frame planes (the layout above; faces 1 = the front face only, or 6; flags: ngi_frame_flags) of face size
+ * n (2..2048) and the front camera. planes_bytes >= faces * 16 * n * n * 4. */
+NGI_API ngi_status ngi_frame_from_planes(int n, const float* planes, size_t planes_bytes, int faces, unsigned flags,
+                                         const float look[3], const float up[3], ngi_frame** out);
+/* The cluster centre in world metres (finite). */
+NGI_API ngi_status ngi_frame_set_position(ngi_frame* frame, const float position[3]);
+/* The area light the frame was lit with: the rectangle centre + s half_u + t half_v (s, t in [-1, 1]), orthogonal
+ * half edges, radiance >= 0 (all 0 = no light). */
+NGI_API ngi_status ngi_frame_set_area_light(ngi_frame* frame, const float centre[3], const float half_u[3],
+                                            const float half_v[3], const float radiance[3]);
+/* Any pointer may be NULL. faces: 6, or 1 when only the front face is present; flags: ngi_frame_flags present;
+ * has_position / has_area_light: 0 or 1. */
+NGI_API ngi_status ngi_frame_info(const ngi_frame* frame, int* n, int* faces, unsigned* flags, int* has_position,
+                                  int* has_area_light);
+/* The frame's planes of `faces` faces (1 or 6) into planes (bytes >= faces * 16 * n * n * 4); absent optional
+ * features are 0. */
+NGI_API ngi_status ngi_frame_planes(const ngi_frame* frame, int faces, float* planes, size_t bytes);
+NGI_API ngi_status ngi_frame_retain(ngi_frame* frame);
+NGI_API ngi_status ngi_frame_release(ngi_frame* frame);
+
+/* --- ambient occlusion (seed 001, ngi/ao.hpp): an "mlp" model file with "ao" metadata --------------------------- */
+NGI_API ngi_status ngi_ao_load(ngi_device* device, const char* path, ngi_ao** out);
+/* Any pointer may be NULL. trained_radius_px: the ring radius of the training images, trained_size their height;
+ * face_normals: 1 if the network was trained on voxel face normals, 0 for smooth normals (the default). */
+NGI_API ngi_status ngi_ao_info(const ngi_ao* ao, float* trained_radius_px, int* trained_size, int* face_normals);
+/* normals: 3 x height x width floats (object-space unit normals, zero = background), normals_bytes >= that;
+ * result: height x width accessibility in [0, 1] (1 = unoccluded, 1 on the background). radius_px: the ring
+ * radius in pixels (0 = the seed's inference), or negative for the trained radius scaled to `height`. Blocking. */
+NGI_API ngi_status ngi_ao_run(ngi_ao* ao, const float* normals, size_t normals_bytes, int height, int width,
+                              float radius_px, float* result, size_t result_bytes);
+/* The same on device buffers, asynchronous. */
+NGI_API ngi_status ngi_ao_enqueue(ngi_ao* ao, ngi_buffer* normals, ngi_buffer* result, int height, int width,
+                                  float radius_px);
+NGI_API ngi_status ngi_ao_retain(ngi_ao* ao);
+NGI_API ngi_status ngi_ao_release(ngi_ao* ao);
+
+/* --- the voxel field and the light-transition function (seed 004, ngi/voxel_field.hpp, ngi/voxel_gi.hpp) --------
+ * A voxels object is one scene's surface voxels on a device, lit at one time of day: V voxels in increasing dense
+ * id. Per-voxel arrays are row-major: attributes [V][10], SH [V][3][9], lighting [V][3] (irradiance / pi). */
+typedef NGI_ENUM(ngi_face) {
+    NGI_FACE_FRONT = 0, NGI_FACE_BACK = 1, NGI_FACE_LEFT = 2, NGI_FACE_RIGHT = 3, NGI_FACE_UP = 4, NGI_FACE_DOWN = 5,
+    NGI_FACE_MAX_ENUM = 0x7FFFFFFF
+} ngi_face;
+typedef NGI_ENUM(ngi_ltf_variant) {
+    NGI_LTF_PHYSICAL = 0,   /* radiosity between voxels (both cosines, area / (pi r^2)), optionally with visibility */
+    NGI_LTF_AS_WRITTEN = 1, /* seed 004's Eq. 23-30 (one cosine, normalized 1 / r^2, no visibility) */
+    NGI_LTF_VARIANT_MAX_ENUM = 0x7FFFFFFF
+} ngi_ltf_variant;
+typedef NGI_ENUM(ngi_voxel_field_kind) {
+    NGI_FIELD_SH = 0,       /* [V][3][9] SH coefficients of incident radiance */
+    NGI_FIELD_LIGHTING = 1, /* [V][3] lighting at the voxel, used as is */
+    NGI_VOXEL_FIELD_KIND_MAX_ENUM = 0x7FFFFFFF
+} ngi_voxel_field_kind;
+/* The ground truth's settings (ngi::VoxelFieldSettings); NULL = NGI_VOXEL_FIELD_DEFAULTS. */
+typedef struct ngi_voxel_field_settings {
+    int directions;    /* SH projection directions per voxel: a perfect square, 1..2^20 */
+    int sun_rays;      /* rays over the sun's disc per voxel, 1..2^20 */
+    int point_samples; /* lighting samples at the probe point and per exposed face, 1..2^20 */
+    int max_bounces;   /* bounces, 0..64 (0: direct light only) */
+    int rr_start;      /* bounces before Russian roulette, >= 0 */
+    unsigned seed;
+} ngi_voxel_field_settings;
+#define NGI_VOXEL_FIELD_DEFAULTS {1024, 64, 256, 8, 2, 0u}
+
+/* scene: a scene spec ("cornell:seed=5", a .vox or mesh path; docs/RENDERER.md); hours: time of day 0..24, or
+ * negative for the scene's default time. */
+NGI_API ngi_status ngi_voxels_new(ngi_device* device, const char* scene, float hours, ngi_voxels** out);
+/* Any pointer may be NULL. grid: the scene's blocks per axis (X, Y, Z). */
+NGI_API ngi_status ngi_voxels_info(const ngi_voxels* voxels, int* count, int grid[3], float* hours);
+/* attributes [V][10] (centre xyz, albedo rgb, emission rgb, dense id): a voxel_sh model's input. */
+NGI_API ngi_status ngi_voxels_attributes(const ngi_voxels* voxels, float* attributes, size_t bytes);
+/* The path-traced ground truth: sh [V][27], direct [V][3] and full lighting [V][3] at the probe points. Any output
+ * may be NULL (not all three). Blocking; costs about V * (directions + sun_rays + 8 point_samples) rays. */
+NGI_API ngi_status ngi_voxels_field(ngi_voxels* voxels, const ngi_voxel_field_settings* settings, float* sh,
+                                    size_t sh_bytes, float* direct, size_t direct_bytes, float* lighting,
+                                    size_t lighting_bytes);
+/* A voxel_sh model's SH field [V][27] for these voxels (NGI_ERROR_INPUT when the scene's grid is not the one the
+ * model was trained on). */
+NGI_API ngi_status ngi_voxels_predict_sh(ngi_voxels* voxels, ngi_model* model, float* sh, size_t sh_bytes);
+/* The LTF: lighting [V][3] after `bounces` (0..64) bounces from direct [V][3]. visibility = 1 (NGI_LTF_PHYSICAL
+ * only) traces the voxel-to-voxel visibility first (V <= 32768; V^2 / 2 segments); 0 = every pair visible. */
+NGI_API ngi_status ngi_voxels_ltf(ngi_voxels* voxels, const float* direct, size_t direct_bytes, int bounces,
+                                  ngi_ltf_variant variant, int visibility, float* lighting, size_t lighting_bytes);
+/* A frame of this scene (all six faces' features, no reference) seen from `position` (the camera cluster's centre,
+ * recorded in the frame) with the front camera look / up: n x n per face (2..2048), feature_spp >= 1. */
+NGI_API ngi_status ngi_voxels_render_frame(ngi_voxels* voxels, const float position[3], const float look[3],
+                                           const float up[3], int n, int feature_spp, unsigned seed, ngi_frame** out);
+/* Probe shading: the lighting (3 x n x n, irradiance / pi) of `face` of a frame of this scene from a per-voxel field
+ * (kind NGI_FIELD_SH: [V][27]; NGI_FIELD_LIGHTING: [V][3]). camera_position NULL: the frame's position. */
+NGI_API ngi_status ngi_voxels_shade(ngi_voxels* voxels, const ngi_frame* frame, const float camera_position[3],
+                                    ngi_face face, const float* field, size_t field_bytes, ngi_voxel_field_kind kind,
+                                    float* lighting, size_t lighting_bytes);
+NGI_API ngi_status ngi_voxels_retain(ngi_voxels* voxels);
+NGI_API ngi_status ngi_voxels_release(ngi_voxels* voxels);
+
+/* --- Neural GI (seed 002, ngi/neural_gi.hpp) ---------------------------------------------------------------------- */
+NGI_API ngi_status ngi_neural_gi_new(ngi_device* device, ngi_neural_gi** out);
+/* Runs a neural_gi model (with a scene box) on a frame's front face: indirect and lighting (= direct + indirect),
+ * 3 x n x n each, either may be NULL (not both). The frame needs its position and area light. upsample: 1, or K > 1
+ * to run the network at n / K and upsample (n / K a multiple of 2^num_downs). sanitized_inputs (may be NULL): input
+ * values the model's guard replaced. Blocking. */
+NGI_API ngi_status ngi_neural_gi_run(ngi_neural_gi* renderer, ngi_model* model, const ngi_frame* frame, int upsample,
+                                     float* indirect, size_t indirect_bytes, float* lighting, size_t lighting_bytes,
+                                     int* sanitized_inputs);
+NGI_API ngi_status ngi_neural_gi_retain(ngi_neural_gi* renderer);
+NGI_API ngi_status ngi_neural_gi_release(ngi_neural_gi* renderer);
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,10 @@
-/* The C ABI from C99 (compiled with -std=c99 -pedantic -Werror): versions, device listing, handles and their
- * reference counts, explicit sizes, every kind of bad argument, the error callback and the thread-local last error,
- * the surround pipeline host path against the device path, their host-transfer counts, and an application's own
- * OpenCL context, queue and buffers. Usage: test_c_api <source dir> (models/ inside it). Exit code 0 = all passed. */
+/* The C ABI from C99 (compiled with -std=c99 -pedantic -Werror): versions, device listing, typed handles and their
+ * reference counts, explicit sizes, every kind of bad argument (one status per kind), the error callback and the
+ * thread-local last error, the surround pipeline host path against the device path, their host-transfer counts, an
+ * application's own OpenCL context, queue and buffers, and every other family: image models on device buffers, the
+ * AO network against its MLP, voxel_sh on [V, 10] and planar, the voxel field, LTF and probe shading, frames, and the
+ * Neural GI renderer. At the end it checks that it called every NGI_API function of ngi.h.
+ * Usage: test_c_api <source dir> (models/ and bindings/c/ngi.h inside it). Exit code 0 = all passed. */
 #include <CL/cl.h>
 #include <math.h>
 #include <stdio.h>
@@ -9,6 +12,9 @@
 #include <string.h>
 
 #include "ngi.h"
+
+/* A handle of one type passed as another, as a C caller can by mistake. */
+#define AS(type, handle) ((type*)(void*)(handle))
 
 static int failures = 0, checks = 0;
 
@@ -206,8 +212,9 @@ static void test_pipeline(ngi_device* dev, const char* models) {
     light2 = (float*)malloc(out_bytes);
     disp2 = (float*)malloc(out_bytes);
     fill_planes(planes, n, 6);
+    /* Every too-small size is the same kind of error, whichever argument it is (issue 28). */
     CHECK_FAILS(ngi_pipeline_run(p, m, planes, plane_bytes - 4, 6, 0, light, out_bytes, NULL, 0, disp, out_bytes),
-                NGI_ERROR_INPUT, "ngi_pipeline_run", "planes hold");
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_pipeline_run", "planes_bytes");
     CHECK_FAILS(ngi_pipeline_run(p, m, planes, plane_bytes, 6, 0, light, out_bytes - 4, NULL, 0, disp, out_bytes),
                 NGI_ERROR_INVALID_ARGUMENT, "ngi_pipeline_run", "lightmap_bytes");
     CHECK_FAILS(ngi_pipeline_run(p, m, planes, plane_bytes, 6, 8, light, out_bytes, NULL, 0, NULL, 0),
@@ -225,11 +232,19 @@ static void test_pipeline(ngi_device* dev, const char* models) {
     CHECK(ngi_buffer_new(dev, out_bytes, &disp_b) == NGI_OK);
     CHECK(ngi_buffer_new(dev, 64, &small_b) == NGI_OK);
     CHECK(ngi_buffer_write(planes_b, 0, planes, plane_bytes) == NGI_OK);
-    CHECK_FAILS(ngi_buffer_write(planes_b, 8, planes, plane_bytes), NGI_ERROR_INPUT, "ngi_buffer_write", "outside");
-    CHECK_FAILS(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, small_b, NULL, NULL), NGI_ERROR_INPUT, "ngi_pipeline_enqueue",
-                "lightmap buffer holds");
-    CHECK_FAILS(ngi_pipeline_enqueue(p, m, small_b, 6, 0, light_b, NULL, NULL), NGI_ERROR_INPUT, "ngi_pipeline_enqueue",
-                "planes buffer holds");
+    CHECK_FAILS(ngi_buffer_write(planes_b, 8, planes, plane_bytes), NGI_ERROR_INVALID_ARGUMENT, "ngi_buffer_write",
+                "outside");
+    CHECK_FAILS(ngi_buffer_read(planes_b, plane_bytes, planes, 4), NGI_ERROR_INVALID_ARGUMENT, "ngi_buffer_read",
+                "outside");
+    CHECK_FAILS(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, small_b, NULL, NULL), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_pipeline_enqueue", "lightmap buffer holds");
+    CHECK_FAILS(ngi_pipeline_enqueue(p, m, small_b, 6, 0, light_b, NULL, NULL), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_pipeline_enqueue", "planes buffer holds");
+    /* The pipeline and model handles swapped: refused by type, naming both. */
+    CHECK_FAILS(ngi_pipeline_enqueue(AS(ngi_pipeline, m), AS(ngi_model, p), planes_b, 6, 0, light_b, NULL, NULL),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_pipeline_enqueue", "is an ngi_model handle, not an ngi_pipeline");
+    CHECK(ngi_pipeline_retain(p) == NGI_OK);
+    CHECK(ngi_pipeline_release(p) == NGI_OK);
     CHECK_FAILS(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, NULL, NULL, NULL), NGI_ERROR_INVALID_ARGUMENT,
                 "ngi_pipeline_enqueue", "nothing to make");
     CHECK(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, light_b, NULL, disp_b) == NGI_OK);
@@ -275,6 +290,8 @@ static void test_pipeline(ngi_device* dev, const char* models) {
         CHECK(ngi_pipeline_enqueue_images(p, m, images, light_b, NULL, NULL) == NGI_OK);
         CHECK(ngi_buffer_read(light_b, 0, light2, out_bytes) == NGI_OK);
         CHECK(memcmp(light, light2, out_bytes) == 0);
+        CHECK_FAILS(ngi_pipeline_enqueue_images(p, m, images, small_b, NULL, NULL), NGI_ERROR_INVALID_ARGUMENT,
+                    "ngi_pipeline_enqueue_images", "lightmap buffer holds");
         images[2 * 6 + NGI_FEATURE_NORMAL].channels = 2;
         CHECK_FAILS(ngi_pipeline_enqueue_images(p, m, images, light_b, NULL, NULL), NGI_ERROR_INPUT,
                     "ngi_pipeline_enqueue_images", "image 'normal' of face 'left' has 2 channels");
@@ -352,7 +369,8 @@ static void test_interop(ngi_device* ngi_dev, const char* models) {
     CHECK(ngi_buffer_wrap(dev, app_planes, 0, plane_bytes, &planes_b) == NGI_OK);
     CHECK(ngi_buffer_wrap(dev, app_light, 0, out_bytes, &light_b) == NGI_OK);
     CHECK_FAILS(ngi_buffer_wrap(dev, foreign, 0, out_bytes, &bad), NGI_ERROR_INPUT, "ngi_buffer_wrap", "another OpenCL context");
-    CHECK_FAILS(ngi_buffer_wrap(dev, app_light, 0, out_bytes + 4, &bad), NGI_ERROR_INPUT, "ngi_buffer_wrap", "outside");
+    CHECK_FAILS(ngi_buffer_wrap(dev, app_light, 0, out_bytes + 4, &bad), NGI_ERROR_INVALID_ARGUMENT, "ngi_buffer_wrap",
+                "outside");
     CHECK_FAILS(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, planes_b, NULL, NULL), NGI_ERROR_INPUT, "ngi_pipeline_enqueue",
                 "READ_ONLY");
     CHECK(ngi_pipeline_enqueue(p, m, planes_b, 6, 0, light_b, NULL, NULL) == NGI_OK); /* warm-up */
@@ -379,6 +397,574 @@ static void test_interop(ngi_device* ngi_dev, const char* models) {
     free(got);
 }
 
+/* Typed handles (issue 28): a handle of another type is refused with NGI_ERROR_INVALID_ARGUMENT naming both types and
+ * nothing is written; the handle itself stays usable. Device queries, retain/release, markers. */
+static void test_typed_handles(ngi_device* dev) {
+    int in_nc = -7;
+    size_t bytes = 12345, needed = 0;
+    char name[256];
+    struct _cl_event* marker = NULL;
+    ngi_buffer* b = NULL;
+    CHECK_FAILS(ngi_model_channels(AS(ngi_model, dev), &in_nc, NULL, NULL), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_model_channels", "model is an ngi_device handle, not an ngi_model");
+    CHECK(in_nc == -7);
+    CHECK_FAILS(ngi_buffer_size(AS(ngi_buffer, dev), &bytes), NGI_ERROR_INVALID_ARGUMENT, "ngi_buffer_size",
+                "buffer is an ngi_device handle, not an ngi_buffer");
+    CHECK(bytes == 12345);
+    CHECK_FAILS(ngi_model_release(AS(ngi_model, dev)), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_release", "ngi_device");
+    CHECK(ngi_device_sync(dev) == NGI_OK); /* not released by the refused call */
+    CHECK(ngi_buffer_new(dev, 256, &b) == NGI_OK);
+    CHECK_FAILS(ngi_device_sync(AS(ngi_device, b)), NGI_ERROR_INVALID_ARGUMENT, "ngi_device_sync",
+                "device is an ngi_buffer handle, not an ngi_device");
+    {
+        ngi_buffer* b2 = b;
+        CHECK_FAILS(ngi_buffer_new(AS(ngi_device, b), 16, &b2), NGI_ERROR_INVALID_ARGUMENT, "ngi_buffer_new",
+                    "ngi_buffer");
+        CHECK(b2 == NULL); /* a failing call clears its out handle */
+    }
+    CHECK(ngi_buffer_retain(b) == NGI_OK);
+    CHECK(ngi_buffer_release(b) == NGI_OK);
+    CHECK(ngi_buffer_size(b, &bytes) == NGI_OK && bytes == 256);
+    CHECK(ngi_buffer_release(b) == NGI_OK);
+    CHECK(ngi_device_retain(dev) == NGI_OK);
+    CHECK(ngi_device_release(dev) == NGI_OK);
+    CHECK(ngi_device_string(dev, NGI_DEVICE_PLATFORM, name, sizeof name, &needed) == NGI_OK && strlen(name) > 0);
+    CHECK(ngi_device_marker(dev, &marker) == NGI_OK && marker != NULL);
+    CHECK(clWaitForEvents(1, &marker) == CL_SUCCESS);
+    clReleaseEvent(marker);
+    CHECK(ngi_last_cl_error() == 0);
+}
+
+/* An image model on device buffers against the host run, and the size rules of ngi_model_enqueue. */
+static void test_model_enqueue(ngi_device* dev, const char* models) {
+    char path[4096];
+    const int h = 64, w = 64;
+    ngi_model* m = NULL;
+    ngi_family family = NGI_FAMILY_MAX_ENUM;
+    ngi_buffer *in_b = NULL, *out_b = NULL;
+    size_t in_bytes = (size_t)10 * h * w * sizeof(float), out_bytes = (size_t)3 * h * w * sizeof(float), i;
+    float *x = (float*)malloc(in_bytes), *y = (float*)malloc(out_bytes), *y2 = (float*)malloc(out_bytes);
+    int sanitized = -1;
+    snprintf(path, sizeof path, "%s/single_view.safetensors", models);
+    CHECK(ngi_model_load(dev, path, &m) == NGI_OK);
+    CHECK(ngi_model_family(m, &family) == NGI_OK && family == NGI_FAMILY_PIX2PIX_UNET);
+    CHECK_FAILS(ngi_model_family(m, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_family", "family is NULL");
+    for (i = 0; i < in_bytes / sizeof(float); ++i) x[i] = (float)((i * 2654435761u) % 2000u) / 1000.0f - 1.0f;
+    CHECK(ngi_model_run(m, x, in_bytes, h, w, y, out_bytes) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, in_bytes, &in_b) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, out_bytes, &out_b) == NGI_OK);
+    CHECK(ngi_buffer_write(in_b, 0, x, in_bytes) == NGI_OK);
+    CHECK_FAILS(ngi_model_enqueue(m, out_b, out_b, h, w), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_enqueue",
+                "input buffer holds");
+    CHECK_FAILS(ngi_model_enqueue(m, in_b, out_b, h, 2 * w), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_enqueue",
+                "buffer holds");
+    CHECK_FAILS(ngi_model_enqueue(m, in_b, out_b, 0, w), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_enqueue", "positive");
+    CHECK_FAILS(ngi_model_enqueue(m, in_b, out_b, 32, 32), NGI_ERROR_INPUT, "ngi_model_enqueue", "2^num_downs");
+    CHECK(ngi_model_enqueue(m, in_b, out_b, h, w) == NGI_OK);
+    CHECK(ngi_buffer_read(out_b, 0, y2, out_bytes) == NGI_OK);
+    CHECK(memcmp(y, y2, out_bytes) == 0);
+    CHECK(ngi_model_sanitized_inputs(m, &sanitized) == NGI_OK && sanitized == 0);
+    CHECK_FAILS(ngi_model_run_items(m, x, in_bytes, 4, y, out_bytes), NGI_ERROR_INPUT, "ngi_model_run_items",
+                "pix2pix_unet");
+    ngi_buffer_release(in_b);
+    ngi_buffer_release(out_b);
+    ngi_model_release(m);
+    free(x);
+    free(y);
+    free(y2);
+}
+
+/* Seed 001's AO network: at radius 0 it is its MLP on the pixel's own normal repeated 16 times, clamped to [0, 1],
+ * 1 on the background (docs/CONVENTIONS.md section 15); the device path equals the host path. */
+static void test_ao(ngi_device* dev, const char* models) {
+    char path[4096];
+    enum { H = 32, W = 48 };
+    const size_t np = (size_t)H * W;
+    ngi_ao* ao = NULL;
+    ngi_model* mlp = NULL;
+    ngi_family family = NGI_FAMILY_MAX_ENUM;
+    ngi_buffer *nb = NULL, *ab = NULL;
+    float radius = 0.0f;
+    int size = 0, face = -1, in_nc = 0, out_nc = 0;
+    float *normals = (float*)malloc(3 * np * sizeof(float)), *ring = (float*)malloc(48 * np * sizeof(float));
+    float *items = (float*)malloc(48 * np * sizeof(float)), *y = (float*)malloc(np * sizeof(float));
+    float *y_items = (float*)malloc(np * sizeof(float)), *a0 = (float*)malloc(np * sizeof(float));
+    float *a1 = (float*)malloc(np * sizeof(float)), *a2 = (float*)malloc(np * sizeof(float));
+    size_t i, worst = 0;
+    unsigned state = 99u;
+    double max_err = 0.0;
+    int k, c;
+    for (i = 0; i < np; ++i) {
+        float v[3], len;
+        for (c = 0; c < 3; ++c) {
+            state = state * 1664525u + 1013904223u;
+            v[c] = (float)(state >> 8) / 8388608.0f - 1.0f;
+        }
+        len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        for (c = 0; c < 3; ++c) normals[(size_t)c * np + i] = (i % 7 == 3 || len < 1e-3f) ? 0.0f : v[c] / len;
+    }
+    snprintf(path, sizeof path, "%s/ao_sculpture_16x8.safetensors", models);
+    CHECK(ngi_ao_load(dev, path, &ao) == NGI_OK);
+    CHECK(ngi_ao_info(ao, &radius, &size, &face) == NGI_OK && radius == 3.0f && size == 256 && face == 0);
+    CHECK(ngi_ao_run(ao, normals, 3 * np * sizeof(float), H, W, 0.0f, a0, np * sizeof(float)) == NGI_OK);
+    /* The same file as a plain mlp model, fed the ring by hand: channel 3k + c = component c of point k. */
+    CHECK(ngi_model_load(dev, path, &mlp) == NGI_OK);
+    CHECK(ngi_model_family(mlp, &family) == NGI_OK && family == NGI_FAMILY_MLP);
+    CHECK(ngi_model_channels(mlp, &in_nc, &out_nc, NULL) == NGI_OK && in_nc == 48 && out_nc == 1);
+    for (k = 0; k < 16; ++k)
+        for (c = 0; c < 3; ++c)
+            for (i = 0; i < np; ++i) {
+                ring[(size_t)(3 * k + c) * np + i] = normals[(size_t)c * np + i];
+                items[i * 48 + (size_t)(3 * k + c)] = normals[(size_t)c * np + i];
+            }
+    CHECK(ngi_model_run(mlp, ring, 48 * np * sizeof(float), H, W, y, np * sizeof(float)) == NGI_OK);
+    CHECK(ngi_model_run_items(mlp, items, 48 * np * sizeof(float), (int)np, y_items, np * sizeof(float)) == NGI_OK);
+    CHECK_FAILS(ngi_model_run_items(mlp, items, 48 * np * sizeof(float) - 4, (int)np, y_items, np * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_model_run_items", "input_bytes");
+    for (i = 0; i < np; ++i) {
+        const int background = normals[i] == 0.0f && normals[np + i] == 0.0f && normals[2 * np + i] == 0.0f;
+        const float want = background ? 1.0f : (isnan(y[i]) ? 0.0f : (y[i] < 0 ? 0.0f : (y[i] > 1 ? 1.0f : y[i])));
+        const double err = fabs((double)a0[i] - want);
+        if (err > max_err) {
+            max_err = err;
+            worst = i;
+        }
+        if (fabs((double)y_items[i] - y[i]) > 1e-5) break; /* per item = per pixel */
+    }
+    CHECK(i == np);
+    CHECK(max_err <= 1e-5);
+    if (max_err > 1e-5) fprintf(stderr, "AO vs its MLP: pixel %u differs by %g\n", (unsigned)worst, max_err);
+    /* The trained radius scaled to H: host and device paths, the same bits. */
+    CHECK(ngi_ao_run(ao, normals, 3 * np * sizeof(float), H, W, -1.0f, a1, np * sizeof(float)) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, 3 * np * sizeof(float), &nb) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, np * sizeof(float), &ab) == NGI_OK);
+    CHECK(ngi_buffer_write(nb, 0, normals, 3 * np * sizeof(float)) == NGI_OK);
+    CHECK(ngi_ao_enqueue(ao, nb, ab, H, W, -1.0f) == NGI_OK);
+    CHECK(ngi_buffer_read(ab, 0, a2, np * sizeof(float)) == NGI_OK);
+    CHECK(memcmp(a1, a2, np * sizeof(float)) == 0);
+    for (i = 0; i < np; ++i)
+        if (!(a1[i] >= 0.0f && a1[i] <= 1.0f)) break;
+    CHECK(i == np);
+    CHECK_FAILS(ngi_ao_enqueue(ao, ab, ab, H, W, -1.0f), NGI_ERROR_INVALID_ARGUMENT, "ngi_ao_enqueue",
+                "normals buffer holds");
+    CHECK_FAILS(ngi_ao_run(ao, normals, 3 * np * sizeof(float), H, W, NAN, a1, np * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_ao_run", "radius_px");
+    CHECK_FAILS(ngi_ao_run(ao, normals, 3 * np * sizeof(float), H, W, 0.0f, a1, np * sizeof(float) - 1),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_ao_run", "result_bytes");
+    CHECK_FAILS(ngi_ao_run(AS(ngi_ao, mlp), normals, 3 * np * sizeof(float), H, W, 0.0f, a1, np * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_ao_run", "ao is an ngi_model handle, not an ngi_ao");
+    {
+        ngi_ao* bad = NULL;
+        snprintf(path, sizeof path, "%s/single_view.safetensors", models);
+        CHECK_FAILS(ngi_ao_load(dev, path, &bad), NGI_ERROR_INPUT, "ngi_ao_load", "single_view.safetensors");
+        CHECK(bad == NULL);
+    }
+    CHECK(ngi_ao_retain(ao) == NGI_OK);
+    CHECK(ngi_ao_release(ao) == NGI_OK);
+    CHECK(ngi_ao_release(ao) == NGI_OK);
+    CHECK_FAILS(ngi_ao_info(ao, NULL, NULL, NULL), NGI_ERROR_INVALID_HANDLE, "ngi_ao_info", "not a live handle");
+    ngi_buffer_release(nb);
+    ngi_buffer_release(ab);
+    ngi_model_release(mlp);
+    free(normals);
+    free(ring);
+    free(items);
+    free(y);
+    free(y_items);
+    free(a0);
+    free(a1);
+    free(a2);
+}
+
+static double sum_of(const float* v, size_t count) {
+    double s = 0.0;
+    size_t i;
+    for (i = 0; i < count; ++i) s += v[i];
+    return s;
+}
+
+static int all_finite_nonnegative(const float* v, size_t count) {
+    size_t i;
+    for (i = 0; i < count; ++i)
+        if (!isfinite(v[i]) || v[i] < 0.0f) return 0;
+    return 1;
+}
+
+/* Seed 004 on a voxel Cornell box: voxel_sh on [V, 10] (by item, planar, on the device, through the voxels), the
+ * path-traced field, the LTF, a rendered frame and probe shading from a field. */
+static void test_voxels(ngi_device* dev, const char* models) {
+    char path[4096];
+    ngi_voxels *vox = NULL, *other = NULL;
+    ngi_model *sh_model = NULL, *image_model = NULL;
+    ngi_family family = NGI_FAMILY_MAX_ENUM;
+    ngi_frame *frame = NULL, *copy = NULL, *front = NULL;
+    ngi_buffer *in_b = NULL, *out_b = NULL;
+    int count = 0, grid[3] = {0, 0, 0}, n = 0, faces = 0, has_pos = -1, has_light = -1, in_nc = 0, out_nc = 0;
+    unsigned flags = 0;
+    float hours = -1.0f;
+    size_t V, i, j;
+    float *attr, *planar, *sh1, *sh2, *sh3, *sh4, *sh_pt, *direct, *lit, *lit2, *ltf0, *ltf2, *ltf_phys;
+    float *shade1, *shade2, *fplanes, *fplanes2;
+    size_t frame_bytes;
+    const float pos[3] = {20.0f, 20.0f, 24.0f}, look[3] = {0.0f, 0.0f, -1.0f}, up[3] = {0.0f, 1.0f, 0.0f};
+    const ngi_voxel_field_settings cheap = {16, 4, 4, 1, 2, 7u};
+    ngi_voxel_field_settings bad = cheap;
+
+    CHECK(ngi_voxels_new(dev, "cornell:seed=5", -1.0f, &vox) == NGI_OK);
+    CHECK(ngi_voxels_info(vox, &count, grid, &hours) == NGI_OK);
+    CHECK(count > 1000 && grid[0] == 40 && grid[1] == 40 && grid[2] == 40 && hours >= 0.0f && hours <= 24.0f);
+    V = (size_t)count;
+    attr = (float*)malloc(V * 10 * sizeof(float));
+    planar = (float*)malloc(V * 27 * sizeof(float));
+    sh1 = (float*)malloc(V * 27 * sizeof(float));
+    sh2 = (float*)malloc(V * 27 * sizeof(float));
+    sh3 = (float*)malloc(V * 27 * sizeof(float));
+    sh4 = (float*)malloc(V * 27 * sizeof(float));
+    sh_pt = (float*)malloc(V * 27 * sizeof(float));
+    direct = (float*)malloc(V * 3 * sizeof(float));
+    lit = (float*)malloc(V * 3 * sizeof(float));
+    lit2 = (float*)malloc(V * 3 * sizeof(float));
+    ltf0 = (float*)malloc(V * 3 * sizeof(float));
+    ltf2 = (float*)malloc(V * 3 * sizeof(float));
+    ltf_phys = (float*)malloc(V * 3 * sizeof(float));
+    CHECK(ngi_voxels_attributes(vox, attr, V * 10 * sizeof(float)) == NGI_OK);
+    CHECK_FAILS(ngi_voxels_attributes(vox, attr, V * 10 * sizeof(float) - 4), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_voxels_attributes", "bytes");
+
+    /* voxel_sh: [V, 10] by item; the same through the voxels; planar [10][V] host and device (issue 28: ngi_model_run
+       used to build [1, C, H, W] for it). */
+    snprintf(path, sizeof path, "%s/voxel_sh_set.safetensors", models);
+    CHECK(ngi_model_load(dev, path, &sh_model) == NGI_OK);
+    CHECK(ngi_model_family(sh_model, &family) == NGI_OK && family == NGI_FAMILY_VOXEL_SH);
+    CHECK(ngi_model_channels(sh_model, &in_nc, &out_nc, NULL) == NGI_OK && in_nc == 10 && out_nc == 27);
+    CHECK(ngi_model_run_items(sh_model, attr, V * 10 * sizeof(float), count, sh1, V * 27 * sizeof(float)) == NGI_OK);
+    CHECK(ngi_voxels_predict_sh(vox, sh_model, sh2, V * 27 * sizeof(float)) == NGI_OK);
+    CHECK(memcmp(sh1, sh2, V * 27 * sizeof(float)) == 0);
+    for (i = 0; i < V; ++i)
+        for (j = 0; j < 10; ++j) planar[j * V + i] = attr[i * 10 + j];
+    CHECK(ngi_model_run(sh_model, planar, V * 10 * sizeof(float), count, 1, sh3, V * 27 * sizeof(float)) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, V * 10 * sizeof(float), &in_b) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, V * 27 * sizeof(float), &out_b) == NGI_OK);
+    CHECK(ngi_buffer_write(in_b, 0, planar, V * 10 * sizeof(float)) == NGI_OK);
+    CHECK(ngi_model_enqueue(sh_model, in_b, out_b, count, 1) == NGI_OK);
+    CHECK(ngi_buffer_read(out_b, 0, sh4, V * 27 * sizeof(float)) == NGI_OK);
+    {
+        double max_planar = 0.0, max_device = 0.0, scale = 0.0;
+        for (i = 0; i < V; ++i)
+            for (j = 0; j < 27; ++j) {
+                const double ref = sh1[i * 27 + j];
+                const double d3 = fabs(sh3[j * V + i] - ref), d4 = fabs(sh4[j * V + i] - ref);
+                if (fabs(ref) > scale) scale = fabs(ref);
+                if (d3 > max_planar) max_planar = d3;
+                if (d4 > max_device) max_device = d4;
+            }
+        CHECK(scale > 0.0 && isfinite(scale));
+        CHECK(max_planar <= 1e-5 * scale); /* the same network, transposed on the host */
+        CHECK(max_device <= 1e-4 * scale); /* the device path (same kernels, planar I/O) */
+        if (max_planar > 1e-5 * scale || max_device > 1e-4 * scale)
+            fprintf(stderr, "voxel_sh: planar differs by %g, device by %g (scale %g)\n", max_planar, max_device, scale);
+    }
+    /* A scene of another grid: the model's inputs are absolute positions, so it is refused, naming the grids. */
+    CHECK(ngi_voxels_new(dev, "sculpture:seed=1", 12.0f, &other) == NGI_OK);
+    CHECK_FAILS(ngi_voxels_predict_sh(other, sh_model, sh2, V * 27 * sizeof(float)), NGI_ERROR_INPUT,
+                "ngi_voxels_predict_sh", "40");
+    snprintf(path, sizeof path, "%s/single_view.safetensors", models);
+    CHECK(ngi_model_load(dev, path, &image_model) == NGI_OK);
+    CHECK_FAILS(ngi_voxels_predict_sh(vox, image_model, sh2, V * 27 * sizeof(float)), NGI_ERROR_INPUT,
+                "ngi_voxels_predict_sh", "voxel_sh");
+    {
+        ngi_voxels* none = vox;
+        CHECK_FAILS(ngi_voxels_new(dev, "no_such_family:seed=1", -1.0f, &none), NGI_ERROR_INPUT, "ngi_voxels_new",
+                    "no_such_family");
+        CHECK(none == NULL);
+        CHECK_FAILS(ngi_voxels_new(dev, "cornell", 25.0f, &none), NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_new", "hours");
+    }
+
+    /* The path-traced ground truth at a cheap setting: deterministic in its seed; full lighting >= direct light in
+       total (bounces add light); the SH's band-0 red coefficient non-negative on average. */
+    CHECK(ngi_voxels_field(vox, &cheap, sh_pt, V * 27 * sizeof(float), direct, V * 3 * sizeof(float), lit,
+                           V * 3 * sizeof(float)) == NGI_OK);
+    CHECK(ngi_voxels_field(vox, &cheap, NULL, 0, NULL, 0, lit2, V * 3 * sizeof(float)) == NGI_OK);
+    CHECK(memcmp(lit, lit2, V * 3 * sizeof(float)) == 0);
+    CHECK(all_finite_nonnegative(direct, V * 3) && all_finite_nonnegative(lit, V * 3));
+    CHECK(sum_of(direct, V * 3) > 0.0 && sum_of(lit, V * 3) > sum_of(direct, V * 3));
+    {
+        double dc = 0.0;
+        for (i = 0; i < V; ++i) dc += sh_pt[i * 27];
+        CHECK(dc > 0.0);
+    }
+    bad.directions = 15;
+    CHECK_FAILS(ngi_voxels_field(vox, &bad, NULL, 0, direct, V * 3 * sizeof(float), NULL, 0), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_voxels_field", "directions 15");
+    CHECK_FAILS(ngi_voxels_field(vox, &cheap, NULL, 0, NULL, 0, NULL, 0), NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_field",
+                "nothing to make");
+
+    /* The LTF: 0 bounces is the direct light itself; bounces add light; the physical variant with visibility. */
+    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 0, NGI_LTF_AS_WRITTEN, 0, ltf0, V * 3 * sizeof(float)) ==
+          NGI_OK);
+    {
+        double worst = 0.0;
+        for (i = 0; i < V * 3; ++i)
+            if (fabs(ltf0[i] - direct[i]) > worst) worst = fabs(ltf0[i] - direct[i]);
+        CHECK(worst <= 1e-6);
+    }
+    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_AS_WRITTEN, 0, ltf2, V * 3 * sizeof(float)) ==
+          NGI_OK);
+    CHECK(all_finite_nonnegative(ltf2, V * 3) && sum_of(ltf2, V * 3) > sum_of(direct, V * 3));
+    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_PHYSICAL, 1, ltf_phys, V * 3 * sizeof(float)) ==
+          NGI_OK);
+    CHECK(all_finite_nonnegative(ltf_phys, V * 3) && sum_of(ltf_phys, V * 3) > sum_of(direct, V * 3));
+    CHECK_FAILS(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_AS_WRITTEN, 1, ltf2, V * 3 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_ltf", "visibility");
+    CHECK_FAILS(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 65, NGI_LTF_PHYSICAL, 0, ltf2, V * 3 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_ltf", "bounces 65");
+    CHECK_FAILS(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float) - 4, 1, NGI_LTF_PHYSICAL, 0, ltf2,
+                               V * 3 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_ltf", "direct_bytes");
+
+    /* A rendered frame of the box, its planes round trip through ngi_frame_from_planes, and probe shading: linear in
+       the field, non-negative, lit somewhere. */
+    CHECK(ngi_voxels_render_frame(vox, pos, look, up, 32, 1, 3u, &frame) == NGI_OK);
+    CHECK(ngi_frame_info(frame, &n, &faces, &flags, &has_pos, &has_light) == NGI_OK);
+    CHECK(n == 32 && faces == 6 && flags == (NGI_FRAME_EMISSION | NGI_FRAME_ENV) && has_pos == 1 && has_light == 0);
+    CHECK(ngi_frame_retain(frame) == NGI_OK);
+    CHECK(ngi_frame_release(frame) == NGI_OK);
+    frame_bytes = (size_t)6 * 16 * 32 * 32 * sizeof(float);
+    fplanes = (float*)malloc(frame_bytes);
+    fplanes2 = (float*)malloc(frame_bytes);
+    shade1 = (float*)malloc((size_t)3 * 32 * 32 * sizeof(float));
+    shade2 = (float*)malloc((size_t)3 * 32 * 32 * sizeof(float));
+    CHECK(ngi_frame_planes(frame, 6, fplanes, frame_bytes) == NGI_OK);
+    CHECK_FAILS(ngi_frame_planes(frame, 6, fplanes, frame_bytes - 4), NGI_ERROR_INVALID_ARGUMENT, "ngi_frame_planes",
+                "bytes");
+    CHECK(ngi_frame_from_planes(32, fplanes, frame_bytes, 6, flags, look, up, &copy) == NGI_OK);
+    CHECK(ngi_frame_planes(copy, 6, fplanes2, frame_bytes) == NGI_OK);
+    CHECK(memcmp(fplanes, fplanes2, frame_bytes) == 0);
+    CHECK(ngi_frame_from_planes(32, fplanes, frame_bytes / 6, 1, 0, look, up, &front) == NGI_OK);
+    CHECK_FAILS(ngi_frame_planes(front, 6, fplanes2, frame_bytes), NGI_ERROR_INPUT, "ngi_frame_planes", "front face only");
+
+    CHECK(ngi_voxels_shade(vox, frame, NULL, NGI_FACE_FRONT, ltf2, V * 3 * sizeof(float), NGI_FIELD_LIGHTING, shade1,
+                           (size_t)3 * 32 * 32 * sizeof(float)) == NGI_OK);
+    for (i = 0; i < V * 3; ++i) lit2[i] = 2.0f * ltf2[i];
+    CHECK(ngi_voxels_shade(vox, copy, pos, NGI_FACE_FRONT, lit2, V * 3 * sizeof(float), NGI_FIELD_LIGHTING, shade2,
+                           (size_t)3 * 32 * 32 * sizeof(float)) == NGI_OK);
+    CHECK(all_finite_nonnegative(shade1, (size_t)3 * 32 * 32) && sum_of(shade1, (size_t)3 * 32 * 32) > 0.0);
+    for (i = 0; i < (size_t)3 * 32 * 32; ++i)
+        if (fabs(shade2[i] - 2.0 * shade1[i]) > 1e-5 * (1.0 + fabs(shade2[i]))) break;
+    CHECK(i == (size_t)3 * 32 * 32);
+    CHECK(ngi_voxels_shade(vox, frame, NULL, NGI_FACE_DOWN, sh_pt, V * 27 * sizeof(float), NGI_FIELD_SH, shade1,
+                           (size_t)3 * 32 * 32 * sizeof(float)) == NGI_OK);
+    for (i = 0; i < (size_t)3 * 32 * 32; ++i)
+        if (!isfinite(shade1[i])) break;
+    CHECK(i == (size_t)3 * 32 * 32);
+    CHECK_FAILS(ngi_voxels_shade(vox, front, NULL, NGI_FACE_FRONT, ltf2, V * 3 * sizeof(float), NGI_FIELD_LIGHTING,
+                                 shade1, (size_t)3 * 32 * 32 * sizeof(float)),
+                NGI_ERROR_INPUT, "ngi_voxels_shade", "no position");
+    CHECK_FAILS(ngi_voxels_shade(vox, front, pos, NGI_FACE_BACK, ltf2, V * 3 * sizeof(float), NGI_FIELD_LIGHTING,
+                                 shade1, (size_t)3 * 32 * 32 * sizeof(float)),
+                NGI_ERROR_INPUT, "ngi_voxels_shade", "no back face");
+    CHECK_FAILS(ngi_voxels_shade(vox, frame, NULL, (ngi_face)6, ltf2, V * 3 * sizeof(float), NGI_FIELD_LIGHTING, shade1,
+                                 (size_t)3 * 32 * 32 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_shade", "face 6");
+    CHECK_FAILS(ngi_voxels_shade(vox, frame, NULL, NGI_FACE_FRONT, ltf2, V * 3 * sizeof(float), NGI_FIELD_SH, shade1,
+                                 (size_t)3 * 32 * 32 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_shade", "field_bytes");
+    CHECK_FAILS(ngi_voxels_shade(vox, AS(ngi_frame, vox), NULL, NGI_FACE_FRONT, ltf2, V * 3 * sizeof(float),
+                                 NGI_FIELD_LIGHTING, shade1, (size_t)3 * 32 * 32 * sizeof(float)),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_shade", "frame is an ngi_voxels handle, not an ngi_frame");
+    {
+        ngi_frame* none = frame;
+        CHECK_FAILS(ngi_voxels_render_frame(vox, pos, look, look, 32, 1, 0u, &none), NGI_ERROR_INVALID_ARGUMENT,
+                    "ngi_voxels_render_frame", "parallel");
+        CHECK(none == NULL);
+    }
+
+    CHECK(ngi_voxels_retain(vox) == NGI_OK);
+    CHECK(ngi_voxels_release(vox) == NGI_OK);
+    CHECK(ngi_voxels_release(vox) == NGI_OK);
+    CHECK(ngi_voxels_release(other) == NGI_OK);
+    ngi_frame_release(frame);
+    ngi_frame_release(copy);
+    ngi_frame_release(front);
+    ngi_buffer_release(in_b);
+    ngi_buffer_release(out_b);
+    ngi_model_release(sh_model);
+    ngi_model_release(image_model);
+    free(attr);
+    free(planar);
+    free(sh1);
+    free(sh2);
+    free(sh3);
+    free(sh4);
+    free(sh_pt);
+    free(direct);
+    free(lit);
+    free(lit2);
+    free(ltf0);
+    free(ltf2);
+    free(ltf_phys);
+    free(shade1);
+    free(shade2);
+    free(fplanes);
+    free(fplanes2);
+}
+
+/* Seed 002 on a synthetic front face inside the bleed scene's box: lighting = direct + indirect, indirect >= 0 and 0
+ * on sky pixels; a frame without an area light, a model of another family and a bad upsample factor are refused. */
+static void test_neural_gi(ngi_device* dev, const char* models) {
+    char path[4096];
+    enum { N = 64 };
+    const size_t np = (size_t)N * N, out_bytes = 3 * np * sizeof(float);
+    const size_t planes_bytes = 16 * np * sizeof(float);
+    ngi_neural_gi* gi = NULL;
+    ngi_model *m = NULL, *other = NULL;
+    ngi_frame* frame = NULL;
+    ngi_family family = NGI_FAMILY_MAX_ENUM;
+    float *planes = (float*)malloc(planes_bytes), *indirect = (float*)malloc(out_bytes);
+    float *lighting = (float*)malloc(out_bytes), *lighting2 = (float*)malloc(out_bytes);
+    const float look[3] = {0.3f, -0.2f, -1.0f}, up[3] = {0.0f, 1.0f, 0.0f}, position[3] = {9.0f, 4.0f, 12.0f};
+    const float centre[3] = {9.0f, 8.5f, 9.0f}, half_u[3] = {0.6f, 0.0f, 0.0f}, half_v[3] = {0.0f, 0.0f, 0.4f};
+    const float radiance[3] = {20.0f, 18.0f, 15.0f}, skew[3] = {0.3f, 0.0f, 0.4f};
+    int sanitized = -1, has_light = -1;
+    size_t i;
+    int c, sky_lit = 0, sum_ok = 1;
+    unsigned state = 7u;
+    for (i = 0; i < np; ++i) {
+        const int x = (int)(i % N), y = (int)(i / N), sky = x < N / 4 && y < N / 4;
+        int axis;
+        float u[4];
+        for (c = 0; c < 4; ++c) {
+            state = state * 1664525u + 1013904223u;
+            u[c] = (float)(state >> 8) / 16777216.0f;
+        }
+        axis = (int)(u[3] * 3.0f) % 3;
+        for (c = 0; c < 3; ++c) {
+            planes[(size_t)c * np + i] = sky ? 0.0f : u[c];                                     /* albedo */
+            planes[(size_t)(3 + c) * np + i] = sky ? 0.0f : (c == axis ? (u[c] < 0.5f ? -1.0f : 1.0f) : 0.0f);
+            planes[(size_t)(7 + c) * np + i] = sky ? 0.0f : 40.0f * u[0] * u[1] * u[c];         /* direct */
+            planes[(size_t)(10 + c) * np + i] = 0.0f;
+            planes[(size_t)(13 + c) * np + i] = 0.0f;
+        }
+        planes[6 * np + i] = sky ? 1.0e4f : 0.5f + 5.5f * u[2]; /* depth */
+    }
+    snprintf(path, sizeof path, "%s/neural_gi/neural_gi_bleed.safetensors", models);
+    CHECK(ngi_model_load(dev, path, &m) == NGI_OK);
+    CHECK(ngi_model_family(m, &family) == NGI_OK && family == NGI_FAMILY_NEURAL_GI);
+    CHECK(ngi_neural_gi_new(dev, &gi) == NGI_OK);
+    CHECK_FAILS(ngi_frame_from_planes(N, planes, planes_bytes - 4, 1, 0, look, up, &frame), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_frame_from_planes", "planes_bytes");
+    CHECK(frame == NULL);
+    CHECK_FAILS(ngi_frame_from_planes(N, planes, planes_bytes, 1, 4, look, up, &frame), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_frame_from_planes", "flags");
+    CHECK(ngi_frame_from_planes(N, planes, planes_bytes, 1, 0, look, up, &frame) == NGI_OK);
+    CHECK_FAILS(ngi_neural_gi_run(gi, m, frame, 1, indirect, out_bytes, lighting, out_bytes, NULL), NGI_ERROR_INPUT,
+                "ngi_neural_gi_run", "area light");
+    CHECK(ngi_frame_set_position(frame, position) == NGI_OK);
+    CHECK_FAILS(ngi_frame_set_area_light(frame, centre, half_u, skew, radiance), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_frame_set_area_light", "orthogonal");
+    CHECK(ngi_frame_set_area_light(frame, centre, half_u, half_v, radiance) == NGI_OK);
+    CHECK(ngi_frame_info(frame, NULL, NULL, NULL, NULL, &has_light) == NGI_OK && has_light == 1);
+    CHECK(ngi_neural_gi_run(gi, m, frame, 1, indirect, out_bytes, lighting, out_bytes, &sanitized) == NGI_OK);
+    CHECK(sanitized == 0);
+    CHECK(all_finite_nonnegative(indirect, 3 * np) && sum_of(indirect, 3 * np) > 0.0);
+    for (i = 0; i < np; ++i) {
+        const int x = (int)(i % N), y = (int)(i / N), sky = x < N / 4 && y < N / 4;
+        for (c = 0; c < 3; ++c) {
+            const float d = planes[(size_t)(7 + c) * np + i], ind = indirect[(size_t)c * np + i];
+            if (sky && ind != 0.0f) sky_lit = 1;
+            if (fabs(lighting[(size_t)c * np + i] - (d + ind)) > 1e-5 * (1.0 + fabs(d + ind))) sum_ok = 0;
+        }
+    }
+    CHECK(!sky_lit);
+    CHECK(sum_ok);
+    /* At half resolution with joint bilateral upsampling: a different estimate of the same light. */
+    CHECK(ngi_neural_gi_run(gi, m, frame, 2, NULL, 0, lighting2, out_bytes, NULL) == NGI_OK);
+    CHECK(all_finite_nonnegative(lighting2, 3 * np));
+    CHECK_FAILS(ngi_neural_gi_run(gi, m, frame, 4, NULL, 0, lighting2, out_bytes, NULL), NGI_ERROR_INPUT,
+                "ngi_neural_gi_run", "upsample 4");
+    CHECK_FAILS(ngi_neural_gi_run(gi, m, frame, 1, indirect, out_bytes - 4, NULL, 0, NULL), NGI_ERROR_INVALID_ARGUMENT,
+                "ngi_neural_gi_run", "indirect_bytes");
+    CHECK_FAILS(ngi_neural_gi_run(gi, m, AS(ngi_frame, m), 1, indirect, out_bytes, NULL, 0, NULL),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_neural_gi_run", "frame is an ngi_model handle, not an ngi_frame");
+    snprintf(path, sizeof path, "%s/single_view.safetensors", models);
+    CHECK(ngi_model_load(dev, path, &other) == NGI_OK);
+    CHECK_FAILS(ngi_neural_gi_run(gi, other, frame, 1, indirect, out_bytes, NULL, 0, NULL), NGI_ERROR_INPUT,
+                "ngi_neural_gi_run", "neural_gi model is needed");
+    CHECK(ngi_neural_gi_retain(gi) == NGI_OK);
+    CHECK(ngi_neural_gi_release(gi) == NGI_OK);
+    CHECK(ngi_neural_gi_release(gi) == NGI_OK);
+    CHECK_FAILS(ngi_neural_gi_run(gi, m, frame, 1, indirect, out_bytes, NULL, 0, NULL), NGI_ERROR_INVALID_HANDLE,
+                "ngi_neural_gi_run", "not a live handle");
+    /* Frame files: the reader's errors (a real folder is read by the c_sample_lightmap test). */
+    {
+        ngi_frame* f = NULL;
+        CHECK_FAILS(ngi_frame_read("/nonexistent/frame", &f), NGI_ERROR_INPUT, "ngi_frame_read", "/nonexistent/frame");
+        CHECK_FAILS(ngi_frame_read(NULL, &f), NGI_ERROR_INVALID_ARGUMENT, "ngi_frame_read", "folder is NULL");
+        CHECK(f == NULL);
+    }
+    ngi_frame_release(frame);
+    ngi_model_release(m);
+    ngi_model_release(other);
+    free(planes);
+    free(indirect);
+    free(lighting);
+    free(lighting2);
+}
+
+/* Every NGI_API function declared in ngi.h is called somewhere in this file (issue 28). */
+static char* read_file(const char* path) {
+    FILE* f = fopen(path, "rb");
+    long size;
+    char* text;
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    text = (char*)malloc((size_t)size + 1);
+    if (text) {
+        text[fread(text, 1, (size_t)size, f)] = '\0';
+    }
+    fclose(f);
+    return text;
+}
+
+static void test_every_function_called(const char* src) {
+    char path[4096];
+    char *header, *self, *p;
+    int functions = 0;
+    snprintf(path, sizeof path, "%s/bindings/c/ngi.h", src);
+    header = read_file(path);
+    snprintf(path, sizeof path, "%s/tests/c/test_c_api.c", src);
+    self = read_file(path);
+    CHECK(header != NULL && self != NULL);
+    if (!header || !self) return;
+    for (p = strstr(header, "NGI_API "); p; p = strstr(p + 1, "NGI_API ")) {
+        char name[128], call[130];
+        const char *start, *end;
+        if (p > header && p[-1] == ' ') continue; /* the #define lines */
+        end = strchr(p, '(');
+        if (!end) break;
+        start = end;
+        while (start > p && (start[-1] == '_' || (start[-1] >= 'a' && start[-1] <= 'z') ||
+                             (start[-1] >= '0' && start[-1] <= '9')))
+            --start;
+        if (end - start <= 4 || (size_t)(end - start) >= sizeof name || strncmp(start, "ngi_", 4) != 0) continue;
+        memcpy(name, start, (size_t)(end - start));
+        name[end - start] = '\0';
+        snprintf(call, sizeof call, "%s(", name);
+        ++functions;
+        ++checks;
+        if (!strstr(self, call)) {
+            ++failures;
+            fprintf(stderr, "test_c_api.c never calls %s (declared NGI_API in ngi.h)\n", name);
+        }
+    }
+    CHECK(functions >= 70);
+    printf("test_c_api: %d NGI_API functions, each called\n", functions);
+    free(header);
+    free(self);
+}
+
 int main(int argc, char** argv) {
     char models[2048];
     const char* spec = getenv("NGI_TEST_DEVICE");
@@ -393,9 +979,15 @@ int main(int argc, char** argv) {
     CHECK(callback_calls >= 3 && callback_status == NGI_ERROR_INVALID_ARGUMENT);
     test_null_handles();
     CHECK(ngi_device_open(spec && *spec ? spec : "cpu", &dev) == NGI_OK);
+    test_typed_handles(dev);
     test_model(dev, models);
+    test_model_enqueue(dev, models);
     test_pipeline(dev, models);
     test_interop(dev, models);
+    test_ao(dev, models);
+    test_voxels(dev, models);
+    test_neural_gi(dev, models);
+    test_every_function_called(argv[1]);
     CHECK(ngi_device_release(dev) == NGI_OK);
     CHECK_FAILS(ngi_device_release(dev), NGI_ERROR_INVALID_HANDLE, "ngi_device_release", "not a live handle");
     ngi_set_error_callback(NULL, NULL);
