@@ -14,6 +14,7 @@
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/metrics.hpp"
+#include "ngi/model.hpp"
 #include "ngi/output_folder.hpp"
 #include "ngi/tensor.hpp"
 #include "side_by_side.hpp"
@@ -45,7 +46,8 @@ struct Options {
 };
 
 int run(const Options& o) {
-    const std::string &frame = o.frame, &model_path = o.model_path, &out_dir = o.out_dir;
+    const std::string model_path = ngi::resolve_model(o.model_path);  // a file, or a shipped model's name
+    const std::string &frame = o.frame, &out_dir = o.out_dir;
     const double radius = o.radius;
     ngi::OutputFolder out(out_dir, "write", {"ao.npy", "ao.png", "compare.png", "metrics.json"});
     ngi::Device device = ngi::Device::open(o.device);
@@ -123,7 +125,8 @@ Run add_ao(CLI::App& app) {
         "Writes ao.npy and ao.png and, when the folder holds the reference, compare.png (network | reference | "
         "|difference|) and metrics.json over the object's pixels.");
     add_path(*cmd, "--frame", o->frame, "DIR", "the AO frame folder (normal.npy or face_normal.npy)", true);
-    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained AO model", true);
+    add_path(*cmd, "--model", o->model_path, "M",
+             "the trained AO model: a .safetensors file or a shipped model's name (ao_bunny_32x16)", true);
     add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
     add_real(*cmd, "--radius", o->radius, -1.0, 65536.0, "PX",
              "ring radius in pixels; 0: the seed's inference, negative: the model's radius scaled to the image",

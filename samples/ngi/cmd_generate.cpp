@@ -18,7 +18,8 @@ struct Options {
 };
 
 int run(const Options& o) {
-    const std::string &model_path = o.model_path, &input_path = o.input_path, &output_path = o.output_path;
+    const std::string model_path = ngi::resolve_model(o.model_path);  // a file, or a shipped model's name
+    const std::string &input_path = o.input_path, &output_path = o.output_path;
     ngi::DeviceOptions dopt;
     dopt.profiling = o.profile;
     ngi::Device device = ngi::Device::open(o.device, dopt);
@@ -75,7 +76,8 @@ Run add_generate(CLI::App& app) {
     CLI::App* cmd = add_command(app, "generate", "run a generator or an mlp on a NumPy float32 tensor",
                                 "A generator takes an NCHW tensor with N = 1; an mlp takes one point per pixel "
                                 "([1, C, H, W]) or per row ([N, C]).");
-    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the model", true);
+    add_path(*cmd, "--model", o->model_path, "M", "the model: a .safetensors file or a shipped model's name (surround)",
+             true);
     add_path(*cmd, "--input", o->input_path, "X.npy", "the input tensor", true);
     add_path(*cmd, "--output", o->output_path, "Y.npy", "the output tensor to write", true);
     add_device(*cmd, o->device);

@@ -72,7 +72,7 @@ int run(const Options& o) {
     // A plan may choose the direct-light rung: no network, the frame's own direct light is the lightmap.
     std::optional<ngi::Model> model;
     if (!chosen || !chosen->model.empty())
-        model = ngi::Model::load(device, chosen ? chosen->model : model_path, model_options);
+        model = ngi::Model::load(device, chosen ? chosen->model : ngi::resolve_model(model_path), model_options);
     if (!width) width = height = frame.n;
 
     ngi::SurroundPipeline pipeline(device, frame.n);
@@ -196,7 +196,9 @@ Run add_lightmap(CLI::App& app) {
                                 "image beyond direct light falls back to direct light alone (docs/CONVENTIONS.md "
                                 "section 17).");
     add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render)", true);
-    CLI::Option* model = add_path(*cmd, "--model", o->model_path, "M.safetensors", "the trained generator", false);
+    CLI::Option* model = add_path(*cmd, "--model", o->model_path, "M",
+                                  "the trained generator: a .safetensors file or a shipped model's name (surround)",
+                                  false);
     CLI::Option* plan = add_path(*cmd, "--plan", o->plan_path, "PLAN.json",
                                  "run the rung a plan chose (python3 -m ngi.plan), with its per-frame switch if it "
                                  "has one; instead of --model",

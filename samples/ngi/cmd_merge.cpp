@@ -39,7 +39,7 @@ int run(const Options& o) {
     // front view only with --single-view).
     ngi::ModelConfig config;
     if (o.model_given->count()) {
-        config = ngi::Model::load(device, o.model).config();
+        config = ngi::Model::load(device, ngi::resolve_model(o.model)).config();
     } else if (o.single_view) {
         config.input_nc = 10;
         config.input_layout = ngi::single_view_input_channels();

@@ -33,7 +33,7 @@ int run(const Options& o) {
     ngi::OutputFolder out(o.out_dir, "write", {std::begin(kFiles), std::end(kFiles)});
     const ngi::Frame frame = ngi::read_frame(o.frame_dir);
     ngi::Device device = ngi::Device::open(o.device);
-    ngi::Model model = ngi::Model::load(device, o.model_path);
+    ngi::Model model = ngi::Model::load(device, ngi::resolve_model(o.model_path));
     ngi::NeuralGiOptions options;
     options.upsample = o.upsample;
     options.jbu_sigma_spatial = float(o.sigma_spatial);
@@ -98,7 +98,8 @@ Run add_neural_gi(CLI::App& app) {
         "compare.png (direct only | network | reference) and metrics.json. The model is trained per scene "
         "(docs/MODEL_FORMAT.md \"neural_gi\").");
     add_path(*cmd, "--frame", o->frame_dir, "DIR", "the frame folder (ngi render --area-light)", true);
-    add_path(*cmd, "--model", o->model_path, "M.safetensors", "the scene's neural_gi model", true);
+    add_path(*cmd, "--model", o->model_path, "M",
+             "the scene's neural_gi model: a .safetensors file or a shipped model's name (neural_gi_room)", true);
     add_path(*cmd, "--out", o->out_dir, "DIR", "the folder to write", true);
     add_integer(*cmd, "--upsample", o->upsample, 1, 64, "K",
                 "run the network at 1/K of the face size and upsample its indirect light (joint bilateral)");

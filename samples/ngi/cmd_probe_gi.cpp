@@ -121,7 +121,7 @@ int run(Options o) {
     // The surround generator, if asked for, is loaded (and its size rule checked) before the long render.
     std::optional<ngi::Model> surround;
     if (!o.surround_model.empty()) {
-        surround.emplace(ngi::Model::load(device, o.surround_model));
+        surround.emplace(ngi::Model::load(device, ngi::resolve_model(o.surround_model)));
         const int k = surround->config().num_downs;  // global view 2N x 4N: 2N must be divisible by 2^num_downs
         if (k < 1 || k > 12 || (2 * o.rs.n) % (1 << k) != 0)
             throw UsageError("--face " + std::to_string(o.rs.n) + ": the surround model " + o.surround_model +
@@ -188,7 +188,7 @@ int run(Options o) {
     for (const auto& [name, file] : sh_files)
         shade(name, "SH field from " + file, read_field(file, {V, 27}), ngi::VoxelFieldKind::Sh, -1);
     for (const std::string& model_path : o.models) {
-        ngi::Model model = ngi::Model::load(device, model_path);
+        ngi::Model model = ngi::Model::load(device, ngi::resolve_model(model_path));
         const ngi::ModelConfig& c = model.config();
         if (c.family != "voxel_sh")
             throw ngi::InputError("load model " + model_path + ": family " + c.family + ", ngi probe-gi needs voxel_sh");
@@ -306,8 +306,9 @@ Run add_probe_gi(CLI::App& app) {
     add_path(*cmd, "--field", o->field, "DIR", "the scene's ngi voxel-data folder (same time of day)", true);
     add_path(*cmd, "--out", o->out, "DIR", "the folder to write", true);
     // Repeatable (the app's default refuses a repeated option): every occurrence adds one.
-    cmd->add_option("--model", o->models, "a trained voxel_sh model (repeatable)")
-        ->type_name("M.safetensors")
+    cmd->add_option("--model", o->models,
+                    "a trained voxel_sh model: a file or a shipped model's name (voxel_sh_set; repeatable)")
+        ->type_name("M")
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     cmd->add_option("--sh", o->sh_files, "another SH field [V,27] to shade, e.g. a baseline (repeatable)")
         ->type_name("NAME=FILE.npy")

@@ -71,16 +71,31 @@ struct PyAo {
 };
 
 void register_model(py::module_& m) {
+    m.def("resolve_model", [](const py::object& name) { return ngi::resolve_model(path_string(name, "resolve_model")); },
+          py::arg("name_or_path"), R"doc(
+The file a model name means ("surround" -> .../share/ngi/models/surround.safetensors); a path (an existing file, or
+anything with a '/' or ending in .safetensors) comes back unchanged. An unknown name raises ngi.InputError listing
+the folders searched and the known names. Folders: $NGI_MODEL_PATH (':'-separated), the installed models, the
+source tree's models/ (ngi/model.hpp "Shipped models by name").)doc");
+    m.def("model_names", [] {
+        py::dict d;
+        for (const auto& [name, file] : ngi::model_names()) d[py::str(name)] = file;
+        return d;
+    }, "Every known model name -> its file (see resolve_model).");
+    m.def("model_search_path", [] { return ngi::model_search_path(); },
+          "The existing folders model names are looked up in, in order (see resolve_model).");
     py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
 A model file loaded on a device: a generator (pix2pix_unet, deepillumination), an mlp or a voxel_sh field network
 (docs/MODEL_FORMAT.md).
 
-Model(device, path, bn_mode=None, dropout=None, mlp_path=None): the options override the file's settings
+Model(device, path, bn_mode=None, dropout=None, mlp_path=None): `path` is a model file or a shipped model's name
+("surround", "ao_bunny_32x16", ...; ngi.model_names() lists them, ngi.resolve_model() says which file a name
+means). The options override the file's settings
 ("running" | "per_image"; "off" | "seeded"; "fused" | "dense"). Weights are packed and uploaded once; the graph for
 each input size is built on first use.)doc")
         .def(py::init([](const DeviceRef& device, const py::object& path, std::optional<std::string> bn_mode,
                          std::optional<std::string> dropout, std::optional<std::string> mlp_path) {
-                 const std::string p = path_string(path, "Model: path");
+                 const std::string p = ngi::resolve_model(path_string(path, "Model: path"));
                  const ngi::Device& dev = device->get("Model");
                  const ngi::ModelOptions o = options(bn_mode, dropout, mlp_path);
                  py::gil_scoped_release release;
@@ -145,10 +160,10 @@ Device.finish() waits (or pyopencl's queue.finish() on a Device.from_pyopencl de
         });
 
     py::class_<PyAo, std::shared_ptr<PyAo>>(m, "AoNetwork", R"doc(
-Seed 001's ambient-occlusion MLP (docs/RESULTS_AO.md): AoNetwork(device, path); run(normals [3, H, W],
-radius_px=-1) -> accessibility [1, H, W] in [0, 1] (1 = open; radius -1: the training radius scaled to H).)doc")
+Seed 001's ambient-occlusion MLP (docs/RESULTS_AO.md): AoNetwork(device, path) (a file or a shipped model's name,
+e.g. "ao_bunny_32x16"); run(normals [3, H, W], radius_px=-1) -> accessibility [1, H, W] in [0, 1] (1 = open; radius -1: the training radius scaled to H).)doc")
         .def(py::init([](const DeviceRef& device, const py::object& path) {
-                 const std::string p = path_string(path, "AoNetwork: path");
+                 const std::string p = ngi::resolve_model(path_string(path, "AoNetwork: path"));
                  const ngi::Device& dev = device->get("AoNetwork");
                  py::gil_scoped_release release;
                  return std::make_shared<PyAo>(PyAo{device, ngi::AoNetwork::load(dev, p)});

@@ -69,6 +69,29 @@ def test_model_run_equals_cli_generate(dev, surround, tmp_path):
     np.testing.assert_array_equal(y, np.load(tmp_path / "y.npy"))  # same kernels, same order: same bits
 
 
+def test_models_by_name(dev, surround, monkeypatch, tmp_path):
+    # A shipped model's name loads the same file as its path (from the source tree here, or an installed copy of it).
+    monkeypatch.delenv("NGI_MODEL_PATH", raising=False)
+    by_name = ngi.Model(dev, "surround")
+    assert Path(by_name.path).name == "surround.safetensors"
+    assert Path(by_name.path).parent in map(Path, ngi.model_search_path())
+    x = np.random.default_rng(4).uniform(-1, 1, (1, 12, 128, 128)).astype(np.float32)
+    np.testing.assert_array_equal(by_name.run(x), surround.run(x))
+    names = ngi.model_names()
+    assert {"surround", "single_view", "voxel_sh_set", "ao_sculpture_16x8", "neural_gi_room",
+            "surround_n64_ngf8"} <= set(names)
+    assert ngi.AoNetwork(dev, "ao_sculpture_16x8").normals in ("smooth", "face")
+    assert ngi.resolve_model(MODELS / "surround.safetensors") == str(MODELS / "surround.safetensors")
+    # The override comes first; an unknown name lists the known ones.
+    (tmp_path / "mine.safetensors").write_bytes((MODELS / "ao_sculpture_16x8.safetensors").read_bytes())
+    monkeypatch.setenv("NGI_MODEL_PATH", str(tmp_path))
+    assert ngi.model_search_path()[0] == str(tmp_path.resolve())
+    assert ngi.Model(dev, "mine").path == str(tmp_path.resolve() / "mine.safetensors")
+    with pytest.raises(ngi.InputError,
+                       match=r"model 'surroundd': not a file and not a known model name .*known names: .*mine.*surround"):
+        ngi.Model(dev, "surroundd")
+
+
 def test_model_run_converts_other_layouts(surround):
     x = np.random.default_rng(2).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
     y = surround.run(x)

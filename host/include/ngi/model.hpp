@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ngi/device.hpp"
@@ -134,5 +135,25 @@ private:
     explicit Model(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };
+
+// --- Shipped models by name (README "Use ngi from your project", models/README.md) -------------------------------
+// A model name is the name of a rung with a file in a models folder's zoo.json ("surround_n64_ngf16",
+// "shipped_surround_n64_ngf32"), or the stem of a .safetensors file in that folder or one of its subfolders
+// ("surround", "single_view", "voxel_sh_set", "ao_bunny_32x16", "neural_gi_room"). Folders searched, in order:
+//   1. each entry of $NGI_MODEL_PATH (':'-separated; the override);
+//   2. the installed models of the binary holding ngi's code (the program, libngi_c.so or the Python module):
+//      <prefix>/share/ngi/models found relative to it (a relocated prefix works), or models/ beside it (pip);
+//   3. <configured install prefix>/share/ngi/models, then /usr/local/share/ngi/models and /usr/share/ngi/models;
+//   4. the source tree's models/ (a build tree; only if the build enabled NGI_SOURCE_MODELS_FALLBACK).
+// A folder that does not exist is skipped; the first folder that has a name wins.
+std::vector<std::string> model_search_path();
+// Every known name with its file, sorted by name (the first folder of model_search_path() holding it wins).
+// Throws InputError naming the file when a searched folder's zoo.json is not readable JSON of the zoo format.
+std::vector<std::pair<std::string, std::string>> model_names();
+// The file to load for `name_or_path`: unchanged when it is an existing file or looks like a path (contains '/' or
+// ends in ".safetensors"; Model::load then reports a missing file); otherwise the file of that model name. Throws
+// InputError "model '<name>': not a file and not a known model name (searched: ...); known names: ..." for an
+// unknown name.
+std::string resolve_model(const std::string& name_or_path);
 
 }  // namespace ngi
