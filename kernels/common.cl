@@ -4,25 +4,12 @@
 #define NGI_CAT_(a, b) a##b
 #define NGI_CAT(a, b) NGI_CAT_(a, b)
 
-// Activation codes; keep in sync with ngi::Activation (host/src/ops/op_types.hpp).
-#define ACT_NONE 0
-#define ACT_RELU 1
-#define ACT_LEAKY_RELU 2
-#define ACT_TANH 3
-#define ACT_SIGMOID 4
-#define ACT_EXP 5
-
-// Branches on a uniform argument: cheap, and keeps one compiled kernel for every activation.
-static inline float ngi_activate(float x, int act, float alpha) {
-    switch (act) {
-        case ACT_RELU: return fmax(x, 0.0f);
-        case ACT_LEAKY_RELU: return x >= 0.0f ? x : alpha * x;
-        case ACT_TANH: return tanh(x);                       // saturates to +-1, never NaN for finite x
-        case ACT_SIGMOID: return 1.0f / (1.0f + exp(-x));    // exp overflow -> inf -> 0, still finite
-        case ACT_EXP: return exp(fmin(x, 88.0f));            // capped below FLT_MAX: never +Inf
-        default: return x;
-    }
-}
+// Rec. 709 luminance. The weights are the host's (build options LUMA_R, LUMA_G, LUMA_B: luminance_defines(),
+// host/src/ops/luminance.hpp), so the helper exists only in the programs built with them; a kernel file that calls
+// it checks for them with #error.
+#ifdef LUMA_R
+static inline float ngi_luminance(float3 c) { return LUMA_R * c.x + LUMA_G * c.y + LUMA_B * c.z; }
+#endif
 
 // ---- real spherical harmonics, bands 0-2 (docs/CONVENTIONS.md section 14) -------------------------------
 // Shared by sh.cl (evaluation) and pathtrace.cl (projection of path-traced radiance) so both use one basis.

@@ -1,15 +1,15 @@
 // Output side of the surround-aware pipeline: model output -> linear lightmap, resize, final composition,
 // display transform. Value rules: docs/CONVENTIONS.md ("Output side").
 
-// Keep in sync with ngi::LuminationTransfer and ngi::ToneCurve (host/include/ngi/pipeline.hpp).
-#define TRANSFER_REINHARD 0
-#define TRANSFER_CLAMP 1
-#define CURVE_ACES 0
-#define CURVE_REINHARD 1
-#define CURVE_CLAMP 2
+// Build options, the host's (compose_defines(), host/src/pipeline/compose.cpp): TRANSFER_REINHARD, TRANSFER_CLAMP
+// (ngi::LuminationTransfer), CURVE_ACES, CURVE_REINHARD, CURVE_CLAMP (ngi::ToneCurve) and LIGHT_MAX.
+#if !defined(TRANSFER_REINHARD) || !defined(TRANSFER_CLAMP) || !defined(CURVE_ACES) || !defined(CURVE_REINHARD) || \
+    !defined(CURVE_CLAMP) || !defined(LIGHT_MAX)
+#error "compose.cl needs the host's transfer and tone-curve codes: build it with compose_defines() (host/src/pipeline/compose.cpp)"
+#endif
 
-// The decoded lightmap stops at the largest half float, so it survives a half-float EXR.
-#define LIGHT_MAX 65504.0f
+// LIGHT_MAX (a build option, kLightMax): the decoded lightmap stops at the largest half float, so it survives a
+// half-float EXR.
 
 // Light terms: NaN -> 0, negative -> 0, +Inf -> FLT_MAX.
 static inline float clean_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }

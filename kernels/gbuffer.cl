@@ -1,21 +1,19 @@
 // Preprocessing of raw G-buffer features (thesis section 4.3.1), per texel, before the merge.
 // Value rules and ranges: docs/CONVENTIONS.md ("Preprocessing").
 
-// Keep in sync with ngi::LuminationTransfer (host/include/ngi/pipeline.hpp).
-#define TRANSFER_REINHARD 0
-#define TRANSFER_CLAMP 1
-
-// Counter slots: 0..5 non-finite values per Feature (albedo, normal, depth, direct, emission, env),
-// then sky normals and far depths. Keep in sync with host/src/pipeline/preprocess.cpp.
-#define COUNT_SKY 6
-#define COUNT_FAR 7
-#define COUNT_SLOTS 8
-
-// Raw input: per face, 16 planes of face_texels values (each face's feature images land contiguously, so the
-// host uploads them without repacking): albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12, env 13-15.
+// Build options, the host's (preprocess_defines(), host/src/pipeline/preprocess.cpp):
+//   TRANSFER_REINHARD, TRANSFER_CLAMP   ngi::LuminationTransfer
+//   F_ALBEDO ... F_ENV, F_CHANNELS      the raw frame planes (ngi/pipeline.hpp kFramePlanes, frame_plane()): per
+//                                       face, F_CHANNELS planes of face_texels values (each face's feature images
+//                                       land contiguously, so the host uploads them without repacking)
+//   COUNT_ALBEDO ... COUNT_ENV          counter slots of the non-finite values per Feature
+//   COUNT_SKY, COUNT_FAR, COUNT_SLOTS   then sky normals and far depths; the number of slots
 // Output: 10 planes of npix = faces * face_texels values, faces in order inside each plane (the layout the merge
 // table indexes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
-#define RAW_PLANES 16
+#if !defined(TRANSFER_REINHARD) || !defined(TRANSFER_CLAMP) || !defined(F_CHANNELS) || !defined(F_ENV) || \
+    !defined(COUNT_ENV) || !defined(COUNT_SLOTS)
+#error "gbuffer.cl needs the host's constants: build it with preprocess_defines() (host/src/pipeline/preprocess.cpp)"
+#endif
 
 #define MAX_DEPTH_M 1000.0f
 // A normal whose largest component is below this is the zero vector: the renderer's "no surface" (sky).
@@ -54,21 +52,21 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
     barrier(CLK_LOCAL_MEM_FENCE);
 
     if (t < face_texels) {
-        __global const float* r = raw + face * RAW_PLANES * face_texels + t;
+        __global const float* r = raw + face * F_CHANNELS * face_texels + t;
         const float scale = hi - lo;
         int bad_albedo = 0, bad_normal = 0, bad_depth = 0, bad_direct = 0, bad_emission = 0, bad_env = 0;
 
         // Albedo: reflectance, clamped to [0, 1].
         for (int c = 0; c < 3; ++c) {
-            const float a = clamp(clean(r[c * face_texels], 0.0f, 0.0f, 1.0f, &bad_albedo), 0.0f, 1.0f);
+            const float a = clamp(clean(r[(F_ALBEDO + c) * face_texels], 0.0f, 0.0f, 1.0f, &bad_albedo), 0.0f, 1.0f);
             out[c * npix + p] = lo + a * scale;
         }
 
         // Normal: a non-finite component makes the whole normal unknown, i.e. zero (sky). Scaled by its largest
         // component before the length so that huge finite values cannot overflow.
-        float nx = clean(r[3 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
-        float ny = clean(r[4 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
-        float nz = clean(r[5 * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float nx = clean(r[F_NORMAL * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float ny = clean(r[(F_NORMAL + 1) * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
+        float nz = clean(r[(F_NORMAL + 2) * face_texels], 0.0f, 0.0f, 0.0f, &bad_normal);
         const float m = fmax(fabs(nx), fmax(fabs(ny), fabs(nz)));
         float cx = 0.0f, cy = 0.0f, cz = 0.0f;
         if (bad_normal == 0 && m >= SKY_NORMAL_EPS) {
@@ -87,27 +85,27 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
         out[5 * npix + p] = lo + clamp(cz * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
 
         // Depth in metres -> depth / 1000 in [0, 1]; unknown (NaN) and +Inf are as far as it gets.
-        const float d = clean(r[6 * face_texels], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
+        const float d = clean(r[F_DEPTH * face_texels], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
         if (d > MAX_DEPTH_M) atomic_inc(&group_counts[COUNT_FAR]);
         out[6 * npix + p] = lo + clamp(d / MAX_DEPTH_M, 0.0f, 1.0f) * scale;
 
         // Lumination = direct + emission + env (eq. 4.2): light is >= 0; +Inf is the brightest finite light, and
         // the sum saturates at FLT_MAX instead of overflowing.
         for (int c = 0; c < 3; ++c) {
-            float l = fmax(clean(r[(7 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_direct), 0.0f);
+            float l = fmax(clean(r[(F_DIRECT + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_direct), 0.0f);
             if (has_emission)
-                l = fmin(l + fmax(clean(r[(10 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_emission), 0.0f), FLT_MAX);
+                l = fmin(l + fmax(clean(r[(F_EMISSION + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_emission), 0.0f), FLT_MAX);
             if (has_env)
-                l = fmin(l + fmax(clean(r[(13 + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_env), 0.0f), FLT_MAX);
+                l = fmin(l + fmax(clean(r[(F_ENV + c) * face_texels], 0.0f, 0.0f, FLT_MAX, &bad_env), 0.0f), FLT_MAX);
             out[(7 + c) * npix + p] = lo + lum_encode(l, transfer) * scale;
         }
 
-        if (bad_albedo) atomic_add(&group_counts[0], bad_albedo);
-        if (bad_normal) atomic_add(&group_counts[1], bad_normal);
-        if (bad_depth) atomic_add(&group_counts[2], bad_depth);
-        if (bad_direct) atomic_add(&group_counts[3], bad_direct);
-        if (bad_emission) atomic_add(&group_counts[4], bad_emission);
-        if (bad_env) atomic_add(&group_counts[5], bad_env);
+        if (bad_albedo) atomic_add(&group_counts[COUNT_ALBEDO], bad_albedo);
+        if (bad_normal) atomic_add(&group_counts[COUNT_NORMAL], bad_normal);
+        if (bad_depth) atomic_add(&group_counts[COUNT_DEPTH], bad_depth);
+        if (bad_direct) atomic_add(&group_counts[COUNT_DIRECT], bad_direct);
+        if (bad_emission) atomic_add(&group_counts[COUNT_EMISSION], bad_emission);
+        if (bad_env) atomic_add(&group_counts[COUNT_ENV], bad_env);
     }
 
     barrier(CLK_LOCAL_MEM_FENCE);

@@ -15,8 +15,10 @@
 // compose.cl) and the pixel is counted. A full-resolution pixel without a surface gets 0: there is nothing to light.
 // Low values: NaN -> 0, +-Inf -> +-FLT_MAX; results saturate at +-FLT_MAX.
 
-// Largest radius the host accepts (a 2r x 2r tap window); keep in sync with kJbuMaxRadius (host/src/ops/jbu.hpp).
-#define JBU_MAX_RADIUS 3
+// Largest radius the host accepts (a 2r x 2r tap window): kJbuMaxRadius, passed by jbu_defines() (ops/jbu.hpp).
+#ifndef JBU_MAX_RADIUS
+#error "jbu.cl needs JBU_MAX_RADIUS: build it with jbu_defines() (host/src/ops/jbu.hpp)"
+#endif
 #define JBU_MAX_TAPS (4 * JBU_MAX_RADIUS * JBU_MAX_RADIUS)
 
 // floor(a / b) for b > 0 (C's division truncates toward zero).

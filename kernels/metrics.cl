@@ -18,17 +18,14 @@
 // not change when x and y are shifted by constants, so each tile first subtracts its own mean of x and of y and
 // adds them back to the two local means only.
 //
-// Build options: SSIM_R, the window radius (5: 11 taps). The work-group sizes are fixed: SE_LOCAL x 1 and
-// TILE x TILE.
-
-#ifndef SSIM_R
-#define SSIM_R 5
+// Build options, the host's (metrics_defines(), host/src/pipeline/metrics.cpp): SSIM_R, the window radius (5: 11
+// taps), and the fixed work-group sizes SE_LOCAL x 1 and TILE x TILE.
+#if !defined(SSIM_R) || !defined(TILE) || !defined(SE_LOCAL)
+#error "metrics.cl needs SSIM_R, TILE and SE_LOCAL: build it with metrics_defines() (host/src/pipeline/metrics.cpp)"
 #endif
 #define SSIM_TAPS (2 * SSIM_R + 1)
-#define TILE 16
 #define TILE_ITEMS (TILE * TILE)
 #define SPAN (TILE + 2 * SSIM_R)
-#define SE_LOCAL 256
 
 __kernel __attribute__((reqd_work_group_size(SE_LOCAL, 1, 1)))
 void squared_error_partials(__global const float* restrict a, __global const float* restrict b, const int n,

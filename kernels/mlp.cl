@@ -2,28 +2,21 @@
 // the network in one launch, one work-item per item (pixel or point), activations in private memory.
 // Conventions (the frequency encoding's parameters, layouts): docs/CONVENTIONS.md section 13.
 
-// Compile-time knobs. MAX_WIDTH: the largest layer width (encoded input included), a multiple of 4; the host builds
-// a variant per width class (16, 32, 64, 128). PARAMS_SPACE: __constant when the packed weights fit the device's
-// constant buffer (cached on every GPU), else __global.
-#ifndef MAX_WIDTH
-#define MAX_WIDTH 64
+// Build options. MAX_WIDTH: the largest layer width (encoded input included), a multiple of 4; the host builds a
+// variant per width class (16, 32, 64, 128). PARAMS_SPACE: __constant when the packed weights fit the device's
+// constant buffer (cached on every GPU), else __global. The host's constants (mlp_defines(), host/src/ops/mlp.cpp):
+//   ORDER_COMPONENT  tiny-cuda-nn's Frequency: per component, per band: sin, cos (FrequencyEncoding::Order)
+//   ORDER_BAND       NeRF / Neural GI Eq. 3: per band: sin of every component, then cos of every component
+//   D_IN, D_IN_PAD, D_OUT, D_ACT, D_W, D_B, D_SIZE   the per-layer descriptor of mlp_fused: D_SIZE ints, at these
+//                    slots: inputs, inputs rounded up to 4 (the row stride of the weights; padded weights are 0),
+//                    outputs, activation, offset of the weights [out][in_pad] and of the bias [out] in params
+#if !defined(MAX_WIDTH) || !defined(ORDER_COMPONENT) || !defined(ORDER_BAND) || !defined(D_IN) || \
+    !defined(D_IN_PAD) || !defined(D_OUT) || !defined(D_ACT) || !defined(D_W) || !defined(D_B) || !defined(D_SIZE)
+#error "mlp.cl needs the host's constants: build it with mlp_defines() (host/src/ops/mlp.cpp)"
 #endif
 #ifndef PARAMS_SPACE
 #define PARAMS_SPACE __global
 #endif
-
-// Keep in sync with ngi::detail::FrequencyEncoding::Order (host/src/ops/mlp.hpp).
-#define ORDER_COMPONENT 0  // tiny-cuda-nn's Frequency: per component, per band: sin, cos
-#define ORDER_BAND 1       // NeRF / Neural GI Eq. 3: per band: sin of every component, then cos of every component
-
-// Per-layer descriptor: 6 ints (keep in sync with FusedMlp in host/src/ops/mlp.cpp).
-#define D_IN 0      // inputs
-#define D_IN_PAD 1  // inputs rounded up to 4 (the row stride of the weights; padded weights are 0)
-#define D_OUT 2
-#define D_ACT 3
-#define D_W 4       // offset of the weights [out][in_pad] in params
-#define D_B 5       // offset of the bias [out]
-#define D_SIZE 6
 
 // The encoding's scale of band b: 2^(first_exp + b), times pi when use_pi.
 static inline float band_scale(int b, int first_exp, int use_pi) {
@@ -156,7 +149,7 @@ static inline realV mlp_activate_v(realV x, int act, float alpha) {
         case ACT_LEAKY_RELU: return select(alpha * x, x, x >= (realV)0.0f);
         case ACT_TANH: return tanh(x);
         case ACT_SIGMOID: return (realV)1.0f / ((realV)1.0f + exp(-x));
-        case ACT_EXP: return exp(fmin(x, (realV)88.0f));
+        case ACT_EXP: return exp(fmin(x, (realV)ACT_EXP_MAX));
         default: return x;
     }
 }

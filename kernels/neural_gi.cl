@@ -6,7 +6,11 @@
 //   12-14 log(1 + direct)    15-17 unit direction from the point to the area light's centre
 // NaN -> 0 everywhere; a vector with infinite components keeps their signs; a zero vector stays zero.
 
-#define NGI_RADIANCE_MAX 1.0e30f  // keep in sync with RADIANCE_MAX (bindings/python/ngi/neural_gi.py)
+// NGI_RADIANCE_MAX, the bound of the radiances: a build option, the host's kNeuralGiRadianceMax
+// (host/src/pipeline/neural_gi_inputs.hpp), which ngi.neural_gi.RADIANCE_MAX reads too.
+#ifndef NGI_RADIANCE_MAX
+#error "neural_gi.cl needs NGI_RADIANCE_MAX: build it with neural_gi_defines() (host/src/pipeline/neural_gi_inputs.hpp)"
+#endif
 
 // ngi.neural_gi._unit: NaN components -> 0; if any component is infinite, the vector of their signs; then
 // normalized (divided by its largest |component| first, so the squares cannot overflow); zero stays zero.

@@ -13,10 +13,10 @@
 //
 // channel_affine_act: y = act(((x - K) - m) * (rstd * gamma) + beta), in place.
 //
-// LOCAL is a build option (-DLOCAL=64): the work-group size, a power of two.
+// LOCAL is a build option, the host's kStatsLocal (host/src/ops/norm.cpp): the work-group size, a power of two.
 
 #ifndef LOCAL
-#define LOCAL 64
+#error "norm.cl needs LOCAL, the work-group size: build it through BatchNormPerImage (host/src/ops/norm.cpp)"
 #endif
 #ifndef CHUNKED
 #define CHUNKED 1

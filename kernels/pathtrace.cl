@@ -16,22 +16,16 @@
 // L_AREA_CENTRE, L_AREA_U, L_AREA_V (3 each: centre and half-edge vectors), L_AREA_RADIANCE (3; 0 = off),
 // L_AREA_NORMAL (3, unit, the emitting side) and L_AREA_AREA (1, m^2). The offsets are defined once, in
 // renderer.cpp (kLightLayout), and arrive here as -D build options.
-#if !defined(L_SUN_DIR) || !defined(L_AREA_AREA)
-#error "pathtrace.cl is built by renderer.cpp, which defines the light layout (L_*) as build options"
+// Also build options, the host's: SKY_DEPTH (depth reported where the primary ray escapes, finite on purpose) and
+// RAY_OFFSET (secondary rays start this far off the surface, along the normal), from render/tracer_constants.hpp;
+// the feature planes per face F_ALBEDO ... F_ENV, F_CHANNELS (the frame planes of ngi/pipeline.hpp,
+// pipeline/frame_planes.hpp); the luminance weights LUMA_R, LUMA_G, LUMA_B of common.cl's ngi_luminance().
+#if !defined(L_SUN_DIR) || !defined(L_AREA_AREA) || !defined(SKY_DEPTH) || !defined(RAY_OFFSET) || \
+    !defined(F_CHANNELS) || !defined(F_ENV) || !defined(LUMA_R)
+#error "pathtrace.cl is built by renderer.cpp, which defines the light layout (L_*), SKY_DEPTH, RAY_OFFSET, the feature planes (F_*) and the luminance weights (LUMA_*) as build options"
 #endif
 
-#define SKY_DEPTH 1.0e4f     // depth reported where the primary ray escapes (finite on purpose)
 #define T_INF 1.0e30f
-#define RAY_OFFSET 1.0e-3f   // secondary rays start this far off the surface, along the normal
-
-// Features: channel planes per face (keep in sync with renderer.cpp).
-#define F_ALBEDO 0
-#define F_NORMAL 3
-#define F_DEPTH 6
-#define F_DIRECT 7
-#define F_EMISSION 10
-#define F_ENV 13
-#define F_CHANNELS 16
 
 typedef struct {
     __global const uchar* grid;
@@ -119,8 +113,6 @@ static inline float3 face_point(int3 cell, int f, float2 v) {
     const float3 c = convert_float3(cell);
     return c + (a == 0 ? (float3)(plane, v.x, v.y) : (a == 1 ? (float3)(v.x, plane, v.y) : (float3)(v.x, v.y, plane)));
 }
-
-static inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 // Orthonormal basis around a unit vector (Duff et al. 2017, branchless).
 static inline void onb(float3 n, float3* t, float3* b) {
@@ -342,7 +334,7 @@ static inline float3 area_light(const Scene* s, float3 p, float3 n, Rng* r, uint
 // Solid-angle density with which emitter sampling picks the direction toward a point on an emissive face at
 // distance `dist` whose normal makes cosine `cos_l` with the direction back to the shading point.
 static inline float emitter_pdf(const Scene* s, float3 Le, float dist, float cos_l) {
-    return luminance(Le) * s->inv_total * dist * dist / cos_l;
+    return ngi_luminance(Le) * s->inv_total * dist * dist / cos_l;
 }
 
 // Power heuristic (beta = 2) weight of a sample drawn with density pa, the other strategy having density pb.
@@ -663,14 +655,14 @@ __kernel void pt_patch_weights(SCENE_ARGS, int count, __global float* weight_out
     const float3 ny = face_normal(e.w), sd = lv(light, L_SUN_DIR), E = lv(light, L_SUN_E);
     const float c = dot(ny, sd);
     float w = 0.0f;
-    if (c > 0.0f && luminance(E) > 0.0f) {
+    if (c > 0.0f && ngi_luminance(E) > 0.0f) {
         uint rays = 0;
         int visible = 0;
         for (int k = 0; k < 4; ++k) {
             const float3 q = face_point(e.xyz, e.w, (float2)((k & 1) ? 0.75f : 0.25f, (k & 2) ? 0.75f : 0.25f));
             visible += trace(&s, q + ny * RAY_OFFSET, sd, T_INF, &rays).mat == 0;
         }
-        w = luminance(mats[2 * s.grid[e.x + sx * (e.y + sy * e.z)]].xyz) * luminance(E) * c * (float)visible * 0.25f;
+        w = ngi_luminance(mats[2 * s.grid[e.x + sx * (e.y + sy * e.z)]].xyz) * ngi_luminance(E) * c * (float)visible * 0.25f;
     }
     weight_out[i] = w;
 }

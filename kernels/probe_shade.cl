@@ -6,28 +6,22 @@
 // normalize(look + u right + v up), as pathtrace.cl's pixel_ray). Grid: block (x, y, z) covers [x, x+1) x [y, y+1)
 // x [z, z+1) metres, linear id x + X (y + Y z) (docs/RENDERER.md).
 
-// Planar depth at or beyond this is "no surface" (the tracer writes 1e4 there). Keep in sync with kProbeSkyDepth
-// (host/src/ops/probe_shade.hpp).
-#define PROBE_SKY_DEPTH 5.0e3f
-// Offset of the fallback lookups (metres): a hit point on a block edge or corner can round to the empty side.
-// Keep in sync with kProbeNeighbourStep.
-#define PROBE_NEIGHBOUR_STEP 0.25f
-// Field layouts; keep in sync with ngi::detail::ProbeField.
-#define FIELD_SH 0         // [V][3][9] SH coefficients of incident radiance (docs/CONVENTIONS.md section 14)
-#define FIELD_PER_VOXEL 1  // [V] float4 lighting (w unused)
-#define COUNT_NO_VOXEL 0
-#define COUNT_NON_FINITE 1
+// Build options, the host's (probe_shade_defines(), host/src/ops/probe_shade.hpp):
+//   PROBE_SKY_DEPTH       planar depth at or beyond this is "no surface" (the tracer writes 1e4 there)
+//   PROBE_NEIGHBOUR_STEP  offset of the fallback lookups (metres): a hit point on a block edge or corner can round
+//                         to the empty side
+//   PROBE_NEIGHBOURS      the 27 lookup offsets (x, y, z in {-1, 0, 1}), in the order they are tried: the cell
+//                         behind the surface first, then its 26 neighbours, nearest first, so the first voxel found
+//                         is the likeliest one
+//   FIELD_SH, FIELD_PER_VOXEL   the field layouts (ngi::detail::ProbeField): [V][3][9] SH coefficients of incident
+//                         radiance (docs/CONVENTIONS.md section 14), or [V] float4 lighting (w unused)
+//   COUNT_NO_VOXEL, COUNT_NON_FINITE   the slots of the miss counters (ProbeShade::counts)
+#if !defined(PROBE_SKY_DEPTH) || !defined(PROBE_NEIGHBOUR_STEP) || !defined(PROBE_NEIGHBOURS) || \
+    !defined(FIELD_SH) || !defined(FIELD_PER_VOXEL) || !defined(COUNT_NO_VOXEL) || !defined(COUNT_NON_FINITE)
+#error "probe_shade.cl needs the host's constants: build it with probe_shade_defines() (host/src/ops/probe_shade.hpp)"
+#endif
 
-// The cell behind the surface first, then its 26 neighbours at PROBE_NEIGHBOUR_STEP: the 6 along the axes (one
-// pair along the normal's axis), the 12 edge and the 8 corner offsets, each group in (x, y, z) lexicographic
-// order of {-1, 0, 1}. Nearest first, so the first voxel found is the likeliest one. Keep in sync with
-// probe_neighbour_offsets() (tests/reference_voxel.hpp).
-__constant char kNeighbour[27][3] = {
-    {0, 0, 0},
-    {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {0, 0, 1}, {0, 1, 0}, {1, 0, 0},
-    {-1, -1, 0}, {-1, 0, -1}, {-1, 0, 1}, {-1, 1, 0}, {0, -1, -1}, {0, -1, 1},
-    {0, 1, -1}, {0, 1, 1}, {1, -1, 0}, {1, 0, -1}, {1, 0, 1}, {1, 1, 0},
-    {-1, -1, -1}, {-1, -1, 1}, {-1, 1, -1}, {-1, 1, 1}, {1, -1, -1}, {1, -1, 1}, {1, 1, -1}, {1, 1, 1}};
+__constant char kNeighbour[27][3] = {PROBE_NEIGHBOURS};
 
 // The voxel index of the cell containing q, or -1 (outside the grid, empty, or an index_of entry outside [0, V)).
 static inline int probe_cell(float3 q, int X, int Y, int Z, __global const int* index_of, int V) {

@@ -4,11 +4,11 @@
 // Set pooling: pooled[s][c] = max or mean of x[i][c] over the items i in [first[s], first[s + 1]) of set s.
 // One work-group of LOCAL work-items per (set, channel): each strides over the set, then a tree in local memory.
 // An empty set pools to 0. Mean: per-work-item partial sums, then the tree (pairwise: no long serial sum).
-#ifndef LOCAL
-#define LOCAL 64
+// Build options, the host's (host/src/ops/set_pool.cpp): LOCAL, the work-group size (kPoolLocal); POOL_MAX,
+// POOL_MEAN, the pooling codes (ngi::detail::PoolMode).
+#if !defined(LOCAL) || !defined(POOL_MAX) || !defined(POOL_MEAN)
+#error "set_pool.cl needs LOCAL, POOL_MAX and POOL_MEAN: build it through SetPool (host/src/ops/set_pool.cpp)"
 #endif
-#define POOL_MAX 0
-#define POOL_MEAN 1
 __kernel __attribute__((reqd_work_group_size(LOCAL, 1, 1)))
 void set_pool(__global const float* restrict x, const int channels, __global const int* restrict first,
               const int mode, __global float* restrict pooled) {

@@ -7,9 +7,12 @@
 // A tile is VC_LOCAL work-items x VC_ITEMS consecutive blocks each, so a work-item's blocks are contiguous and the
 // exclusive scan of the per-work-item counts gives every surface voxel its place in id order.
 
-#define VC_LOCAL 64        // work-group size of every kernel here (keep in sync with voxel_field.cpp kCompactLocal)
-#define VC_ITEMS 64        // consecutive blocks per work-item (keep in sync with voxel_field.cpp kCompactItems)
-#define VC_ATTRIBUTES 10   // per voxel: centre xyz, albedo rgb, emission rgb, id (keep in sync: kVoxelAttributes)
+// Build options, the host's (voxel_field.cpp): VC_LOCAL, the work-group size of every kernel here (kCompactLocal);
+// VC_ITEMS, consecutive blocks per work-item (kCompactItems); VC_ATTRIBUTES, floats per voxel: centre xyz, albedo
+// rgb, emission rgb, id (ngi::kVoxelAttributes).
+#if !defined(VC_LOCAL) || !defined(VC_ITEMS) || !defined(VC_ATTRIBUTES)
+#error "voxel_compact.cl needs VC_LOCAL, VC_ITEMS and VC_ATTRIBUTES: build it through surface_voxels() (host/src/render/voxel_field.cpp)"
+#endif
 
 static inline int vc_solid(__global const uchar* grid, int sx, int sy, int sz, int x, int y, int z) {
     if (x < 0 || y < 0 || z < 0 || x >= sx || y >= sy || z >= sz) return 0;
@@ -94,7 +97,7 @@ static inline float3 vc_face_normal(int f) {
 // Writes every surface voxel at its compact index k (running count in id order):
 //   cell_out[k] = (x, y, z, exposed mask); attr_out[k][VC_ATTRIBUTES]; normal_out[k][3]; probe_out[k][3]
 // and index_of[id] = k, or -1 for blocks that are not surface voxels. mats: per material albedo, emission (lamp
-// level applied). probe_offset: the tracer's RAY_OFFSET. global size: tiles * VC_LOCAL.
+// level applied). probe_offset: the tracer's RAY_OFFSET (kRayOffset). global size: tiles * VC_LOCAL.
 //
 // Normal (Eq. 3): g = (occ(x-1) - occ(x+1), ...) normalized, the stand-in face's normal where g = 0. With
 // outside = air, g_a = exposed(+a) - exposed(-a) = the sum of the exposed faces' normals.

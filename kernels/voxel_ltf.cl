@@ -14,8 +14,10 @@
 // The O(V) kernels take the variant as an argument and are built once, without the last four (the normalizer,
 // O(V^2) once per run, with LTF_VEC only).
 
-#ifndef LTF_LOCAL
-#define LTF_LOCAL 64
+// LTF_LOCAL, LTF_R_MIN and LUMA_* are the host's (voxel_ltf.cpp kLtfLocal, voxel_ltf.hpp kLtfRMin, the Rec. 709
+// weights of ops/luminance.hpp behind common.cl's ngi_luminance()): always passed.
+#if !defined(LTF_LOCAL) || !defined(LTF_R_MIN) || !defined(LUMA_R)
+#error "voxel_ltf.cl needs LTF_LOCAL, LTF_R_MIN and the luminance weights LUMA_*: build it through VoxelLtf (host/src/ops/voxel_ltf.cpp)"
 #endif
 #ifndef LTF_PHYSICAL
 #define LTF_PHYSICAL 1
@@ -55,12 +57,9 @@
 
 // Distances are clamped below at LTF_R_MIN in every 1 / r^2: two adjacent voxels (r = 1 m, centre to centre) see
 // each other at a point-to-area form factor that is already a poor approximation, and it diverges as r -> 0
-// (coincident positions). Keep in sync with kLtfRMin (host/src/ops/voxel_ltf.hpp).
-#define LTF_R_MIN 0.5f
+// (coincident positions). LTF_R_MIN is kLtfRMin (host/src/ops/voxel_ltf.hpp), a build option.
 #define LTF_INV_PI 0.318309886183790672f
 
-// Rec. 709 luminance, as the path tracer's light selection (pathtrace.cl).
-static inline float ltf_luminance(float4 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 // ---- per-run and per-bounce preparation (O(V)) -------------------------------------------------------------
 
@@ -147,7 +146,7 @@ void ltf_energy(__global const float4* restrict a, __global const float4* restri
     if (i < V) {
         float4 x = a[i];
         if (has_b) x -= b[i];
-        e = ltf_luminance(x);
+        e = ngi_luminance(x.xyz);
     }
     part[lid] = e;
     barrier(CLK_LOCAL_MEM_FENCE);

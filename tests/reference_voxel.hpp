@@ -1,12 +1,16 @@
 // Naive double-precision references for the voxel ops: seed 004's light-transition function (ops/voxel_ltf.*) and
 // probe shading (ops/probe_shade.*). Straight loops over the definitions in docs/VOXEL_LTF.md, no shared code
-// with the kernels beyond the constants they must agree on.
+// with the kernels beyond the constants they must agree on, which are the host's (kLtfRMin, kProbeSkyDepth,
+// probe_neighbour_offsets(): the values the kernels are built with).
 #pragma once
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
+
+#include "ops/probe_shade.hpp"
+#include "ops/voxel_ltf.hpp"
 
 namespace ngi::test {
 
@@ -19,7 +23,7 @@ struct LtfScene {
     std::vector<std::uint32_t> exposed;
 };
 
-constexpr double kRefLtfRMin = 0.5;  // docs/VOXEL_LTF.md: r is clamped below at 0.5 m in every 1 / r^2
+constexpr double kRefLtfRMin = ngi::detail::kLtfRMin;  // docs/VOXEL_LTF.md: r is clamped below in every 1 / r^2
 
 inline double ref_luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
@@ -97,18 +101,6 @@ inline std::vector<double> ltf_reference(const LtfScene& s, int bounces, bool ph
 
 // ---- probe shading -------------------------------------------------------------------------------------------
 
-// The 27 lookup offsets (units of 0.25 m) in the kernel's order: the centre, then the offsets with one, two and
-// three non-zero components, each group in (x, y, z) lexicographic order of {-1, 0, 1} (kernels/probe_shade.cl).
-inline std::vector<std::array<int, 3>> probe_neighbour_offsets() {
-    std::vector<std::array<int, 3>> o;
-    for (int nz = 0; nz <= 3; ++nz)
-        for (int a = -1; a <= 1; ++a)
-            for (int b = -1; b <= 1; ++b)
-                for (int c = -1; c <= 1; ++c)
-                    if ((a != 0) + (b != 0) + (c != 0) == nz) o.push_back({a, b, c});
-    return o;
-}
-
 struct ProbeRefInputs {
     int n = 0;
     std::vector<float> depth, normal;  // [n*n], [3][n*n]
@@ -132,7 +124,7 @@ inline ProbeRefResult probe_shade_reference(const ProbeRefInputs& in) {
     ProbeRefResult r;
     r.lighting.assign(std::size_t(3) * npix, 0.0);
     r.voxel.assign(npix, -1);
-    const auto offsets = probe_neighbour_offsets();
+    const auto offsets = ngi::detail::probe_neighbour_offsets();
     static const double Y0 = 0.28209479177387814, Y1 = 0.48860251190291992, Y2 = 1.0925484305920792,
                         Y20 = 0.31539156525252005, Y22 = 0.54627421529603959;
     const double lobe[9] = {M_PI, 2 * M_PI / 3, 2 * M_PI / 3, 2 * M_PI / 3, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4, M_PI / 4};
@@ -144,7 +136,7 @@ inline ProbeRefResult probe_shade_reference(const ProbeRefInputs& in) {
             ++r.non_finite;
             continue;
         }
-        if (t >= 5.0e3) continue;  // sky
+        if (t >= ngi::detail::kProbeSkyDepth) continue;  // sky
         const double u = 2.0 * (col + 0.5) / n - 1.0, v = 1.0 - 2.0 * (row + 0.5) / n;
         double dir[3], dl = 0;
         for (int c = 0; c < 3; ++c) { dir[c] = in.look[c] + u * in.right[c] + v * in.up[c]; dl += dir[c] * dir[c]; }
@@ -158,7 +150,7 @@ inline ProbeRefResult probe_shade_reference(const ProbeRefInputs& in) {
             for (int c = 0; c < 3; ++c) q[c] = in.centre[c] + dir[c] * (t / along) - 0.5 * nr[c];
             for (const auto& o : offsets) {
                 double cell[3];
-                for (int c = 0; c < 3; ++c) cell[c] = std::floor(q[c] + 0.25 * o[c]);
+                for (int c = 0; c < 3; ++c) cell[c] = std::floor(q[c] + double(ngi::detail::kProbeNeighbourStep) * o[c]);
                 if (cell[0] < 0 || cell[1] < 0 || cell[2] < 0 || cell[0] >= X || cell[1] >= Y || cell[2] >= Z) continue;
                 const std::size_t lin =
                     std::size_t(cell[0]) + std::size_t(X) * (std::size_t(cell[1]) + std::size_t(Y) * std::size_t(cell[2]));

@@ -9,6 +9,7 @@
 
 #include "ngi/error.hpp"
 #include "ngi/pipeline.hpp"
+#include "pipeline/pipeline_impl.hpp"
 #include "reference_pipeline.hpp"
 #include "test_support.hpp"
 
@@ -251,8 +252,8 @@ TEST_CASE("decode_indirect: decoded indirect light + sanitized direct, against a
     // The kernel itself at odd element counts and offsets (the pipeline only launches 3 N^2 with N even): each
     // value equals decode_lightmap's value + the cleaned direct light in float, saturating at FLT_MAX.
     detail::Context& c = test::ctx();
-    detail::Kernel decode = c.kernel("compose", "decode_lightmap");
-    detail::Kernel indirect = c.kernel("compose", "decode_indirect");
+    detail::Kernel decode = c.kernel("compose", "decode_lightmap", detail::compose_defines());
+    detail::Kernel indirect = c.kernel("compose", "decode_indirect", detail::compose_defines());
     std::mt19937 rng(71);
     std::uniform_int_distribution<int> size(1, 301), offset(0, 97);
     for (int trial = 0; trial < 12; ++trial) {

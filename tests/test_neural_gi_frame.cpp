@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ngi/neural_gi.hpp"
+#include "pipeline/neural_gi_inputs.hpp"
 #include "runtime/context.hpp"
 #include "test_support.hpp"
 
@@ -97,7 +98,7 @@ std::vector<float> device_inputs(const ngi::Frame& f, int stride, const float lo
     ngi::detail::Buffer out = ctx.alloc(18 * plane * sizeof(float), "test inputs"),
                         pos = ctx.alloc(3 * plane * sizeof(float), "test positions"),
                         nrm = ctx.alloc(3 * plane * sizeof(float), "test normals");
-    ngi::detail::Kernel k = ctx.kernel("neural_gi", "neural_gi_inputs");
+    ngi::detail::Kernel k = ctx.kernel("neural_gi", "neural_gi_inputs", ngi::detail::neural_gi_defines());
     const ngi::FaceBasis b = ngi::CameraCluster::from_look_up(f.look, f.up).face(ngi::Face::Front);
     const glm::vec3 c = *f.position, l = f.area_light->centre;
     k.args(albedo, normal, depth, direct, n, stride, side, c.x, c.y, c.z, b.look.x, b.look.y, b.look.z, b.right.x,

@@ -97,7 +97,11 @@ ToneCurve tone_curve_from_name(const std::string& name);    // throws InputError
 // direct RGB 7-9, emission RGB 10-12, env RGB 13-15 (kernels/gbuffer.cl reads the same layout). Planes of an
 // absent optional feature (emission, env) are not read. This is the layout the renderer's feature buffers have.
 constexpr int kFramePlanes = 16;
-int frame_plane(Feature feature);                   // first plane of a feature: 0, 3, 6, 7, 10, 13
+// First plane of a feature: 0, 3, 6, 7, 10, 13.
+constexpr int frame_plane(Feature feature) {
+    constexpr int first[kFeatureCount] = {0, 3, 6, 7, 10, 13};
+    return first[int(feature)];
+}
 std::size_t frame_planes_bytes(int n, int faces);   // faces * 16 * n * n * 4
 // Packs a Frame's face images (faces = 6, or 1: the front face) into that layout; absent optional features are 0.
 std::vector<float> pack_frame_planes(const Frame& frame, int faces);

@@ -119,9 +119,9 @@ ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string&
       stride_(stride),
       pad_(pad),
       transposed_(transposed),
-      pad_kernel_(ctx.kernel("im2col", "conv_pad", "-DNR=" + std::to_string(p.nr()))),
-      gemm_(ctx.kernel("gemm", "gemm_conv",
-                       p.defines() + " -DIMPLICIT=1" + taps)) {
+      pad_kernel_(ctx.kernel(activation_program("im2col"), "conv_pad", im2col_defines(p.nr()))),
+      gemm_(ctx.kernel(activation_program("gemm"), "gemm_conv",
+                       gemm_kernel_defines(p) + " -DIMPLICIT=1" + taps)) {
     const std::size_t phases = transposed ? std::size_t(stride) * stride : 1;
     phase_floats_ = packed.size() / phases;
     ap_ = ctx.alloc(packed.size() * sizeof(float), transposed ? "conv_transpose2d packed weights" : "conv2d packed weights");

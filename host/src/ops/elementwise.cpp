@@ -6,15 +6,17 @@ namespace ngi::detail {
 
 namespace {
 const std::size_t kLocal[1] = {64};
+// kernels/elementwise.cl after the activation helper.
+const std::string kProgram = activation_program("elementwise");
 const std::size_t kLocal2[2] = {64, 1};
 }
 
 Elementwise::Elementwise(Context& ctx)
-    : act_(ctx.kernel("elementwise", "activate_inplace")),
-      dropout_(ctx.kernel("elementwise", "dropout_seeded")),
-      sanitize_(ctx.kernel("elementwise", "sanitize_inplace")),
-      affine_(ctx.kernel("elementwise", "channel_affine_planar")),
-      add_(ctx.kernel("elementwise", "add_inplace")),
+    : act_(ctx.kernel(kProgram, "activate_inplace", activation_defines())),
+      dropout_(ctx.kernel(kProgram, "dropout_seeded", activation_defines())),
+      sanitize_(ctx.kernel(kProgram, "sanitize_inplace", activation_defines())),
+      affine_(ctx.kernel(kProgram, "channel_affine_planar", activation_defines())),
+      add_(ctx.kernel(kProgram, "add_inplace", activation_defines())),
       counter_(ctx.alloc(sizeof(int), "sanitize counter")) {}
 
 cl_event Elementwise::activate(Context& ctx, const View& x, Act act, bool want_event) {

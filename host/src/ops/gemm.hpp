@@ -27,6 +27,12 @@ struct GemmParams {
     std::string to_string() const;  // "MR,VW,NV,KU,L0,L1,UNROLL", with ",KWG" appended when kwg > 0
 };
 
+// What kernels/gemm.cl is built with: the knobs (p.defines()) and the activation codes of its epilogue; the
+// program is activation_program("gemm").
+inline std::string gemm_kernel_defines(const GemmParams& p) { return p.defines() + " " + activation_defines(); }
+// What kernels/im2col.cl is built with (the program activation_program("im2col")): the panel width NR.
+inline std::string im2col_defines(int nr) { return "-DNR=" + std::to_string(nr) + " " + activation_defines(); }
+
 // The device's knob set: $NGI_GEMM if set, else the tuning database's best match (ops/gemm_tuning.hpp).
 GemmParams gemm_params_for(const DeviceInfo& info);
 // "MR,VW,NV,KU,L0,L1[,UNROLL[,KWG]]" (UNROLL 1, KWG 0 when left out); throws InputError. The device-dependent

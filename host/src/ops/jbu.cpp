@@ -25,7 +25,7 @@ void require_param(bool ok, const char* name, float v, const char* range) {
 }  // namespace
 
 JointBilateralUpsample::JointBilateralUpsample(Context& ctx)
-    : kernel_(ctx.kernel("jbu", "jbu_upsample")),
+    : kernel_(ctx.kernel("jbu", "jbu_upsample", jbu_defines())),
       fallbacks_(ctx.alloc(sizeof(std::uint32_t), "joint bilateral upsampling: fallback counter")) {}
 
 int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const JbuParams& p, cl_mem out,

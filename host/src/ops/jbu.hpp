@@ -3,15 +3,21 @@
 // geometry matches each full-resolution pixel's (normal and tangent-plane distance), Kopf et al. 2007 as seed 002
 // section 5.3 uses it. Weights, defaults and why: docs/CONVENTIONS.md section 18.
 #pragma once
+#include <string>
+
 #include "runtime/context.hpp"
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi::detail {
 
-// Largest tap-window radius (a 2r x 2r window). Keep in sync with JBU_MAX_RADIUS (kernels/jbu.cl).
+// Largest tap-window radius (a 2r x 2r window); kernels/jbu.cl sizes its tap arrays with it (JBU_MAX_RADIUS).
 constexpr int kJbuMaxRadius = 3;
 constexpr int kJbuMaxChannels = 64;
 // Image sides accepted (both resolutions).
 constexpr int kJbuMaxSide = 16384;
+
+// The build options of kernels/jbu.cl.
+inline std::string jbu_defines() { return define("JBU_MAX_RADIUS", kJbuMaxRadius); }
 
 struct JbuParams {
     // Standard deviation of the spatial Gaussian, in low-resolution pixels.

@@ -1,23 +1,34 @@
 #include "ops/mlp.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <string>
 
-#include <algorithm>
-#include <cmath>
-#include <string>
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi::detail {
 
 namespace {
 
-constexpr int kDescSize = 6;  // kernels/mlp.cl D_SIZE
+// kernels/mlp.cl after the activation helper (kernels/activation.cl).
+constexpr const char* kMlpProgram = "activation+mlp";
+
+// Per-layer descriptor of mlp_fused: kDescSize ints at these slots (kernels/mlp.cl D_*, from mlp_defines()).
+enum DescSlot : int { kDescIn, kDescInPad, kDescOut, kDescAct, kDescW, kDescB, kDescSize };
 const std::size_t kLocal1[1] = {64};
 const std::size_t kEncodeLocal[2] = {64, 1};
 
 int pad4(int x) { return (x + 3) & ~3; }
 
-std::string encoding_defines(int max_width) { return "-DMAX_WIDTH=" + std::to_string(max_width); }
+// The build options of kernels/mlp.cl: the width class, the encoding orders and the descriptor slots.
+std::string mlp_defines(int max_width) {
+    return join_defines({define("MAX_WIDTH", max_width),
+                         define("ORDER_COMPONENT", int(FrequencyEncoding::Order::ComponentMajor)),
+                         define("ORDER_BAND", int(FrequencyEncoding::Order::BandMajor)), define("D_IN", kDescIn),
+                         define("D_IN_PAD", kDescInPad), define("D_OUT", kDescOut), define("D_ACT", kDescAct),
+                         define("D_W", kDescW), define("D_B", kDescB), define("D_SIZE", kDescSize), activation_defines()});
+}
 
 }  // namespace
 
@@ -115,7 +126,14 @@ FusedMlp::FusedMlp(Context& ctx, const MlpSpec& spec, int vec) : spec_(spec) {
         const int b_off = int(params.size());
         if (d.bias.empty()) params.resize(params.size() + d.out, 0.0f);
         else params.insert(params.end(), d.bias.begin(), d.bias.end());
-        desc.insert(desc.end(), {d.in, in_pad, d.out, int(d.act.kind), w_off, b_off});
+        int slots[kDescSize];
+        slots[kDescIn] = d.in;
+        slots[kDescInPad] = in_pad;
+        slots[kDescOut] = d.out;
+        slots[kDescAct] = int(d.act.kind);
+        slots[kDescW] = w_off;
+        slots[kDescB] = b_off;
+        desc.insert(desc.end(), slots, slots + kDescSize);
     }
     // Constant memory when both arrays fit the device's constant buffer and argument limits.
     cl_ulong const_bytes = 0;
@@ -135,16 +153,16 @@ FusedMlp::FusedMlp(Context& ctx, const MlpSpec& spec, int vec) : spec_(spec) {
         for (std::size_t l = 0; l < spec.layers.size(); ++l) {
             const std::string k = std::to_string(l + 1);
             arch += " -DW" + k + "=" + std::to_string(spec.layers[l].out) + " -DA" + k + "=" +
-                    std::to_string(int(spec.layers[l].act.kind)) + " -DINPAD" + k + "=" + std::to_string(desc[6 * l + 1]) +
-                    " -DWOFF" + k + "=" + std::to_string(desc[6 * l + 4]) + " -DBOFF" + k + "=" + std::to_string(desc[6 * l + 5]);
+                    std::to_string(int(spec.layers[l].act.kind)) + " -DINPAD" + k + "=" + std::to_string(desc[kDescSize * l + kDescInPad]) +
+                    " -DWOFF" + k + "=" + std::to_string(desc[kDescSize * l + kDescW]) + " -DBOFF" + k + "=" + std::to_string(desc[kDescSize * l + kDescB]);
         }
         if (vec != 0 && vec != 1 && vec != 2 && vec != 4 && vec != 8 && vec != 16)
             throw InputError("fused MLP: " + std::to_string(vec) + " items per work-item; expected 1, 2, 4, 8 or 16");
         vec_ = vec ? vec : mlp_items_per_work_item(ctx.info());
-        kernel_ = ctx.kernel("mlp", "mlp_static",
-                             encoding_defines(max_width_) + space + arch + " -DVEC=" + std::to_string(vec_));
+        kernel_ = ctx.kernel(kMlpProgram, "mlp_static",
+                             mlp_defines(max_width_) + space + arch + " -DVEC=" + std::to_string(vec_));
     } else {
-        kernel_ = ctx.kernel("mlp", "mlp_fused", encoding_defines(max_width_) + space);
+        kernel_ = ctx.kernel(kMlpProgram, "mlp_fused", mlp_defines(max_width_) + space);
     }
     params_ = ctx.alloc(params.size() * sizeof(float), "fused MLP weights");
     ctx.write(params_, 0, params.size() * sizeof(float), params.data(), "fused MLP weights");
@@ -170,7 +188,7 @@ cl_event FusedMlp::enqueue(Context& ctx, cl_mem x, std::size_t x_off, ItemLayout
 // ---- the encoding alone ---------------------------------------------------------------------------------------
 
 FrequencyEncodePlanar::FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding)
-    : inputs_(inputs), encoding_(encoding), kernel_(ctx.kernel("mlp", "frequency_encode_planar", encoding_defines(16))) {}
+    : inputs_(inputs), encoding_(encoding), kernel_(ctx.kernel(kMlpProgram, "frequency_encode_planar", mlp_defines(16))) {}
 
 cl_event FrequencyEncodePlanar::enqueue(Context& ctx, cl_mem x, std::size_t x_off, cl_mem y, std::size_t y_off, int n,
                                         bool want_event) {

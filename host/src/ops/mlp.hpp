@@ -15,7 +15,7 @@ namespace ngi::detail {
 // exponent l - 1) is {bands = L + 1, first_exponent = -1, pi, include_input, BandMajor}; tiny-cuda-nn's Frequency
 // encoding is {n_frequencies, 0, pi, no input, ComponentMajor}. bands = 0: no encoding (the input as it is).
 struct FrequencyEncoding {
-    enum class Order : int { ComponentMajor = 0, BandMajor = 1 };  // kernels/mlp.cl ORDER_*
+    enum class Order : int { ComponentMajor = 0, BandMajor = 1 };  // kernels/mlp.cl ORDER_* (build options)
     int bands = 0;
     int first_exponent = 0;
     bool pi = true;

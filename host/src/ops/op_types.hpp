@@ -3,10 +3,26 @@
 #include <cstddef>
 #include <string>
 
+#include "runtime/kernel_defines.hpp"
+
 namespace ngi {
 
-// Codes match kernels/common.cl.
+// The codes reach kernels/activation.cl as build options (activation_defines()).
 enum class Activation : int { None = 0, ReLU = 1, LeakyReLU = 2, Tanh = 3, Sigmoid = 4, Exp = 5 };
+// The "exp" activation is exp(min(x, kActExpMax)): finite in float32 for every input (docs/CONVENTIONS.md
+// section 13). Python's ngi.neural_gi.EXP_CLAMP.
+constexpr float kActExpMax = 88.0f;
+
+// A program whose kernels apply activations: kernels/activation.cl, then `file` (Context::kernel's program name).
+inline std::string activation_program(const std::string& file) { return "activation+" + file; }
+// The build options of kernels/activation.cl: ACT_NONE ... ACT_EXP (the codes above) and ACT_EXP_MAX.
+inline std::string activation_defines() {
+    using detail::define;
+    return detail::join_defines({define("ACT_NONE", int(Activation::None)), define("ACT_RELU", int(Activation::ReLU)),
+                                 define("ACT_LEAKY_RELU", int(Activation::LeakyReLU)), define("ACT_TANH", int(Activation::Tanh)),
+                                 define("ACT_SIGMOID", int(Activation::Sigmoid)), define("ACT_EXP", int(Activation::Exp)),
+                                 define("ACT_EXP_MAX", kActExpMax)});
+}
 
 struct Act {
     Activation kind = Activation::None;

@@ -22,8 +22,8 @@ void require_finite(const float* v, const char* name) {
 }  // namespace
 
 ProbeShade::ProbeShade(Context& ctx)
-    : kernel_(ctx.kernel("probe_shade", "probe_shade")),
-      counts_(ctx.alloc(2 * sizeof(std::uint32_t), "probe shading: miss counters")) {}
+    : kernel_(ctx.kernel("probe_shade", "probe_shade", probe_shade_defines())),
+      counts_(ctx.alloc(kProbeCounters * sizeof(std::uint32_t), "probe shading: miss counters")) {}
 
 int ProbeShade::enqueue(Context& ctx, const ProbeShadeInputs& in, cl_mem out, bool read_counts) {
     if (in.n < 1 || in.n > kProbeMaxFace)
@@ -68,11 +68,11 @@ int ProbeShade::enqueue(Context& ctx, const ProbeShadeInputs& in, cl_mem out, bo
 }
 
 ProbeShadeCounts ProbeShade::counts(Context& ctx) const {
-    std::uint32_t v[2] = {0, 0};
+    std::uint32_t v[kProbeCounters] = {};
     ctx.read(counts_, 0, sizeof v, v, "probe shading: miss counters");
     ProbeShadeCounts r;
-    r.no_voxel = v[0];
-    r.non_finite = v[1];
+    r.no_voxel = v[kProbeCountNoVoxel];
+    r.non_finite = v[kProbeCountNonFinite];
     return r;
 }
 

@@ -2,17 +2,23 @@
 
 #include <algorithm>
 #include <limits>
+#include <string>
+
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi::detail {
 
 namespace {
-constexpr int kPoolLocal = 64;  // must match -DLOCAL
+constexpr int kPoolLocal = 64;  // the work-group size of set_pool.cl (LOCAL)
+// The build options of kernels/set_pool.cl.
+const std::string kPoolDefines = join_defines({define("LOCAL", kPoolLocal), define("POOL_MAX", int(PoolMode::Max)),
+                                               define("POOL_MEAN", int(PoolMode::Mean))});
 }
 
 SetPool::SetPool(Context& ctx)
-    : pool_(ctx.kernel("set_pool", "set_pool", "-DLOCAL=" + std::to_string(kPoolLocal))),
-      broadcast_(ctx.kernel("set_pool", "set_broadcast_concat", "-DLOCAL=" + std::to_string(kPoolLocal))),
-      pool_planar_(ctx.kernel("set_pool", "set_pool_planar", "-DLOCAL=" + std::to_string(kPoolLocal))) {}
+    : pool_(ctx.kernel("set_pool", "set_pool", kPoolDefines)),
+      broadcast_(ctx.kernel("set_pool", "set_broadcast_concat", kPoolDefines)),
+      pool_planar_(ctx.kernel("set_pool", "set_pool_planar", kPoolDefines)) {}
 
 cl_event SetPool::pool(Context& ctx, cl_mem x, int channels, cl_mem first, int sets, PoolMode mode, cl_mem pooled,
                        bool want_event) {

@@ -5,7 +5,7 @@
 
 namespace ngi::detail {
 
-enum class PoolMode : int { Max = 0, Mean = 1 };  // kernels/set_pool.cl POOL_*
+enum class PoolMode : int { Max = 0, Mean = 1 };  // kernels/set_pool.cl POOL_* (build options)
 
 class SetPool {
 public:

@@ -1,6 +1,8 @@
 #include "ops/voxel_ltf.hpp"
 
 #include "ops/buffer_checks.hpp"
+#include "ops/luminance.hpp"
+#include "runtime/kernel_defines.hpp"
 
 #include <algorithm>
 #include <string>
@@ -10,8 +12,10 @@ namespace ngi::detail {
 
 namespace {
 
-constexpr int kLtfLocal = 64;  // must match -DLTF_LOCAL
-const std::string kLocalDefine = "-DLTF_LOCAL=" + std::to_string(kLtfLocal);
+constexpr int kLtfLocal = 64;  // the work-group size of every kernel of voxel_ltf.cl (LTF_LOCAL)
+// What every voxel_ltf.cl kernel is built with (the gather adds its variant's options).
+const std::string kLocalDefine =
+    join_defines({define("LTF_LOCAL", kLtfLocal), define("LTF_R_MIN", kLtfRMin), luminance_defines()});
 // Loop iterations a launch keeps in reserve below the driver's limit: the energy tree (log2 LTF_LOCAL) and
 // whatever a compiler adds around the sender loop.
 constexpr long kLoopSlack = 64;

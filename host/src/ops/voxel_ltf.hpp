@@ -13,7 +13,7 @@
 namespace ngi::detail {
 
 // Distance floor of every 1 / r^2 (metres): the point-to-area form factor of adjacent voxels is already poor and it
-// diverges as r -> 0. Keep in sync with LTF_R_MIN (kernels/voxel_ltf.cl).
+// diverges as r -> 0. Reaches kernels/voxel_ltf.cl as the build option LTF_R_MIN.
 constexpr float kLtfRMin = 0.5f;
 // Bounces accepted by run(): 0 returns d; every bounce is O(V^2), and the seed reports t = 1..8.
 constexpr int kLtfMaxBounces = 64;

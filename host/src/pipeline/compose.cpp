@@ -5,8 +5,16 @@
 
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi {
+
+std::string detail::compose_defines() {
+    return join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
+                         define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)),
+                         define("CURVE_ACES", int(ToneCurve::AcesFitted)), define("CURVE_REINHARD", int(ToneCurve::Reinhard)),
+                         define("CURVE_CLAMP", int(ToneCurve::Clamp)), define("LIGHT_MAX", kLightMax)});
+}
 
 namespace {
 

@@ -12,6 +12,7 @@
 
 #include "ngi/error.hpp"
 #include "ngi/pipeline.hpp"
+#include "ops/luminance.hpp"
 
 namespace ngi {
 
@@ -26,7 +27,7 @@ double clean_light(float v) {
 
 // Sum over the face's pixels of the Rec. 709 luminance of direct + emission + env (absent terms count 0).
 double face_lumination(const Frame& frame, Face face) {
-    static constexpr double kLuma[3] = {0.2126, 0.7152, 0.0722};
+    const double* kLuma = detail::kRec709Luma;
     double sum = 0.0;
     for (Feature f : {Feature::Direct, Feature::Emission, Feature::Env}) {
         const Image& im = frame.get(f, face);
@@ -78,7 +79,7 @@ double indirect_share(const Frame& frame, const Image& lightmap) {
     const Image* emission = front_plane(frame, Feature::Emission, false);
     const Image* env = front_plane(frame, Feature::Env, false);
 
-    static constexpr double kLuma[3] = {0.2126, 0.7152, 0.0722};  // as outside_light_share
+    const double* kLuma = detail::kRec709Luma;
     double added_sum = 0.0, final_sum = 0.0;
     for (int c = 0; c < 3; ++c) {
         double added_c = 0.0, final_c = 0.0;

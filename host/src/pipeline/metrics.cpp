@@ -8,15 +8,18 @@
 #include <vector>
 
 #include "ngi/error.hpp"
+#include "pipeline/pipeline_impl.hpp"
 #include "runtime/context.hpp"
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi {
 namespace {
 
 constexpr double kSigma = 1.5, kTruncate = 3.5, kK1 = 0.01, kK2 = 0.03;
 constexpr int kRadius = int(kTruncate * kSigma + 0.5);  // scipy.ndimage's radius: 5, i.e. 11 taps (SSIM_R)
-constexpr int kTile = 16;                               // TILE in kernels/metrics.cl
-constexpr std::size_t kSeLocal = 256, kSeMaxGroups = 1024;
+constexpr int kTile = 16;                               // ssim_tiles' work-group: TILE x TILE
+constexpr int kSeLocal = 256;                           // squared_error_partials' work-group (SE_LOCAL)
+constexpr std::size_t kSeMaxGroups = 1024;
 // Squares of 1e15 are 1e30; a work-group adds at most a few hundred of them: far below FLT_MAX (3.4e38).
 constexpr float kMaxMagnitude = 1e15f;
 
@@ -92,9 +95,9 @@ Pair upload(detail::Context& ctx, const Image& a, const Image& b) {
 }
 
 double run_mse(detail::Context& ctx, const Pair& p, std::size_t n) {
-    const std::size_t groups = std::min(kSeMaxGroups, (n + kSeLocal - 1) / kSeLocal);
+    const std::size_t groups = std::min(kSeMaxGroups, (n + kSeLocal - 1) / std::size_t(kSeLocal));
     detail::Buffer partial = ctx.alloc(groups * sizeof(float), "squared-error partial sums");
-    detail::Kernel k = ctx.kernel("metrics", "squared_error_partials");
+    detail::Kernel k = ctx.kernel("metrics", "squared_error_partials", detail::metrics_defines());
     k.args(p.a, p.b, int(n), partial);
     const std::size_t global = groups * kSeLocal, local = kSeLocal;
     ctx.launch(k, 1, &global, &local);
@@ -120,7 +123,7 @@ double run_ssim(detail::Context& ctx, const Pair& p, int width, int height, int 
     const std::size_t gx = (crop_w + kTile - 1) / kTile, gy = (crop_h + kTile - 1) / kTile;
     const std::size_t count = gx * gy * std::size_t(channels);
     detail::Buffer partial = ctx.alloc(count * sizeof(float), "SSIM partial sums");
-    detail::Kernel k = ctx.kernel("metrics", "ssim_tiles", "-DSSIM_R=" + std::to_string(kRadius));
+    detail::Kernel k = ctx.kernel("metrics", "ssim_tiles", detail::metrics_defines());
     const double c1 = (kK1 * data_range) * (kK1 * data_range), c2 = (kK2 * data_range) * (kK2 * data_range);
     k.args(p.a, p.b, width, height, weights, float(c1), float(c2), partial);
     const std::size_t global[3] = {gx * kTile, gy * kTile, std::size_t(channels)}, local[3] = {kTile, kTile, 1};
@@ -176,6 +179,10 @@ void append_json_number(std::string& out, double v) {
 }
 
 }  // namespace
+
+std::string detail::metrics_defines() {
+    return join_defines({define("SSIM_R", kRadius), define("TILE", kTile), define("SE_LOCAL", kSeLocal)});
+}
 
 double psnr_from_mse(double mse, double data_range) {
     if (mse == 0.0) return std::numeric_limits<double>::infinity();

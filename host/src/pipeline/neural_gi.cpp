@@ -11,6 +11,7 @@
 #include "io/vec_text.hpp"
 #include "models/model_access.hpp"
 #include "ops/jbu.hpp"
+#include "pipeline/neural_gi_inputs.hpp"
 #include "pipeline/pipeline_impl.hpp"
 #include "runtime/context.hpp"
 
@@ -71,8 +72,8 @@ struct NeuralGiRenderer::Impl {
     explicit Impl(const Device& d)
         : device(d),
           ctx(detail::context_of(device)),
-          inputs(ctx.kernel("neural_gi", "neural_gi_inputs")),
-          lighting(ctx.kernel("neural_gi", "neural_gi_lighting")),
+          inputs(ctx.kernel("neural_gi", "neural_gi_inputs", detail::neural_gi_defines())),
+          lighting(ctx.kernel("neural_gi", "neural_gi_lighting", detail::neural_gi_defines())),
           jbu(ctx) {}
 
     void upload(detail::Buffer& b, const Image& im, const char* what) {

@@ -124,13 +124,13 @@ bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what)
 SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, LuminationTransfer transfer_)
     : device(d), ctx(ngi::detail::context_of(d)), n(n_), mode(mode_), transfer(transfer_),
       gather(ctx.kernel("globalview", "lut_gather")),
-      preprocess(ctx.kernel("gbuffer", "preprocess_gbuffer")),
-      decode(ctx.kernel("compose", "decode_lightmap")),
-      decode_indirect(ctx.kernel("compose", "decode_indirect")),
-      encode(ctx.kernel("compose", "encode_lightmap")),
-      resize(ctx.kernel("compose", "resize_bilinear")),
-      compose(ctx.kernel("compose", "compose_final")),
-      tonemap(ctx.kernel("compose", "tonemap")) {}
+      preprocess(ctx.kernel("gbuffer", "preprocess_gbuffer", detail::preprocess_defines())),
+      decode(ctx.kernel("compose", "decode_lightmap", detail::compose_defines())),
+      decode_indirect(ctx.kernel("compose", "decode_indirect", detail::compose_defines())),
+      encode(ctx.kernel("compose", "encode_lightmap", detail::compose_defines())),
+      resize(ctx.kernel("compose", "resize_bilinear", detail::compose_defines())),
+      compose(ctx.kernel("compose", "compose_final", detail::compose_defines())),
+      tonemap(ctx.kernel("compose", "tonemap", detail::compose_defines())) {}
 
 void SurroundPipeline::Impl::gather_planes(cl_mem src, int src_plane, const detail::Buffer& idx,
                                            const detail::Buffer& w, int npix, int channels, cl_mem dst,

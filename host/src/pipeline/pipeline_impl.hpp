@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "ngi/pipeline.hpp"
@@ -29,6 +30,16 @@ void check_face_image(const Image& image, Feature feature, Face face, int n, con
 // Whether an optional feature (emission, env) is present: on every listed face, or on none (else InputError).
 bool optional_feature_present(const Frame& frame, Feature feature, const Face* faces, int face_count, int n,
                               const char* what);
+
+// Build options of kernels/gbuffer.cl (the lumination transfer codes, the raw frame planes, the counter slots) and of
+// kernels/compose.cl (the lumination transfer and tone curve codes): the host's values, defined once.
+std::string preprocess_defines();
+std::string compose_defines();
+// Build options of kernels/metrics.cl: the SSIM window radius and the two fixed work-group sizes (metrics.cpp).
+std::string metrics_defines();
+// The largest lightmap value the decoding produces: the largest half float, so a lightmap survives a half-float EXR
+// (compose.cl LIGHT_MAX; Python's ngi.scoring.LIGHT_MAX).
+constexpr float kLightMax = 65504.0f;
 
 // Which input the model wants: true = global view (12 channels), false = front view only (10). Throws InputError
 // for a model whose input width, input_layout or input_range the pipeline cannot serve.

@@ -1,23 +1,26 @@
 // The generator's input: raw faces -> preprocess_gbuffer (kernels/gbuffer.cl) -> merge (lut_gather) ->
 // NCHW tensor with the coordinate map. Channel order and value rules: docs/CONVENTIONS.md.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <string>
 
 #include "ngi/error.hpp"
+#include "pipeline/frame_planes.hpp"
 #include "pipeline/pipeline_impl.hpp"
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi {
 
 namespace {
 
 constexpr int kFeaturePlanes = 10; // albedo 3, normal 3, depth 1, lumination 3
-constexpr int kCounterSlots = 8;   // see kernels/gbuffer.cl
-const int kRawFirstPlane[kFeatureCount] = {0, 3, 6, 7, 10, 13};  // per Feature; kernels/gbuffer.cl's layout
+// Counter slots of preprocess_gbuffer: the non-finite values per Feature (slot = the Feature's value), then sky
+// normals and far depths.
+constexpr int kCountSky = kFeatureCount, kCountFar = kFeatureCount + 1, kCounterSlots = kFeatureCount + 2;
 const Face kAllFaces[kFaceCount] = {Face::Front, Face::Back, Face::Left, Face::Right, Face::Up, Face::Down};
 
 }  // namespace
-
-int frame_plane(Feature feature) { return kRawFirstPlane[int(feature)]; }
 
 std::size_t frame_planes_bytes(int n, int faces) {
     return std::size_t(faces) * kFramePlanes * std::size_t(n) * std::size_t(n) * sizeof(float);
@@ -39,7 +42,7 @@ std::vector<float> pack_frame_planes(const Frame& frame, int faces) {
         for (int i = 0; i < faces; ++i) {
             const Image& src = frame.get(f, kAllFaces[i]);
             std::copy(src.data.begin(), src.data.end(),
-                      planes.begin() + std::ptrdiff_t((i * kFramePlanes + kRawFirstPlane[fi]) * face_plane));
+                      planes.begin() + std::ptrdiff_t((i * kFramePlanes + frame_plane(f)) * face_plane));
         }
     }
     return planes;
@@ -57,6 +60,20 @@ FrameDesc FrameDesc::of(const Frame& frame, int faces) {
 }
 
 namespace detail {
+
+std::string preprocess_defines() {
+    std::string d = join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
+                                  define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)), frame_plane_defines(),
+                                  define("COUNT_SKY", kCountSky), define("COUNT_FAR", kCountFar),
+                                  define("COUNT_SLOTS", kCounterSlots)});
+    for (int f = 0; f < kFeatureCount; ++f) {
+        std::string name = "COUNT_";
+        for (const char* c = feature_name(Feature(f)); *c; ++c) name += char(std::toupper(static_cast<unsigned char>(*c)));
+        d += ' ';
+        d += define(name, f);
+    }
+    return d;
+}
 
 bool check_model_input(const ModelConfig& config) {
     const bool surround = config.input_nc == int(surround_input_channels().size());
@@ -119,8 +136,8 @@ void SurroundPipeline::Impl::read_stats(PreprocessStats& stats) {
     int counts[kCounterSlots];
     ctx.read(counters, 0, sizeof counts, counts, "preprocessing counters");
     for (int f = 0; f < kFeatureCount; ++f) stats.nonfinite[f] = counts[f];
-    stats.sky_normals = counts[6];
-    stats.far_depths = counts[7];
+    stats.sky_normals = counts[kCountSky];
+    stats.far_depths = counts[kCountFar];
 }
 
 Tensor SurroundPipeline::network_input(const Frame& frame, const ModelConfig& config, PreprocessStats* stats) {

@@ -10,15 +10,16 @@
 #include "ngi/error.hpp"
 #include "ngi/render.hpp"
 #include "ngi/voxel_field.hpp"
+#include "ops/luminance.hpp"
+#include "pipeline/frame_planes.hpp"
 #include "render/bvh.hpp"
+#include "render/tracer_constants.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi {
 namespace {
 
 constexpr std::size_t kLocal = 64;   // fixed work-group size (PoCL compiles one work-group function per size)
-constexpr int kFeatureChannels = 16; // pathtrace.cl F_CHANNELS: albedo 3, normal 3, depth 1, direct 3, emission 3, env 3
-constexpr int kFeatureOffset[kFeatureCount] = {0, 3, 6, 7, 10, 13};  // per ngi::Feature
 
 // Layout of pathtrace.cl's `light` parameter array (what each holds: the comment there). Defined here only: every
 // pathtrace.cl kernel is built with these as -D options (kPathtraceDefines), so host and device cannot disagree.
@@ -41,10 +42,12 @@ constexpr const char* kPathtraceProgram = "bvh+pathtrace";
 std::string pathtrace_defines() {
     std::string d;
     for (const LightSlot& l : kLightLayout) d += std::string(d.empty() ? "" : " ") + "-D" + l.name + "=" + std::to_string(l.offset);
-    return d + " " + detail::bvh_defines();
+    return detail::join_defines({d, detail::define("SKY_DEPTH", detail::kSkyDepth),
+                                 detail::define("RAY_OFFSET", detail::kRayOffset), detail::frame_plane_defines(),
+                                 detail::luminance_defines(), detail::bvh_defines()});
 }
 
-float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+float luminance(glm::vec3 c) { return detail::luminance(c.r, c.g, c.b); }
 
 // A face of an emissive block that borders air inside the grid (only such faces can be seen or sampled).
 struct EmitterFace {
@@ -292,7 +295,7 @@ struct Renderer::Impl {
     void ensure_buffers(int n) {
         if (n == buffers_n) return;
         const std::size_t npix = std::size_t(n) * n;
-        features = ctx->alloc(npix * kFaceCount * kFeatureChannels * sizeof(float), "render: feature buffers");
+        features = ctx->alloc(npix * kFaceCount * kFramePlanes * sizeof(float), "render: feature buffers");
         feature_rays = ctx->alloc(npix * kFaceCount * sizeof(std::uint32_t), "render: ray counts");
         mean = ctx->alloc(npix * 3 * sizeof(float), "render: reference");
         var = ctx->alloc(npix * 3 * sizeof(float), "render: reference variance");
@@ -479,7 +482,7 @@ void Renderer::render_planes(const CameraPose& pose, const Lighting& lighting, c
                              const DeviceBuffer& planes, RenderStats* stats) {
     check_settings(s);
     Impl& m = *impl_;
-    const std::size_t need = std::size_t(s.n) * s.n * kFaceCount * kFeatureChannels * sizeof(float);
+    const std::size_t need = std::size_t(s.n) * s.n * kFaceCount * kFramePlanes * sizeof(float);
     if (!planes) throw InputError("render planes: the planes buffer is empty");
     if (detail::shared_context_of(planes.device()) != m.ctx)
         throw InputError("render planes: the planes buffer belongs to another device than the renderer");
@@ -503,7 +506,7 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     m.enqueue_features(pose, lighting, s, m.features.get());
     const std::size_t npix = std::size_t(s.n) * s.n;
     const std::size_t global = npix * kFaceCount;
-    std::vector<float> out(npix * kFaceCount * kFeatureChannels);
+    std::vector<float> out(npix * kFaceCount * kFramePlanes);
     m.ctx->read(m.features, 0, out.size() * sizeof(float), out.data(), "render: read feature buffers");
 
     Frame fr;
@@ -517,7 +520,7 @@ Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const R
     for (int f = 0; f < kFeatureCount; ++f)
         for (int face = 0; face < kFaceCount; ++face) {
             Image img(s.n, s.n, feature_channels(Feature(f)));
-            const float* src = out.data() + (std::size_t(face) * kFeatureChannels + kFeatureOffset[f]) * npix;
+            const float* src = out.data() + (std::size_t(face) * kFramePlanes + frame_plane(Feature(f))) * npix;
             std::copy(src, src + img.data.size(), img.data.begin());
             fr.faces[f][face] = std::move(img);
         }

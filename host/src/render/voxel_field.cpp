@@ -6,14 +6,21 @@
 #include <string>
 
 #include "ngi/error.hpp"
+#include "render/tracer_constants.hpp"
 #include "runtime/context.hpp"
+#include "runtime/kernel_defines.hpp"
 
 namespace ngi {
 namespace {
 
-constexpr std::size_t kCompactLocal = 64;  // voxel_compact.cl VC_LOCAL (keep in sync)
-constexpr std::size_t kCompactItems = 64;  // voxel_compact.cl VC_ITEMS (keep in sync)
-constexpr float kProbeOffset = 1.0e-3f;    // pathtrace.cl RAY_OFFSET (keep in sync): probes sit this far off faces
+constexpr int kCompactLocal = 64;  // work-group size of every voxel_compact.cl kernel (VC_LOCAL)
+constexpr int kCompactItems = 64;  // consecutive blocks per work-item (VC_ITEMS)
+
+// The build options of kernels/voxel_compact.cl.
+std::string compact_defines() {
+    return detail::join_defines({detail::define("VC_LOCAL", kCompactLocal), detail::define("VC_ITEMS", kCompactItems),
+                                 detail::define("VC_ATTRIBUTES", kVoxelAttributes)});
+}
 
 std::string dims(glm::ivec3 s) {
     return std::to_string(s.x) + "x" + std::to_string(s.y) + "x" + std::to_string(s.z);
@@ -46,7 +53,7 @@ SurfaceVoxels surface_voxels(const Device& device, const VoxelScene& scene, cons
         const float v[8] = {p.albedo.r, p.albedo.g, p.albedo.b, 0, e.r, e.g, e.b, 0};
         std::copy(v, v + 8, mats.begin() + std::ptrdiff_t(i * 8));
     }
-    const std::size_t tile = kCompactLocal * kCompactItems;
+    const std::size_t tile = std::size_t(kCompactLocal) * kCompactItems;
     const std::size_t tiles = (blocks + tile - 1) / tile;
     detail::Buffer grid = ctx.alloc(blocks, "surface voxels: grid");
     ctx.write(grid, 0, blocks, scene.voxels.data(), "surface voxels: upload grid");
@@ -56,11 +63,11 @@ SurfaceVoxels surface_voxels(const Device& device, const VoxelScene& scene, cons
     detail::Buffer tile_count = ctx.alloc(tiles * sizeof(std::int32_t), "surface voxels: tile counts");
     detail::Buffer tile_offset = ctx.alloc((tiles + 1) * sizeof(std::int32_t), "surface voxels: tile offsets");
 
-    detail::Kernel flag = ctx.kernel("voxel_compact", "vc_flag");
-    detail::Kernel scan = ctx.kernel("voxel_compact", "vc_scan_tiles");
-    detail::Kernel scatter = ctx.kernel("voxel_compact", "vc_scatter");
+    detail::Kernel flag = ctx.kernel("voxel_compact", "vc_flag", compact_defines());
+    detail::Kernel scan = ctx.kernel("voxel_compact", "vc_scan_tiles", compact_defines());
+    detail::Kernel scatter = ctx.kernel("voxel_compact", "vc_scatter", compact_defines());
     const glm::ivec3 s = scene.size;
-    const std::size_t local = kCompactLocal, global = tiles * kCompactLocal;
+    const std::size_t local = kCompactLocal, global = tiles * local;
     flag.args(grid, s.x, s.y, s.z, mask, tile_count);
     ctx.launch(flag, 1, &global, &local);
     scan.args(tile_count, int(tiles), tile_offset);
@@ -78,7 +85,7 @@ SurfaceVoxels surface_voxels(const Device& device, const VoxelScene& scene, cons
     detail::Buffer normal = ctx.alloc(V * 3 * sizeof(float), "surface voxels: normals");
     detail::Buffer probe = ctx.alloc(V * 3 * sizeof(float), "surface voxels: probe points");
     detail::Buffer index = ctx.alloc(blocks * sizeof(std::int32_t), "surface voxels: index");
-    scatter.args(grid, s.x, s.y, s.z, mask, tile_offset, mat_buf, kProbeOffset, cell, attr, normal, probe, index);
+    scatter.args(grid, s.x, s.y, s.z, mask, tile_offset, mat_buf, detail::kRayOffset, cell, attr, normal, probe, index);
     ctx.launch(scatter, 1, &global, &local);
 
     SurfaceVoxels out;

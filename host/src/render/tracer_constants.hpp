@@ -1,0 +1,16 @@
+// Constants of the path tracer (kernels/pathtrace.cl) that other render code shares; they reach the kernels as
+// build options (renderer.cpp's pathtrace_defines(), voxel_field.cpp's compaction). Library-internal.
+#pragma once
+#include "ops/probe_shade.hpp"
+
+namespace ngi::detail {
+
+// Secondary rays start this far (metres) off a surface, along its normal; a surface voxel's probe point sits this
+// far off its face (kernels/voxel_compact.cl). Build option RAY_OFFSET.
+constexpr float kRayOffset = 1.0e-3f;
+// Depth (metres) the tracer writes where the primary ray escapes: finite on purpose. Build option SKY_DEPTH.
+constexpr float kSkyDepth = 1.0e4f;
+// Probe shading reads depths at or beyond kProbeSkyDepth as sky: the tracer's sky must be among them.
+static_assert(kSkyDepth >= kProbeSkyDepth, "probe shading would take the tracer's sky for a surface");
+
+}  // namespace ngi::detail
