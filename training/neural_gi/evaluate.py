@@ -38,11 +38,12 @@ import torch
 import data
 import ngi
 import ngi.model_file as model_file
+from ngi import _constants
 import ngi.scoring as scoring
 from ngi.neural_gi import NeuralGI, decode_indirect, sanitize_radiance
 
 METRICS = ("mae", "mse", "psnr", "ssim")
-REC709 = np.array([0.2126, 0.7152, 0.0722], np.float64)
+REC709 = np.array(_constants.REC709_LUMA, np.float64)
 
 
 def load_torch_model(path):

@@ -21,11 +21,14 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from ngi import _constants
+
 INPUTS = 10
 OUTPUTS = 27
 ARCHITECTURES = ("mlp", "set", "resnet")
-# Standardized inputs beyond +-INPUT_BOUND are replaced by it, NaN by 0 (ngi: kVoxelShInputBound, keep in sync).
-INPUT_BOUND = 1e6
+# Standardized inputs beyond +-INPUT_BOUND are replaced by it, NaN by 0: ngi's kVoxelShInputBound
+# (host/src/models/voxel_sh_model.hpp), through the generated ngi._constants.
+INPUT_BOUND = _constants.VOXEL_SH_INPUT_BOUND
 DEFAULT_WIDTHS = {"mlp": {"hidden": [128, 128, 128]},
                   "set": {"phi": [128, 128], "rho": [256, 128]},
                   "resnet": {"width": 128, "blocks": 10}}

@@ -52,6 +52,7 @@ import time
 import torch
 import torch.nn as nn
 
+from ngi import _constants
 from ngi.reference_models import UnetGenerator, encode_frequencies
 
 FAMILY = "neural_gi"
@@ -69,10 +70,12 @@ ENCODED_CHANNELS = INPUT_CHANNELS + 2 * ENCODING["bands"] * INPUT_CHANNELS  # 37
 LOG_EPSILON = 1.0 / math.e
 # Bound of the radiances (direct input, reference): only replaces +inf and absurd values, keeps log1p(L_d) <= 69
 # and L_d + exp(88) < 3.4e38, i.e. every sum in the forward pass and the loss finite in float32. Real HDR values
-# (65504 and far beyond) pass unchanged.
-RADIANCE_MAX = 1e30
-# exp's argument bound: ngi's "exp" activation is exp(min(x, 88)) (CONVENTIONS section 13), finite in float32.
-EXP_CLAMP = 88.0
+# (65504 and far beyond) pass unchanged. The C++ value (kNeuralGiRadianceMax, which kernels/neural_gi.cl is built
+# with), through the generated ngi._constants.
+RADIANCE_MAX = _constants.NEURAL_GI_RADIANCE_MAX
+# exp's argument bound: ngi's "exp" activation is exp(min(x, 88)) (CONVENTIONS section 13), finite in float32
+# (kActExpMax).
+EXP_CLAMP = _constants.ACT_EXP_MAX
 
 # Defaults (see NeuralGI for why).
 DEFAULT_BUFFER_CHANNELS = 16

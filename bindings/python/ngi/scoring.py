@@ -13,10 +13,10 @@ Needs the native module (ngi._ngi) for tone mapping and metrics.
 
 import numpy as np
 
-from . import _ngi
+from . import _constants, _ngi
 
-LIGHT_MAX = 65504.0  # the largest lightmap value the library's decoding produces (kernels/compose.cl)
-LUMA = np.array([0.2126, 0.7152, 0.0722], np.float32)  # Rec. 709, as outside_light_share
+LIGHT_MAX = _constants.LIGHT_MAX  # the largest lightmap value the library's decoding produces (kernels/compose.cl)
+LUMA = np.array(_constants.REC709_LUMA, np.float32)  # Rec. 709, as outside_light_share
 
 
 def upsample(image, size):
