@@ -8,6 +8,7 @@
 # Distributed dataset rendering (ngi-dataset-mpi): OpenMPI.
 # Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
 # simulator), clang-15 + libFuzzer (fuzz targets).
+# Packaging (the package stage, pip install .): debhelper, dh-python, python3-setuptools/-wheel/-pip/-venv.
 # Benchmark baseline: Intel Embree 3 (libembree-dev, with TBB), the CPU ray tracer perf/bench_bvh compares the
 # triangle BVH with (optional: CMake skips bench_bvh where it is missing).
 set -euo pipefail
@@ -21,6 +22,7 @@ packages=(
   mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
   libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri libstb-dev xvfb xauth
   libembree-dev
+  debhelper dh-python python3-setuptools python3-wheel python3-pip python3-venv
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -5,19 +5,23 @@
 #             path is the one Mesa uses for GPUs
 #   oclgrind  the [oclgrind] kernel tests (small shapes) in the oclgrind simulator: out-of-bounds accesses, data
 #             races, uninitialized reads, barrier divergence and API errors must number zero
-#   install   installs the build into a temporary prefix; a C99 program (pkg-config) and a C++ program
-#             (find_package(ngi)) are built against the installed files and run (tools/ci/install_consumers.sh)
+#   install   installs the build into a temporary prefix; one consumer per exported target (C99 through pkg-config
+#             and find_package, C++ through find_package for ngi::core, io, pipeline and render), the CLI and the
+#             Python package are built or run against the installed files (tools/ci/install_consumers.sh)
+#   package   the Debian packages (debian/) made from ./build without building again, installed with dpkg, the same
+#             consumers run against /usr only, then purged; `pip install .` of ./build into a fresh venv
+#             (tools/ci/package.sh; needs root)
 #   sanitize  the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer, on PoCL
 #   tsan      the [threads] tests (one device, several threads, models and pipelines) under ThreadSanitizer
 #   fuzz      every libFuzzer target for a bounded time (tools/fuzz.sh)
 # NGI_TEST_STAGES="pocl rusticl" runs a subset. A stage whose platform is missing fails (install-deps.sh installs
 # them all); NGI_TEST_ALLOW_MISSING=1 turns that into a skip with the reason printed.
 #
-# Two lanes run side by side (NGI_TEST_LANES=1: one after the other): lane A = pocl, install, oclgrind, tsan, fuzz;
-# lane B = rusticl, sanitize. Much of a cold test run is one LLVM thread compiling kernels (PoCL, llvmpipe), so two
-# lanes keep both cores busy. Each lane has its own TMPDIR (tests write fixed names under it); the sanitize stage
-# waits for the pocl stage, whose kernel cache it reuses. Lane output is prefixed "A|" / "B|"; stage times are
-# printed at the end (docs/RELIABILITY.md records them).
+# Two lanes run side by side (NGI_TEST_LANES=1: one after the other): lane A = pocl, install, package, oclgrind,
+# tsan, fuzz; lane B = rusticl, sanitize. Much of a cold test run is one LLVM thread compiling kernels (PoCL,
+# llvmpipe), so two lanes keep both cores busy. Each lane has its own TMPDIR (tests write fixed names under it);
+# the sanitize stage waits for the pocl stage, whose kernel cache it reuses. Lane output is prefixed "A|" / "B|";
+# stage times are printed at the end (docs/RELIABILITY.md records them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -25,7 +29,7 @@ root=$PWD
 # start-up and training steps: minutes that exercise Python more than the kernels); every kernel and model test runs.
 tier=${NGI_TEST_TIER:-full}
 case $tier in
-  full) stages=${NGI_TEST_STAGES:-pocl install rusticl oclgrind sanitize tsan fuzz}; quick_exclude=() ;;
+  full) stages=${NGI_TEST_STAGES:-pocl install package rusticl oclgrind sanitize tsan fuzz}; quick_exclude=() ;;
   quick) stages=${NGI_TEST_STAGES:-pocl}; quick_exclude=(-E '^(training_.*|dataset_mpi|python_bindings|ci_sanitizer_triage)$') ;;
   *) echo "NGI_TEST_TIER must be full or quick, got '$tier'" >&2; exit 2 ;;
 esac
@@ -59,7 +63,7 @@ missing() {  # stage, reason
 }
 
 needs_release_build=0
-for s in $stages; do case $s in pocl|install|rusticl|oclgrind) needs_release_build=1 ;; esac; done
+for s in $stages; do case $s in pocl|install|package|rusticl|oclgrind) needs_release_build=1 ;; esac; done
 [ $needs_release_build = 1 ] && bash tools/build.sh
 
 run_stage() {
@@ -77,6 +81,13 @@ run_stage() {
       elif n=$(NGI_DEVICE=pocl bash tools/ci/install_consumers.sh build); then
         stage_result install ok "$n" $((SECONDS - start))
       else stage_result install failed 0 $((SECONDS - start)); fi ;;
+    package)
+      caches "$root/build"
+      if ! command -v dpkg-buildpackage > /dev/null || ! command -v dh > /dev/null; then
+        missing package "dpkg-dev or debhelper not installed"
+      elif [ "$(id -u)" -ne 0 ]; then missing package "not root (dpkg -i)"
+      elif n=$(NGI_DEVICE=pocl bash tools/ci/package.sh build); then stage_result package ok "$n" $((SECONDS - start))
+      else stage_result package failed 0 $((SECONDS - start)); fi ;;
     rusticl)
       caches "$root/build"
       export RUSTICL_ENABLE=llvmpipe
@@ -155,13 +166,13 @@ run_stage() {
         stage_result fuzz ok "$(grep -c ' execs ' "$fuzz_out" || true)" $((SECONDS - start))
       else cat "$fuzz_out" >&2; stage_result fuzz failed 0 $((SECONDS - start)); fi
       rm -f "$fuzz_out" ;;
-    *) echo "unknown stage '$stage' (pocl install rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;;
+    *) echo "unknown stage '$stage' (pocl install package rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;;
   esac
 }
 
 for s in $stages; do
-  case $s in pocl|install|rusticl|oclgrind|sanitize|tsan|fuzz) ;;
-    *) echo "unknown stage '$s' (pocl install rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;; esac
+  case $s in pocl|install|package|rusticl|oclgrind|sanitize|tsan|fuzz) ;;
+    *) echo "unknown stage '$s' (pocl install package rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;; esac
 done
 pocl_done=$(mktemp -u)   # created when the pocl stage ends
 lane_a="" lane_b=""
