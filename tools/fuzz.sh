@@ -8,22 +8,29 @@
 # Environment: NGI_FUZZ_TARGETS="npy exr ..." runs only those (names without fuzz_); NGI_FUZZ_JOBS=2 runs two
 # targets at a time. New inputs go to build-fuzz/corpus/<target>/ (fuzz/corpus/ is read as seeds only); crash
 # reproducers to build-fuzz/artifacts/. Prints one line per target: execs, exec/s, peak RSS, result.
+# NGI_FUZZ_BUILD_DIR=DIR uses a tree already configured with -DNGI_FUZZ=ON (the test command's sanitize tree, which
+# builds the fuzz targets beside the tests: one instrumented library instead of two) instead of ./build-fuzz.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 src=$PWD
-out=$src/build-fuzz
+out=${NGI_FUZZ_BUILD_DIR:-$src/build-fuzz}
 
 if ! command -v clang++-15 >/dev/null; then
     echo "fuzz.sh: clang++-15 not found (apt-get install clang-15 libfuzzer-15-dev)" >&2
     exit 2
 fi
 mkdir -p "$out"
-# -O1 -gline-tables-only: OSS-Fuzz's flags (line numbers in crash reports; a quicker build than -O2 -g).
-CC=clang-15 CXX=clang++-15 cmake -S . -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_FUZZ=ON \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" -DNGI_BUILD_TESTS=OFF -DNGI_BUILD_PERF=OFF >"$out/cmake.log" 2>&1 ||
-    { cat "$out/cmake.log" >&2; exit 2; }
-cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/build.log" 2>&1 ||
-    { tail -50 "$out/build.log" >&2; exit 2; }
+if [[ -z "${NGI_FUZZ_BUILD_DIR:-}" ]]; then
+    # -O1 -gline-tables-only: OSS-Fuzz's flags (line numbers in crash reports; a quicker build than -O2 -g).
+    CC=clang-15 CXX=clang++-15 cmake -S . -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_FUZZ=ON \
+        -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" -DNGI_BUILD_TESTS=OFF -DNGI_BUILD_PERF=OFF >"$out/cmake.log" 2>&1 ||
+        { cat "$out/cmake.log" >&2; exit 2; }
+elif ! grep -q '^NGI_FUZZ:BOOL=ON' "$out/CMakeCache.txt" 2>/dev/null; then
+    echo "fuzz.sh: NGI_FUZZ_BUILD_DIR=$out is not a tree configured with -DNGI_FUZZ=ON" >&2
+    exit 2
+fi
+cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/fuzz-build.log" 2>&1 ||
+    { tail -50 "$out/fuzz-build.log" >&2; exit 2; }
 
 if [[ "${1:-}" == "--corpus" ]]; then
     # ngi_make_corpus replaces only the target folders it writes; vox and mesh keep their seed scripts' files and

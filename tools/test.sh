@@ -101,9 +101,12 @@ run_stage() {
       # network-level tests (over 18 minutes on llvmpipe): their kernels (GEMM, convolutions, encoding, neural_gi
       # inputs, JBU) are tested here one by one, the shipped models' parity gate stays, and the path tracer feeding
       # the pipeline stays. The indirect output mode's frame-path case runs the shipped generators through the same
-      # plumbing; its kernel (decode_indirect) is tested here on its own.
+      # plumbing; its kernel (decode_indirect) is tested here on its own. Two more, by their cold times on llvmpipe
+      # (2026-11-28): the generator family/BN-mode matrix (379 s with the shipped pair; the shipped pair stays, as
+      # its own case) and every GEMM knob set at the generators' layer shapes (258 s): every knob set runs here on
+      # random small and odd shapes, the device's own choice at K up to 8192 (local-memory case, self-check).
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(ci_sanitizer_triage|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model|the path tracer feeds).*|image descriptors: (an engine|device buffers).*|gl_agreement|neural_gi( model files match|: hostile).*|neural GI on a frame: .*)$'); then
+                 -E '^(ci_sanitizer_triage|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model|the path tracer feeds).*|image descriptors: (an engine|device buffers).*|gl_agreement|neural_gi( model files match|: hostile).*|neural GI on a frame: .*|generators match PyTorch for both families.*|GEMM: every knob set matches the reference at the generators. layer shapes)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;
@@ -113,11 +116,21 @@ run_stage() {
       elif bash tools/ci/oclgrind.sh build; then stage_result oclgrind ok "$(cat build/oclgrind/cases)" $((SECONDS - start))
       else stage_result oclgrind failed 0 $((SECONDS - start)); fi ;;
     sanitize)
-      # -O1 -g1 (function names and line tables for the reports, no variable info): half the compile time of
-      # RelWithDebInfo's -O2 -g (48 -> 22 s for one test file), and -O1 is what AddressSanitizer's docs advise.
-      NGI_BUILD_DIR=build-sanitize bash tools/build.sh -DNGI_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-        -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
-        -DNGI_BUILD_PERF=OFF
+      # clang-15 with the libFuzzer targets in the same tree (-DNGI_FUZZ=ON): the fuzz stage runs them from here, so
+      # the instrumented library is built once, not twice (it was ~500 CPU-seconds of the test command). -O1
+      # -gline-tables-only (function names and line tables for the reports, no variable info): what
+      # AddressSanitizer's docs advise, OSS-Fuzz's flags, and half the compile time of -O2 -g.
+      if ! command -v clang++-15 > /dev/null; then
+        missing sanitize "clang-15 not installed"; echo failed > "$sanitize_built"; return
+      fi
+      if NGI_BUILD_DIR=build-sanitize bash tools/build.sh -DCMAKE_C_COMPILER=clang-15 -DCMAKE_CXX_COMPILER=clang++-15 \
+          -DNGI_SANITIZE=ON -DNGI_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DNGI_BUILD_PERF=OFF \
+          -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
+          -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG"; then
+        echo ok > "$sanitize_built"
+      else
+        echo failed > "$sanitize_built"; stage_result sanitize failed 0 $((SECONDS - start)); return
+      fi
       # The kernels the pocl stage compiled are reused (same sources, options and device: the cache keys say so):
       # compiling them again, with LLVM inside a sanitized process, only costs time. So wait for that stage.
       if [ -n "${lane_a_pid:-}" ] && [[ " $lane_a " == *" pocl "* ]]; then
@@ -159,9 +172,18 @@ run_stage() {
       # The per-target lines go through a file, not tee: reopening /dev/stderr would write past (or truncate)
       # a CI log that stdout and stderr share.
       fuzz_out=$(mktemp)
+      # With the sanitize stage in this run, the fuzz targets come from its tree: wait for its build (lane B).
+      fuzz_tree=""
+      if [[ " $stages " == *" sanitize "* ]]; then
+        while [ ! -s "$sanitize_built" ]; do sleep 5; done
+        fuzz_tree=$root/build-sanitize
+      fi
       if ! command -v clang++-15 > /dev/null; then missing fuzz "clang-15 not installed"
+      elif [ -n "$fuzz_tree" ] && [ "$(cat "$sanitize_built")" != ok ]; then
+        echo "== fuzz: FAILED: the sanitize tree it runs from did not build" >&2; stage_result fuzz failed 0 0
       # Two targets at a time, one per core: each still gets its 20 s.
-      elif NGI_FUZZ_JOBS=${NGI_FUZZ_JOBS:-2} $yield_cpu bash tools/fuzz.sh "${NGI_FUZZ_SECONDS:-20}" > "$fuzz_out"; then
+      elif NGI_FUZZ_BUILD_DIR=$fuzz_tree NGI_FUZZ_JOBS=${NGI_FUZZ_JOBS:-2} $yield_cpu bash tools/fuzz.sh \
+             "${NGI_FUZZ_SECONDS:-20}" > "$fuzz_out"; then
         cat "$fuzz_out" >&2
         stage_result fuzz ok "$(grep -c ' execs ' "$fuzz_out" || true)" $((SECONDS - start))
       else cat "$fuzz_out" >&2; stage_result fuzz failed 0 $((SECONDS - start)); fi
@@ -175,6 +197,7 @@ for s in $stages; do
     *) echo "unknown stage '$s' (pocl install package rusticl oclgrind sanitize tsan fuzz)" >&2; exit 2 ;; esac
 done
 pocl_done=$(mktemp -u)   # created when the pocl stage ends
+sanitize_built=$(mktemp)  # "ok" or "failed" once the sanitize stage's build ends (the fuzz stage runs from that tree)
 lane_a="" lane_b=""
 for s in $stages; do
   case $s in rusticl|sanitize) lane_b+=" $s" ;; *) lane_a+=" $s" ;; esac
@@ -184,6 +207,9 @@ run_lane() {  # name, stages...: the stages one after the other, in their own TM
   local tmp; tmp=$(mktemp -d "/tmp/ngi-lane-$name.XXXXXX")
   (
     export TMPDIR=$tmp
+    # The fuzz stage (lane A) waits for the sanitize stage's build: if this lane ends without saying how that build
+    # went (an unexpected error stops a lane), it says "failed", so the wait ends.
+    if [[ " $* " == *" sanitize "* ]]; then trap '[ -s "$sanitize_built" ] || echo failed > "$sanitize_built"' EXIT; fi
     for stage in "$@"; do run_stage "$stage"; done
   ) 2>&1 | sed -u "s/^/$name| /" >&2
   rm -rf "$tmp"
@@ -212,6 +238,6 @@ while read -r name status tests seconds; do
   printf '%-9s %-7s %5s tests %6ss\n' "$name" "$status" "$tests" "$seconds" >&2
   if [ "$status" = ok ]; then passed=$((passed + tests)); else failed=$((failed + 1)); fi
 done < "$results"
-rm -f "$results" "$pocl_done"
+rm -f "$results" "$pocl_done" "$sanitize_built"
 echo "ngi-ci: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -712,14 +712,12 @@ static void test_voxels(ngi_device* dev, const char* models) {
     CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_AS_WRITTEN, 0, ltf2, V * 3 * sizeof(float)) ==
           NGI_OK);
     CHECK(all_finite_nonnegative(ltf2, V * 3) && sum_of(ltf2, V * 3) > sum_of(direct, V * 3));
-    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_PHYSICAL, 1, ltf_phys, V * 3 * sizeof(float)) ==
+    /* The physical variant, every pair visible. With the visibility mask it would cost ~1 min of PoCL for this box's
+       voxels (54 of this program's 72 s): that variant's shadowing is tested in C++ on smaller scenes ("voxel GI:
+       the LTF of a scene's voxels equals the double reference"); here, that the flag is checked (below). */
+    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_PHYSICAL, 0, ltf_phys, V * 3 * sizeof(float)) ==
           NGI_OK);
     CHECK(all_finite_nonnegative(ltf_phys, V * 3) && sum_of(ltf_phys, V * 3) > sum_of(direct, V * 3));
-    /* Visibility only removes transfer: every pair visible gives at least as much light (the mask costs ~1 min of
-       PoCL for this box's voxels; it is what tells the variants' shadowing apart). */
-    CHECK(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_PHYSICAL, 0, lit2, V * 3 * sizeof(float)) ==
-          NGI_OK);
-    CHECK(sum_of(lit2, V * 3) > sum_of(ltf_phys, V * 3));
     CHECK_FAILS(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 2, NGI_LTF_AS_WRITTEN, 1, ltf2, V * 3 * sizeof(float)),
                 NGI_ERROR_INVALID_ARGUMENT, "ngi_voxels_ltf", "visibility");
     CHECK_FAILS(ngi_voxels_ltf(vox, direct, V * 3 * sizeof(float), 65, NGI_LTF_PHYSICAL, 0, ltf2, V * 3 * sizeof(float)),
