@@ -339,3 +339,16 @@ TEST_CASE("round 2: metrics refuse a data range whose SSIM constants are not flo
         CHECK(std::isfinite(m.ssim));
     }
 }
+
+// Item 6 of round 2: a valid 14 KB scene padded to a 3 GiB sparse .vox was read whole (38 s, 4 GB RSS, exit 0).
+TEST_CASE("round 2: a .vox file beyond kMaxVoxFileBytes is refused before it is read", "[vox][limits][reliability2]") {
+    using namespace vox_test;
+    TempDir dir("r2-vox-size");
+    const fs::path path = dir / "padded.vox";
+    ngi::test::spit(path, vox_file(size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 7}})));
+    CHECK(ngi::load_vox(path.string()).palette.size() > 1);  // valid as written
+    fs::resize_file(path, ngi::kMaxVoxFileBytes + 1);           // sparse: no disk space, no memory
+    // Refused from the size fstat reports (the message quotes it), before any byte is read.
+    CHECK_THROWS_WITH(ngi::load_vox(path.string()),
+                      Contains("padded.vox") && Contains("is larger (" + std::to_string(ngi::kMaxVoxFileBytes + 1)));
+}

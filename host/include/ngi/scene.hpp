@@ -83,6 +83,10 @@ constexpr int kMaxVoxDepth = 64;            // scene-graph nodes on one path fro
 constexpr std::size_t kMaxVoxNodeVisits = std::size_t(1) << 18;  // node visits of the whole walk (shared subtrees
                                                                  // count once per reference)
 constexpr std::size_t kMaxVoxInstances = std::size_t(1) << 16;   // shape instances (model placements)
+// Largest .vox file load_vox reads, checked (stat) before reading: 4 bytes per listed voxel for a grid of
+// kMaxVoxBlocks blocks, plus 16 MiB of palette, materials and scene graph (real files: < 1 MiB; the largest public
+// scene used here is 0.9 MiB). A 14 KB scene padded with an unknown 3 GiB chunk was once read whole (4 GB RSS).
+constexpr std::uint64_t kMaxVoxFileBytes = 4 * std::uint64_t(kMaxVoxBlocks) + (std::uint64_t(16) << 20);
 constexpr std::size_t kMaxVoxPlaced = kMaxVoxBlocks;             // voxels placed, summed over instances
 constexpr std::int64_t kMaxVoxCoord = std::int64_t(1) << 20;     // |translation| per axis, per nTRN and summed
 VoxelScene load_vox(const std::string& path);

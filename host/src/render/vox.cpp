@@ -178,7 +178,7 @@ float parse_float(const Reader& rd, const std::string& s, const char* what) {
 VoxelScene load_vox(const std::string& path) {
     // ngi's file rule (detail::read_file): a FIFO named x.vox once blocked this reader's std::ifstream in open()
     // forever; read_file refuses anything but a regular file before opening it, and caps the size.
-    return parse_vox(detail::read_file(path), path);
+    return parse_vox(detail::read_file(path, "read .vox scene", kMaxVoxFileBytes), path);
 }
 
 VoxelScene parse_vox(const std::string& b, const std::string& path) {
