@@ -4,10 +4,12 @@
 # Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser), assimp (mesh files: OBJ, PLY, glTF;
 # the path tracer's ngi_render links it). Python side (parity oracle,
 # training, perf baseline): Debian's python3-torch/numpy/skimage/matplotlib/tqdm, and OpenBLAS so PyTorch's BLAS is
-# not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest.
+# not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest, onnx (the
+# ONNX import, python3 -m ngi.convert model.onnx).
 # Distributed dataset rendering (ngi-dataset-mpi): OpenMPI.
 # Gates (tools/test.sh): Mesa's rusticl (mesa-opencl-icd, a second OpenCL stack), oclgrind (the kernel
-# simulator), clang-15 + libFuzzer (fuzz targets).
+# simulator), clang-15 + libFuzzer (the sanitize and fuzz stages), llvm-15 (llvm-symbolizer: stack traces in their
+# reports).
 # Packaging (the package stage, pip install .): debhelper, dh-python, python3-setuptools/-wheel/-pip/-venv.
 # Benchmark baseline: Intel Embree 3 (libembree-dev, with TBB), the CPU ray tracer perf/bench_bvh compares the
 # triangle BVH with (optional: CMake skips bench_bvh where it is missing).
@@ -17,9 +19,9 @@ packages=(
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
   catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev libassimp-dev
   python3-torch python3-numpy python3-skimage python3-matplotlib python3-tqdm libopenblas0-pthread
-  pybind11-dev python3-dev python3-pyopencl python3-pytest
+  pybind11-dev python3-dev python3-pyopencl python3-pytest python3-onnx
   libopenmpi-dev openmpi-bin
-  mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev
+  mesa-opencl-icd oclgrind clang-15 libfuzzer-15-dev llvm-15
   libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri libstb-dev xvfb xauth
   libembree-dev
   debhelper dh-python python3-setuptools python3-wheel python3-pip python3-venv

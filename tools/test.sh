@@ -140,6 +140,9 @@ run_stage() {
       # Leaks inside the OpenCL driver (PoCL, LLVM) are not ngi's; ngi's own are reported (tools/ci/lsan.supp).
       export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0" LSAN_OPTIONS="suppressions=$root/tools/ci/lsan.supp:print_suppressions=0"
       export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+      # clang's runtime symbolizes with llvm-symbolizer (llvm-15): without it, frames are bare addresses, and the
+      # triage could not tell ngi's frames from the driver's.
+      export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-15/bin/llvm-symbolizer
       if n=$(NGI_TEST_DEVICE=pocl run_ctest build-sanitize); then stage_result sanitize ok "$n" $((SECONDS - start))
       else
         # Failures that are not ngi's (tools/ci/sanitizer_triage.py; docs/RELIABILITY.md "Sanitizers"): LeakSanitizer's
@@ -156,7 +159,7 @@ run_stage() {
         if [ $triage = 0 ]; then stage_result sanitize ok "$n" $((SECONDS - start))
         else stage_result sanitize failed "$n" $((SECONDS - start)); fi
       fi
-      unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS ;;
+      unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS ASAN_SYMBOLIZER_PATH ;;
     tsan)
       NGI_BUILD_DIR=build-tsan NGI_BUILD_TARGETS=ngi_tests_threads $yield_cpu bash tools/build.sh -DNGI_SANITIZE=thread \
         -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DNGI_BUILD_PERF=OFF
