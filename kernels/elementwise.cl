@@ -64,3 +64,10 @@ __kernel void add_inplace(__global float* restrict x, const int x_off, __global 
     const int i = get_global_id(0);
     if (i < n) x[x_off + i] += y[y_off + i];
 }
+
+// x *= y over n floats (an imported graph's Mul of two computed tensors, e.g. a gate). x and y do not overlap.
+__kernel void mul_inplace(__global float* restrict x, const int x_off, __global const float* restrict y,
+                          const int y_off, const int n) {
+    const int i = get_global_id(0);
+    if (i < n) x[x_off + i] *= y[y_off + i];
+}

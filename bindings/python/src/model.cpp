@@ -1,4 +1,4 @@
-// ngi.Model: a model file (generator, mlp or voxel_sh) loaded on a device, run on NumPy arrays or on device buffers.
+// ngi.Model: a model file (generator, mlp, voxel_sh, neural_gi or an imported graph) loaded on a device, run on NumPy arrays or on device buffers.
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
@@ -17,6 +17,8 @@ py::dict config_dict(const ngi::ModelConfig& c) {
     if (c.family == "voxel_sh") {
         d["architecture"] = c.voxel_sh.architecture;
         d["grid"] = py::make_tuple(c.voxel_sh.grid[0], c.voxel_sh.grid[1], c.voxel_sh.grid[2]);
+    } else if (c.family == "graph") {
+        d["layout"] = c.graph.layout;
     } else if (c.family != "mlp") {
         d["ngf"] = c.ngf;
         d["num_downs"] = c.num_downs;
@@ -117,7 +119,8 @@ each input size is built on first use.)doc")
             FloatArray x = float_array(input, "Model.run: input");
             const ngi::ModelConfig& c = pm.model.config();
             // Per-item families take point lists [N, C] too (voxel_sh: [V, 10], one scene's voxels).
-            const bool mlp = c.family == "mlp" || c.family == "voxel_sh";
+            const bool mlp = c.family == "mlp" || c.family == "voxel_sh" ||
+                             (c.family == "graph" && c.graph.layout == "nc");
             expect_ndim(x, mlp ? std::initializer_list<int>{2, 4} : std::initializer_list<int>{4}, "Model.run: input",
                         mlp ? "[1, C, H, W] or [N, C]" : "[1, C, H, W]");
             if (x.ndim() == 4) {
@@ -125,10 +128,13 @@ each input size is built on first use.)doc")
                     throw py::value_error("Model.run: input: expected [1, " + std::to_string(c.input_nc) +
                                           ", H, W] for " + pm.path + ", got [" + std::to_string(x.shape(0)) + ", " +
                                           std::to_string(x.shape(1)) + ", ...]");
-                return run_nchw(pm, x);
+                // An imported graph may resample (its output's size is the graph's): through the library's Tensor.
+                if (c.family != "graph") return run_nchw(pm, x);
             }
             // [N, C] points: channels last, so the library transposes; one copy into its Tensor.
-            ngi::Tensor t({int(x.shape(0)), int(x.shape(1))});
+            std::vector<int> shape;
+            for (py::ssize_t i = 0; i < x.ndim(); ++i) shape.push_back(int(x.shape(i)));
+            ngi::Tensor t(shape);
             std::memcpy(t.data.data(), x.data(), t.data.size() * sizeof(float));
             ngi::RunInfo info;
             pm.device->get("Model.run");

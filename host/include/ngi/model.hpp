@@ -17,7 +17,7 @@ namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi" | "graph"
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;
@@ -77,6 +77,15 @@ struct ModelConfig {
         bool has_scene_box = false;
         float scene_min[3] = {0, 0, 0}, scene_max[3] = {0, 0, 0};
     } neural_gi;
+
+    // family "graph" (docs/MODEL_FORMAT.md "graph"; python3 -m ngi.convert writes it from an ONNX file): a list of
+    // nodes (conv2d, conv_transpose2d, dense, concat, activation, affine, add, mul, frequency_encode, nan_to_num) over
+    // named tensors, built on the graph ops; the loader validates the list (models/graph_model.cpp).
+    // layout "nchw": Model::run takes [1, input_nc, H, W]; "nc": [N, input_nc] items (or [1, input_nc, H, W], per
+    // pixel), as the mlp family.
+    struct GraphFamily {
+        std::string layout = "nchw";
+    } graph;
 };
 
 // Overrides of the file's settings; an empty string keeps the file's value.
@@ -115,6 +124,8 @@ public:
     // Family "mlp": [1, input_nc, H, W] (per pixel) -> [1, output_nc, H, W], or [N, input_nc] -> [N, output_nc].
     // Family "voxel_sh": [V, 10] raw voxel attributes (one scene) -> [V, 27] SH coefficients.
     // Family "neural_gi": [1, 18, H, W] assembled inputs -> [1, 3, H, W] indirect light.
+    // Family "graph": [1, input_nc, H, W] -> [1, output_nc, H', W'] (layout "nchw"); layout "nc" also [N, input_nc]
+    // -> [N, output_nc].
     // The graph for each new H x W is built and planned on first use and reused afterwards.
     Tensor run(const Tensor& input, RunInfo* info = nullptr);
 
@@ -131,6 +142,7 @@ public:
 
 private:
     friend struct detail::ModelAccess;
+    Tensor run_items(const Tensor& input, RunInfo* info);  // family "graph", layout "nc": [N, C]
     struct Impl;
     explicit Model(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;

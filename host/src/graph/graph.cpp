@@ -54,15 +54,21 @@ TensorId Graph::concat(const std::vector<TensorId>& inputs, const std::string& n
     std::size_t offset = 0;
     for (TensorId t : inputs) {
         const TensorId r = root(t);
-        if (r == input_ || tensors_[r].parent != -1)
-            throw Error("graph concat " + name + ": " + tensors_[t].name + " is already placed (graph input or "
-                        "member of another concat)");
+        if (r == input_ || r == cat)  // r == cat: t is twice in this concat (placing it again would loop)
+            throw Error("graph concat " + name + ": " + tensors_[t].name +
+                        " is already placed (the graph input, or twice in this concat; copy it first)");
         // t may itself be an in-place alias of r at offset 0; place the root.
         tensors_[r].parent = cat;
         tensors_[r].offset = offset;
         offset += tensors_[t].shape.size();
     }
     return cat;
+}
+
+bool Graph::placeable(TensorId t) const {
+    if (t < 0 || t >= TensorId(tensors_.size())) throw Error("graph: tensor id out of range");
+    const TensorId r = root(t);
+    return r != input_ && !tensors_[r].is_concat;
 }
 
 TensorId Graph::root(TensorId t) const {

@@ -45,11 +45,15 @@ public:
     TensorId add(std::shared_ptr<Op> op, const std::vector<TensorId>& inputs, const std::string& name);
     // Channel concatenation without a copy: the inputs are placed one after the other inside the result.
     TensorId concat(const std::vector<TensorId>& inputs, const std::string& name);
+    // Whether t can become a member of a new concat: not the graph input (or an in-place alias of it) and not
+    // already inside a concat. Otherwise copy it first (CopyNode).
+    bool placeable(TensorId t) const;
     void set_output(TensorId t) { output_ = t; }
     // What +-Inf in the input becomes (NaN always becomes 0); default: the float range.
     void set_input_limits(float lo, float hi) { input_lo_ = lo; input_hi_ = hi; }
 
     const Shape& shape(TensorId t) const { return tensors_.at(t).shape; }
+    const Shape& output_shape() const { return tensors_.at(output_).shape; }
     std::size_t node_count() const { return nodes_.size(); }
 
     // Plans memory and allocates the arena and the scratch buffer. Call once after the last add().

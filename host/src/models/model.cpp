@@ -2,6 +2,7 @@
 
 #include <map>
 
+#include "models/graph_model.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
 #include "models/mlp_model.hpp"
@@ -23,13 +24,15 @@ struct Model::Impl {
     std::unique_ptr<detail::VoxelShRunner> voxel_sh;  // family "voxel_sh" (instead of ops and graphs)
     bool voxel_sh_enqueued = false;
     std::unique_ptr<detail::NeuralGiOps> neural_gi;  // family "neural_gi" (instead of ops; graphs as a U-Net's)
+    std::unique_ptr<detail::GraphModelOps> graph_model;  // family "graph" (instead of ops; its own graphs)
 
     // The graph for an input of h x w, built, planned and allocated on first use.
     detail::Graph& graph(int h, int w) {
         auto& g = graphs[{h, w}];
         if (!g) {
-            auto fresh = neural_gi ? detail::build_neural_gi_graph(*neural_gi, config.input_nc, h, w)
-                                   : detail::build_unet_graph(ops, h, w);
+            auto fresh = graph_model ? detail::build_graph_model_graph(*graph_model, h, w)
+                         : neural_gi ? detail::build_neural_gi_graph(*neural_gi, config.input_nc, h, w)
+                                     : detail::build_unet_graph(ops, h, w);
             fresh->set_input_limits(config.input_range[0], config.input_range[1]);
             fresh->compile(ngi::detail::context_of(device));
             g = std::move(fresh);
@@ -50,9 +53,12 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
         throw InputError("load model " + path + ": no __metadata__[\"ngi\"] architecture config; convert the "
                          "checkpoint with python3 -m ngi.convert (docs/MODEL_FORMAT.md)");
     ModelConfig cfg = detail::parse_model_config(meta->second, path);  // every family, the JSON parsed once
+    if (cfg.family == "graph" && (!options.bn_mode.empty() || !options.dropout.empty()))
+        throw InputError("load model " + path + ": bn_mode and dropout apply to the U-Net families; an imported "
+                         "graph runs as exported (inference batch norm folded in, no dropout)");
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr});
+    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr, nullptr});
     auto& ctx = ngi::detail::context_of(device);
     if (cfg.family == "voxel_sh") {
         if (!options.mlp_path.empty())
@@ -70,7 +76,10 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
         throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is " + cfg.family);
     try {
         const detail::GemmSelection& gemm = detail::gemm_selection(ngi::detail::context_of(device));
-        if (cfg.family == "neural_gi")
+        if (cfg.family == "graph")
+            impl->graph_model = std::make_unique<detail::GraphModelOps>(
+                detail::build_graph_model_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params));
+        else if (cfg.family == "neural_gi")
             impl->neural_gi = std::make_unique<detail::NeuralGiOps>(
                 detail::build_neural_gi_ops(ngi::detail::context_of(device), cfg, file, gemm.params, gemm.conv_params));
         else
@@ -93,6 +102,7 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
         impl_->voxel_sh_enqueued = false;
         return impl_->voxel_sh->run(ngi::detail::context_of(impl_->device), input, info);
     }
+    if (impl_->graph_model && c.graph.layout == "nc" && input.shape.size() == 2) return run_items(input, info);
     if (input.shape.size() != 4 || input.shape[0] != 1 || input.shape[1] != c.input_nc)
         throw InputError("run model: input tensor is " + shape_string(input.shape) + ", expected [1, " +
                          std::to_string(c.input_nc) + ", H, W] (NCHW, batch 1)");
@@ -101,7 +111,8 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
                          shape_string(input.shape));
     const int h = input.shape[2], w = input.shape[3];
     detail::Graph* graph = &impl_->graph(h, w);
-    Tensor out({1, c.output_nc, h, w});
+    const Shape os = graph->output_shape();  // [output_nc, h, w] except for graphs that resample
+    Tensor out({1, os.c, os.h, os.w});
     const detail::RunStats stats = graph->run(ngi::detail::context_of(impl_->device), input.data.data(), out.data.data());
     if (info) {
         info->sanitized_inputs = stats.sanitized_inputs;
@@ -110,8 +121,30 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
         info->arena_bytes = graph->arena_bytes();
         info->naive_bytes = graph->naive_bytes();
         info->scratch_bytes = graph->scratch_bytes();
-        info->weight_bytes = impl_->neural_gi ? impl_->neural_gi->weight_bytes : impl_->ops.weight_bytes;
+        info->weight_bytes = impl_->graph_model ? impl_->graph_model->weight_bytes
+                             : impl_->neural_gi ? impl_->neural_gi->weight_bytes : impl_->ops.weight_bytes;
     }
+    return out;
+}
+
+// Family "graph", layout "nc": [N, C] items, transposed to the planar [C, 1, N] image the graph runs on and back.
+Tensor Model::run_items(const Tensor& input, RunInfo* info) {
+    const auto& c = impl_->config;
+    if (input.shape[1] != c.input_nc || input.shape[0] < 1 || input.shape[0] > (1 << 30))
+        throw InputError("run model: input tensor is " + shape_string(input.shape) + ", expected [N, " +
+                         std::to_string(c.input_nc) + "] with N in 1 .. 2^30 (or [1, " + std::to_string(c.input_nc) +
+                         ", H, W] per pixel)");
+    if (input.data.size() != Tensor::element_count(input.shape))
+        throw InputError("run model: input tensor has " + std::to_string(input.data.size()) + " values for shape " +
+                         shape_string(input.shape));
+    const int n = input.shape[0], ci = c.input_nc, co = c.output_nc;
+    Tensor planar({1, ci, 1, n});
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < ci; ++k) planar.data[std::size_t(k) * n + i] = input.data[std::size_t(i) * ci + k];
+    const Tensor y = run(planar, info);
+    Tensor out({n, co});
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < co; ++k) out.data[std::size_t(i) * co + k] = y.data[std::size_t(k) * n + i];
     return out;
 }
 
@@ -123,6 +156,10 @@ void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem
     if (im.mlp) throw InputError("the surround pipeline runs image generators; this model is an mlp");
     if (im.voxel_sh) throw InputError("the surround pipeline runs image generators; this model is a voxel_sh network");
     Graph& g = im.graph(height, width);
+    // The pipeline sizes its buffers as [output_nc, height, width]; an imported graph may resample.
+    if (im.graph_model && !(g.output_shape() == Shape{im.config.output_nc, height, width}))
+        throw InputError("the surround pipeline needs an output of the input's size (" + std::to_string(height) +
+                         "x" + std::to_string(width) + "); this graph model gives " + to_string(g.output_shape()));
     g.enqueue(context_of(im.device), in, in_offset, out, out_offset);
     im.last = &g;
 }
@@ -178,7 +215,15 @@ void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int h
                          " (HxW) must be positive multiples of 2^num_downs = " + std::to_string(step));
     const std::size_t plane = std::size_t(height) * std::size_t(width) * sizeof(float);
     check_device_buffer(input, impl_->device, plane * std::size_t(c.input_nc), false, "input");
-    check_device_buffer(output, impl_->device, plane * std::size_t(c.output_nc), true, "output");
+    const std::size_t out_bytes =
+        impl_->graph_model ? impl_->graph(height, width).output_bytes() : plane * std::size_t(c.output_nc);
+    check_device_buffer(output, impl_->device, out_bytes, true, "output");
+    if (impl_->graph_model) {
+        detail::Graph& g = impl_->graph(height, width);
+        g.enqueue(ngi::detail::context_of(impl_->device), input.opencl_mem(), 0, output.opencl_mem(), 0);
+        impl_->last = &g;
+        return;
+    }
     detail::ModelAccess::enqueue(*this, input.opencl_mem(), 0, output.opencl_mem(), 0, height, width);
 }
 

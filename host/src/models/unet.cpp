@@ -8,6 +8,7 @@
 #include "graph/nodes.hpp"
 #include "io/json_strict.hpp"
 #include "models/float_field.hpp"
+#include "models/graph_model.hpp"
 #include "models/mlp_model.hpp"
 #include "models/neural_gi_model.hpp"
 #include "models/voxel_sh_model.hpp"
@@ -135,6 +136,11 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         c.json = text;
         return c;
     }
+    if (j.contains("family") && j["family"].is_string() && j["family"] == "graph") {
+        ModelConfig c = parse_graph_config(j, path);  // its own fields and node list (models/graph_model.cpp)
+        c.json = text;
+        return c;
+    }
     // Every field is checked for its JSON type and range before conversion (get<int> would silently truncate
     // 2^32 + 4 to 4, get<float> turns 1e300 into inf); the ranges are those of docs/MODEL_FORMAT.md.
     auto fail = [&](const std::string& key, const std::string& rule) -> InputError {
@@ -178,7 +184,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const std::string s = j[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             if (std::string(key) == "family")  // the most common mistake gets the most specific message
-                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh, neural_gi)");
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh, neural_gi, graph)");
             throw fail(key, rule);
         }
         return s;

@@ -17,6 +17,7 @@ Elementwise::Elementwise(Context& ctx)
       sanitize_(ctx.kernel(kProgram, "sanitize_inplace", activation_defines())),
       affine_(ctx.kernel(kProgram, "channel_affine_planar", activation_defines())),
       add_(ctx.kernel(kProgram, "add_inplace", activation_defines())),
+      mul_(ctx.kernel(kProgram, "mul_inplace", activation_defines())),
       counter_(ctx.alloc(sizeof(int), "sanitize counter")) {}
 
 cl_event Elementwise::activate(Context& ctx, const View& x, Act act, bool want_event) {
@@ -72,6 +73,16 @@ cl_event Elementwise::add(Context& ctx, const View& x, const View& y, bool want_
     add_.args(x.mem, int(x.offset), y.mem, int(y.offset), n);
     const std::size_t g[1] = {std::size_t(n)};
     return ctx.launch(add_, 1, g, kLocal, want_event);
+}
+
+cl_event Elementwise::mul(Context& ctx, const View& x, const View& y, bool want_event) {
+    if (x.shape.size() != y.shape.size())
+        throw InputError("mul: shapes " + to_string(x.shape) + " and " + to_string(y.shape) + " differ");
+    const int n = int(x.shape.size());
+    if (n <= 0) return nullptr;
+    mul_.args(x.mem, int(x.offset), y.mem, int(y.offset), n);
+    const std::size_t g[1] = {std::size_t(n)};
+    return ctx.launch(mul_, 1, g, kLocal, want_event);
 }
 
 }  // namespace ngi::detail

@@ -28,9 +28,11 @@ public:
                             bool want_event = false);
     // x += y (same shape, no overlap): a residual connection.
     cl_event add(Context& ctx, const View& x, const View& y, bool want_event = false);
+    // x *= y (same shape, no overlap).
+    cl_event mul(Context& ctx, const View& x, const View& y, bool want_event = false);
 
 private:
-    Kernel act_, dropout_, sanitize_, affine_, add_;
+    Kernel act_, dropout_, sanitize_, affine_, add_, mul_;
     Buffer counter_;
 };
 

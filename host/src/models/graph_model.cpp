@@ -1,0 +1,502 @@
+#include "models/graph_model.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <climits>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "graph/nodes.hpp"
+#include "models/float_field.hpp"
+#include "models/mlp_model.hpp"
+#include "models/unet.hpp"
+
+namespace ngi::detail {
+
+namespace {
+
+constexpr int kMaxKernel = 64, kMaxStride = 64, kMaxPad = 64, kMaxNameLength = 512;
+
+// y = act(x), in place.
+class ActivationNode : public Op {
+public:
+    ActivationNode(Context& ctx, Act act) : ew_(ctx), act_(act) {}
+    std::string kind() const override { return "activation"; }
+    Shape infer(const std::vector<Shape>& in) const override { return ConvNode::one(in); }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem, std::vector<cl_event>* ev) override {
+        cl_event e = ew_.activate(ctx, in[0], act_, ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    Elementwise ew_;
+    Act act_;
+};
+
+// torch.nan_to_num(x) with its defaults: NaN -> 0, +-Inf -> +-FLT_MAX, in place. The sanitize kernel with the
+// float range as limits (its own counter, so the graph input's count is not touched).
+class NanToNumNode : public Op {
+public:
+    explicit NanToNumNode(Context& ctx) : ew_(ctx) {}
+    std::string kind() const override { return "nan_to_num"; }
+    Shape infer(const std::vector<Shape>& in) const override { return ConvNode::one(in); }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem, std::vector<cl_event>*) override {
+        ew_.sanitize(ctx, in[0], -FLT_MAX, FLT_MAX);
+    }
+
+private:
+    Elementwise ew_;
+};
+
+// x += y or x *= y (same shape), in place on input 0.
+class BinaryNode : public Op {
+public:
+    BinaryNode(Context& ctx, bool mul) : ew_(ctx), mul_(mul) {}
+    std::string kind() const override { return mul_ ? "mul" : "add"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        if (in.size() != 2) throw InputError(kind() + " takes two inputs");
+        if (!(in[0] == in[1]))
+            throw InputError(kind() + ": the inputs are " + to_string(in[0]) + " and " + to_string(in[1]) +
+                             " (no broadcasting between computed tensors)");
+        return in[0];
+    }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem, std::vector<cl_event>* ev) override {
+        cl_event e = mul_ ? ew_.mul(ctx, in[0], in[1], ev != nullptr) : ew_.add(ctx, in[0], in[1], ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    Elementwise ew_;
+    bool mul_;
+};
+
+// y[c] = scale[c] x[c] + shift[c] (a batch norm that follows no convolution, a Mul or Add by a constant).
+class AffineNode : public Op {
+public:
+    AffineNode(Context& ctx, const std::vector<float>& scale, const std::vector<float>& shift)
+        : ew_(ctx), channels_(int(scale.size())) {
+        scale_ = ctx.alloc(scale.size() * sizeof(float), "graph affine scale");
+        shift_ = ctx.alloc(shift.size() * sizeof(float), "graph affine shift");
+        ctx.write(scale_, 0, scale.size() * sizeof(float), scale.data(), "graph affine scale");
+        ctx.write(shift_, 0, shift.size() * sizeof(float), shift.data(), "graph affine shift");
+    }
+    std::string kind() const override { return "affine"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        const Shape& s = ConvNode::one(in);
+        if (s.c != channels_)
+            throw InputError("affine: the input has " + std::to_string(s.c) + " channels, the node " +
+                             std::to_string(channels_));
+        return s;
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        const int n = in[0].shape.h * in[0].shape.w;
+        cl_event e = ew_.channel_affine(ctx, in[0].mem, in[0].offset, 1, n, channels_, n, scale_.get(), shift_.get(),
+                                        out.mem, out.offset, ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    Elementwise ew_;
+    int channels_;
+    Buffer scale_, shift_;
+};
+
+const std::set<std::string> kOps = {"conv2d", "conv_transpose2d", "dense", "concat", "activation",
+                                    "affine", "add", "mul", "frequency_encode", "nan_to_num"};
+const std::set<std::string> kActivations = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp"};
+
+bool is_int_in(const nlohmann::json& v, long long lo, long long hi) {
+    if (!v.is_number_integer()) return false;
+    if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(LLONG_MAX)) return false;
+    const long long x = v.get<long long>();
+    return x >= lo && x <= hi;
+}
+
+bool is_name(const nlohmann::json& v) {
+    return v.is_string() && !v.get<std::string>().empty() && v.get<std::string>().size() <= kMaxNameLength;
+}
+
+// The activation of key `key` ("activation" or "input_activation") of node n; absent: none.
+Act node_activation(const nlohmann::json& n, const char* key) {
+    if (!n.contains(key)) return Act::none();
+    const std::string a = n[key].get<std::string>();
+    if (a == "relu") return Act::relu();
+    if (a == "leaky_relu") return Act::leaky(n.contains("slope") ? n["slope"].get<float>() : 0.01f);
+    if (a == "tanh") return Act::tanh();
+    if (a == "sigmoid") return Act::sigmoid();
+    if (a == "exp") return Act::exp();
+    return Act::none();
+}
+
+}  // namespace
+
+GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        return InputError(what + "field '" + key + "' must be " + rule);
+    };
+    if (!j.contains("graph") || !j["graph"].is_object())
+        throw fail("graph", "an object {\"layout\", \"input\", \"output\", \"nodes\"}");
+    const nlohmann::json& g = j["graph"];
+    GraphDesc d;
+    if (g.contains("layout")) {
+        if (!g["layout"].is_string() || (g["layout"] != "nchw" && g["layout"] != "nc"))
+            throw fail("graph.layout", "\"nchw\" | \"nc\"");
+        d.layout = g["layout"].get<std::string>();
+    }
+    if (!g.contains("input") || !is_name(g["input"])) throw fail("graph.input", "a tensor name (1..512 characters)");
+    if (!g.contains("output") || !is_name(g["output"])) throw fail("graph.output", "a tensor name (1..512 characters)");
+    if (!j.contains("input_nc") || !is_int_in(j["input_nc"], 1, kMaxChannels))
+        throw fail("input_nc", "an integer in 1.." + std::to_string(kMaxChannels));
+    d.input_name = g["input"].get<std::string>();
+    d.input_nc = j["input_nc"].get<int>();
+    if (!g.contains("nodes") || !g["nodes"].is_array() || g["nodes"].empty() || g["nodes"].size() > kMaxGraphNodes)
+        throw fail("graph.nodes", "a list of 1.." + std::to_string(kMaxGraphNodes) + " node objects");
+
+    std::map<std::string, int> tensor = {{d.input_name, 0}};  // name -> index
+    std::vector<int> channels = {d.input_nc};
+    std::set<std::string> node_names;
+    const bool nc = d.layout == "nc";
+    for (std::size_t k = 0; k < g["nodes"].size(); ++k) {
+        const nlohmann::json& n = g["nodes"][k];
+        std::string label = "graph.nodes[" + std::to_string(k) + "]";
+        if (!n.is_object()) throw InputError(what + label + " is not an object");
+        if (!n.contains("name") || !is_name(n["name"]))
+            throw InputError(what + label + ": 'name' must be a string of 1..512 characters");
+        GraphNodeDesc node;
+        node.name = n["name"].get<std::string>();
+        label = "node '" + node.name + "'";
+        auto bad = [&](const std::string& msg) { return InputError(what + label + ": " + msg); };
+        if (!node_names.insert(node.name).second) throw bad("a second node of this name");
+        if (!n.contains("op") || !n["op"].is_string()) throw bad("'op' must be a string");
+        node.op = n["op"].get<std::string>();
+        label = "node '" + node.name + "' (" + node.op.substr(0, 80) + ")";
+        if (!kOps.count(node.op))
+            throw bad("op '" + node.op.substr(0, 80) + "' is not one of conv2d, conv_transpose2d, dense, concat, "
+                      "activation, affine, add, mul, frequency_encode, nan_to_num");
+        static const std::map<std::string, std::set<std::string>> kFields = {
+            {"conv2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
+            {"conv_transpose2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
+            {"dense", {"in", "out", "weight", "bias", "activation", "slope"}},
+            {"concat", {}},
+            {"activation", {"activation", "slope"}},
+            {"affine", {"scale", "shift"}},
+            {"add", {}},
+            {"mul", {}},
+            {"frequency_encode", {"encoding"}},
+            {"nan_to_num", {}}};
+        const std::set<std::string>& allowed = kFields.at(node.op);
+        for (auto it = n.begin(); it != n.end(); ++it) {
+            const std::string& key = it.key();
+            if (key != "name" && key != "op" && key != "inputs" && key != "output" && key != "source" &&
+                !allowed.count(key))
+                throw bad("unknown field '" + key.substr(0, 80) + "'");
+        }
+        // Inputs: each one the graph input or an earlier node's output (so no cycle, nothing dangling).
+        if (!n.contains("inputs") || !n["inputs"].is_array() || n["inputs"].empty() || n["inputs"].size() > 1024)
+            throw bad("'inputs' must be a list of 1..1024 tensor names");
+        for (const auto& in : n["inputs"]) {
+            if (!is_name(in)) throw bad("'inputs' must be a list of tensor names");
+            auto it = tensor.find(in.get<std::string>());
+            if (it == tensor.end())
+                throw bad("input '" + in.get<std::string>().substr(0, 120) + "' is neither the graph input nor the "
+                          "output of an earlier node (dangling, or a cycle)");
+            node.inputs.push_back(it->second);
+        }
+        const std::size_t arity = node.op == "concat" ? 0 : (node.op == "add" || node.op == "mul") ? 2 : 1;
+        if (arity && node.inputs.size() != arity)
+            throw bad("takes " + std::to_string(arity) + " input" + (arity > 1 ? "s" : "") + ", the list has " +
+                      std::to_string(node.inputs.size()));
+        if (!n.contains("output") || !is_name(n["output"])) throw bad("'output' must be a tensor name");
+        node.output = n["output"].get<std::string>();
+        if (tensor.count(node.output)) throw bad("output '" + node.output.substr(0, 120) + "' is made a second time");
+        const int cin = channels[node.inputs[0]];
+
+        // Activation fields.
+        for (const char* key : {"activation", "input_activation"}) {
+            if (!n.contains(key)) continue;
+            if (!n[key].is_string() || !kActivations.count(n[key].get<std::string>()))
+                throw bad(std::string("'") + key + "' must be one of none, relu, leaky_relu, tanh, sigmoid, exp");
+        }
+        if (node.op == "activation" && !n.contains("activation")) throw bad("'activation' is missing");
+        if (n.contains("slope")) {
+            const nlohmann::json& s = n["slope"];
+            if (!s.is_number() || !std::isfinite(s.get<double>()) || std::abs(s.get<double>()) > 1.0 ||
+                !float32_representable(s.get<double>()))
+                throw bad(std::string("'slope' must be a number in [-1, 1] ") + kFloat32Rule);
+        }
+        auto tensor_field = [&](const char* key, bool required) {
+            if (!n.contains(key)) {
+                if (required) throw bad(std::string("'") + key + "' (a tensor name) is missing");
+                return;
+            }
+            if (!is_name(n[key])) throw bad(std::string("'") + key + "' must be a tensor name");
+        };
+        auto int_field = [&](const char* key, long long lo, long long hi) {
+            if (!n.contains(key) || !is_int_in(n[key], lo, hi))
+                throw bad(std::string("'") + key + "' must be an integer in " + std::to_string(lo) + ".." +
+                          std::to_string(hi));
+            return int(n[key].get<long long>());
+        };
+
+        if (node.op == "conv2d" || node.op == "conv_transpose2d" || node.op == "dense") {
+            const int in = int_field("in", 1, kMaxChannels);
+            node.out_channels = int_field("out", 1, kMaxChannels);
+            if (in != cin)
+                throw bad("'in' is " + std::to_string(in) + ", its input has " + std::to_string(cin) + " channels");
+            tensor_field("weight", true);
+            tensor_field("bias", false);
+            if (node.op != "dense") {
+                const std::string rule = "[kh, kw], integers in 1.." + std::to_string(kMaxKernel);
+                if (!n.contains("kernel") || !n["kernel"].is_array() || n["kernel"].size() != 2 ||
+                    !is_int_in(n["kernel"][0], 1, kMaxKernel) || !is_int_in(n["kernel"][1], 1, kMaxKernel))
+                    throw bad("'kernel' must be " + rule);
+                const int stride = int_field("stride", 1, kMaxStride), pad = int_field("pad", 0, kMaxPad);
+                if (nc && (n["kernel"][0] != 1 || n["kernel"][1] != 1 || stride != 1 || pad != 0))
+                    throw bad("layout \"nc\" has no spatial axes: only 1 x 1 kernels, stride 1, pad 0");
+            }
+        } else if (node.op == "concat") {
+            long long c = 0;
+            for (int i : node.inputs) c += channels[i];
+            if (c > kMaxChannels) throw bad("concatenates " + std::to_string(c) + " channels (at most " +
+                                            std::to_string(kMaxChannels) + ")");
+            node.out_channels = int(c);
+        } else if (node.op == "add" || node.op == "mul") {
+            if (channels[node.inputs[1]] != cin)
+                throw bad("combines " + std::to_string(cin) + " and " + std::to_string(channels[node.inputs[1]]) +
+                          " channels (no broadcasting between computed tensors)");
+            node.out_channels = cin;
+        } else if (node.op == "affine") {
+            tensor_field("scale", false);
+            tensor_field("shift", false);
+            if (!n.contains("scale") && !n.contains("shift")) throw bad("neither 'scale' nor 'shift' is given");
+            node.out_channels = cin;
+        } else if (node.op == "frequency_encode") {
+            if (!n.contains("encoding") || !n["encoding"].is_object()) throw bad("'encoding' must be an object");
+            ModelConfig e;
+            parse_encoding_fields(n, e, what + label + ": ");
+            if (e.encoding_bands < 1) throw bad("'encoding.bands' must be at least 1");
+            node.out_channels = frequency_encoding(e).width(cin);
+            if (node.out_channels > kMaxChannels) throw bad("encodes to more than " + std::to_string(kMaxChannels) + " channels");
+        } else {  // activation, nan_to_num
+            node.out_channels = cin;
+        }
+        node.fields = n;
+        tensor[node.output] = int(d.nodes.size()) + 1;
+        channels.push_back(node.out_channels);
+        d.nodes.push_back(std::move(node));
+    }
+    auto out = tensor.find(g["output"].get<std::string>());
+    if (out == tensor.end())
+        throw fail("graph.output", "the output of a node; no node makes '" + g["output"].get<std::string>().substr(0, 120) + "'");
+    if (out->second == 0) throw fail("graph.output", "a node's output, not the graph input itself");
+    d.output = out->second;
+    return d;
+}
+
+ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path) {
+    const std::string what = "load model " + path + ": metadata 'ngi': ";
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
+        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
+    };
+    ModelConfig c;
+    c.family = "graph";
+    if (j.contains("format_version")) {
+        if (j["format_version"].is_number_integer() && j["format_version"].get<long long>() > kModelFormatVersion)
+            throw InputError(what + "field 'format_version' is " + j["format_version"].dump() +
+                             ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
+                             "): update ngi");
+        if (!is_int_in(j["format_version"], 1, kModelFormatVersion))
+            throw fail("format_version", "an integer in 1.." + std::to_string(kModelFormatVersion));
+    }
+    const GraphDesc d = parse_graph_desc(j, what);
+    c.input_nc = d.input_nc;
+    c.output_nc = d.nodes[d.output - 1].out_channels;
+    c.graph.layout = d.layout;
+    if (j.contains("output_nc") && !(is_int_in(j["output_nc"], 1, kMaxChannels) && j["output_nc"] == c.output_nc))
+        throw fail("output_nc", "the graph output's channel count (" + std::to_string(c.output_nc) + ")");
+    // An imported network's inputs have no known range: the guard replaces only NaN (-> 0) and +-Inf.
+    c.input_range[0] = -FLT_MAX;
+    c.input_range[1] = FLT_MAX;
+    for (const char* key : {"input_range", "output_range"}) {
+        if (!j.contains(key)) continue;
+        const nlohmann::json& v = j[key];
+        const std::string rule = std::string("[lo, hi], two numbers with lo < hi, both ") + kFloat32Rule;
+        if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) throw fail(key, rule);
+        const double lo = v[0].get<double>(), hi = v[1].get<double>();
+        if (!float32_representable(lo) || !float32_representable(hi) || !(float(lo) < float(hi))) throw fail(key, rule);
+        float* out = std::string(key) == "input_range" ? c.input_range : c.output_range;
+        out[0] = float(lo);
+        out[1] = float(hi);
+    }
+    if (j.contains("input_layout")) {
+        const nlohmann::json& v = j["input_layout"];
+        const std::string rule = "a list of strings, empty or input_nc (" + std::to_string(c.input_nc) + ") long";
+        if (!v.is_array() || (!v.empty() && v.size() != std::size_t(c.input_nc))) throw fail("input_layout", rule);
+        for (const auto& s : v) {
+            if (!s.is_string()) throw fail("input_layout", rule);
+            c.input_layout.push_back(s.get<std::string>());
+        }
+    }
+    if (j.contains("source")) {
+        if (!j["source"].is_string()) throw fail("source", "a string");
+        c.source = j["source"].get<std::string>();
+    }
+    if (j.contains("output_mode") && j["output_mode"] != "lightmap")
+        throw fail("output_mode", "\"lightmap\" (only family pix2pix_unet has another output mode)");
+    if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
+    static const std::set<std::string> kKnown = {"format_version", "family", "input_nc", "output_nc", "graph",
+                                                 "input_range", "output_range", "input_layout", "source",
+                                                 "training", "required", "onnx", "output_mode"};
+    if (j.contains("required")) {
+        if (!j["required"].is_array()) throw fail("required", "a list of field names");
+        for (const auto& name : j["required"]) {
+            if (!name.is_string()) throw fail("required", "a list of field names");
+            if (!kKnown.count(name.get<std::string>()))
+                throw InputError(what + "field 'required' lists '" + name.get<std::string>().substr(0, 80) +
+                                 "', which this reader does not know: the file needs a newer ngi");
+        }
+    }
+    return c;
+}
+
+GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
+                                    const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm) {
+    GraphModelOps m;
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(cfg.json);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(std::string("load model: metadata 'ngi': malformed JSON: ") + e.what());
+    }
+    m.desc = parse_graph_desc(j, "load model: metadata 'ngi': ");
+    const GraphDesc& d = m.desc;
+    std::vector<int> channels = {d.input_nc};
+    for (const GraphNodeDesc& n : d.nodes) channels.push_back(n.out_channels);
+
+    // Pass 1: every tensor a node names, present and of the shape the node implies; nothing else in the file.
+    std::set<std::string> used;
+    auto weight = [&](const GraphNodeDesc& n, const char* key, const std::vector<int>& shape) -> const StoredTensor* {
+        if (!n.fields.contains(key)) return nullptr;
+        const std::string name = n.fields[key].get<std::string>();
+        auto it = file.tensors.find(name);
+        if (it == file.tensors.end())
+            throw InputError("load model: node '" + n.name + "' (" + n.op + "): tensor '" + name + "' (" + key +
+                             ") is not in the file");
+        if (it->second.shape != shape)
+            throw InputError("load model: node '" + n.name + "' (" + n.op + "): tensor '" + name + "' (" + key +
+                             ") is " + shape_string(it->second.shape) + ", expected " + shape_string(shape));
+        used.insert(name);
+        return &it->second;
+    };
+    struct Weights { const StoredTensor *w = nullptr, *b = nullptr, *scale = nullptr, *shift = nullptr; };
+    std::vector<Weights> weights(d.nodes.size());
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) {
+        const GraphNodeDesc& n = d.nodes[k];
+        const int cin = channels[n.inputs[0]], cout = n.out_channels;
+        Weights& w = weights[k];
+        if (n.op == "conv2d" || n.op == "conv_transpose2d") {
+            const int kh = n.fields["kernel"][0].get<int>(), kw = n.fields["kernel"][1].get<int>();
+            w.w = weight(n, "weight", n.op == "conv2d" ? std::vector<int>{cout, cin, kh, kw}
+                                                        : std::vector<int>{cin, cout, kh, kw});
+            w.b = weight(n, "bias", {cout});
+        } else if (n.op == "dense") {
+            w.w = weight(n, "weight", {cout, cin});
+            w.b = weight(n, "bias", {cout});
+        } else if (n.op == "affine") {
+            w.scale = weight(n, "scale", {cin});
+            w.shift = weight(n, "shift", {cin});
+        }
+    }
+    for (const auto& [name, t] : file.tensors)
+        if (!used.count(name))
+            throw InputError("load model: tensor '" + name + "' is not used by any node of the graph");
+
+    // Pass 2: the ops (weights uploaded).
+    const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
+    m.copy = std::make_shared<CopyNode>();
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) {
+        const GraphNodeDesc& n = d.nodes[k];
+        const Weights& w = weights[k];
+        const int cin = channels[n.inputs[0]], cout = n.out_channels;
+        std::shared_ptr<Op> op;
+        try {
+            if (n.op == "conv2d" || n.op == "conv_transpose2d" || n.op == "dense") {
+                ChannelAffine affine;
+                if (w.b) affine.shift = w.b->data;
+                ConvSpec spec{cin, cout, {1, 1, 1, 0}, node_activation(n.fields, "input_activation"),
+                              node_activation(n.fields, "activation")};
+                if (n.op != "dense")
+                    spec.geom = {n.fields["kernel"][0].get<int>(), n.fields["kernel"][1].get<int>(),
+                                 n.fields["stride"].get<int>(), n.fields["pad"].get<int>()};
+                if (n.op == "conv_transpose2d")
+                    op = std::make_shared<ConvTransposeNode>(ctx, gemm, spec, w.w->data.data(), affine, conv_path, conv_gemm);
+                else
+                    op = std::make_shared<ConvNode>(ctx, gemm, spec, w.w->data.data(), affine, conv_path, conv_gemm);
+                m.weight_bytes += (w.w->data.size() + (w.b ? w.b->data.size() : 0)) * sizeof(float);
+            } else if (n.op == "activation") {
+                op = std::make_shared<ActivationNode>(ctx, node_activation(n.fields, "activation"));
+            } else if (n.op == "affine") {
+                op = std::make_shared<AffineNode>(ctx, w.scale ? w.scale->data : std::vector<float>(cin, 1.0f),
+                                                  w.shift ? w.shift->data : std::vector<float>(cin, 0.0f));
+                m.weight_bytes += 2 * std::size_t(cin) * sizeof(float);
+            } else if (n.op == "add" || n.op == "mul") {
+                op = std::make_shared<BinaryNode>(ctx, n.op == "mul");
+            } else if (n.op == "frequency_encode") {
+                ModelConfig e;
+                parse_encoding_fields(n.fields, e, "");
+                op = std::make_shared<FrequencyEncodeNode>(ctx, cin, frequency_encoding(e));
+            } else if (n.op == "nan_to_num") {
+                op = std::make_shared<NanToNumNode>(ctx);
+            }  // concat: no op
+        } catch (const InputError& e) {
+            throw InputError("load model: node '" + n.name + "' (" + n.op + "): " + e.what());
+        }
+        m.ops.push_back(std::move(op));
+    }
+    return m;
+}
+
+std::unique_ptr<Graph> build_graph_model_graph(const GraphModelOps& m, int height, int width) {
+    const GraphDesc& d = m.desc;
+    auto g = std::make_unique<Graph>();
+    std::vector<TensorId> t(d.nodes.size() + 1, -1);
+    t[0] = g->input({d.input_nc, height, width}, d.input_name);
+    // Readers of every tensor (a concat counts: its members live inside it); the graph output is read at the end.
+    std::vector<int> readers(d.nodes.size() + 1, 0);
+    for (const GraphNodeDesc& n : d.nodes)
+        for (int i : n.inputs) ++readers[i];
+    ++readers[d.output];
+    // Tensors whose memory is a concat's (the concat itself, or an in-place result of it): its members live there
+    // and may have readers of their own.
+    std::vector<char> concat_memory(d.nodes.size() + 1, 0);
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) {
+        const GraphNodeDesc& n = d.nodes[k];
+        std::vector<TensorId> in;
+        for (int i : n.inputs) in.push_back(t[i]);
+        if (n.op == "concat") {
+            for (std::size_t s = 0; s < in.size(); ++s)  // a tensor twice in one concat: the second is a copy
+                if (!g->placeable(in[s]) || std::find(in.begin(), in.begin() + long(s), in[s]) != in.begin() + long(s))
+                    in[s] = g->add(m.copy, {in[s]}, n.name + ".copy" + std::to_string(s));
+            t[k + 1] = g->concat(in, n.name);
+            concat_memory[k + 1] = 1;
+            continue;
+        }
+        // An in-place op would change what the other readers of its input (or of a concat's members) see.
+        if (m.ops[k]->in_place()) {
+            if (readers[n.inputs[0]] > 1 || concat_memory[n.inputs[0]])
+                in[0] = g->add(m.copy, {in[0]}, n.name + ".copy");
+            else
+                concat_memory[k + 1] = concat_memory[n.inputs[0]];
+        }
+        t[k + 1] = g->add(m.ops[k], in, n.name);
+    }
+    g->set_output(t[d.output]);
+    return g;
+}
+
+}  // namespace ngi::detail

@@ -1,0 +1,61 @@
+// The "graph" model family (docs/MODEL_FORMAT.md "graph"): a network stored as a list of nodes over named tensors,
+// as python3 -m ngi.convert writes it from an ONNX file. Each node is one of the graph ops ngi has (conv2d,
+// conv_transpose2d, dense, concat, activation, affine, add, mul, frequency_encode, nan_to_num); the loader checks the
+// list as hostile input (unknown op or field, a tensor used before it is made or never made, channel counts that do
+// not chain, weights missing, misshaped or unused) and names the node in every error.
+#pragma once
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "graph/graph.hpp"
+#include "models/safetensors.hpp"
+#include "ngi/model.hpp"
+#include "ops/gemm.hpp"
+
+namespace ngi::detail {
+
+inline constexpr int kMaxGraphNodes = 4096;
+
+// One node of the list, checked: its inputs are tensor indices (0 = the graph input, i + 1 = node i's output), so
+// every input is made before it is read (a list cannot hold a cycle).
+struct GraphNodeDesc {
+    std::string name, op, output;
+    std::vector<int> inputs;
+    int out_channels = 0;
+    nlohmann::json fields;  // the node's JSON object (weights, geometry, activation)
+};
+
+struct GraphDesc {
+    std::string layout = "nchw";  // "nchw" | "nc"
+    std::string input_name;
+    int input_nc = 0;
+    std::vector<GraphNodeDesc> nodes;
+    int output = 0;  // tensor index
+};
+
+// The whole config of a family "graph" file (common fields + "graph"); InputError naming the file, the field and,
+// for node problems, the node. `j` is the parsed metadata.
+ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path);
+// The node list of a config parse_graph_config accepted; `what` prefixes errors.
+GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what);
+
+struct GraphModelOps {
+    GraphDesc desc;
+    std::vector<std::shared_ptr<Op>> ops;  // per node; nullptr for concat
+    std::shared_ptr<Op> copy;              // inserted where a tensor must live in a second place
+    std::size_t weight_bytes = 0;
+};
+
+// Every weight the nodes name present with the shape the node implies (and no other tensor in the file), then the
+// ops built and their weights uploaded.
+GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
+                                    const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm);
+// input [input_nc, height, width] -> the output tensor. An in-place node whose input is read elsewhere too, and a
+// concat member that already lives somewhere (the graph input, another concat), get a copy first.
+std::unique_ptr<Graph> build_graph_model_graph(const GraphModelOps& ops, int height, int width);
+
+}  // namespace ngi::detail
