@@ -9,6 +9,10 @@ checkpoint layout its upstream training code writes:
                        `netG_model_epoch_<n>.pth` =
                        torch.save({'epoch', 'state_dict_G', 'optimizer_G'})
 
+An ONNX file (model.onnx, e.g. from torch.onnx.export) becomes a model of
+family "graph" instead (ngi.onnx_import; needs Debian's python3-onnx):
+  /usr/bin/python3 -m ngi.convert model.onnx OUT.safetensors [--half]
+
 Usage (with <build>/python on PYTHONPATH):
   /usr/bin/python3 -m ngi.convert IN.pth OUT.safetensors \\
       --family pix2pix_unet --bn-mode per_image [--input-nc 12 --output-nc 3 \\
@@ -22,7 +26,6 @@ import pickle
 import sys
 
 import numpy as np
-import torch
 
 from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, ConversionError, expected_shapes,
                          make_config, write_model)
@@ -33,6 +36,8 @@ from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, Conver
 
 def _torch_load(pth_path):
     """torch.load on the CPU, refusing arbitrary pickled code wherever torch can."""
+    import torch  # noqa: PLC0415 (imported where needed: the ONNX path does not need torch)
+
     if "weights_only" not in inspect.signature(torch.load).parameters:
         # torch < 1.13 has no safe loader at all.
         print("ngi.convert: warning: this torch cannot load without unpickling arbitrary code; "
@@ -77,6 +82,8 @@ def validate_state_dict(state_dict, config):
     Drops num_batches_tracked and a DataParallel `module.` prefix. Every
     problem found is reported at once, by tensor name.
     """
+    import torch  # noqa: PLC0415
+
     tensors = {}
     for key, value in state_dict.items():
         if not isinstance(value, torch.Tensor):
@@ -131,7 +138,45 @@ def convert_checkpoint(pth_path, out_path, family, *, half=False, **options):
     return config
 
 
+def _is_onnx(path):
+    """An .onnx name, or a file that is not a PyTorch checkpoint (zip or pickle) but starts like ONNX's protobuf."""
+    if path.lower().endswith(".onnx"):
+        return True
+    try:
+        with open(path, "rb") as f:
+            head = f.read(2)
+    except OSError:
+        return False
+    return head[:1] == b"\x08" and head != b"PK"  # field 1 (ir_version), varint: every ONNX ModelProto's start
+
+
+def onnx_main(argv):
+    parser = argparse.ArgumentParser(prog="python3 -m ngi.convert",
+                                     description="Import an ONNX model as an ngi model file (family \"graph\"; "
+                                                 "docs/MODEL_FORMAT.md). Needs python3-onnx.")
+    parser.add_argument("input", help="ONNX file, e.g. from torch.onnx.export (eval mode, fixed input shape)")
+    parser.add_argument("output", help="ngi model file to write (.safetensors)")
+    parser.add_argument("--source", help="free text stored in the config (default: input file name)")
+    parser.add_argument("--half", action="store_true", help="store tensors as F16 instead of F32")
+    args = parser.parse_args(argv)
+    from .onnx_import import import_onnx  # noqa: PLC0415 (the onnx package is needed on this path only)
+    try:
+        config = import_onnx(args.input, args.output, half=args.half, source=args.source)
+    except ConversionError as error:
+        print(f"ngi.convert: error: {error}", file=sys.stderr)
+        return 1
+    graph = config["graph"]
+    print(f"ngi.convert: wrote {args.output} (graph, {len(graph['nodes'])} nodes from {config['onnx']['nodes']} "
+          f"ONNX nodes, layout {graph['layout']}, {config['input_nc']} -> {config['output_nc']} channels, "
+          f"{'F16' if args.half else 'F32'}, {os.path.getsize(args.output)} bytes)", file=sys.stderr)
+    return 0
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    positional = [a for a in argv if not a.startswith("-")]
+    if positional and _is_onnx(positional[0]):
+        return onnx_main(argv)
     parser = argparse.ArgumentParser(prog="python3 -m ngi.convert",
                                      description="Convert a PyTorch generator checkpoint to an ngi model file.")
     parser.add_argument("input", help="checkpoint: junyanz <epoch>_net_G.pth or DeepIllumination netG_model_epoch_<n>.pth")

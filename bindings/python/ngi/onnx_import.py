@@ -1,0 +1,871 @@
+"""ONNX import: an ONNX file (e.g. from torch.onnx.export) -> an ngi model file of family "graph".
+
+    /usr/bin/python3 -m ngi.convert model.onnx out.safetensors
+
+Needs Debian's python3-onnx (the `onnx` package, 1.12 on Debian 12). The ONNX graph is checked, sorted
+topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md, family "graph"):
+
+  Conv, ConvTranspose            -> conv2d, conv_transpose2d (2-D, group 1, dilation 1, symmetric padding)
+  Gemm, MatMul (weights constant) -> dense (a 1 x 1 convolution over the items)
+  BatchNormalization (inference) -> folded into the convolution before it, else a per-channel affine
+  Add, Sub, Mul, Div by a constant that varies along channels only (or not at all) -> affine (folded likewise)
+  Add, Mul of two computed tensors of one shape -> add, mul
+  Relu, LeakyRelu, Tanh, Sigmoid, Exp, Clip(min=0) -> activation (fused into the convolution before it, or into the
+                                                    convolutions that read it, where that is exact)
+  Clip(max=88) then Exp          -> activation exp (ngi's exp is exp(min(x, 88)))
+  Concat (channel axis)          -> concat
+  Dropout (inference), Identity  -> nothing (the tensor itself)
+  Mul by constants + Sin + Cos + Concat as ngi.reference_models.encode_frequencies builds it -> frequency_encode
+  torch.nan_to_num's IsNaN/IsInf/Where pattern (default limits) -> nan_to_num
+
+Anything else is refused with the node's name and op. So are files that do not parse (truncated, corrupt), graphs
+with a cycle, opsets outside 9..17 or other domains, symbolic, zero or negative input dimensions, initializers whose
+data does not match their shape, and more than one input or output. Nothing is written unless the whole graph maps;
+the file appears at its path only when complete (written beside it, then renamed).
+"""
+
+import math
+import os
+import tempfile
+
+import numpy as np
+
+from .model_file import FORMAT_VERSION, ConversionError, write_model
+
+MIN_OPSET, MAX_OPSET = 9, 17
+EXP_CLAMP = 88.0  # ngi's exp activation: exp(min(x, 88))
+FLT_MAX = float(np.finfo(np.float32).max)
+_ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp"}
+SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
+                 "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout", "Identity", "Constant",
+                 "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
+
+
+def _onnx():
+    try:
+        import onnx  # noqa: PLC0415 (optional dependency: only the ONNX path needs it)
+        import onnx.numpy_helper  # noqa: F401,PLC0415
+    except ImportError as error:
+        raise ConversionError("ONNX import needs the onnx Python package (Debian: apt-get install python3-onnx): "
+                              f"{error}") from None
+    return onnx
+
+
+# --------------------------------------------------------------------------
+# Reading and checking the file
+# --------------------------------------------------------------------------
+
+_DTYPES = {1: np.float32, 10: np.float16, 11: np.float64, 7: np.int64, 6: np.int32, 9: np.bool_}
+
+
+def _tensor_array(onnx, t, what, path):
+    """A TensorProto as an np.ndarray, its data checked against its dims first."""
+    what = f"{path}: {what}"
+    if t.data_location == 1:  # EXTERNAL
+        raise ConversionError(f"{what} '{t.name}' keeps its data in an external file; save the model with its "
+                              "data inside (onnx.save_model(..., save_as_external_data=False))")
+    dims = list(t.dims)
+    if any(d < 0 for d in dims):
+        raise ConversionError(f"{what} '{t.name}' has a negative dimension {dims}")
+    if t.data_type not in _DTYPES:
+        raise ConversionError(f"{what} '{t.name}' has data type {t.data_type} "
+                              f"({onnx.TensorProto.DataType.Name(t.data_type)}); float, double, float16, int and "
+                              "bool tensors are supported")
+    count = int(np.prod(dims, dtype=np.int64))
+    itemsize = np.dtype(_DTYPES[t.data_type]).itemsize
+    if t.HasField("raw_data"):
+        if len(t.raw_data) != count * itemsize:
+            raise ConversionError(f"{what} '{t.name}' has {len(t.raw_data)} bytes of data, its shape {dims} of "
+                                  f"{np.dtype(_DTYPES[t.data_type]).name} needs {count * itemsize}")
+    else:
+        field = {1: t.float_data, 10: t.int32_data, 11: t.double_data, 7: t.int64_data, 6: t.int32_data,
+                 9: t.int32_data}[t.data_type]
+        if len(field) != count:
+            raise ConversionError(f"{what} '{t.name}' has {len(field)} values, its shape {dims} needs {count}")
+    try:
+        return onnx.numpy_helper.to_array(t)
+    except Exception as error:  # noqa: BLE001 (whatever the helper raises is one more malformed tensor)
+        raise ConversionError(f"{what} '{t.name}': unreadable data: {error}") from None
+
+
+def _load(onnx, path):
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as error:
+        raise ConversionError(f"cannot read {path}: {error.strerror}") from None
+    if not data:
+        raise ConversionError(f"{path} is empty")
+    try:
+        model = onnx.load_model_from_string(data)
+    except Exception as error:  # noqa: BLE001 (protobuf's DecodeError and friends)
+        raise ConversionError(f"{path} is not a readable ONNX model (truncated or corrupt?): {error}") from None
+    if not model.HasField("graph") or not model.graph.node:
+        raise ConversionError(f"{path}: the ONNX model has no graph nodes (truncated or not an ONNX model?)")
+    return model
+
+
+def _check_opsets(model, path):
+    opsets = {(o.domain or "ai.onnx"): o.version for o in model.opset_import}
+    for domain, version in opsets.items():
+        if domain != "ai.onnx":
+            raise ConversionError(f"{path}: opset domain '{domain}' is not supported (only the default ai.onnx "
+                                  "domain)")
+    version = opsets.get("ai.onnx")
+    if version is None:
+        raise ConversionError(f"{path}: the model imports no ai.onnx opset")
+    if not MIN_OPSET <= version <= MAX_OPSET:
+        raise ConversionError(f"{path}: opset {version} is not supported (ai.onnx opsets {MIN_OPSET}..{MAX_OPSET}; "
+                              f"export with torch.onnx.export(..., opset_version=13))")
+    return version
+
+
+def _topological(nodes, available, path):
+    """The nodes in an order where every input is made before it is read; refuses a cycle, naming its nodes."""
+    producer = {}
+    for i, node in enumerate(nodes):
+        for out in node.output:
+            if out:
+                if out in producer or out in available:
+                    other = "an initializer or the input" if out in available else f"node '{nodes[producer[out]].name}'"
+                    raise ConversionError(f"{path}: tensor '{out}' is made twice (node '{node.name}' and {other})")
+                producer[out] = i
+    deps = {i: set() for i in range(len(nodes))}
+    for i, node in enumerate(nodes):
+        for name in node.input:
+            if not name or name in available:
+                continue
+            if name not in producer:
+                raise ConversionError(f"{path}: node '{node.name}' ({node.op_type}) reads '{name}', which no node, "
+                                      "initializer or input makes")
+            deps[i].add(producer[name])
+    users = {i: [] for i in range(len(nodes))}
+    for i, d in deps.items():
+        for p in d:
+            users[p].append(i)
+    # Kahn's algorithm, keeping the file's order among ready nodes.
+    waiting = {i: len(d) for i, d in deps.items()}
+    ready = sorted(i for i, n in waiting.items() if n == 0)
+    order = []
+    while ready:
+        i = ready.pop(0)
+        order.append(i)
+        for u in users[i]:
+            waiting[u] -= 1
+            if waiting[u] == 0:
+                ready.append(u)
+        ready.sort()
+    if len(order) != len(nodes):
+        # Walk back from a node that never became ready along dependencies that did not either: it closes a loop.
+        stuck = {i for i in range(len(nodes)) if waiting[i] > 0}
+        seen, walk = {}, []
+        i = min(stuck)
+        while i not in seen:
+            seen[i] = len(walk)
+            walk.append(i)
+            i = min(d for d in deps[i] if d in stuck)
+        cycle = walk[seen[i]:][::-1]
+        names = " -> ".join(f"'{nodes[k].name}' ({nodes[k].op_type})" for k in cycle + cycle[:1])
+        raise ConversionError(f"{path}: the graph has a cycle: {names}")
+    return [nodes[i] for i in order]
+
+
+def _attrs(onnx, node):
+    return {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
+
+
+# --------------------------------------------------------------------------
+# Mapping
+# --------------------------------------------------------------------------
+
+class _Importer:
+    def __init__(self, onnx, model, path):
+        self.onnx = onnx
+        self.path = path
+        graph = model.graph
+        self.opset = _check_opsets(model, path)
+        self.consts = {}
+        for t in graph.initializer:
+            self.consts[t.name] = _tensor_array(onnx, t, "initializer", path)
+        inputs = [i for i in graph.input if i.name not in self.consts]
+        if len(inputs) != 1:
+            raise ConversionError(f"{path}: the graph has {len(inputs)} inputs "
+                                  f"({', '.join(i.name for i in inputs)}); ngi models take exactly one")
+        if len(graph.output) != 1:
+            raise ConversionError(f"{path}: the graph has {len(graph.output)} outputs; ngi models give exactly one")
+        self.input = inputs[0]
+        self.output_name = graph.output[0].name
+        self.layout, self.input_nc, self.input_hw = self._input_shape(self.input)
+        # Node names, unique and non-empty (ONNX allows neither to hold).
+        names = set()
+        for i, node in enumerate(graph.node):
+            name = node.name or f"{node.op_type}_{i}"
+            while name in names:
+                name += "_"
+            names.add(name)
+            node.name = name
+        self.nodes = _topological(list(graph.node), set(self.consts) | {self.input.name}, path)
+        self.readers = {}
+        for node in self.nodes:
+            for name in node.input:
+                if name:
+                    self.readers.setdefault(name, []).append(node)
+        self.producer = {out: node for node in self.nodes for out in node.output if out}
+        self.alias = {}      # ONNX tensor -> the ngi tensor it is (Identity, Dropout)
+        self.channels = {self.input.name: self.input_nc}
+        self.ir = []         # ngi nodes: dicts
+        self.weights = {}    # tensor name -> float64 array
+        self.done = set()    # ONNX node names consumed by a pattern
+
+    def fail(self, node, message):
+        return ConversionError(f"{self.path}: node '{node.name}' ({node.op_type}): {message}")
+
+    def _input_shape(self, value_info):
+        t = value_info.type.tensor_type
+        if not value_info.type.HasField("tensor_type") or t.elem_type != 1:
+            raise ConversionError(f"{self.path}: input '{value_info.name}' must be a float32 tensor")
+        dims = []
+        for k, d in enumerate(t.shape.dim):
+            if d.HasField("dim_param") or not d.HasField("dim_value"):
+                raise ConversionError(
+                    f"{self.path}: input '{value_info.name}' dimension {k} is symbolic "
+                    f"('{d.dim_param or '?'}'); export with a fixed example shape (no dynamic_axes): ngi still runs "
+                    "the model at any size its layers allow")
+            if d.dim_value <= 0:
+                raise ConversionError(f"{self.path}: input '{value_info.name}' dimension {k} is {d.dim_value}; "
+                                      "dimensions must be positive")
+            dims.append(d.dim_value)
+        if len(dims) == 4 and dims[0] == 1:
+            return "nchw", dims[1], (dims[2], dims[3])
+        if len(dims) == 2:
+            return "nc", dims[1], None
+        raise ConversionError(f"{self.path}: input '{value_info.name}' has shape {dims}; ngi takes [1, C, H, W] "
+                              "images or [N, C] item lists")
+
+    # -- tensors --------------------------------------------------------------------------------------------------
+
+    def const(self, name):
+        """The constant value of tensor `name` (initializer, Constant node, Identity of either), or None."""
+        if name in self.consts:
+            return self.consts[name]
+        node = self.producer.get(name)
+        if node is None:
+            return None
+        if node.op_type == "Constant":
+            attrs = _attrs(self.onnx, node)
+            if "value" not in attrs:
+                raise self.fail(node, f"only the 'value' form is supported, got {sorted(attrs)}")
+            self.consts[name] = _tensor_array(self.onnx, attrs["value"], "constant", self.path)
+            self.done.add(node.name)
+            return self.consts[name]
+        if node.op_type == "Identity":
+            value = self.const(node.input[0])
+            if value is not None:
+                self.consts[name] = value
+                self.done.add(node.name)
+            return value
+        return None
+
+    def tensor(self, node, name):
+        """The ngi tensor of a computed ONNX tensor; refuses constants where a computed tensor is needed."""
+        name = self.alias.get(name, name)
+        if name not in self.channels:
+            raise self.fail(node, f"input '{name}' is a constant or not computed by a supported node; ngi's graph "
+                                  "ops take computed tensors there")
+        return name
+
+    def emit(self, onnx_node, op, inputs, output, **fields):
+        fields = {k: v for k, v in fields.items() if v is not None}
+        entry = {"name": onnx_node.name, "op": op, "inputs": list(inputs), "output": output, **fields}
+        self.ir.append(entry)
+        return entry
+
+    def put_weight(self, key, array):
+        self.weights[key] = np.asarray(array, dtype=np.float64)
+        return key
+
+    def per_channel(self, node, value, channels, what):
+        """A constant that broadcasts along the channel axis only (or not at all) -> [channels] float64."""
+        v = np.asarray(value, dtype=np.float64)
+        rank = 4 if self.layout == "nchw" else 2
+        if v.ndim > rank:
+            raise self.fail(node, f"{what} has rank {v.ndim}, the tensor {rank}")
+        shape = (1,) * (rank - v.ndim) + v.shape
+        if any(s != 1 for i, s in enumerate(shape) if i != 1) or shape[1] not in (1, channels):
+            raise self.fail(node, f"{what} of shape {list(v.shape)} does not broadcast per channel "
+                                  f"({channels} channels); only constants that vary along the channel axis (or not "
+                                  "at all) are supported")
+        return np.broadcast_to(v.reshape(shape[1]), (channels,)).copy()
+
+    # -- the nodes ------------------------------------------------------------------------------------------------
+
+    def run(self):
+        # Patterns that span nodes the walk below would meet one by one: the frequency encoding (its Mul, Sin and
+        # Cos come before the Concat that gathers them).
+        self.freq_runs = {}
+        for node in self.nodes:
+            if node.op_type == "Concat":
+                runs, i, inputs = [], 0, list(node.input)
+                while i < len(inputs):
+                    run = self._frequency_run(node, inputs, i)
+                    if run is None:
+                        i += 1
+                        continue
+                    runs.append((i, run))
+                    i = run[-1]
+                self.freq_runs[node.name] = runs
+        for node in self.nodes:
+            if node.name in self.done:
+                continue
+            self.map_node(node)
+        out = self.alias.get(self.output_name, self.output_name)
+        if out not in self.channels or out == self.input.name:
+            raise ConversionError(f"{self.path}: the graph output '{self.output_name}' is not computed by the mapped "
+                                  "nodes (a constant, or the input itself)")
+        return out
+
+    def map_node(self, node):
+        op = node.op_type
+        attrs = _attrs(self.onnx, node)
+        if op == "Constant":
+            self.const(node.output[0])
+            return
+        if op == "Identity" or op == "Dropout":
+            if op == "Dropout":
+                if len(node.output) > 1 and node.output[1] and self.readers.get(node.output[1]):
+                    raise self.fail(node, "its mask output is used; only inference dropout (the identity) maps")
+                if len(node.input) > 2 and node.input[2]:
+                    training = self.const(node.input[2])
+                    if training is None or bool(np.asarray(training).reshape(-1)[0]):
+                        raise self.fail(node, "training_mode is on (or not constant); export the model in eval mode")
+            if self.const(node.input[0]) is not None:
+                if op == "Dropout":
+                    self.consts[node.output[0]] = self.const(node.input[0])
+                return
+            self.alias[node.output[0]] = self.tensor(node, node.input[0])
+            return
+        handler = getattr(self, "op_" + op, None)
+        if handler is None:
+            if op in ("Sin", "Cos"):
+                raise self.fail(node, "Sin and Cos are supported only as part of a frequency encoding "
+                                      "(Concat of [x,] Sin(s x), Cos(s x), ... with s = 2^k or 2^k pi doubling)")
+            if op in ("IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less"):
+                raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits")
+            raise self.fail(node, f"op {op} is not supported; supported: {', '.join(SUPPORTED_OPS)}")
+        handler(node, attrs)
+
+    def out(self, node, channels):
+        self.channels[node.output[0]] = channels
+        return node.output[0]
+
+    def _conv(self, node, attrs, transpose):
+        if len(node.output) != 1:
+            raise self.fail(node, "one output expected")
+        x = self.tensor(node, node.input[0])
+        w = self.const(node.input[1]) if len(node.input) > 1 else None
+        if w is None:
+            raise self.fail(node, "the weight must be a constant (an initializer)")
+        if w.ndim != 4:
+            raise self.fail(node, f"weight of rank {w.ndim}: only 2-D convolutions (4-D weights) are supported")
+        b = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else None
+        if len(node.input) > 2 and node.input[2] and b is None:
+            raise self.fail(node, "the bias must be a constant")
+        if attrs.get("group", 1) != 1:
+            raise self.fail(node, f"group {attrs['group']}: only group 1 is supported")
+        if any(d != 1 for d in attrs.get("dilations", [1, 1])):
+            raise self.fail(node, f"dilations {attrs['dilations']}: only 1 is supported")
+        auto_pad = attrs.get("auto_pad", b"NOTSET")
+        auto_pad = auto_pad.decode() if isinstance(auto_pad, bytes) else auto_pad
+        if auto_pad not in ("NOTSET", "VALID"):
+            raise self.fail(node, f"auto_pad {auto_pad}: give explicit pads")
+        kh, kw = int(w.shape[2]), int(w.shape[3])
+        if list(attrs.get("kernel_shape", [kh, kw])) != [kh, kw]:
+            raise self.fail(node, f"kernel_shape {attrs['kernel_shape']} disagrees with the weight {list(w.shape)}")
+        strides = list(attrs.get("strides", [1, 1]))
+        pads = list(attrs.get("pads", [0, 0, 0, 0])) if auto_pad == "NOTSET" else [0, 0, 0, 0]
+        if len(strides) != 2 or strides[0] != strides[1]:
+            raise self.fail(node, f"strides {strides}: only equal strides along H and W are supported")
+        if len(pads) != 4 or len(set(pads)) != 1:
+            raise self.fail(node, f"pads {pads}: only the same padding on every side is supported")
+        cin = self.channels[x]
+        if transpose:
+            if any(p != 0 for p in attrs.get("output_padding", [0, 0])):
+                raise self.fail(node, f"output_padding {attrs['output_padding']}: only 0 is supported")
+            if "output_shape" in attrs:
+                raise self.fail(node, "output_shape is not supported; give pads")
+            if w.shape[0] != cin:
+                raise self.fail(node, f"weight {list(w.shape)} takes {w.shape[0]} channels, the input has {cin}")
+            cout = int(w.shape[1])
+        else:
+            if w.shape[1] != cin:
+                raise self.fail(node, f"weight {list(w.shape)} takes {w.shape[1]} channels, the input has {cin}")
+            cout = int(w.shape[0])
+        if b is not None and b.shape != (cout,):
+            raise self.fail(node, f"bias of shape {list(b.shape)}, expected [{cout}]")
+        if self.layout == "nc":
+            raise self.fail(node, "a convolution on an [N, C] item list")
+        key = node.name
+        self.emit(node, "conv_transpose2d" if transpose else "conv2d", [x], self.out(node, cout), **{
+            "in": cin, "out": cout, "kernel": [kh, kw], "stride": strides[0], "pad": pads[0],
+            "weight": self.put_weight(key + ".weight", w),
+            "bias": self.put_weight(key + ".bias", b) if b is not None else None})
+
+    def op_Conv(self, node, attrs):
+        self._conv(node, attrs, False)
+
+    def op_ConvTranspose(self, node, attrs):
+        self._conv(node, attrs, True)
+
+    def _dense(self, node, x, weight, bias):
+        """weight [out, in] float64, bias [out] or None."""
+        cin = self.channels[x]
+        if self.layout != "nc":
+            raise self.fail(node, "a matrix product on an image: ngi maps Gemm/MatMul on [N, C] item lists only "
+                                  "(use a 1 x 1 Conv for a per-pixel layer)")
+        if weight.shape[1] != cin:
+            raise self.fail(node, f"the weight takes {weight.shape[1]} inputs, the input has {cin} channels")
+        cout = int(weight.shape[0])
+        self.emit(node, "dense", [x], self.out(node, cout), **{
+            "in": cin, "out": cout, "weight": self.put_weight(node.name + ".weight", weight),
+            "bias": self.put_weight(node.name + ".bias", bias) if bias is not None else None})
+
+    def op_Gemm(self, node, attrs):
+        x = self.tensor(node, node.input[0])
+        b = self.const(node.input[1])
+        if b is None or b.ndim != 2:
+            raise self.fail(node, "B must be a constant matrix (the weights)")
+        if attrs.get("transA", 0):
+            raise self.fail(node, "transA = 1 is not supported (the items are the rows)")
+        bm = np.asarray(b, np.float64)
+        bm = bm.T if attrs.get("transB", 0) else bm           # [in, out]
+        weight = attrs.get("alpha", 1.0) * bm.T                # [out, in]
+        bias = None
+        if len(node.input) > 2 and node.input[2]:
+            c = self.const(node.input[2])
+            if c is None:
+                raise self.fail(node, "C must be a constant (the bias)")
+            c = np.asarray(c, np.float64)
+            if c.ndim > 2 or (c.ndim == 2 and c.shape[0] != 1) or c.size not in (1, weight.shape[0]):
+                raise self.fail(node, f"C of shape {list(c.shape)} is not a bias row of {weight.shape[0]}")
+            bias = attrs.get("beta", 1.0) * np.broadcast_to(c.reshape(-1), (weight.shape[0],))
+        self._dense(node, x, weight, bias)
+
+    def op_MatMul(self, node, attrs):
+        x = self.tensor(node, node.input[0])
+        b = self.const(node.input[1])
+        if b is None or b.ndim != 2:
+            raise self.fail(node, "the second operand must be a constant matrix (the weights)")
+        self._dense(node, x, np.asarray(b, np.float64).T, None)
+
+    def op_BatchNormalization(self, node, attrs):
+        if attrs.get("training_mode", 0):
+            raise self.fail(node, "training_mode = 1; export the model in eval mode")
+        if any(o and self.readers.get(o) for o in node.output[1:]):
+            raise self.fail(node, "its running-statistics outputs are used (training mode)")
+        x = self.tensor(node, node.input[0])
+        params = [self.const(n) for n in node.input[1:5]]
+        if len(params) != 4 or any(p is None for p in params):
+            raise self.fail(node, "scale, bias, mean and variance must be constants")
+        c = self.channels[x]
+        gamma, beta, mean, var = (np.asarray(p, np.float64).reshape(-1) for p in params)
+        for name, p in zip(("scale", "bias", "mean", "var"), (gamma, beta, mean, var)):
+            if p.shape != (c,):
+                raise self.fail(node, f"{name} has {p.size} values, the input {c} channels")
+        eps = float(attrs.get("epsilon", 1e-5))
+        if np.any(var + eps <= 0):
+            raise self.fail(node, "variance + epsilon is not positive")
+        scale = gamma / np.sqrt(var + eps)
+        self._affine(node, x, scale, beta - mean * scale)
+
+    def _affine(self, node, x, scale, shift):
+        key = node.name
+        self.emit(node, "affine", [x], self.out(node, self.channels[x]),
+                  scale=self.put_weight(key + ".scale", scale) if scale is not None else None,
+                  shift=self.put_weight(key + ".shift", shift) if shift is not None else None)
+
+    def _binary(self, node, kind):
+        a, b = node.input[0], node.input[1]
+        ca, cb = self.const(a), self.const(b)
+        if ca is None and cb is None:
+            if kind not in ("Add", "Mul"):
+                raise self.fail(node, f"{kind} of two computed tensors is not supported (only by a constant)")
+            x, y = self.tensor(node, a), self.tensor(node, b)
+            if self.channels[x] != self.channels[y]:
+                raise self.fail(node, f"combines {self.channels[x]} and {self.channels[y]} channels (no "
+                                      "broadcasting between computed tensors)")
+            self.emit(node, kind.lower(), [x, y], self.out(node, self.channels[x]))
+            return
+        if ca is not None and cb is not None:
+            raise self.fail(node, "both operands are constants (constant folding was off at export?)")
+        swapped = ca is not None
+        x = self.tensor(node, b if swapped else a)
+        c = self.per_channel(node, cb if not swapped else ca, self.channels[x], "the constant")
+        if kind == "Add":
+            self._affine(node, x, None, c)
+        elif kind == "Mul":
+            self._affine(node, x, c, None)
+        elif kind == "Sub":
+            self._affine(node, x, -np.ones_like(c) if swapped else None, c if swapped else -c)
+        else:  # Div
+            if swapped:
+                raise self.fail(node, "a constant divided by a computed tensor is not supported")
+            if np.any(c == 0):
+                raise self.fail(node, "division by a constant that holds 0")
+            self._affine(node, x, 1.0 / c, None)
+
+    def op_Add(self, node, attrs):
+        self._binary(node, "Add")
+
+    def op_Sub(self, node, attrs):
+        self._binary(node, "Sub")
+
+    def op_Mul(self, node, attrs):
+        self._binary(node, "Mul")
+
+    def op_Div(self, node, attrs):
+        self._binary(node, "Div")
+
+    def _activation(self, node, kind, slope=None):
+        x = self.tensor(node, node.input[0])
+        self.emit(node, "activation", [x], self.out(node, self.channels[x]), activation=kind, slope=slope)
+
+    def op_Relu(self, node, attrs):
+        self._activation(node, "relu")
+
+    def op_LeakyRelu(self, node, attrs):
+        self._activation(node, "leaky_relu", float(np.float32(attrs.get("alpha", 0.01))))
+
+    def op_Tanh(self, node, attrs):
+        self._activation(node, "tanh")
+
+    def op_Sigmoid(self, node, attrs):
+        self._activation(node, "sigmoid")
+
+    def op_Exp(self, node, attrs):
+        # ngi's exp is exp(min(x, 88)); a bare Exp differs only where x > 88 (float32 exp >= 1.6e38 there, inf
+        # beyond 88.72). Clip(max=88) + Exp (ngi.neural_gi's decoding) maps exactly: see op_Clip.
+        self._activation(node, "exp")
+
+    def _clip_limits(self, node, attrs):
+        if self.opset < 11:
+            return attrs.get("min"), attrs.get("max")
+        limits = []
+        for k in (1, 2):
+            if len(node.input) > k and node.input[k]:
+                v = self.const(node.input[k])
+                if v is None or np.asarray(v).size != 1:
+                    raise self.fail(node, "min and max must be scalar constants")
+                limits.append(float(np.asarray(v).reshape(-1)[0]))
+            else:
+                limits.append(None)
+        return limits
+
+    def op_Clip(self, node, attrs):
+        lo, hi = self._clip_limits(node, attrs)
+        readers = self.readers.get(node.output[0], [])
+        if lo is None and hi == EXP_CLAMP and len(readers) == 1 and readers[0].op_type == "Exp" \
+                and node.output[0] != self.output_name:
+            x = self.tensor(node, node.input[0])
+            exp = readers[0]
+            self.done.add(exp.name)
+            self.emit(exp, "activation", [x], self.out(exp, self.channels[x]), activation="exp",
+                      source=f"{node.name} (Clip max 88) + {exp.name} (Exp)")
+            return
+        if lo == 0.0 and hi is None:
+            self._activation(node, "relu")
+            return
+        raise self.fail(node, f"Clip(min={lo}, max={hi}) is not supported: only Clip(min=0) (ReLU) and "
+                              f"Clip(max={EXP_CLAMP:g}) followed by Exp (ngi's exp activation)")
+
+    def op_Concat(self, node, attrs):
+        axis = attrs.get("axis")
+        rank = 4 if self.layout == "nchw" else 2
+        if axis not in (1, 1 - rank):
+            raise self.fail(node, f"axis {axis}: only the channel axis (1) is supported")
+        inputs = list(node.input)
+        runs = dict(self.freq_runs.get(node.name, []))
+        parts = []
+        i = 0
+        while i < len(inputs):
+            if i in runs:
+                x, include, first_exponent, pi, bands, used, end = runs[i]
+                x = self.tensor(node, x)
+                name = f"{node.name}.encode{i}"
+                out = name + ".out"
+                self.channels[out] = self.channels[x] * ((1 if include else 0) + 2 * bands)
+                self.ir.append({"name": name, "op": "frequency_encode", "inputs": [x], "output": out,
+                                "encoding": {"bands": bands, "first_exponent": first_exponent, "pi": pi,
+                                             "include_input": include, "order": "band"},
+                                "source": ", ".join(used)})
+                parts.append(out)
+                i = end
+                continue
+            parts.append(self.tensor(node, inputs[i]))
+            i += 1
+        if len(parts) == 1 and parts[0] != self.input.name:
+            self.alias[node.output[0]] = parts[0]  # a concat of one tensor is that tensor
+            return
+        total = sum(self.channels[p] for p in parts)
+        self.emit(node, "concat", parts, self.out(node, total))
+
+    def _frequency_run(self, concat, inputs, i):
+        """A run inputs[i:end] = [x,] Sin(s0 x), Cos(s0 x), Sin(2 s0 x), Cos(2 s0 x), ... (encode_frequencies'
+        band order) -> (x, include_input, first_exponent, pi, bands, node names, end), or None."""
+        def sincos(name, op):
+            node = self.producer.get(name)
+            if node is None or node.op_type != op or self.readers.get(name, []) != [concat]:
+                return None
+            mul = self.producer.get(node.input[0])
+            if mul is None or mul.op_type != "Mul":
+                return None
+            if any(r.op_type not in ("Sin", "Cos") for r in self.readers.get(mul.output[0], [])):
+                return None
+            a, b = mul.input
+            ca, cb = self.const(a), self.const(b)
+            if (ca is None) == (cb is None):
+                return None
+            c, x = (ca, b) if ca is not None else (cb, a)
+            if np.asarray(c).size != 1:
+                return None
+            return x, float(np.asarray(c, np.float64).reshape(-1)[0]), node, mul
+        x = None
+        include = False
+        first = sincos(inputs[i], "Sin")
+        if first is None:
+            if i + 1 >= len(inputs):
+                return None
+            nxt = sincos(inputs[i + 1], "Sin")
+            if nxt is None or inputs[i] != nxt[0]:
+                return None
+            include = True
+            i += 1
+        scales, used = [], []
+        while i + 1 < len(inputs):
+            s = sincos(inputs[i], "Sin")
+            c = sincos(inputs[i + 1], "Cos")
+            if s is None or c is None or s[0] != c[0] or s[1] != c[1] or (x is not None and s[0] != x):
+                break
+            x = s[0]
+            scales.append(s[1])
+            used += [s[2].name, c[2].name, s[3].name, c[3].name]
+            i += 2
+        if not scales:
+            return None
+        s0 = scales[0]
+        pi = False
+        exponent = None
+        for with_pi in (True, False):
+            e = math.log2(s0 / math.pi) if with_pi else math.log2(s0) if s0 > 0 else None
+            if e is not None and abs(e - round(e)) < 1e-5 and -32 <= round(e) <= 31:
+                pi, exponent = with_pi, int(round(e))
+                break
+        if exponent is None or exponent + len(scales) > 32:
+            return None
+        for b, s in enumerate(scales):
+            want = 2.0 ** (exponent + b) * (math.pi if pi else 1.0)
+            if abs(s - want) > 1e-6 * want:
+                return None
+        self.done.update(used)
+        return x, include, exponent, pi, len(scales), sorted(set(used)), i
+
+    # torch.nan_to_num(x) with its defaults, as torch.onnx exports it:
+    #   r1 = Where(IsNaN(x), 0, x); [Cast]; r2 = Where(And(IsInf(r1), Greater(r1, 0)), FLT_MAX, r1); [Cast];
+    #   r3 = Where(And(IsInf(r2), Less(r2, 0)), -FLT_MAX, r2)
+    def op_Where(self, node, attrs):
+        cond = self.producer.get(node.input[0])
+        if cond is None or cond.op_type != "IsNaN" or cond.input[0] != node.input[2]:
+            raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits")
+        if not self._is_const_value(node.input[1], 0.0):
+            raise self.fail(node, "nan_to_num with nan other than 0 is not supported")
+        x = self.tensor(node, node.input[2])
+        used = [cond.name, node.name]
+        current = node.output[0]
+        for compare, limit in (("Greater", FLT_MAX), ("Less", -FLT_MAX)):
+            current = self._skip_casts(current, used)
+            step = self._inf_step(current, compare, limit, used)
+            if step is None:
+                raise self.fail(node, f"torch.nan_to_num pattern not recognised (the {compare} step; only the "
+                                      "default posinf / neginf are supported)")
+            current = step
+        current = self._skip_casts(current, used)
+        self.done.update(used)
+        self.emit(node, "nan_to_num", [x], current, source=", ".join(used))
+        self.channels[current] = self.channels[x]
+
+    def _is_const_value(self, name, value):
+        c = self.const(name)
+        return c is not None and np.asarray(c).size == 1 and float(np.asarray(c, np.float64).reshape(-1)[0]) == value
+
+    def _skip_casts(self, name, used):
+        while True:
+            readers = self.readers.get(name, [])
+            if len(readers) == 1 and readers[0].op_type == "Cast" and _attrs(self.onnx, readers[0]).get("to") == 1:
+                used.append(readers[0].name)
+                name = readers[0].output[0]
+            else:
+                return name
+
+    def _follow_casts(self, name, chain):
+        while True:
+            readers = self.readers.get(name, [])
+            if len(readers) != 1 or readers[0].op_type != "Cast":
+                return name
+            chain.append(readers[0].name)
+            name = readers[0].output[0]
+
+    def _inf_step(self, r, compare, limit, used):
+        """Where(And(IsInf(r), compare(r, 0)), limit, r) reading r (Casts allowed between) -> its output, or None."""
+        readers = self.readers.get(r, [])
+        by = {n.op_type: n for n in readers}
+        if len(readers) != 3 or len(by) != 3 or compare not in by or "Where" not in by:
+            return None
+        chain = []
+        isinf = by.get("IsInf") or by.get("Cast")
+        while isinf is not None and isinf.op_type == "Cast":
+            chain.append(isinf.name)
+            nxt = self.readers.get(isinf.output[0], [])
+            isinf = nxt[0] if len(nxt) == 1 else None
+        if isinf is None or isinf.op_type != "IsInf":
+            return None
+        cmp, where = by[compare], by["Where"]
+        if cmp.input[0] != r or not self._is_const_value(cmp.input[1], 0.0):
+            return None
+        a = self._follow_casts(isinf.output[0], chain)
+        b = self._follow_casts(cmp.output[0], chain)
+        ands = self.readers.get(a, [])
+        if len(ands) != 1 or ands[0].op_type != "And" or set(ands[0].input) != {a, b}:
+            return None
+        if where.input[0] != ands[0].output[0] or where.input[2] != r:
+            return None
+        c = self.const(where.input[1])
+        if c is None or np.asarray(c).size != 1 or np.float32(np.asarray(c).reshape(-1)[0]) != np.float32(limit):
+            return None
+        used += chain + [isinf.name, cmp.name, ands[0].name, where.name]
+        return where.output[0]
+
+    def op_IsNaN(self, node, attrs):
+        readers = self.readers.get(node.output[0], [])
+        if len(readers) == 1 and readers[0].op_type == "Where":
+            return  # mapped with its Where (op_Where), which comes later in topological order
+        raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits")
+
+
+# --------------------------------------------------------------------------
+# Fusion passes over the ngi node list
+# --------------------------------------------------------------------------
+
+def _readers(ir, output):
+    counts = {}
+    for n in ir:
+        for i in n["inputs"]:
+            counts[i] = counts.get(i, 0) + 1
+    counts[output] = counts.get(output, 0) + 1
+    return counts
+
+
+def _fuse(ir, weights, output):
+    """Folds affines into the convolution before them, then activations into its epilogue, then ReLU / LeakyReLU
+    into the convolutions that read them, where each is exact (the producer's output read by that node alone)."""
+    changed = True
+    while changed:
+        changed = False
+        readers = _readers(ir, output)
+        made_by = {n["output"]: n for n in ir}
+        for n in list(ir):
+            src = made_by.get(n["inputs"][0]) if n["op"] in ("affine", "activation") else None
+            if src is None or readers.get(src["output"], 0) != 1 or src["op"] not in ("conv2d", "conv_transpose2d", "dense"):
+                continue
+            if n["op"] == "affine" and "activation" not in src:
+                scale = weights[n["scale"]] if "scale" in n else np.ones(src["out"])
+                shift = weights[n["shift"]] if "shift" in n else np.zeros(src["out"])
+                w = weights[src["weight"]]
+                axis = 1 if src["op"] == "conv_transpose2d" else 0
+                shape = [1] * w.ndim
+                shape[axis] = -1
+                weights[src["weight"]] = w * scale.reshape(shape)
+                bias = weights[src["bias"]] if "bias" in src else np.zeros(src["out"])
+                if "bias" not in src:
+                    src["bias"] = src["weight"][:-len(".weight")] + ".bias"
+                weights[src["bias"]] = bias * scale + shift
+                for key in ("scale", "shift"):
+                    weights.pop(n.get(key), None)
+                src.setdefault("folded", []).append(n["name"])
+            elif n["op"] == "activation" and "activation" not in src:
+                src["activation"] = n["activation"]
+                if "slope" in n:
+                    src["slope"] = n["slope"]
+                src.setdefault("folded", []).append(n["name"])
+            else:
+                continue
+            src["output"] = n["output"]
+            ir.remove(n)
+            changed = True
+            break
+    # ReLU / LeakyReLU read only by convolutions without an input activation: applied while they gather.
+    changed = True
+    while changed:
+        changed = False
+        readers = _readers(ir, output)
+        for n in list(ir):
+            if n["op"] != "activation" or n["activation"] not in ("relu", "leaky_relu") or n["output"] == output:
+                continue
+            users = [m for m in ir if n["output"] in m["inputs"]]
+            if not users or any(m["op"] not in ("conv2d", "conv_transpose2d", "dense") or "input_activation" in m
+                                or ("slope" in m and "slope" in n and m["slope"] != n["slope"])
+                                or ("slope" in m and n["activation"] == "leaky_relu")
+                                for m in users):
+                continue
+            for m in users:
+                m["inputs"] = [n["inputs"][0]]
+                m["input_activation"] = n["activation"]
+                if "slope" in n:
+                    m["slope"] = n["slope"]
+                m.setdefault("folded", []).append(n["name"])
+            ir.remove(n)
+            changed = True
+            break
+    for n in ir:
+        if "folded" in n:
+            n["source"] = n["name"] + " + " + " + ".join(n.pop("folded"))
+
+
+def import_onnx(onnx_path, out_path, *, half=False, source=None):
+    """Convert the ONNX file `onnx_path` to the ngi model file `out_path` (family "graph"); returns the config.
+
+    Raises ConversionError (naming the node and op where there is one); nothing is written then."""
+    onnx = _onnx()
+    model = _load(onnx, onnx_path)
+    imp = _Importer(onnx, model, onnx_path)
+    try:
+        onnx.checker.check_model(model)
+    except Exception as error:  # noqa: BLE001 (onnx.checker.ValidationError and protobuf errors)
+        raise ConversionError(f"{onnx_path}: the ONNX checker refuses the model: {str(error).splitlines()[0]}") \
+            from None
+    output = imp.run()
+    ir = imp.ir
+    weights = imp.weights
+    _fuse(ir, weights, output)
+    used = {n[k] for n in ir for k in ("weight", "bias", "scale", "shift") if k in n}
+    tensors = {k: v.astype(np.float32) for k, v in weights.items() if k in used}
+    config = {
+        "format_version": FORMAT_VERSION, "family": "graph", "input_nc": imp.input_nc,
+        "output_nc": imp.channels[output],
+        "graph": {"layout": imp.layout, "input": imp.input.name, "output": output, "nodes": ir},
+        "onnx": {"opset": imp.opset, "producer": f"{model.producer_name} {model.producer_version}".strip(),
+                 "nodes": len(model.graph.node),
+                 **({"input_hw": list(imp.input_hw)} if imp.input_hw else {})},
+        "source": source if source is not None else f"{os.path.basename(onnx_path)}, imported by ngi.convert",
+    }
+    directory = os.path.dirname(os.path.abspath(out_path))
+    fd, tmp = tempfile.mkstemp(prefix=".ngi-convert-", suffix=".tmp", dir=directory)
+    os.close(fd)
+    try:
+        write_model(tmp, tensors, config, half=half)
+        os.replace(tmp, out_path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return config

@@ -1,0 +1,346 @@
+"""ONNX import (python3 -m ngi.convert model.onnx out; ngi.onnx_import, docs/MODEL_FORMAT.md family "graph").
+
+torch.onnx.export of three of ngi's networks (small widths, so the whole file runs in seconds) is converted by the
+CLI and run on the test device; the outputs are compared with the PyTorch module in float64. Then the bad-input
+classes of issue 28: each ONNX file is refused with one error naming the problem and nothing is written; and the C++
+loader refuses hand-made "graph" files whose node list is hostile, naming the node.
+"""
+
+import copy
+import io
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+import ngi
+from ngi.model_file import write_model
+
+onnx = pytest.importorskip("onnx", reason="ONNX import needs Debian's python3-onnx (tools/install-deps.sh)")
+torch = pytest.importorskip("torch")
+
+from onnx import TensorProto, helper  # noqa: E402
+
+from ngi import neural_gi as ngi_net  # noqa: E402
+from ngi.reference_models import build_generator  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def dev():
+    return ngi.Device(os.environ.get("NGI_TEST_DEVICE", "cpu"))
+
+
+def export(module, example):
+    """torch.onnx.export in eval mode at opset 13, as bytes."""
+    f = io.BytesIO()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(module, example, f, opset_version=13)
+    return f.getvalue()
+
+
+def convert(tmp_path, data, name="model"):
+    """Writes `data` as name.onnx and runs the CLI; returns (returncode, stderr, output path)."""
+    src = tmp_path / f"{name}.onnx"
+    src.write_bytes(data)
+    out = tmp_path / f"{name}.safetensors"
+    proc = subprocess.run([sys.executable, "-m", "ngi.convert", str(src), str(out)], capture_output=True, text=True)
+    return proc.returncode, proc.stderr, out
+
+
+def randomize_batch_norm(module):
+    """Running statistics and affine parameters away from their 0 / 1 initial values, so folding them is tested."""
+    g = torch.Generator().manual_seed(7)
+    for m in module.modules():
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.copy_(torch.rand(m.num_features, generator=g) - 0.5)
+            m.running_var.copy_(torch.rand(m.num_features, generator=g) * 1.5 + 0.5)
+            m.weight.data.copy_(torch.rand(m.num_features, generator=g) + 0.5)
+            m.bias.data.copy_(torch.rand(m.num_features, generator=g) - 0.5)
+
+
+def reference(module, x):
+    with torch.no_grad():
+        return copy.deepcopy(module).double()(torch.from_numpy(x).double()).numpy()
+
+
+# --------------------------------------------------------------------------
+# Round trips
+# --------------------------------------------------------------------------
+
+def test_pix2pix_generator_round_trip(dev, tmp_path):
+    # junyanz UnetGenerator (eval: BatchNorm with running statistics, dropout off), ngf 4, 5 levels, 64 x 32.
+    torch.manual_seed(1)
+    net = build_generator("pix2pix_unet", 3, 3, 4, 5).eval()
+    randomize_batch_norm(net)
+    rc, err, out = convert(tmp_path, export(net, torch.randn(1, 3, 64, 32)), "pix2pix")
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    assert model.config["family"] == "graph" and model.config["layout"] == "nchw"
+    nodes = model.config["metadata"]["graph"]["nodes"]
+    # BatchNorm folded into the convolutions, LeakyReLU / ReLU / Tanh fused: 5 conv + 5 conv_transpose + 4 concat.
+    assert sorted(n["op"] for n in nodes).count("affine") == 0 and len(nodes) == 14
+    x = np.random.default_rng(2).uniform(-1, 1, (1, 3, 64, 32)).astype(np.float32)
+    err_max = float(np.max(np.abs(model.run(x) - reference(net, x))))
+    print(f"pix2pix ONNX round trip: max |ngi - PyTorch float64| = {err_max:.3g}")
+    # float32 sums of at most 4*4*8*ngf = 512 products per layer over 10 layers, outputs in [-1, 1]: ~1e-6 seen.
+    assert err_max < 1e-4
+    # The graph is not tied to the exported size: another multiple of 2^5.
+    y = np.random.default_rng(3).uniform(-1, 1, (1, 3, 32, 96)).astype(np.float32)
+    assert float(np.max(np.abs(model.run(y) - reference(net, y)))) < 1e-4
+
+
+def test_ao_mlp_round_trip(dev, tmp_path):
+    # training/ao_train.py's network (48 -> x -> y -> 1, tanh), exported on [N, 48] points: Gemm nodes.
+    torch.manual_seed(4)
+    net = torch.nn.Sequential(torch.nn.Linear(48, 16), torch.nn.Tanh(), torch.nn.Linear(16, 8), torch.nn.Tanh(),
+                              torch.nn.Linear(8, 1)).eval()
+    rc, err, out = convert(tmp_path, export(net, torch.randn(5, 48)), "ao")
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    assert model.config["layout"] == "nc"
+    assert [n["op"] for n in model.config["metadata"]["graph"]["nodes"]] == ["dense"] * 3
+    x = np.random.default_rng(5).uniform(-1, 1, (300, 48)).astype(np.float32)
+    y = model.run(x)
+    assert y.shape == (300, 1)
+    err_max = float(np.max(np.abs(y - reference(net, x))))
+    print(f"AO MLP ONNX round trip: max |ngi - PyTorch float64| = {err_max:.3g}")
+    assert err_max < 1e-5  # 48-term float32 dot products, |values| < ~3
+
+
+def test_neural_gi_round_trip(dev, tmp_path):
+    # ngi.neural_gi.NeuralGI (U-Net buffer, Eq. 3 encoding, DeepSDF MLP with a skip, exp decoding, nan_to_num),
+    # small: buffer 4, ngf 4, 5 levels, MLP 3 x 16 with the input re-injected at layer 2; 32 x 32.
+    torch.manual_seed(6)
+    net = ngi_net.NeuralGI(buffer_channels=4, ngf=4, num_downs=5, mlp_width=16, mlp_depth=3, skip_layer=2).eval()
+    randomize_batch_norm(net)
+    rc, err, out = convert(tmp_path, export(net, torch.randn(1, 18, 32, 32)), "neural_gi")
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    ops = [n["op"] for n in model.config["metadata"]["graph"]["nodes"]]
+    assert ops.count("frequency_encode") == 1 and ops[-1] == "nan_to_num"
+    x = np.random.default_rng(7).uniform(-1, 1, (1, 18, 32, 32)).astype(np.float32)
+    want = reference(net, x)
+    rel = float(np.max(np.abs(model.run(x) - want) / want))
+    print(f"Neural GI ONNX round trip: max relative |ngi - PyTorch float64| = {rel:.3g}")
+    # As tests/test_neural_gi_model.cpp: the encoding's top band multiplies x by 2^8 pi in float32, whose rounding
+    # the MLP and the exp carry into a relative error of the order of 1e-4.
+    assert rel < 2e-3
+
+
+# --------------------------------------------------------------------------
+# Bad ONNX files: one clear error, nothing written
+# --------------------------------------------------------------------------
+
+def small_model(nodes, initializers=(), input_dims=(1, 2, 8, 8), opset=13, outputs=("y",)):
+    graph = helper.make_graph(
+        nodes, "g", [helper.make_tensor_value_info("x", TensorProto.FLOAT, list(input_dims))],
+        [helper.make_tensor_value_info(o, TensorProto.FLOAT, [1, None, None, None]) for o in outputs], list(initializers))
+    return helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)])
+
+
+def conv_weight(raw_bytes=None):
+    w = np.ones((3, 2, 3, 3), np.float32)
+    t = helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.tobytes(), raw=True)
+    if raw_bytes is not None:
+        t.raw_data = raw_bytes
+    return t
+
+
+def conv_model(**kw):
+    return small_model([helper.make_node("Conv", ["x", "w"], ["y"], name="the_conv", pads=[1, 1, 1, 1])],
+                       [conv_weight(kw.pop("raw_bytes", None))], **kw)
+
+
+def assert_refused(tmp_path, data, *needles):
+    rc, err, out = convert(tmp_path, data, "bad")
+    assert rc == 1, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("ngi.convert: error:"), err
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.onnx"]  # no temporary file left either
+
+
+def test_a_valid_small_model_converts(tmp_path, dev):
+    # The control for the cases below: the same model unbroken converts and runs (3 x 3 conv, pad 1).
+    rc, err, out = convert(tmp_path, conv_model().SerializeToString())
+    assert rc == 0, err
+    y = ngi.Model(dev, out).run(np.ones((1, 2, 8, 8), np.float32))
+    assert y.shape == (1, 3, 8, 8) and y[0, 0, 4, 4] == pytest.approx(18.0) and y[0, 0, 0, 0] == pytest.approx(8.0)
+    if os.environ.get("NGI_CLI"):  # the README's path: ngi generate on the imported model, on another size
+        np.save(tmp_path / "x.npy", np.ones((1, 2, 6, 10), np.float32))
+        proc = subprocess.run([os.environ["NGI_CLI"], "generate", "--model", str(out), "--input",
+                               str(tmp_path / "x.npy"), "--output", str(tmp_path / "y.npy")],
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+        assert np.load(tmp_path / "y.npy").shape == (1, 3, 6, 10)
+
+
+def test_elementwise_nodes_round_trip(tmp_path, dev):
+    # Ops that fold into no convolution: Relu, Mul and Add of computed tensors (in place, so x is copied for its other
+    # readers), Sub and Div by constants, a BatchNormalization alone (affine), Sigmoid, LeakyRelu, Concat.
+    c = np.array([0.25, -0.5], np.float32).reshape(1, 2, 1, 1)
+    bn = [np.array(v, np.float32) for v in ([1.5, 0.5], [0.1, -0.2], [0.3, -0.1], [2.0, 0.5])]
+    inits = [helper.make_tensor("c", TensorProto.FLOAT, c.shape, c.tobytes(), raw=True),
+             helper.make_tensor("two", TensorProto.FLOAT, [], [2.0])]
+    inits += [helper.make_tensor(n, TensorProto.FLOAT, [2], v.tobytes(), raw=True)
+              for n, v in zip(("g", "b", "m", "v"), bn)]
+    nodes = [helper.make_node("Relu", ["x"], ["r"], name="relu"),
+             helper.make_node("Mul", ["x", "r"], ["xr"], name="mul"),
+             helper.make_node("Add", ["xr", "x"], ["a"], name="add"),
+             helper.make_node("Sub", ["a", "c"], ["s"], name="sub"),
+             helper.make_node("Div", ["s", "two"], ["d"], name="div"),
+             helper.make_node("BatchNormalization", ["d", "g", "b", "m", "v"], ["n"], name="bn", epsilon=1e-3),
+             helper.make_node("Sigmoid", ["n"], ["sig"], name="sigmoid"),
+             helper.make_node("LeakyRelu", ["x"], ["l"], name="leaky", alpha=0.1),
+             helper.make_node("Concat", ["sig", "l"], ["y"], name="cat", axis=1)]
+    rc, err, out = convert(tmp_path, small_model(nodes, inits, input_dims=(1, 2, 4, 4)).SerializeToString())
+    assert rc == 0, err
+    x = np.random.default_rng(9).uniform(-2, 2, (1, 2, 4, 4)).astype(np.float32)
+    g, b, m, v = (t.astype(np.float64).reshape(1, 2, 1, 1) for t in bn)
+    d = ((x * np.maximum(x, 0) + x) - c) / 2.0
+    n = (d - m) / np.sqrt(v + 1e-3) * g + b
+    want = np.concatenate([1 / (1 + np.exp(-n)), np.where(x >= 0, x, 0.1 * x)], axis=1)
+    got = ngi.Model(dev, out).run(x)
+    assert float(np.max(np.abs(got - want))) < 1e-6
+
+
+def test_matmul_and_gemm_round_trip(tmp_path, dev):
+    # [N, C] items: MatMul by a constant + Add of a bias row (folded into one dense layer), Relu, Gemm with
+    # transB = 0, alpha and beta.
+    rng = np.random.default_rng(10)
+    w1, b1 = rng.normal(size=(6, 5)).astype(np.float32), rng.normal(size=5).astype(np.float32)
+    w2, b2 = rng.normal(size=(5, 3)).astype(np.float32), rng.normal(size=(1, 3)).astype(np.float32)
+    inits = [helper.make_tensor(n, TensorProto.FLOAT, v.shape, v.tobytes(), raw=True)
+             for n, v in (("w1", w1), ("b1", b1), ("w2", w2), ("b2", b2))]
+    nodes = [helper.make_node("MatMul", ["x", "w1"], ["h"], name="matmul"),
+             helper.make_node("Add", ["h", "b1"], ["hb"], name="bias"),
+             helper.make_node("Relu", ["hb"], ["r"], name="relu"),
+             helper.make_node("Gemm", ["r", "w2", "b2"], ["y"], name="gemm", alpha=0.5, beta=2.0)]
+    graph = helper.make_graph(nodes, "g", [helper.make_tensor_value_info("x", TensorProto.FLOAT, [4, 6])],
+                              [helper.make_tensor_value_info("y", TensorProto.FLOAT, [4, 3])], inits)
+    data = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)]).SerializeToString()
+    rc, err, out = convert(tmp_path, data)
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    assert [n["op"] for n in model.config["metadata"]["graph"]["nodes"]] == ["dense", "dense"]
+    x = rng.normal(size=(37, 6)).astype(np.float32)
+    want = 0.5 * np.maximum(x.astype(np.float64) @ w1 + b1, 0) @ w2 + 2.0 * b2
+    assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
+
+
+def test_truncated_file_is_refused(tmp_path):
+    data = conv_model().SerializeToString()
+    assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
+
+
+def test_cyclic_graph_is_refused(tmp_path):
+    nodes = [helper.make_node("Add", ["x", "b"], ["a"], name="add_node"),
+             helper.make_node("Relu", ["a"], ["b"], name="relu_node"),
+             helper.make_node("Relu", ["a"], ["y"], name="out_node")]
+    assert_refused(tmp_path, small_model(nodes).SerializeToString(), "cycle", "add_node", "relu_node")
+
+
+def test_unsupported_op_is_refused(tmp_path):
+    nodes = [helper.make_node("Softmax", ["x"], ["y"], name="the_softmax", axis=1)]
+    assert_refused(tmp_path, small_model(nodes).SerializeToString(), "node 'the_softmax' (Softmax)", "not supported")
+
+
+def test_unsupported_opsets_are_refused(tmp_path):
+    assert_refused(tmp_path, conv_model(opset=7).SerializeToString(), "opset 7 is not supported")
+    (tmp_path / "bad.onnx").unlink()
+    m = conv_model()
+    m.opset_import.append(helper.make_opsetid("com.microsoft", 1))
+    assert_refused(tmp_path, m.SerializeToString(), "domain 'com.microsoft'")
+
+
+def test_symbolic_and_negative_shapes_are_refused(tmp_path):
+    assert_refused(tmp_path, conv_model(input_dims=(1, 2, "H", 8)).SerializeToString(), "symbolic", "'H'")
+    (tmp_path / "bad.onnx").unlink()
+    assert_refused(tmp_path, conv_model(input_dims=(1, 2, -8, 8)).SerializeToString(), "dimension 2 is -8")
+
+
+def test_initializer_of_the_wrong_size_is_refused(tmp_path):
+    short = np.ones(3 * 2 * 3 * 3 - 1, np.float32).tobytes()
+    assert_refused(tmp_path, conv_model(raw_bytes=short).SerializeToString(), "bad.onnx: initializer 'w'", "212 bytes", "216")
+
+
+def test_unsupported_attribute_names_the_node(tmp_path):
+    nodes = [helper.make_node("Conv", ["x", "w"], ["y"], name="grouped", group=2)]
+    assert_refused(tmp_path, small_model(nodes, [conv_weight()]).SerializeToString(), "node 'grouped' (Conv)",
+                   "group 2")
+
+
+# --------------------------------------------------------------------------
+# The C++ loader of family "graph" against hand-made hostile node lists
+# --------------------------------------------------------------------------
+
+def graph_file(tmp_path, nodes, tensors, output="y", input_nc=2):
+    config = {"format_version": 1, "family": "graph", "input_nc": input_nc,
+              "graph": {"layout": "nchw", "input": "x", "output": output, "nodes": nodes}}
+    path = tmp_path / "g.safetensors"
+    write_model(path, tensors, config)
+    return path
+
+
+CONV = {"name": "c", "op": "conv2d", "inputs": ["x"], "output": "y", "in": 2, "out": 3, "kernel": [3, 3],
+        "stride": 1, "pad": 1, "weight": "c.weight"}
+WEIGHT = {"c.weight": np.ones((3, 2, 3, 3), np.float32)}
+
+
+@pytest.mark.parametrize("nodes,tensors,needle", [
+    ([dict(CONV, op="softmax")], WEIGHT, "node 'c' (softmax): op 'softmax' is not one of"),
+    ([dict(CONV, inputs=["nowhere"])], WEIGHT, "node 'c' (conv2d): input 'nowhere' is neither the graph input"),
+    ([dict(CONV, inputs=["y"])], WEIGHT, "node 'c' (conv2d): input 'y' is neither"),  # reads its own output: a cycle
+    ([dict(CONV, **{"in": 5})], WEIGHT, "node 'c' (conv2d): 'in' is 5, its input has 2 channels"),
+    ([dict(CONV, weight="missing")], WEIGHT, "node 'c' (conv2d): tensor 'missing' (weight) is not in the file"),
+    ([CONV], {"c.weight": np.ones((3, 2, 5, 5), np.float32)}, "tensor 'c.weight' (weight) is [3, 2, 5, 5], expected [3, 2, 3, 3]"),
+    ([CONV], dict(WEIGHT, extra=np.ones(1, np.float32)), "tensor 'extra' is not used by any node"),
+    ([dict(CONV, activation="gelu")], WEIGHT, "node 'c' (conv2d): 'activation' must be one of"),
+    ([dict(CONV, dilation=2)], WEIGHT, "node 'c' (conv2d): unknown field 'dilation'"),
+    ([CONV, dict(CONV, name="c")], WEIGHT, "node 'c': a second node of this name"),
+    ([CONV, dict(CONV, name="d")], WEIGHT, "node 'd' (conv2d): output 'y' is made a second time"),
+    ([dict(CONV, stride=0)], WEIGHT, "node 'c' (conv2d): 'stride' must be an integer in 1..64"),
+])
+def test_graph_loader_refuses_hostile_node_lists(dev, tmp_path, nodes, tensors, needle):
+    path = graph_file(tmp_path, nodes, tensors)
+    with pytest.raises(ngi.InputError, match=None) as info:
+        ngi.Model(dev, path)
+    assert needle in str(info.value)
+
+
+def test_graph_loader_refuses_an_output_no_node_makes(dev, tmp_path):
+    with pytest.raises(ngi.InputError, match="field 'graph.output' must be the output of a node; no node makes 'z'"):
+        ngi.Model(dev, graph_file(tmp_path, [CONV], WEIGHT, output="z"))
+
+
+def test_graph_copies_where_a_tensor_is_read_twice(dev, tmp_path):
+    # y = relu(x) in place would change what the concat reads of x; x cannot live inside the concat either (it is
+    # the graph input): the builder copies. out = [x, relu(x), x + x].
+    nodes = [{"name": "r", "op": "activation", "inputs": ["x"], "output": "rx", "activation": "relu"},
+             {"name": "s", "op": "add", "inputs": ["x", "x"], "output": "xx"},
+             {"name": "cat", "op": "concat", "inputs": ["x", "rx", "xx"], "output": "y"}]
+    model = ngi.Model(dev, graph_file(tmp_path, nodes, {}))
+    x = np.random.default_rng(8).uniform(-1, 1, (1, 2, 4, 4)).astype(np.float32)
+    y = model.run(x)
+    np.testing.assert_array_equal(y, np.concatenate([x, np.maximum(x, 0), x + x], axis=1))
+
+
+def test_graph_copies_a_concat_before_changing_it_in_place(dev, tmp_path):
+    # relu in place on a concat would also change its member t, which the add reads afterwards.
+    # t = 0.5 x (an affine: memory of its own, so the concat places t inside itself).
+    nodes = [{"name": "t", "op": "affine", "inputs": ["x"], "output": "t", "scale": "half"},
+             {"name": "cat", "op": "concat", "inputs": ["t", "t"], "output": "c"},
+             {"name": "r", "op": "activation", "inputs": ["c"], "output": "rc", "activation": "relu"},
+             {"name": "s", "op": "add", "inputs": ["t", "t"], "output": "tt"},
+             {"name": "out", "op": "concat", "inputs": ["rc", "tt"], "output": "y"}]
+    model = ngi.Model(dev, graph_file(tmp_path, nodes, {"half": np.full(2, 0.5, np.float32)}))
+    x = np.random.default_rng(11).uniform(-1, 1, (1, 2, 4, 4)).astype(np.float32)
+    y = model.run(x)
+    t = 0.5 * x.astype(np.float64)
+    np.testing.assert_allclose(y, np.concatenate([np.maximum(t, 0), np.maximum(t, 0), 2 * t], axis=1), atol=1e-6)
