@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "frame_report.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/metrics.hpp"
@@ -63,7 +64,9 @@ int run(const Options& o) {
     // A plan (python3 -m ngi.plan) names the rung, its batch-norm mode and face size, and maybe a per-frame switch.
     std::optional<Plan> plan;
     if (!o.plan_path.empty()) plan = Plan::load(o.plan_path);
-    const ngi::Frame frame = ngi::read_frame(frame_dir);  // the reference, if any, has the face size
+    ngi::FrameReadStats read_stats;
+    const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);  // the reference, if any, has the face size
+    warn_frame_sanitized("lightmap", frame_dir, read_stats);
     double share = -1.0;
     const PlanRung* chosen = plan ? &plan->choose(frame, share) : nullptr;
     ngi::ModelOptions model_options;
@@ -160,6 +163,7 @@ int run(const Options& o) {
     if (!metrics.is_null()) metrics["output_mode"] = model ? nlohmann::json(model->config().output_mode) : nlohmann::json();
     if (guard > 0.0 && !metrics.is_null())
         metrics["guard"] = {{"max_indirect_share", guard}, {"indirect_share", guard_share}, {"fell_back", fell_back}};
+    mark_scores(metrics, read_stats);  // null scores with a note when the frame's files held NaN/Inf
 
     // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
     const ngi::Image lightmap_out = present(lightmap);
@@ -179,9 +183,11 @@ int run(const Options& o) {
     if (guard > 0.0)
         std::printf("guard      indirect share %s %s %s: %s\n", share_text(guard_share).c_str(), fell_back ? ">" : "<=",
                     share_text(guard).c_str(), fell_back ? "direct light used" : "network kept");
-    std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s, %d NaN/Inf sanitized\n", out_dir.c_str(),
-                width, height, frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
-                input_text.c_str(), stats.total_nonfinite());
+    std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s; NaN/Inf replaced: %zu in the frame's "
+                "files, %d in the network input\n",
+                out_dir.c_str(), width, height,
+                frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
+                input_text.c_str(), read_stats.total_sanitized(), stats.total_nonfinite());
     return 0;
 }
 

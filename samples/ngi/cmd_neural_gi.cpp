@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "frame_report.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/metrics.hpp"
 #include "ngi/model.hpp"
@@ -31,7 +32,9 @@ struct Options {
 int run(const Options& o) {
     const char* const kFiles[] = {"indirect.exr", "lighting.exr", "final.png", "compare.png", "metrics.json"};
     ngi::OutputFolder out(o.out_dir, "write", {std::begin(kFiles), std::end(kFiles)});
-    const ngi::Frame frame = ngi::read_frame(o.frame_dir);
+    ngi::FrameReadStats read_stats;
+    const ngi::Frame frame = ngi::read_frame(o.frame_dir, &read_stats);
+    warn_frame_sanitized("neural-gi", o.frame_dir, read_stats);
     ngi::Device device = ngi::Device::open(o.device);
     ngi::Model model = ngi::Model::load(device, ngi::resolve_model(o.model_path));
     ngi::NeuralGiOptions options;
@@ -71,6 +74,7 @@ int run(const Options& o) {
             {"jbu_fallback_pixels", images.jbu_fallbacks},
         };
     }
+    mark_scores(metrics, read_stats);  // null scores with a note when the frame's files held NaN/Inf
 
     out.write("indirect.exr", [&](const std::string& p) { ngi::write_exr(p, images.indirect, ngi::ExrPixelType::Float); });
     out.write("lighting.exr", [&](const std::string& p) { ngi::write_exr(p, images.lighting, ngi::ExrPixelType::Float); });

@@ -25,6 +25,27 @@ for f in lightmap.exr final.png compare.png metrics.json; do
   [ -s "$work/lm/$f" ] || fail "ngi lightmap did not write $f"
 done
 
+# A frame whose front albedo is all NaN (issue 31, "a score that lies": it once ran with exit 0, "0 NaN/Inf
+# sanitized" and MSE 0 / SSIM 1): it runs, the count per file is warned on stderr and printed, and every score in
+# metrics.json is null with a note, scores_valid false, the file listed.
+cp -r "$work/frame" "$work/frame_nan"
+/usr/bin/python3 "$(dirname "$0")/write_exr.py" "$work/frame_nan/front_albedo.exr" 32 32 R,G,B nan
+"$ngi" lightmap --frame "$work/frame_nan" --model "$model" --out "$work/lm_nan" > "$work/lm_nan.out" 2> "$work/lm_nan.err"
+grep -q "warning: .*frame_nan: 3072 NaN/Inf values replaced on read (front_albedo.exr: 3072 NaN)" "$work/lm_nan.err" ||
+  fail "lightmap on a NaN albedo did not warn: $(cat "$work/lm_nan.err")"
+grep -q "NaN/Inf replaced: 3072 in the frame's files" "$work/lm_nan.out" || fail "lightmap's count: $(tail -1 "$work/lm_nan.out")"
+/usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1]))
+assert m['scores_valid'] is False and m['frame_sanitized'] == [{'file': 'front_albedo.exr', 'nan': 3072, 'inf': 0}], m
+for side in ('network', 'direct_only'):
+    for v in m[side].values():
+        assert v['mse'] is None and v['psnr'] is None and v['ssim'] is None and 'front_albedo.exr' in v['note'], v
+" "$work/lm_nan/metrics.json" || fail "lightmap on a NaN albedo: $(cat "$work/lm_nan/metrics.json")"
+/usr/bin/python3 -c "import json, sys; assert json.load(open(sys.argv[1]))['scores_valid'] is True" "$work/lm/metrics.json" ||
+  fail "a clean frame's metrics.json does not say scores_valid true"
+# Negative depth is refused on read, naming the file (neural-gi refused it; lightmap once ran on it).
+cp -r "$work/frame" "$work/frame_negdepth"
+/usr/bin/python3 "$(dirname "$0")/write_exr.py" "$work/frame_negdepth/front_depth.exr" 32 32 Y 5.0 -1.0
+
 # ngi metrics prints strict JSON: a PSNR/SSIM that is not a number is null with a note saying why
 # (docs/CONVENTIONS.md, Metrics). check_metrics FILE_A FILE_B RANGE PYTHON_ASSERTION (m = the parsed output).
 check_metrics() {
@@ -55,6 +76,8 @@ cp -r "$work/frame" "$work/missing" && rm "$work/missing/left_depth.exr"
 expect=left_depth.exr
 expect_failure missing_merge "$ngi" merge --frame "$work/missing" --out "$work/out_missing_merge"
 expect_failure missing_lightmap "$ngi" lightmap --frame "$work/missing" --model "$model" --out "$work/out_missing_lightmap"
+expect="front_depth.exr: 1 of 1024 pixels have a negative depth"
+expect_failure negative_depth "$ngi" lightmap --frame "$work/frame_negdepth" --model "$model" --out "$work/out_negdepth"
 
 cp -r "$work/frame" "$work/truncated" && head -c 100 "$work/frame/up_normal.exr" > "$work/truncated/up_normal.exr"
 expect=up_normal.exr

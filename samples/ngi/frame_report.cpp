@@ -1,0 +1,54 @@
+#include "frame_report.hpp"
+
+#include <cstdio>
+
+namespace ngi_cli {
+
+std::string sanitized_files_text(const ngi::FrameReadStats& stats) {
+    std::string text;
+    for (const ngi::SanitizedFile& s : stats.sanitized) {
+        if (!text.empty()) text += "; ";
+        text += s.file + ":";
+        if (s.nan) text += " " + std::to_string(s.nan) + " NaN";
+        if (s.inf) text += std::string(s.nan ? "," : "") + " " + std::to_string(s.inf) + " Inf";
+    }
+    return text;
+}
+
+void warn_frame_sanitized(const char* command, const std::string& frame_dir, const ngi::FrameReadStats& stats) {
+    if (stats.total_sanitized() == 0) return;
+    std::fprintf(stderr,
+                 "ngi %s: warning: %s: %zu NaN/Inf values replaced on read (%s); scores against its reference are "
+                 "not valid\n",
+                 command, frame_dir.c_str(), stats.total_sanitized(), sanitized_files_text(stats).c_str());
+}
+
+namespace {
+
+void null_scores(nlohmann::json& j, const std::string& note) {
+    if (!j.is_object()) return;
+    if (j.contains("mse") && j.contains("psnr") && j.contains("ssim")) {
+        j = {{"mse", nullptr}, {"psnr", nullptr}, {"ssim", nullptr}, {"note", note}};
+        return;
+    }
+    for (auto& [key, value] : j.items()) null_scores(value, note);
+}
+
+}  // namespace
+
+void mark_scores(nlohmann::json& metrics, const ngi::FrameReadStats& stats) {
+    if (metrics.is_null()) return;
+    const bool valid = stats.total_sanitized() == 0;
+    if (!valid) {
+        null_scores(metrics, "not scored: the frame's files held " + std::to_string(stats.total_sanitized()) +
+                                 " NaN/Inf values, replaced on read (" + sanitized_files_text(stats) +
+                                 "); a score would compare the replacements");
+        nlohmann::json files = nlohmann::json::array();
+        for (const ngi::SanitizedFile& s : stats.sanitized)
+            files.push_back({{"file", s.file}, {"nan", s.nan}, {"inf", s.inf}});
+        metrics["frame_sanitized"] = files;
+    }
+    metrics["scores_valid"] = valid;
+}
+
+}  // namespace ngi_cli
