@@ -106,8 +106,9 @@ checks=$((checks + 1))
 
 # 5. Python: the installed package (pure-Python modules + the native module) imports from the prefix alone, from a
 # directory that holds no ngi sources, finds the installed models by name and runs one.
-pypath=()
-if [ $system = 0 ]; then pypath=(PYTHONPATH="$pydir"); fi
+# PYTHONPATH in both modes: for /usr too, since a build tree registered with the system Python (tools/build.sh
+# writes an ngi.pth into site-packages, as an editable install does) would otherwise be found before dist-packages.
+pypath=(PYTHONPATH="$pydir")
 [ -d "$pydir/ngi" ] || { step "no Python package installed ($pydir)"; exit 1; }
 (cd "$work" && env -u NGI_MODEL_PATH "${pypath[@]}" /usr/bin/python3 -c '
 import sys, numpy as np, ngi
