@@ -11,9 +11,11 @@
 #   package   the Debian packages (debian/) made from ./build without building again, installed with dpkg, the same
 #             consumers run against /usr only, then purged; `pip install .` of ./build into a fresh venv
 #             (tools/ci/package.sh; needs root)
-#   sanitize  the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer, on PoCL
+#   sanitize  the whole suite built with clang-15's AddressSanitizer + UndefinedBehaviorSanitizer, on PoCL (the
+#             libFuzzer targets are built in the same tree)
 #   tsan      the [threads] tests (one device, several threads, models and pipelines) under ThreadSanitizer
-#   fuzz      every libFuzzer target for a bounded time (tools/fuzz.sh)
+#   fuzz      every libFuzzer target for a bounded time (tools/fuzz.sh), from the sanitize stage's tree when that
+#             stage runs too (it waits for that build), else from its own build-fuzz
 # NGI_TEST_STAGES="pocl rusticl" runs a subset. A stage whose platform is missing fails (install-deps.sh installs
 # them all); NGI_TEST_ALLOW_MISSING=1 turns that into a skip with the reason printed.
 #
