@@ -72,6 +72,13 @@ int run(const Options& o) {
     ngi::ModelOptions model_options;
     model_options.bn_mode = chosen ? chosen->bn_mode : o.bn_mode;
     ngi::Device device = ngi::Device::open(o.device);
+    if (width) {  // checked before the model runs: a presented image is width x height x 3 floats on the device
+        const std::size_t image_bytes = std::size_t(width) * std::size_t(height) * 3 * sizeof(float);
+        if (image_bytes > device.info().max_alloc_bytes)
+            throw ngi::InputError("--size " + o.size + ": an image of that size is " + std::to_string(image_bytes) +
+                                  " bytes, beyond the device's largest allocation (" +
+                                  std::to_string(device.info().max_alloc_bytes) + " bytes)");
+    }
     // A plan may choose the direct-light rung: no network, the frame's own direct light is the lightmap.
     std::optional<ngi::Model> model;
     if (!chosen || !chosen->model.empty())

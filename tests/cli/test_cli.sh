@@ -206,6 +206,14 @@ expect=--frame;       expect_usage frame_range "${render[@]}" --frame 100 --out 
 expect=--tme;         expect_usage unknown_option "${render[@]}" --tme 12 --out "$work/out_unknown_option"
 expect="--spp given twice"; expect_usage spp_twice "${render[@]}" --spp 3 --out "$work/out_spp_twice"
 expect="unexpected argument 'stray'"; expect_usage stray "${render[@]}" stray --out "$work/out_stray"
+# A --size whose images exceed the device's largest allocation is refused before the model runs (issue 31 item 6:
+# 16384x16384 once reached 3.2 GB of host memory first). Only where the device's limit is below those 3 GiB.
+max_alloc_mib=$("$ngi" devices --no-check | sed -n 's/.*max alloc \([0-9]*\) MiB.*/\1/p' | head -1)
+if [ -n "$max_alloc_mib" ] && [ "$max_alloc_mib" -lt 3072 ]; then
+  expect="beyond the device's largest allocation"
+  expect_failure size_over_alloc "$ngi" lightmap --frame "$work/frame" --model "$model" --size 16384x16384 \
+    --out "$work/out_size_over_alloc"
+fi
 expect=--size;        expect_usage size_bad "$ngi" lightmap --frame "$work/frame" --model "$model" --size 12x --out "$work/out_size_bad"
 expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/frame" --model "$model" --size 0x8 --out "$work/out_size_zero"
 expect=--plan;        expect_usage plan_and_model "$ngi" lightmap --frame "$work/frame" --model "$model" --plan "$work/plan_ok.json" --out "$work/out_plan_and_model"

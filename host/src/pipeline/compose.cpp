@@ -161,10 +161,12 @@ Image SurroundPipeline::upscale(const Image& image, int width, int height) {
     if (width <= 0 || height <= 0 || double(width) * height * image.channels > double(INT_MAX))
         throw InputError("upscale: target size " + std::to_string(width) + "x" + std::to_string(height) +
                          " is empty or too large");
+    // The device buffer first: its size is checked against the device's limit (OutOfMemoryError naming it) before
+    // the host allocates the same amount (`lightmap --size 16384x16384` once reached 3.2 GB of host memory first).
+    const std::size_t bytes = std::size_t(width) * std::size_t(height) * std::size_t(image.channels) * sizeof(float);
+    detail::ensure_buffer(im.ctx, im.out, bytes, "upscale output");
     upload_image(im.ctx, im.aux[0], image, "upscale input");
     Image out(width, height, image.channels);
-    const std::size_t bytes = out.data.size() * sizeof(float);
-    detail::ensure_buffer(im.ctx, im.out, bytes, "upscale output");
     im.resize.args(im.aux[0], image.width, image.height, im.out, width, height, image.channels);
     const std::size_t g[2] = {std::size_t(width), std::size_t(height)};
     im.ctx.launch(im.resize, 2, g, kLocal2);
