@@ -4,6 +4,10 @@
 #pragma once
 #include <cfloat>
 #include <cmath>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 namespace ngi::detail {
 
@@ -17,5 +21,19 @@ inline bool float32_representable(double x) {
 
 // The rule's words for error messages.
 inline constexpr const char* kFloat32Rule = "representable in float32 (0, or 1.2e-38 <= |v| <= 3.4e38)";
+
+// A config's "input_layout": a list of strings, empty or input_nc long (the generator families and the graph
+// family). Fills `out` and returns true, or returns false when `v` breaks the rule input_layout_rule() states.
+inline std::string input_layout_rule(int input_nc) {
+    return "a list of strings, empty or input_nc (" + std::to_string(input_nc) + ") long";
+}
+inline bool read_input_layout(const nlohmann::json& v, int input_nc, std::vector<std::string>& out) {
+    if (!v.is_array() || (!v.empty() && v.size() != std::size_t(input_nc))) return false;
+    for (const auto& s : v) {
+        if (!s.is_string()) return false;
+        out.push_back(s.get<std::string>());
+    }
+    return true;
+}
 
 }  // namespace ngi::detail

@@ -333,15 +333,8 @@ ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path)
         out[0] = float(lo);
         out[1] = float(hi);
     }
-    if (j.contains("input_layout")) {
-        const nlohmann::json& v = j["input_layout"];
-        const std::string rule = "a list of strings, empty or input_nc (" + std::to_string(c.input_nc) + ") long";
-        if (!v.is_array() || (!v.empty() && v.size() != std::size_t(c.input_nc))) throw fail("input_layout", rule);
-        for (const auto& s : v) {
-            if (!s.is_string()) throw fail("input_layout", rule);
-            c.input_layout.push_back(s.get<std::string>());
-        }
-    }
+    if (j.contains("input_layout") && !read_input_layout(j["input_layout"], c.input_nc, c.input_layout))
+        throw fail("input_layout", input_layout_rule(c.input_nc));
     if (j.contains("source")) {
         if (!j["source"].is_string()) throw fail("source", "a string");
         c.source = j["source"].get<std::string>();

@@ -231,15 +231,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     c.dropout_p = number("dropout_p", 0.0, 1.0, false, true, c.dropout_p);  // 1 would divide by 1 - p = 0
     c.dropout_seed = std::uint32_t(integer("dropout_seed", 0, 0xffffffffll, c.dropout_seed, false));
     c.leaky_slope = number("leaky_slope", 0.0, 1.0, false, false, c.leaky_slope);
-    if (j.contains("input_layout")) {
-        const nlohmann::json& v = j["input_layout"];
-        const std::string rule = "a list of strings, empty or input_nc (" + std::to_string(c.input_nc) + ") long";
-        if (!v.is_array() || (!v.empty() && v.size() != std::size_t(c.input_nc))) throw fail("input_layout", rule);
-        for (const auto& s : v) {
-            if (!s.is_string()) throw fail("input_layout", rule);
-            c.input_layout.push_back(s.get<std::string>());
-        }
-    }
+    if (j.contains("input_layout") && !read_input_layout(j["input_layout"], c.input_nc, c.input_layout))
+        throw fail("input_layout", input_layout_rule(c.input_nc));
     range("input_range", c.input_range);
     range("output_range", c.output_range);
     c.source = string("source", {}, c.source, false);
