@@ -10,12 +10,15 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "commands.hpp"
 #include "io/file_util.hpp"
 #include "ngi/camera_path.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
+#include "ngi/output_folder.hpp"
 #include "ngi/render.hpp"
 #include "ngi/scene.hpp"
 
@@ -57,6 +60,27 @@ ngi::AreaLight parse_area_light(const std::string& text) {
     l.radiance = {v[9], v[10], v[11]};
     ngi::check_area_light(l, "--area-light");
     return l;
+}
+
+// render.json, written into the frame folder with it: what the render was (scene, camera, settings) and what it
+// took, for scripts (training's sequence and report tools) that would otherwise parse this command's output.
+nlohmann::json render_record(const Options& o, const ngi::VoxelScene& scene, const ngi::CameraPose& pose, float hours,
+                             const ngi::RenderSettings& rs, const ngi::RenderStats& st) {
+    auto vec = [](glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+    nlohmann::json r = {
+        {"scene", {{"spec", o.spec}, {"name", scene.name}, {"size", {scene.size.x, scene.size.y, scene.size.z}}}},
+        {"camera", {{"frame", o.frame}, {"path_frames", o.frames}, {"position", vec(pose.position)},
+                    {"look", vec(pose.look)}, {"time_h", hours}}},
+        {"settings", {{"face", rs.n}, {"feature_spp", rs.feature_spp}, {"seed", rs.seed}}},
+        {"timing", {{"features_ms", st.feature_ms}, {"feature_rays", st.feature_rays}}}};
+    if (rs.reference) {
+        r["settings"]["reference_spp"] = rs.reference_spp;
+        r["settings"]["bounces"] = rs.max_bounces;
+        r["timing"]["reference_ms"] = st.reference_ms;
+        r["timing"]["reference_rays"] = st.reference_rays;
+        r["timing"]["reference_rel_stderr"] = st.reference_rel_stderr;
+    }
+    return r;
 }
 
 int run(const Options& o) {
@@ -103,7 +127,10 @@ int run(const Options& o) {
         ngi::write_png(preview_tmp, img, ngi::PngEncoding::Srgb);
     }
     try {
-        ngi::write_frame(out, fr);
+        const std::unique_ptr<ngi::OutputFolder> folder = ngi::frame_output_folder(out);
+        ngi::write_frame_files(*folder, fr);
+        folder->write_text("render.json", render_record(o, scene, pose, hours, rs, st).dump(2) + "\n");
+        folder->commit();
         if (!preview.empty()) {
             std::error_code ec;
             std::filesystem::rename(preview_tmp, preview, ec);
@@ -142,7 +169,8 @@ Run add_render(CLI::App& app) {
     add_path(*cmd, "--scene", o->spec, "SPEC",
              "room|street|cave|backlit|bleed|sculpture|cornell|knot|superquadric|blob[:seed=S,...], or a .vox or "
              "mesh file (.obj, .ply, .gltf, .glb)", true);
-    add_path(*cmd, "--out", o->out, "DIR", "the frame folder to write", true);
+    add_path(*cmd, "--out", o->out, "DIR", "the frame folder to write (render.json in it: scene, camera, timings)",
+             true);
     // The limits are those of a dataset config.
     add_integer(*cmd, "--frame", o->frame, 0, ngi::kMaxPathFrames - 1, "K", "the frame of the camera path, below --path-frames");
     add_integer(*cmd, "--face", rs.n, 1, 8192, "N", "face size in pixels");

@@ -16,6 +16,11 @@ fail() { echo "FAILED: $*" >&2; exit 1; }
 
 # A 32 x 32 frame: global view 128 x 64, which the 6-level parity generator accepts.
 "$ngi" render --scene room:seed=1 --face 32 --spp 4 --feature-spp 1 --out "$work/frame" > /dev/null
+# render.json records the render for scripts (no parsing of the printed summary): scene size, camera, timings.
+/usr/bin/python3 -c "import json, sys; r = json.load(open(sys.argv[1]))
+assert r['scene']['size'] == [20, 8, 24] and r['camera']['frame'] == 0 and r['camera']['path_frames'] == 100, r
+assert len(r['camera']['position']) == 3 and r['settings']['reference_spp'] == 4 and r['timing']['reference_ms'] > 0, r
+" "$work/frame/render.json" || fail "ngi render: render.json lacks the scene, camera or timings"
 "$ngi" merge --frame "$work/frame" --out "$work/merged" > /dev/null
 for f in globalview_albedo.exr globalview_normal.exr coord.exr input.npy; do
   [ -s "$work/merged/$f" ] || fail "ngi merge did not write $f"
