@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <climits>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -23,6 +24,8 @@
 #include "ngi/area_light.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
+#include "ngi/image_io.hpp"
 #include "ngi/mesh.hpp"
 #include "ngi/metrics.hpp"
 #include "ngi/output_folder.hpp"
@@ -351,4 +354,86 @@ TEST_CASE("round 2: a .vox file beyond kMaxVoxFileBytes is refused before it is 
     // Refused from the size fstat reports (the message quotes it), before any byte is read.
     CHECK_THROWS_WITH(ngi::load_vox(path.string()),
                       Contains("padded.vox") && Contains("is larger (" + std::to_string(ngi::kMaxVoxFileBytes + 1)));
+}
+
+namespace {
+
+// Sets the process's host-memory limit for one scope (ngi/host_memory.hpp) and restores the default after.
+struct HostMemoryLimit {
+    explicit HostMemoryLimit(std::uint64_t bytes) { ngi::set_host_memory_limit(bytes); }
+    ~HostMemoryLimit() { ngi::set_host_memory_limit(0); }
+    HostMemoryLimit(const HostMemoryLimit&) = delete;
+    HostMemoryLimit& operator=(const HostMemoryLimit&) = delete;
+};
+
+}  // namespace
+
+// Item 6 of round 2: an 805 MB npy into an AO model reached 2.5 GB of host memory unchecked. Every reader now
+// checks what it will hold at once -- the file's bytes plus what they decode to -- against a limit the user can
+// raise (NGI_HOST_MEMORY_LIMIT), before allocating. A compressed image is judged by its decoded size, not its file.
+TEST_CASE("round 2: readers check the host memory they will hold before allocating", "[io][limits][reliability2]") {
+    TempDir dir("r2-host-memory");
+    // 512 x 512 x 3 constant: small files (ZIP / deflate), 3 MiB of floats once decoded.
+    ngi::Image flat(512, 512, 3, 0.25f);
+    const std::string exr = dir / "flat.exr", png = dir / "flat.png", npy = dir / "flat.npy";
+    ngi::write_exr(exr, flat, ngi::ExrPixelType::Half);
+    ngi::write_png(png, flat);
+    ngi::Tensor t({3, 512, 512});
+    ngi::write_npy(npy, t);
+    REQUIRE(fs::file_size(exr) < 64 * 1024);
+    REQUIRE(fs::file_size(png) < 64 * 1024);
+    {
+        HostMemoryLimit limit(1 << 20);  // 1 MiB: every decoded image above is 3 MiB
+        for (const std::string& path : {exr, png, npy}) {
+            INFO(path);
+            CHECK_THROWS_WITH(path.ends_with(".npy") ? void(ngi::read_npy(path)) : void(ngi::read_image(path)),
+                              Contains(path) && Contains("of host memory at once") &&
+                                  Contains("host-memory limit of 1048576 bytes (1 MiB)") &&
+                                  Contains("NGI_HOST_MEMORY_LIMIT"));
+        }
+        // The file itself over the limit: refused from its size, before a byte is read.
+        HostMemoryLimit tiny(1000);
+        CHECK_THROWS_WITH(ngi::detail::read_file(npy, "read"), Contains("flat.npy") && Contains("1000 bytes"));
+    }
+    // The default limit (half the physical memory, at least 1 GiB) reads them all.
+    CHECK(ngi::host_memory_limit() >= (std::uint64_t(1) << 30));
+    CHECK(ngi::read_image(exr).data.size() == flat.data.size());
+    CHECK(ngi::read_image(png).data.size() == flat.data.size());
+    CHECK(ngi::read_npy(npy).data.size() == flat.data.size());
+    // Exactly at the limit is allowed: the npy holds its 3 MiB of values plus its file's bytes.
+    {
+        HostMemoryLimit exact(fs::file_size(npy) + 512 * 512 * 3 * sizeof(float));
+        CHECK(ngi::read_npy(npy).data.size() == flat.data.size());
+        HostMemoryLimit one_less(fs::file_size(npy) + 512 * 512 * 3 * sizeof(float) - 1);
+        CHECK_THROWS_AS(ngi::read_npy(npy), ngi::InputError);
+    }
+}
+
+TEST_CASE("round 2: NGI_HOST_MEMORY_LIMIT takes bytes with a binary suffix, and names itself when malformed",
+          "[io][limits][reliability2]") {
+    const char* old = std::getenv("NGI_HOST_MEMORY_LIMIT");
+    const std::string saved = old ? old : "";
+    auto with_env = [](const char* value) {
+        ::setenv("NGI_HOST_MEMORY_LIMIT", value, 1);
+        return ngi::host_memory_limit();
+    };
+    CHECK(with_env("123456") == 123456u);
+    CHECK(with_env("64K") == 64u << 10);
+    CHECK(with_env("512m") == 512u << 20);
+    CHECK(with_env("16G") == std::uint64_t(16) << 30);
+    CHECK(with_env("2T") == std::uint64_t(2) << 40);
+    for (const char* bad : {"lots", "0", "-5", "12GB", "1.5G", "99999999999999999999", "20000000T"}) {
+        INFO(bad);
+        CHECK_THROWS_WITH(with_env(bad), Contains(std::string("NGI_HOST_MEMORY_LIMIT='") + bad + "'"));
+    }
+    {
+        HostMemoryLimit set(4096);  // the application's setting wins over the environment
+        CHECK(with_env("lots") == 4096u);
+    }
+    if (old) ::setenv("NGI_HOST_MEMORY_LIMIT", saved.c_str(), 1);
+    else ::unsetenv("NGI_HOST_MEMORY_LIMIT");
+    CHECK(ngi::host_memory_limit() >= (std::uint64_t(1) << 30));
+    CHECK(ngi::describe_bytes(805306368) == "805306368 bytes (768 MiB)");
+    CHECK(ngi::describe_bytes(3u << 30) == "3221225472 bytes (3.0 GiB)");
+    CHECK(ngi::describe_bytes(1000) == "1000 bytes");
 }

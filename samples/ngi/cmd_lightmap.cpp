@@ -13,6 +13,7 @@
 #include "commands.hpp"
 #include "frame_report.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/metrics.hpp"
 #include "ngi/model.hpp"
@@ -78,6 +79,9 @@ int run(const Options& o) {
             throw ngi::InputError("--size " + o.size + ": an image of that size is " + std::to_string(image_bytes) +
                                   " bytes, beyond the device's largest allocation (" +
                                   std::to_string(device.info().max_alloc_bytes) + " bytes)");
+        // And on the host: with a reference, final.png, the three tone-mapped finals of compare.png, compare.png
+        // itself (three wide) and the image being upscaled are held at once (8 images); without, 3.
+        ngi::check_host_memory("ngi lightmap --size " + o.size, image_bytes * (frame.reference ? 8 : 3));
     }
     // A plan may choose the direct-light rung: no network, the frame's own direct light is the lightmap.
     std::optional<ngi::Model> model;

@@ -24,7 +24,9 @@ const char kFooter[] =
     "        writes, and only once the new one is complete)\n"
     "exit codes: 0 success; 1 bad input or failed write (the message names the file); 2 usage error (unknown\n"
     "            command or option, missing or bad option value); 3 device failure (OpenCL error, device memory\n"
-    "            exhausted, no OpenCL device)";
+    "            exhausted, no OpenCL device)\n"
+    "memory: a file or image that needs more host memory than $NGI_HOST_MEMORY_LIMIT (bytes, or 512M, 16G; default\n"
+    "        half of the physical memory) is refused before it is allocated (exit code 1)";
 
 // The version of the ngi headers this sample is built with (= the CMake project version, checked by CMake).
 std::string version() {

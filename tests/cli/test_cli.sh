@@ -219,6 +219,18 @@ if [ -n "$max_alloc_mib" ] && [ "$max_alloc_mib" -lt 3072 ]; then
   expect_failure size_over_alloc "$ngi" lightmap --frame "$work/frame" --model "$model" --size 16384x16384 \
     --out "$work/out_size_over_alloc"
 fi
+# The host-memory limit (ngi/host_memory.hpp, issue 31 item 6): checked before allocating, named with the bytes
+# needed and how to raise it; a malformed limit names the variable. A 32x32 RGB face decodes to 12 KB.
+expect="host-memory limit of 8192 bytes"
+NGI_HOST_MEMORY_LIMIT=8K expect_failure host_limit_read "$ngi" merge --frame "$work/frame" --out "$work/out_host_limit_read"
+expect="ngi lightmap --size 4096x4096: needs 1610612736 bytes (1.5 GiB) of host memory at once"
+NGI_HOST_MEMORY_LIMIT=256M expect_failure host_limit_size "$ngi" lightmap --frame "$work/frame" --model "$model" \
+  --size 4096x4096 --out "$work/out_host_limit_size"
+expect="render: a frame of face size 8192: needs"
+NGI_HOST_MEMORY_LIMIT=1G expect_failure host_limit_render "$ngi" render --scene room:seed=1 --face 8192 --spp 1 \
+  --out "$work/out_host_limit_render"
+expect="NGI_HOST_MEMORY_LIMIT='lots'"
+NGI_HOST_MEMORY_LIMIT=lots expect_failure host_limit_bad "$ngi" merge --frame "$work/frame" --out "$work/out_host_limit_bad"
 expect=--size;        expect_usage size_bad "$ngi" lightmap --frame "$work/frame" --model "$model" --size 12x --out "$work/out_size_bad"
 expect=--size;        expect_usage size_zero "$ngi" lightmap --frame "$work/frame" --model "$model" --size 0x8 --out "$work/out_size_zero"
 expect=--plan;        expect_usage plan_and_model "$ngi" lightmap --frame "$work/frame" --model "$model" --plan "$work/plan_ok.json" --out "$work/out_plan_and_model"

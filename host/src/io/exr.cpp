@@ -21,6 +21,7 @@
 #include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"
 
 namespace ngi {
@@ -302,6 +303,10 @@ Image detail::decode_exr(const std::string& bytes, const std::string& path, std:
 
         // Read the data window into its own planes, then copy its overlap with the display window.
         const std::size_t plane = std::size_t(dw_w) * std::size_t(dw_h);
+        // Held at once: the file's bytes, the data window's planes and the display-window image.
+        check_host_memory("read " + path, std::uint64_t(bytes.size()) +
+                                              (std::uint64_t(plane) + std::uint64_t(w) * std::uint64_t(hgt)) *
+                                                  names.size() * sizeof(float));
         std::vector<float> data(plane * names.size());
         Imf::FrameBuffer fb;
         for (std::size_t c = 0; c < names.size(); ++c) {

@@ -15,6 +15,7 @@
 #include <new>
 
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 
 namespace ngi::detail {
 
@@ -65,6 +66,12 @@ std::string read_file(const std::string& path, const std::string& op, std::uint6
     if (std::uint64_t(st.st_size) > max_bytes) {
         std::fclose(f);
         throw too_big(std::uint64_t(st.st_size));
+    }
+    try {
+        check_host_memory(op + " " + path, std::uint64_t(st.st_size));
+    } catch (...) {
+        std::fclose(f);
+        throw;
     }
     std::string bytes;
     char chunk[1 << 16];

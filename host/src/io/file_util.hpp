@@ -20,8 +20,8 @@ void require_readable_file(const std::string& path, const std::string& op = "rea
 inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(4) << 30;
 
 // The whole file. Throws InputError("<op> <path>: ...") when it cannot be read, is not a regular file (a
-// directory, a FIFO, a device such as /dev/zero) or is larger than max_bytes. `op` is the message's verb
-// ("read", "load model", "dataset config").
+// directory, a FIFO, a device such as /dev/zero) or is larger than max_bytes or the host-memory limit
+// (ngi/host_memory.hpp). `op` is the message's verb ("read", "load model", "dataset config").
 std::string read_file(const std::string& path, const std::string& op = "read", std::uint64_t max_bytes = kMaxFileBytes);
 
 // A name next to `path` that no other writer in any process uses: "<path>.tmp-<pid>-<n>", with the last component

@@ -9,6 +9,7 @@
 #include "io/file_util.hpp"
 #include "io/half.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/tensor.hpp"
 
 namespace ngi {
@@ -141,6 +142,9 @@ Tensor decode_npy(const std::string& bytes, const std::string& path) {
         throw InputError(what + "truncated: shape " + shape_string(t.shape) + " of " + std::to_string(elem) +
                          "-byte values needs more data bytes than the file's " + std::to_string(available));
     const std::size_t n = std::size_t(*need / elem);
+    // The file's bytes and the float32 values are held at once (a float64 file decodes to half its size, a
+    // float16 file to twice).
+    check_host_memory("read " + path, std::uint64_t(bytes.size()) + std::uint64_t(n) * sizeof(float));
     t.data.resize(n);
     const char* p = bytes.data() + pos;
     for (std::size_t i = 0; i < n; ++i) {

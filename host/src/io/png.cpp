@@ -12,6 +12,7 @@
 #include "io/decode.hpp"
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"
 
 namespace ngi {
@@ -53,6 +54,7 @@ void on_flush(png_structp) {}
 struct Raw {
     png_uint_32 width = 0, height = 0;
     int channels = 0, bits = 0;
+    std::uint64_t host_bytes = 0;  // set (and decode returns false, no longjmp) when over the host-memory limit
     std::vector<unsigned char> pixels;
     std::vector<png_bytep> rows;
 };
@@ -80,6 +82,14 @@ bool decode(png_structp png, png_infop info, std::size_t file_bytes, Raw& raw) {
     if (std::uint64_t(row_bytes) * raw.height > (1ull << 32)) png_error(png, "image too large");
     if ((std::uint64_t(row_bytes) + 1) * raw.height > kRawAllowance + kMaxInflateRatio * file_bytes)
         png_error(png, "image size in the header is larger than the file's compressed data can hold");
+    // Held at once: the file's bytes, the decoded rows and the float image. Checked here, before the rows are
+    // allocated; the caller throws (no C++ exception may cross libpng's frames).
+    const std::uint64_t host = std::uint64_t(file_bytes) + std::uint64_t(row_bytes) * raw.height +
+                               std::uint64_t(raw.width) * raw.height * std::uint64_t(raw.channels) * sizeof(float);
+    if (host > host_memory_limit()) {
+        raw.host_bytes = host;
+        return false;
+    }
     raw.pixels.resize(row_bytes * raw.height);
     raw.rows.resize(raw.height);
     for (png_uint_32 y = 0; y < raw.height; ++y) raw.rows[y] = raw.pixels.data() + y * row_bytes;
@@ -131,6 +141,7 @@ Image detail::decode_png(const std::string& bytes, const std::string& path, PngE
         throw;
     }
     png_destroy_read_struct(&png, &info, nullptr);
+    if (raw.host_bytes) check_host_memory("read " + path, raw.host_bytes);  // throws: over the limit
     if (!ok) throw InputError("read " + path + ": corrupt or truncated PNG file: " + io.message);
 
     Image img(int(raw.width), int(raw.height), raw.channels);

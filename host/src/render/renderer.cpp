@@ -8,6 +8,7 @@
 
 #include "ngi/camera.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/render.hpp"
 #include "ngi/voxel_field.hpp"
 #include "ops/luminance.hpp"
@@ -500,6 +501,9 @@ void Renderer::render_planes(const CameraPose& pose, const Lighting& lighting, c
 
 Frame Renderer::render(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s, RenderStats* stats) {
     check_settings(s);
+    // Held at once on the host: the downloaded planes and the frame's images (the same size), and the reference.
+    const std::uint64_t frame_floats = std::uint64_t(s.n) * std::uint64_t(s.n) * (kFaceCount * kFramePlanes * 2 + 3);
+    check_host_memory("render: a frame of face size " + std::to_string(s.n), frame_floats * sizeof(float));
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
     m.ensure_buffers(s.n);
