@@ -159,7 +159,16 @@ TEST_CASE("AO network: ring gather + MLP + clamp match a naive reference, device
             net.enqueue(in, out, h, w);
             std::vector<float> dev(n.plane());
             out.download(dev.data(), dev.size() * 4);
-            CHECK(dev == net.run(n, net.radius_for(h)).data);
+            const std::vector<float> whole = net.run(n, net.radius_for(h)).data;
+            CHECK(dev == whole);
+            // In bands of rows (one row; two rows and a remainder; more than the image): the same bits.
+            for (std::size_t band : {std::size_t(1), std::size_t(2 * w + 1), std::size_t(w * h + 7)}) {
+                CAPTURE(band);
+                net.set_band_pixels(band);
+                CHECK(net.band_pixels() == band);
+                CHECK(net.run(n, net.radius_for(h)).data == whole);
+            }
+            net.set_band_pixels(ngi::AoNetwork::kDefaultBandPixels);
         }
     }
 }
@@ -212,4 +221,7 @@ TEST_CASE("AO network on a tiny image (ring gather, shape-specialized MLP, clamp
                 for (int c = 0; c < 3; ++c) n.at(c, y, x) = c == (x % 3) ? 1.0f : 0.0f;
     const ngi::Image got = net.run(n);
     CHECK(ngi::test::max_abs_diff(got.data, reference_ao(n, layers, 2.0f).data) < 2e-5);
+    net.set_band_pixels(10);  // bands of one row (7 pixels wide): every kernel on a partial image, same bits
+    CHECK(net.run(n).data == got.data);
+    CHECK_THROWS_WITH(net.set_band_pixels(0), Contains("band size"));
 }

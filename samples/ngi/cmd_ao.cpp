@@ -23,19 +23,23 @@ namespace ngi_cli {
 namespace {
 
 ngi::Image image_from_npy(const std::string& path, int channels) {
-    const ngi::Tensor t = ngi::read_npy(path);
+    ngi::Tensor t = ngi::read_npy(path);  // checks the file and its values against the host-memory limit
     std::vector<int> s = t.shape;
     if (s.size() == 4 && s[0] == 1) s.erase(s.begin());
     if (s.size() != 3 || s[0] != channels || s[1] < 1 || s[2] < 1)
         throw ngi::InputError(path + ": shape " + ngi::shape_string(t.shape) + ", expected [" + std::to_string(channels) +
                               ", H, W]");
-    ngi::Image img(s[2], s[1], channels);
-    img.data = t.data;
+    ngi::Image img;  // the tensor's values are moved, not copied: one copy of a large frame, not two
+    img.width = s[2];
+    img.height = s[1];
+    img.channels = channels;
+    img.data = std::move(t.data);
     return img;
 }
 
 ngi::Tensor tensor_from_image(const ngi::Image& img) {
-    ngi::Tensor t({img.channels, img.height, img.width});
+    ngi::Tensor t;
+    t.shape = {img.channels, img.height, img.width};
     t.data = img.data;
     return t;
 }

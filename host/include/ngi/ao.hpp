@@ -4,6 +4,7 @@
 // pixel, in the order of docs/CONVENTIONS.md section 15. AoNetwork gathers that ring on the device, runs the MLP
 // and clamps the result: accessibility in [0, 1], 1 = unoccluded, 1 on the background (zero normals).
 #pragma once
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,6 +19,9 @@ namespace ngi {
 class AoNetwork {
 public:
     static constexpr int kRingPoints = 16;
+    // Pixels per band (whole rows) the ring gather and the MLP run over at once: 2^20 pixels hold 192 MiB of
+    // gathered inputs (and as much again in the MLP's guarded copy), so any image size fits a device's allocation.
+    static constexpr std::size_t kDefaultBandPixels = std::size_t(1) << 20;
 
     // Throws InputError naming the file if it is not an mlp with 48 inputs, 1 output and valid "ao" metadata.
     static AoNetwork load(const Device& device, const std::string& path, const ModelOptions& options = {});
@@ -44,6 +48,10 @@ public:
     // Device in, device out, asynchronous: `normals` holds [3][height][width] float32, `ao` receives
     // [height][width]; both on this network's device. Nothing is waited for.
     void enqueue(const DeviceBuffer& normals, const DeviceBuffer& ao, int height, int width, float radius_px = -1.0f);
+    // Memory for speed: the band size (at least one row is run at once whatever the setting). Results do not
+    // depend on it (each pixel's MLP is independent). Throws InputError for 0.
+    void set_band_pixels(std::size_t pixels);
+    std::size_t band_pixels() const;
 
 private:
     struct Impl;

@@ -1,6 +1,8 @@
 // Seed 001's AO network: ring gather (kernels/ao.cl) -> per-pixel MLP (the "mlp" family) -> clamp and mask.
 #include "ngi/ao.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -20,7 +22,8 @@ struct AoNetwork::Impl {
     int at_size = 0;
     detail::Kernel gather, finish;
     detail::Buffer offsets;
-    DeviceBuffer inputs, raw;  // [48][h][w] and [h][w], grown on demand
+    DeviceBuffer inputs, raw;  // one band's [48][rows][w] and [rows][w], grown on demand
+    std::size_t band_pixels = AoNetwork::kDefaultBandPixels;
     Impl(Device d, Model m) : device(std::move(d)), model(std::move(m)) {}
 };
 
@@ -92,6 +95,9 @@ void AoNetwork::enqueue(const DeviceBuffer& normals, const DeviceBuffer& ao, int
     if (!std::isfinite(radius_px) || radius_px > 65536.0f)
         throw InputError("AO " + m.path + ": ring radius " + std::to_string(radius_px) + " pixels is not a finite number <= 65536");
     const std::size_t hw = std::size_t(height) * width;
+    if (3 * hw > std::size_t(INT_MAX))  // the kernels index the normals with int
+        throw InputError("AO " + m.path + ": image size " + std::to_string(width) + "x" + std::to_string(height) +
+                         " has more than " + std::to_string(INT_MAX / 3) + " pixels");
     if (normals.bytes() < 3 * hw * sizeof(float))
         throw InputError("AO " + m.path + ": the normals buffer holds " + std::to_string(normals.bytes()) +
                          " bytes, 3 x " + std::to_string(height) + " x " + std::to_string(width) + " floats need " +
@@ -100,19 +106,33 @@ void AoNetwork::enqueue(const DeviceBuffer& normals, const DeviceBuffer& ao, int
         throw InputError("AO " + m.path + ": the output buffer holds " + std::to_string(ao.bytes()) + " bytes, " +
                          std::to_string(hw * sizeof(float)) + " needed");
     detail::Context& ctx = detail::context_of(m.device);
-    if (m.inputs.bytes() < 3 * kRingPoints * hw * sizeof(float)) {
-        m.inputs = DeviceBuffer::allocate(m.device, 3 * kRingPoints * hw * sizeof(float));
-        m.raw = DeviceBuffer::allocate(m.device, hw * sizeof(float));
+    // Bands of whole rows, at most band_pixels each: the gathered inputs (48 floats a pixel) and the MLP's own
+    // buffers scale with the band, not the image (a 4096 x 4096 image once asked for one 3.2 GB buffer).
+    const int band_rows = int(std::clamp<std::size_t>(m.band_pixels / std::size_t(width), 1, std::size_t(height)));
+    const std::size_t band_px = std::size_t(band_rows) * std::size_t(width);
+    if (m.inputs.bytes() < 3 * kRingPoints * band_px * sizeof(float)) {
+        m.inputs = DeviceBuffer::allocate(m.device, 3 * kRingPoints * band_px * sizeof(float));
+        m.raw = DeviceBuffer::allocate(m.device, band_px * sizeof(float));
     }
     const std::vector<int> off = ring_offsets(radius_px);
     ctx.write(m.offsets, 0, off.size() * sizeof(int), off.data(), "AO: upload ring offsets");
-    const int h = height, w = width, points = kRingPoints, n = int(hw);
-    m.gather.args(normals.opencl_mem(), h, w, m.offsets, points, m.inputs.opencl_mem());
-    ctx.launch(m.gather, 1, &hw, nullptr);
-    m.model.enqueue(m.inputs, m.raw, height, width);
-    m.finish.args(normals.opencl_mem(), m.raw.opencl_mem(), n, ao.opencl_mem());
-    ctx.launch(m.finish, 1, &hw, nullptr);
+    const int h = height, w = width, points = kRingPoints, total = int(hw);
+    for (int row0 = 0; row0 < h; row0 += band_rows) {
+        const int rows = std::min(band_rows, h - row0), n = rows * w;
+        const std::size_t global = std::size_t(n);
+        m.gather.args(normals.opencl_mem(), h, w, row0, rows, m.offsets, points, m.inputs.opencl_mem());
+        ctx.launch(m.gather, 1, &global, nullptr);
+        m.model.enqueue(m.inputs, m.raw, rows, w);
+        m.finish.args(normals.opencl_mem(), m.raw.opencl_mem(), total, row0 * w, n, ao.opencl_mem());
+        ctx.launch(m.finish, 1, &global, nullptr);
+    }
 }
+
+void AoNetwork::set_band_pixels(std::size_t pixels) {
+    if (pixels < 1) throw InputError("AO " + impl_->path + ": band size must be at least one pixel");
+    impl_->band_pixels = pixels;
+}
+std::size_t AoNetwork::band_pixels() const { return impl_->band_pixels; }
 
 Image AoNetwork::run(const Image& normals, float radius_px, RunInfo* info) {
     if (normals.channels != 3)
