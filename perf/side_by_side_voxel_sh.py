@@ -3,14 +3,14 @@
 weights, same scene. Prints one JSON object.
 
 Per architecture (mlp 3 x 128, set 128/128 + 256/128, resnet 128 x 10 blocks; the widths of
-training/voxel_sh/experiment.sh) on one synthetic scene of --voxels voxels (training/voxel_sh/data.py; the timing does
-not depend on the values):
+training/ngi_train/voxel_sh/experiment.sh) on one synthetic scene of --voxels voxels (ngi_train.voxel_sh.data; the
+timing does not depend on the values):
   ngi               ngi.Model.run([V, 10] raw attributes) -> [V, 27]: standardization, guard, network on the device
-  PyTorch eager     networks.VoxelSh (the same math) under torch.no_grad(), torch.set_num_threads(--threads)
+  PyTorch eager     ngi.voxel_sh.VoxelSh (the same math) under torch.no_grad(), torch.set_num_threads(--threads)
   PyTorch fastest   the same traced, torch.jit.freeze + torch.jit.optimize_for_inference
 Each after --warmups runs, the three alternating run by run; medians of --repeats, and the ratio ngi / fastest.
 max |diff| of ngi and PyTorch against PyTorch float64 on the same weights.
-Usage: PYTHONPATH=build/python /usr/bin/python3 perf/side_by_side_voxel_sh.py [--device pocl] [--voxels 10000]
+Usage: PYTHONPATH=training:build/python /usr/bin/python3 perf/side_by_side_voxel_sh.py [--device pocl] [--voxels 10000]
 """
 import argparse
 import json
@@ -29,10 +29,9 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 import numpy as np
 import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "training" / "voxel_sh"))
-import data  # noqa: E402
-import export  # noqa: E402
-import networks  # noqa: E402
+import ngi.voxel_sh as networks  # noqa: E402  (after OMP_WAIT_POLICY)
+
+from ngi_train.voxel_sh import data, export  # noqa: E402
 
 ARCHS = {"mlp": {"hidden": [128, 128, 128]}, "set": {"phi": [128, 128], "rho": [256, 128]},
          "resnet": {"width": 128, "blocks": 10}}

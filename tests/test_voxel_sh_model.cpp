@@ -1,5 +1,5 @@
 // Seed 004's voxel_sh model family (models/voxel_sh_model.*): whole model files against PyTorch (the oracle:
-// tests/parity/make_voxel_sh_parity.py runs training/voxel_sh/networks.py in float64), the input guard, broken
+// tests/parity/make_voxel_sh_parity.py runs ngi.voxel_sh in float64), the input guard, broken
 // files, and the ops the runner added (planar set pooling, the per-channel affine, the residual add) against
 // straight double-precision loops.
 #include <catch2/catch.hpp>

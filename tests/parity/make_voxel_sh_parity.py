@@ -1,20 +1,19 @@
 #!/usr/bin/python3
 """Generate PyTorch parity data for ngi's "voxel_sh" model family (docs/MODEL_FORMAT.md "voxel_sh").
 
-For each architecture (mlp, set, resnet at training/voxel_sh/networks.py's default widths) and weight dtype
+For each architecture (mlp, set, resnet at ngi.voxel_sh's default widths) and weight dtype
 (F32, F16): a network with random weights and random standardization statistics (one constant input channel,
 hi == lo), written with ngi.model_file.write_voxel_sh_model, and its float64 output on raw voxel attributes of
 V = 1, 37 and 1001 voxels (positions, albedo, sparse emission, voxel ids; some values outside the training range).
-The reference is training/voxel_sh/networks.py in float64 on the stored (for F16: rounded) weights; the set
-network's reference is the literal broadcast-and-concatenate form (forward_concat), not the split ngi and the
-training use.
+The reference is ngi.voxel_sh (the networks training trains) in float64 on the stored (for F16: rounded)
+weights; the set network's reference is the literal broadcast-and-concatenate form (forward_concat), not the split
+ngi and the training use.
 
 Usage: PYTHONPATH=<build>/python /usr/bin/python3 tests/parity/make_voxel_sh_parity.py --out DIR
 Writes DIR/<model>.safetensors, DIR/<case>_input.npy, DIR/<case>_expected.npy and DIR/cases.json. Deterministic.
 """
 
 import argparse
-import importlib.util
 import json
 import os
 
@@ -22,19 +21,10 @@ import numpy as np
 import torch
 
 import ngi.model_file as model_file
+import ngi.voxel_sh as networks
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 GRID = [32, 32, 32]
 SIZES = (1, 37, 1001)
-
-
-def load_networks():
-    """training/voxel_sh/networks.py by path (it is a training script's module, not part of the ngi package)."""
-    path = os.path.join(HERE, "..", "..", "training", "voxel_sh", "networks.py")
-    spec = importlib.util.spec_from_file_location("voxel_sh_networks", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def random_stats(g):
@@ -61,7 +51,6 @@ def main():
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    networks = load_networks()
     torch.set_num_threads(1)
     cases = []
     for a, arch in enumerate(networks.ARCHITECTURES):

@@ -1,9 +1,9 @@
 """Running the training and the evaluation on several processes with PyTorch's own engine (torch.distributed).
 
-    torchrun --nproc_per_node 2 training/train.py ...          (or python3 -m torch.distributed.run ...)
+    torchrun --nproc_per_node 2 --module ngi_train.generator.train ...   (or python3 -m ngi_train.torchrun ...)
 
 torchrun starts one process per rank and sets RANK, WORLD_SIZE, LOCAL_RANK (and MASTER_ADDR / MASTER_PORT) in
-their environments; init() reads them. Without them (a plain `python3 training/train.py`), or with
+their environments; init() reads them. Without them (a plain `python3 -m ngi_train.generator.train`), or with
 WORLD_SIZE 1, nothing is initialized and every helper here is the identity of a single process, so the
 single-process code path is exactly what it was before distribution existed.
 

@@ -1,10 +1,10 @@
-"""Where things are: the repository and the ngi command-line tool (and running it); how the training scripts
+"""Where things are: the repository and the ngi command-line tool (and running it); how the training commands
 report progress.
 
-The training scripts are plain files run with /usr/bin/python3 (`python3 training/train.py ...`). What they
-share with the converter and the parity tests (the model-file writer, the PyTorch reference generators) is the
-Python package `ngi` (bindings/python/ngi), importable once a build has assembled it in <build>/python:
-`PYTHONPATH=build/python /usr/bin/python3 training/train.py ...`.
+The training commands are modules of this package (`python3 -m ngi_train.generator.train ...`). What they share
+with the converter and the parity tests (the model-file writer, the PyTorch reference networks) is the Python
+package `ngi` (bindings/python/ngi), importable once a build has assembled it in <build>/python:
+`PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.train ...`.
 """
 
 import os
@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]  # training/ngi_train/ngi_paths.py
 
 
 def find_ngi(explicit=None):
@@ -48,7 +48,7 @@ def run(cmd, **kw):
 
 
 def progress_options():
-    """tqdm keyword arguments of the training scripts' progress bars (ETA included) on stderr: redrawn in place
+    """tqdm keyword arguments of every training command's progress bar (ETA included) on stderr: redrawn in place
     four times a second on a terminal; in a log (stderr not a TTY) plain ASCII, at most every 30 s, so CI logs
     stay short."""
     tty = sys.stderr.isatty()

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """torchrun, runnable where Debian's python3-torch 1.13 meets Python 3.11 (Debian 12).
 
-    /usr/bin/python3 training/torchrun.py --nproc_per_node 2 training/train.py --config ... --dataset ... --run ...
+    /usr/bin/python3 -m ngi_train.torchrun --nproc_per_node 2 --module ngi_train.generator.train --config ... --run ...
 
 Takes exactly torchrun's arguments (`--help`). torch 1.13's launcher parses its --redirects / --tee values by
 iterating over the IntFlag `Std`, which on Python 3.11 no longer yields the zero member NONE (nor the

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """Distributed training and evaluation with torch.distributed (ctest: training_distributed, ~25 s on 2 cores).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/test_distributed.py --ngi build/ngi \
+    PYTHONPATH=training:build/python /usr/bin/python3 training/tests/test_distributed.py --ngi build/ngi \
         --work build/training_distributed
 
 Renders a tiny dataset with `ngi dataset` (N = 32: 3 train frames, 3 test frames; 3 train frames make the global
 batches of 2 straddle epoch boundaries), then, with 2 gloo ranks on this machine started by torchrun
-(training/torchrun.py, static rendezvous on 127.0.0.1, GLOO_SOCKET_IFNAME=lo: loopback only):
+(ngi_train.torchrun, static rendezvous on 127.0.0.1, GLOO_SOCKET_IFNAME=lo: loopback only):
 
 (a) one optimizer step of 2 ranks x 1 image equals one step of 1 process x accumulate 2: the G and D state_dicts
     (weights and BatchNorm running statistics) and both Adam states (whose moments hold the averaged gradients
@@ -37,10 +37,14 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+# The commands under test (modules of the package ngi_train; torchrun starts them with --module).
+TRAIN_MODULE, EXPORT_MODULE = "ngi_train.generator.train", "ngi_train.generator.export"
+EVALUATE_MODULE = "ngi_train.generator.evaluate"
 
 # ---------------------------------------------------------------------------------------------------------------
-# Worker mode: `test_distributed.py --audit-worker AUDIT_DIR WATCHED SCRIPT ARGS...` is what torchrun starts per
-# rank: it records the process's file writes under the WATCHED folders (os.pathsep-separated), then runs SCRIPT.
+# Worker mode: `test_distributed.py --audit-worker AUDIT_DIR WATCHED MODULE ARGS...` is what torchrun starts per
+# rank: it records the process's file writes under the WATCHED folders (os.pathsep-separated), then runs MODULE
+# (as python3 -m MODULE would).
 # ---------------------------------------------------------------------------------------------------------------
 
 WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC
@@ -50,7 +54,7 @@ PATH_EVENTS = {"os.rename": (0, 1), "os.mkdir": (0,), "os.remove": (0,), "os.rmd
 
 
 def audit_worker(argv):
-    audit_dir, watched, script, *args = argv
+    audit_dir, watched, module, *args = argv
     watched = [os.path.realpath(w) for w in watched.split(os.pathsep)]
     writes = []
 
@@ -80,8 +84,8 @@ def audit_worker(argv):
     import runpy
     atexit.register(report)
     sys.addaudithook(hook)
-    sys.argv = [script, *args]
-    runpy.run_path(script, run_name="__main__")
+    sys.argv = [module, *args]
+    runpy.run_module(module, run_name="__main__", alter_sys=True)
 
 
 if __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "--audit-worker":
@@ -96,10 +100,9 @@ except ImportError as e:  # pragma: no cover
     print(f"training_distributed: skipped ({e})")
     sys.exit(77)
 
-import data  # noqa: E402
-import distributed  # noqa: E402
-import ngi_paths  # noqa: E402
-from ngi_paths import run  # noqa: E402
+from ngi_train import distributed, ngi_paths  # noqa: E402
+from ngi_train.generator import data  # noqa: E402
+from ngi_train.ngi_paths import run  # noqa: E402
 
 # Tolerances of 2 ranks x 1 image against 1 process x accumulate 2. Exact equality is not to be had on every
 # machine: the ranks' losses and gradients are averaged by an allreduce (a / 2 + b / 2 in float32) where the single
@@ -138,14 +141,16 @@ def free_port():
         return s.getsockname()[1]
 
 
-def torchrun_cmd(nproc, script, args, audit=None):
-    """torchrun (training/torchrun.py) with nproc ranks on this machine, static rendezvous on the loopback."""
-    cmd = [sys.executable, HERE / "torchrun.py", "--nnodes", 1, "--nproc_per_node", nproc, "--master_addr",
+def torchrun_cmd(nproc, module, args, audit=None):
+    """torchrun (ngi_train.torchrun) of `module` with nproc ranks on this machine, static rendezvous on the
+    loopback."""
+    cmd = [sys.executable, "-m", "ngi_train.torchrun", "--nnodes", 1, "--nproc_per_node", nproc, "--master_addr",
            "127.0.0.1", "--master_port", free_port(), "--monitor_interval", 0.1, "--max_restarts", 0]
     if audit:
         audit_dir, watched = audit
-        cmd += [HERE / "test_distributed.py", "--audit-worker", audit_dir, os.pathsep.join(map(str, watched))]
-    return [str(c) for c in cmd + [script, *args]]
+        return [str(c) for c in cmd + [HERE / "test_distributed.py", "--audit-worker", audit_dir,
+                                       os.pathsep.join(map(str, watched)), module, *args]]
+    return [str(c) for c in cmd + ["--module", module, *args]]
 
 
 def dist_env():
@@ -154,13 +159,18 @@ def dist_env():
     return env
 
 
-def torchrun(nproc, script, args, audit=None):
-    cmd = torchrun_cmd(nproc, script, args, audit)
+def torchrun(nproc, module, args, audit=None):
+    cmd = torchrun_cmd(nproc, module, args, audit)
     t0 = time.monotonic()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=dist_env())
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
     return proc, time.monotonic() - t0
+
+
+def one_process(args):
+    """The training command in one process (no torchrun)."""
+    return [sys.executable, "-m", TRAIN_MODULE, *args]
 
 
 def train_args(cfg_path, dataset, run_dir, ngi, *extra):
@@ -234,7 +244,6 @@ def main():
     if work.exists():
         shutil.rmtree(work)
     work.mkdir(parents=True)
-    train_py = HERE / "train.py"
 
     (work / "dataset.json").write_text(json.dumps(DATASET))
     dataset = work / "data"
@@ -249,9 +258,9 @@ def main():
     audit = work / "audit"
     audit.mkdir()
     r2 = work / "a_2x1"
-    _, secs2 = torchrun(2, train_py, train_args(cfg_path, dataset, r2, ngi), audit=(audit, [r2, dataset]))
+    _, secs2 = torchrun(2, TRAIN_MODULE, train_args(cfg_path, dataset, r2, ngi), audit=(audit, [r2, dataset]))
     r1 = work / "a_1x2"
-    _, secs1 = run([sys.executable, train_py, *train_args(cfg_path, dataset, r1, ngi, "--accumulate", 2)])
+    _, secs1 = run(one_process(train_args(cfg_path, dataset, r1, ngi, "--accumulate", 2)))
     s2, s1 = load_ckpt(r2), load_ckpt(r1)
     diff_a = differences(s1, s2)
     check(s1["step"] == s2["step"] == 1 and s1["samples"] == s2["samples"] == 2
@@ -275,7 +284,7 @@ def main():
 
     # (b) 2 ranks stopped by SIGTERM, resumed by 1 process (effective batch kept: accumulate 2).
     rb = work / "b_resumed"
-    cmd = torchrun_cmd(2, train_py, train_args(cfg_path, dataset, rb, ngi, "--steps", 100000))
+    cmd = torchrun_cmd(2, TRAIN_MODULE, train_args(cfg_path, dataset, rb, ngi, "--steps", 100000))
     proc = subprocess.Popen(cmd, env=dist_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
@@ -291,14 +300,14 @@ def main():
     check(not torch.equal(stopped["rng_ranks"][0]["cpu"], stopped["rng_ranks"][1]["cpu"]),
           "the checkpoint holds both ranks' RNG states, and they differ")
     target = k + 4
-    refused = subprocess.run([sys.executable, train_py, *train_args(cfg_path, dataset, rb, ngi, "--steps", target)],
+    refused = subprocess.run(one_process(train_args(cfg_path, dataset, rb, ngi, "--steps", target)),
                              capture_output=True, text=True, env=ngi_paths.ngi_env())
     check(refused.returncode != 0 and "effective batch of 2" in refused.stderr and load_ckpt(rb)["step"] == k,
           "resuming with 1 process x accumulate 1 (effective batch 1) is refused: "
           + refused.stderr.strip().splitlines()[-1][:120] + "...")
-    run([sys.executable, train_py, *train_args(cfg_path, dataset, rb, ngi, "--steps", target, "--accumulate", 2)])
+    run(one_process(train_args(cfg_path, dataset, rb, ngi, "--steps", target, "--accumulate", 2)))
     rc = work / "b_uninterrupted_1x2"
-    run([sys.executable, train_py, *train_args(cfg_path, dataset, rc, ngi, "--steps", target, "--accumulate", 2)])
+    run(one_process(train_args(cfg_path, dataset, rc, ngi, "--steps", target, "--accumulate", 2)))
     sb, sc = load_ckpt(rb), load_ckpt(rc)
     diff_b = differences(sb, sc)
     check(sb["step"] == sc["step"] == target and sb["samples"] == sc["samples"] == 2 * target
@@ -309,7 +318,7 @@ def main():
           f"2 ranks to step {k} + 1 x accumulate 2 to {target} == 1 x accumulate 2 throughout: {describe(diff_b)}, "
           f"same losses")
     model = work / "b.safetensors"
-    run([sys.executable, HERE / "export.py", "--run", rb, "--out", model])
+    run([sys.executable, "-m", EXPORT_MODULE, "--run", rb, "--out", model])
     meta = json.loads(run([sys.executable, "-c", "import sys, json, ngi.model_file as m; "
                            "print(json.dumps(m.read_config(sys.argv[1])['training']))", model])[0].stdout)
     check(meta["steps"] == target and meta["samples"] == 2 * target and meta["effective_batch"] == 2,
@@ -321,7 +330,7 @@ def main():
     # num_downs 6: one dropout site (networks.dropout_site_count); the 64 x 128 global view halves 6 times.
     cfg_drop.write_text(json.dumps(dict(TRAIN, dropout=True, num_downs=6, eval_every=0)))
     rd = work / "d_dropout"
-    torchrun(2, train_py, train_args(cfg_drop, dataset, rd, ngi))
+    torchrun(2, TRAIN_MODULE, train_args(cfg_drop, dataset, rd, ngi))
     sd = load_ckpt(rd)
     torch.manual_seed(distributed.rank_seed(TRAIN["seed"], 1, 0))
     check(not torch.equal(sd["rng_ranks"][0]["cpu"], sd["rng_ranks"][1]["cpu"])
@@ -331,9 +340,9 @@ def main():
 
     # (e) evaluate.py on 2 ranks == on 1 process.
     e1, e2 = work / "e_eval_1", work / "e_eval_2"
-    run([sys.executable, HERE / "evaluate.py", "--model", model, "--dataset", dataset, "--split", "test",
+    run([sys.executable, "-m", EVALUATE_MODULE, "--model", model, "--dataset", dataset, "--split", "test",
          "--out", e1, "--ngi", ngi])
-    _, secs = torchrun(2, HERE / "evaluate.py", ["--model", model, "--dataset", dataset, "--split", "test",
+    _, secs = torchrun(2, EVALUATE_MODULE, ["--model", model, "--dataset", dataset, "--split", "test",
                                                  "--out", e2, "--ngi", ngi])
     same = all((e1 / f).read_bytes() == (e2 / f).read_bytes() for f in ("summary.json", "per_frame.json"))
     frames = json.loads((e2 / "summary.json").read_text())["frames"]

@@ -2,7 +2,7 @@
 decoding, the loss, the DeepSDF re-injection, a short overfit. About 10 s on one thread (measured 8-14 s beside a
 build).
 
-    PYTHONPATH=build/python /usr/bin/python3 -m pytest -q training/neural_gi/test_model.py
+    PYTHONPATH=build/python /usr/bin/python3 -m pytest -q training/tests/test_neural_gi_model.py
 """
 
 import math

@@ -1,8 +1,9 @@
-"""Tests of seed 002's data, trainer and evaluation (training/neural_gi/{data,train,evaluate}.py) on a tiny dataset
+"""Tests of seed 002's data, trainer and evaluation (ngi_train.neural_gi.{data,train,evaluate}) on a tiny dataset
 that `ngi dataset` renders into a temporary folder (6 frames of bleed:seed=1 at N = 32 with an area light, low
 spp). About a minute on one thread.
 
-    NGI_BIN=build/ngi PYTHONPATH=build/python /usr/bin/python3 -m pytest -q training/neural_gi/test_train.py
+    NGI_BIN=build/ngi PYTHONPATH=training:build/python /usr/bin/python3 -m pytest -q \
+        training/tests/test_neural_gi_train.py
 """
 
 import json
@@ -12,21 +13,16 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.append(str(HERE.parent))  # ngi_paths (appended: HERE's data.py must win)
+import ngi
+import ngi.model_file as model_file
 
-import data  # noqa: E402
-import ngi  # noqa: E402
-import ngi.model_file as model_file  # noqa: E402
-import ngi_paths  # noqa: E402
-import train  # noqa: E402
+from ngi_train import ngi_paths
+from ngi_train.neural_gi import data, evaluate, networks, sequences, train
 
 torch.set_num_threads(1)
 
@@ -56,7 +52,8 @@ def scene_dir(dataset):
 
 
 def train_cmd(dataset, work, steps, extra=()):
-    return [sys.executable, str(HERE / "train.py"), "--dataset", str(dataset), "--test-frames", str(HELD_OUT),
+    return [sys.executable, "-m", "ngi_train.neural_gi.train", "--dataset", str(dataset),
+            "--test-frames", str(HELD_OUT),
             "--work", str(work), "--out", str(work / "model.safetensors"), "--steps", str(steps), "--log-every", "1",
             "--eval-every", "4", "--eval-frames", "2", "--checkpoint-every", "5", "--threads", "1", *SMALL, *extra]
 
@@ -229,7 +226,8 @@ def test_export_and_evaluate(dataset, tmp_path):
     assert all(v.dtype == np.float16 for v in tensors.values()), "F16 by default"
 
     out = tmp_path / "eval.json"
-    run([sys.executable, str(HERE / "evaluate.py"), "--dataset", str(dataset), "--test-frames", str(HELD_OUT),
+    run([sys.executable, "-m", "ngi_train.neural_gi.evaluate", "--dataset", str(dataset),
+         "--test-frames", str(HELD_OUT),
          "--model", str(path), "--out", str(out)])
     result = json.loads(out.read_text())
     assert result["frames"] == HELD_OUT and len(result["per_frame"]) == HELD_OUT
@@ -243,10 +241,10 @@ def test_export_and_evaluate(dataset, tmp_path):
 
 def test_no_buffer_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
     torch.manual_seed(3)
-    net = train.NoBufferGI(mlp_width=32, mlp_depth=4, skip_layer=2)
+    net = networks.NoBufferGI(mlp_width=32, mlp_depth=4, skip_layer=2)
     for p in net.parameters():
         p.data.normal_(0, 0.1)
-    full = train.no_buffer_as_neural_gi(net)
+    full = networks.no_buffer_as_neural_gi(net)
     x = torch.rand(1, 18, 32, 32) * 2 - 1
     with train.per_image_bn(full):
         a, b = net.raw_output(x), full.raw_output(x)
@@ -260,10 +258,10 @@ def test_no_buffer_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
 
 def test_unet_only_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
     torch.manual_seed(4)
-    net = train.UnetOnlyGI(ngf=8, num_downs=5)
+    net = networks.UnetOnlyGI(ngf=8, num_downs=5)
     for p in net.parameters():
         p.data.normal_(0, 0.1)
-    full = train.unet_as_neural_gi(net)
+    full = networks.unet_as_neural_gi(net)
     x = torch.rand(1, 18, 32, 32) * 2 - 1
     with train.per_image_bn(net), train.per_image_bn(full):
         a, b = net.raw_output(x), full.raw_output(x)
@@ -277,7 +275,6 @@ def test_unet_only_baseline_exports_an_equivalent_neural_gi(dataset, tmp_path):
     arr = data.cached_frame(scene_dir(dataset) / "0005", tmp_path / "cache", "0005")
     box = train.box_of_config(config)
     inputs, _, _, _ = data.to_tensors(arr, *box)
-    import evaluate  # noqa: E402 (sibling script)
     torch_out = evaluate.Predictor(path, "torch", None)(inputs)
     ngi_out = evaluate.Predictor(path, "ngi", ngi.Device("cpu"))(inputs)
     # F16 weights in both; ngi accumulates in another order: a relative difference of float32 rounding
@@ -291,7 +288,6 @@ def test_ngi_on_frames_matches_training(dataset, tmp_path):
     """Training and inference assemble the inputs independently (data.py + ngi.neural_gi.assemble_inputs here,
     kernels/neural_gi.cl in `ngi neural-gi`): the same exported model on the same held-out frame must give the same
     indirect light. F16 weights in both; float32 both; per-image batch norm."""
-    import evaluate  # noqa: E402 (sibling script)
     work = tmp_path / "cli"
     run(train_cmd(dataset, work, 3))
     path = work / "model.safetensors"
@@ -317,7 +313,6 @@ def test_ngi_on_frames_matches_training(dataset, tmp_path):
 
 def test_temporal_mabd_by_hand():
     """evaluate.temporal: MABD_t = mean |Y_t - Y_t-1| per method; mabd_error against the reference's own."""
-    import evaluate  # noqa: E402 (sibling script)
     ones = np.ones((4, 4))
     lum = {"reference": [0 * ones, 0.1 * ones, 0.3 * ones],
            "model": [0 * ones, 0.1 * ones, 0.1 * ones],  # steps 0.1, 0.0
@@ -336,7 +331,6 @@ def test_temporal_mabd_by_hand():
 def test_sequences_plan():
     """sequences.py: the moving light sweeps x across the config's light box at fixed y, z; the camera moves along
     the path from --start-frame; equal-time renders use other seeds than the references."""
-    import sequences  # noqa: E402 (sibling script)
     jobs = sequences.plan(CONFIG, 3, [8], 100)
     cam = [j for j in jobs if j[0] == "moving_camera"]
     light = [j for j in jobs if j[0] == "moving_light"]
@@ -359,8 +353,7 @@ def test_shipped_models_run_in_ngi_as_in_pytorch(dataset, tmp_path):
     """Each shipped model: F16, per-image BN, its scene box recorded; ngi (PoCL) gives PyTorch's indirect light on a
     frame of the test dataset (bleed:seed=1; the room model sees it through its own box: valid inputs, another
     scene). Tolerance as test_ngi_on_frames_matches_training: 1e-3 relative on surface pixels."""
-    import evaluate  # noqa: E402 (sibling script)
-    root = HERE.parents[1] / "models" / "neural_gi"
+    root = ngi_paths.REPO / "models" / "neural_gi"
     frame = scene_dir(dataset) / f"{FRAMES - 1:04d}"
     arr = data.decode_frame(frame)
     for name, (spec, box_max) in SHIPPED.items():

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Smoke test of the training pipeline against the real ngi binary (ctest: training_smoke, < 1 min on 2 cores).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/test_training.py --ngi build/ngi --work build/training_smoke
+    PYTHONPATH=training:build/python /usr/bin/python3 training/tests/test_training.py --ngi build/ngi \
+        --work build/training_smoke
 
 1. renders a tiny dataset with `ngi dataset` (N = 32: 2 train frames, 1 test frame, few samples);
 2. the loader (data.py, surround and single view) yields exactly, bit for bit, what a fresh `ngi merge` writes
@@ -17,8 +18,8 @@
    kernels; a tiny surround generator trained with output_mode indirect, the final-image term and no GAN: its
    loss falls, the export records the mode, and ngi's lightmap of a frame is the frame's direct light plus the
    decoded output of the same network in PyTorch (max relative |diff| < 1e-4);
-7. seed 001's AO: `ngi ao-data` (6 + 1 views at 48 px), ao_train.py for 40 iterations, and `ngi ao` equal to the
-   exported network evaluated in PyTorch on ao_common.py's ring inputs (max |diff| < 1e-4, background 1).
+7. seed 001's AO: `ngi ao-data` (6 + 1 views at 48 px), ngi_train.ao.train for 40 iterations, and `ngi ao` equal to
+   the exported network evaluated in PyTorch on ngi_train.ao.sampling's ring inputs (max |diff| < 1e-4, background 1).
 Exit code 77 (ctest: skipped) when torch or numpy is missing.
 """
 
@@ -42,13 +43,14 @@ except ImportError as e:  # pragma: no cover
 import ngi.model_file as model_file  # noqa: E402
 import ngi.reference_models as reference_models  # noqa: E402
 
-import ao_common  # noqa: E402
-import data  # noqa: E402
-import lightmap_loss  # noqa: E402
-import ngi_paths  # noqa: E402
-from ngi_paths import run  # noqa: E402  (a failed command raises RuntimeError with its output)
+from ngi_train import ngi_paths  # noqa: E402
+from ngi_train.ao import sampling  # noqa: E402
+from ngi_train.generator import data, lightmap_loss  # noqa: E402
+from ngi_train.ngi_paths import run  # noqa: E402  (a failed command raises RuntimeError with its output)
 
-HERE = Path(__file__).resolve().parent
+# The commands under test (modules of the package ngi_train, run with python3 -m).
+TRAIN_MODULE, EXPORT_MODULE = "ngi_train.generator.train", "ngi_train.generator.export"
+EVALUATE_MODULE, AO_TRAIN_MODULE = "ngi_train.generator.evaluate", "ngi_train.ao.train"
 
 # Output tolerance of `ngi generate` against the float64 PyTorch reference. ngi computes in float32 with
 # another summation order (im2col + GEMM); the rounding differences (~1e-7 relative per layer) are amplified
@@ -80,7 +82,7 @@ def read_log(run_dir):
 
 
 def train(cfg_path, dataset, run_dir, ngi, *extra):
-    return run([sys.executable, HERE / "train.py", "--config", cfg_path, "--dataset", dataset, "--run", run_dir,
+    return run([sys.executable, "-m", TRAIN_MODULE, "--config", cfg_path, "--dataset", dataset, "--run", run_dir,
                 "--ngi", ngi, *extra])
 
 
@@ -133,7 +135,7 @@ def reference_output(model_path, x):
 
 def test_export_and_run(ngi, dataset, work, run_dir, layout):
     model = work / f"{layout}.safetensors"
-    proc, _ = run([sys.executable, HERE / "export.py", "--run", run_dir, "--out", model])
+    proc, _ = run([sys.executable, "-m", EXPORT_MODULE, "--run", run_dir, "--out", model])
     print(proc.stderr.strip())
     tensors, cfg = model_file.read_model(str(model))
     check(cfg["input_layout"] == data.channels(layout) and cfg["bn_mode"] in ("per_image", "running")
@@ -163,7 +165,7 @@ def test_export_and_run(ngi, dataset, work, run_dir, layout):
 
 
 def test_indirect_mode(ngi, dataset, work):
-    """The indirect output mode end to end (docs/CONVENTIONS.md section 8, training/lightmap_loss.py)."""
+    """The indirect output mode end to end (docs/CONVENTIONS.md section 8, training/ngi_train/generator/lightmap_loss.py)."""
     import ngi as ngi_py
     dev = ngi_py.Device("")
     rel = data.list_frames(dataset, "test")[0]
@@ -202,7 +204,7 @@ def test_indirect_mode(ngi, dataset, work):
     check(np.mean(l1[-5:]) < np.mean(l1[:5]) and all(e["G_GAN"] == 0 and e["G_final"] > 0 for e in log),
           f"indirect mode: L1 {np.mean(l1[:5]):.4f} -> {np.mean(l1[-5:]):.4f}; no GAN term, final-image term on")
     model_path = work / "indirect.safetensors"
-    run([sys.executable, HERE / "export.py", "--run", work / "run_ind", "--out", model_path])
+    run([sys.executable, "-m", EXPORT_MODULE, "--run", work / "run_ind", "--out", model_path])
     _, cfg = model_file.read_model(str(model_path))
     check(cfg["output_mode"] == "indirect", "export: output_mode indirect in the model file")
     model = ngi_py.Model(dev, str(model_path))
@@ -258,7 +260,7 @@ def main():
 
     # 4. Ctrl-C and resume == one uninterrupted run.
     run_b = work / "run_b"
-    proc = subprocess.Popen([sys.executable, HERE / "train.py", "--config", cfg_path, "--dataset", dataset,
+    proc = subprocess.Popen([sys.executable, "-m", TRAIN_MODULE, "--config", cfg_path, "--dataset", dataset,
                              "--run", run_b, "--ngi", ngi, "--steps", "100000"], env=ngi_paths.ngi_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
@@ -284,7 +286,7 @@ def main():
 
     # 5. Export, ngi generate parity, ngi lightmap, evaluate.py.
     model, worst_s = test_export_and_run(ngi, dataset, work, work / "run_a", "surround")
-    proc, _ = run([sys.executable, HERE / "evaluate.py", "--model", model, "--dataset", dataset, "--split", "test",
+    proc, _ = run([sys.executable, "-m", EVALUATE_MODULE, "--model", model, "--dataset", dataset, "--split", "test",
                    "--out", work / "eval", "--ngi", ngi])
     summary = json.loads((work / "eval" / "summary.json").read_text())
     check(summary["frames"] == 1 and summary["network"]["final_ldr"]["ssim"] is not None,
@@ -303,20 +305,21 @@ def main():
     _, worst_v = test_export_and_run(ngi, dataset, work, work / "run_sv", "single_view")
 
     # 7. Seed 001's AO MLP: tiny orbit data, a short training, and `ngi ao` == the exported network in PyTorch
-    # on the ring inputs ao_common.py builds (the Python and the C++ ring conventions agree).
+    # on the ring inputs sampling.py builds (the Python and the C++ ring conventions agree).
     aod = work / "aod"
     run([ngi, "ao-data", "--scene", "sculpture:seed=1", "--out", aod, "--views", 6, "--heldout-views", 1, "--n", 48,
          "--rays", 16])
     ao_model = work / "ao_16x8.safetensors"
-    proc, _ = run([sys.executable, HERE / "ao_train.py", "--data", aod, "--size", "16x8", "--out", ao_model,
+    proc, _ = run([sys.executable, "-m", AO_TRAIN_MODULE, "--data", aod, "--size", "16x8", "--out", ao_model,
                    "--max-iters", 40])
     report = json.loads(proc.stdout.strip().splitlines()[-1])
-    check(report["parameters"] == 929 and report["test_mse"] < 0.2, f"ao_train.py: 16x8, test MSE {report['test_mse']:.4f}")
+    check(report["parameters"] == 929 and report["test_mse"] < 0.2,
+          f"ngi_train.ao.train: 16x8, test MSE {report['test_mse']:.4f}")
     view = aod / "heldout" / "v0000"
     run([ngi, "ao", "--frame", view, "--model", ao_model, "--out", work / "ao_out"])
     got = np.load(work / "ao_out" / "ao.npy")[0]
-    v = ao_common.load_view(view)
-    x, rows, cols = ao_common.image_inputs(v, 3.0)  # the model's radius at its own size
+    v = sampling.load_view(view)
+    x, rows, cols = sampling.image_inputs(v, 3.0)  # the model's radius at its own size
     tensors, config = model_file.read_model(ao_model)
     h = reference_models.run_mlp_reference(tensors, config, x)
     want = np.ones_like(got)

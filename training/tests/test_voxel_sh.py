@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Smoke test of seed 004's training (training/voxel_sh/) against ngi's voxel_sh runner (< 1 min on 2 cores).
+"""Smoke test of seed 004's training (ngi_train.voxel_sh) against ngi's voxel_sh runner (< 1 min on 2 cores).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/voxel_sh/test_voxel_sh.py [--work DIR] [--device cpu]
+    PYTHONPATH=training:build/python /usr/bin/python3 training/tests/test_voxel_sh.py [--work DIR] [--device cpu]
 
 1. data: synthetic scene folders of the generator's format load; the statistics come from the training scenes
    only; a scene of another grid is refused, naming both grids (load_scenes and train.py);
@@ -10,7 +10,7 @@
 3. train.py (set network): a few steps, SIGINT mid-run (exit 130, checkpoint kept), resume to the end: the weights
    and the log equal those of an uninterrupted run, bit for bit; the loss falls; export.py from the work folder;
 4. every architecture (set F32, mlp F16, resnet F32): the exported file loaded in ngi (Python bindings) on the test
-   scene equals networks.VoxelSh in float64 on the stored weights (max |diff| <= 1e-4 + 1e-4 |y|); NaN inputs are
+   scene equals ngi.voxel_sh.VoxelSh in float64 on the stored weights (max |diff| <= 1e-4 + 1e-4 |y|); NaN inputs are
    counted; the card and the metadata say what was trained.
 Exit code 0 on success; an AssertionError (exit 1) names the failed check.
 """
@@ -31,11 +31,9 @@ import torch
 
 import ngi
 import ngi.model_file as model_file
+import ngi.voxel_sh as networks
 
-import data
-import networks
-
-HERE = Path(__file__).resolve().parent
+from ngi_train.voxel_sh import data
 GRID = (12, 10, 8)
 # ngi (float32, GEMM summation order) against float64 PyTorch on the same weights: ~1e-6 observed
 # (tests/test_voxel_sh_model.cpp); 1e-4 absolute + relative leaves room without letting a wrong layer through.
@@ -48,7 +46,7 @@ def check(cond, what):
 
 
 def train_cmd(work, out, arch, steps, scenes, extra=()):
-    return [sys.executable, str(HERE / "train.py"), "--arch", arch, "--train", *scenes["train"], "--test",
+    return [sys.executable, "-m", "ngi_train.voxel_sh.train", "--arch", arch, "--train", *scenes["train"], "--test",
             *scenes["test"], "--steps", str(steps), "--work", str(work), "--out", str(out),
             "--card", str(out) + ".md", "--log-every", "2", "--checkpoint-every", "4", "--threads", "1", *extra]
 
@@ -93,7 +91,7 @@ def test_networks():
     check(d < 1e-12, f"split rho.0 == broadcast concat (max diff {d})")
     check(networks.parameter_count(networks.build("set")) == sum(
         int(np.prod(s)) for s in model_file.voxel_sh_shapes({"architecture": "set", **networks.DEFAULT_WIDTHS["set"]})
-        .values()), "networks.py and model_file.voxel_sh_shapes agree")
+        .values()), "ngi.voxel_sh and model_file.voxel_sh_shapes agree")
     base = dict(grid=[8, 8, 8], input_lo=[0] * 10, input_hi=[1] * 10, output_mean=[0] * 27, output_std=[1] * 27)
     for bad, fragment in ((dict(base, input_lo=[0] * 9), "input_lo"), (dict(base, grid=[8, 8]), "grid"),
                           (dict(base, output_std=[-1] * 27), "output_std")):
@@ -151,7 +149,8 @@ def test_train_resume(root, scenes):
     first, last = logs[0][2]["train_mse"], logs[0][12]["train_mse"]
     check(last < first, f"the training MSE falls ({first:.4f} -> {last:.4f})")
     # export.py from the work folder writes the same network train.py exported.
-    run([sys.executable, str(HERE / "export.py"), "--work", str(work), "--out", str(root / "set_export.safetensors")])
+    run([sys.executable, "-m", "ngi_train.voxel_sh.export", "--work", str(work),
+         "--out", str(root / "set_export.safetensors")])
     t1, _ = model_file.read_model(str(root / "set.safetensors"))
     t2, c2 = model_file.read_model(str(root / "set_export.safetensors"))
     check(all(np.array_equal(t1[k], t2[k]) for k in t1) and list(t1) == list(t2), "export.py == train.py's export")

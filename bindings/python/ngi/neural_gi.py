@@ -7,7 +7,7 @@
     loss = mean | log(final + 1/e) - log(reference + 1/e) |                                      (Eq. 5 / 6)
 
 The model of ngi's "neural_gi" family (docs/MODEL_FORMAT.md): export_model writes it as an ngi model file that
-ngi::Model runs as one graph on the device. Tests: training/neural_gi/test_model.py; parity with ngi:
+ngi::Model runs as one graph on the device. Tests: training/tests/test_neural_gi_model.py; parity with ngi:
 tests/parity/make_neural_gi_parity.py.
 
 Input channels (`assemble_inputs`; section 3.2 adapted to ngi's Lambertian voxel renderer: no specular albedo, no

@@ -5,7 +5,7 @@
     ngi lightmap --frame F --plan plan.json --out DIR                              # run what the plan chose
 
 It renders --frames calibration frames of the scene's camera path with converged references (ngi.Renderer), runs
-every rung of the zoo (models/zoo.json, written by training/ladder_eval.py) on them and scores each with
+every rung of the zoo (models/zoo.json, written by ngi_train.generator.ladder_eval) on them and scores each with
 ngi.scoring, exactly as the ladder's held-out evaluation does. The cost of a rung is the zoo's measured ms per
 frame on this device (--cost lightmap: the whole `ngi lightmap` command; generator: the network alone); a device
 the zoo has not measured gets the rung's in-process pipeline time measured here instead.
@@ -21,7 +21,7 @@ Candidates: the direct-light rung and the rungs whose network predicts indirect 
 predicts the whole lightmap; they lose to direct light alone on the held-out split, docs/RESULTS.md) and the other
 batch-norm mode of each rung are measured comparisons, tried only with --all-rungs. A zoo without indirect rungs
 offers all of its rungs. A rung with a measured per-frame guard in the zoo (rung "guard": {"max_indirect_share": t},
-training/gi_eval.py) runs with it (a frame whose indirect share exceeds t falls back to direct light: ngi.indirect_share,
+ngi_train.generator.gi_eval) runs with it (a frame whose indirect share exceeds t falls back to direct light: ngi.indirect_share,
 `ngi lightmap --guard`), and the plan records it.
 
 Nothing meets the budget: exit code 1, the closest rung named, nothing written. The plan is JSON

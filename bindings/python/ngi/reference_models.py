@@ -11,8 +11,10 @@ no other implementation can reproduce. Here every Dropout is either an
 identity (dropout "off") or SeededDropout, the counter-based hash that ngi's
 kernel computes bit for bit (dropout "seeded", ngi.dropout), see docs/MODEL_FORMAT.md.
 
-Also the float64 reference of the "mlp" family (run_mlp_reference), and
-load_generator, which builds the reference generator of a model file.
+Also the float64 reference of the "mlp" family (run_mlp_reference), seed 001's
+ambient-occlusion MLP as PyTorch trains it (ao_mlp), and load_generator, which
+builds the reference generator of a model file. The other families' networks:
+ngi.neural_gi (Neural GI), ngi.voxel_sh (voxel SH).
 """
 
 import copy
@@ -317,3 +319,14 @@ def run_mlp_reference(tensors, config, x):
         b = torch.as_tensor(tensors[f"layers.{i}.bias"]).double()
         h = MLP_ACTIVATIONS[layer.get("activation", "none")](h @ w.t() + b, layer.get("slope", 0.01))
     return h
+
+
+AO_INPUTS = 48  # 16 ring normals x 3 (docs/CONVENTIONS.md section 15)
+
+
+def ao_mlp(hidden_x, hidden_y):
+    """Seed 001's ambient-occlusion network as training builds it (ngi_train.ao.train): 48 -> hidden_x tanh ->
+    hidden_y tanh -> 1. An nn.Sequential, so its state_dict keys are 0/2/4.weight|bias; the trainer folds the input
+    and output scaling into them and writes an "mlp" family file (layers.0..2), which run_mlp_reference runs."""
+    return nn.Sequential(nn.Linear(AO_INPUTS, hidden_x), nn.Tanh(), nn.Linear(hidden_x, hidden_y), nn.Tanh(),
+                         nn.Linear(hidden_y, 1))

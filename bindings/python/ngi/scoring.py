@@ -6,7 +6,7 @@ range = the reference's maximum). The ladder has rungs that run at a smaller fac
 lightmap is upsampled bilinearly (pixel centres at +0.5, edges clamped: the library's resize_bilinear, PyTorch's
 align_corners=False) to the reference's size and composed there with the full-resolution albedo, emission and
 env, which is what a renderer that has its own full-resolution G-buffer does with a low-resolution lightmap.
-At equal sizes the composition equals the pipeline's 'final' output (checked by training/ladder_eval.py).
+At equal sizes the composition equals the pipeline's 'final' output (checked by ngi_train.generator.ladder_eval).
 
 Needs the native module (ngi._ngi) for tone mapping and metrics.
 """

@@ -1,6 +1,6 @@
 """The model zoo manifest (models/zoo.json): every shipped generator variant with its measured cost and accuracy.
 
-Written by training/ladder_eval.py from its measurements; read by ngi.plan. Format (version 1):
+Written by ngi_train.generator.ladder_eval from its measurements; read by ngi.plan. Format (version 1):
 
     {"format": "ngi-zoo", "version": 1, "comment": ..., "protocol": {how cost and accuracy were measured},
      "devices": {"pocl": {"platform", "name", "driver", ...}, ...},   # the devices the costs were measured on
@@ -48,7 +48,7 @@ def load(path, check_digests=True):
     try:
         zoo = json.loads(path.read_text())
     except FileNotFoundError:
-        raise ZooError(f"zoo {path}: no such file (training/ladder_eval.py --zoo writes it)") from None
+        raise ZooError(f"zoo {path}: no such file (python3 -m ngi_train.generator.ladder_eval --zoo writes it)") from None
     except ValueError as e:
         raise ZooError(f"zoo {path}: not valid JSON: {e}") from None
     if not isinstance(zoo, dict) or zoo.get("format") != FORMAT:
@@ -77,7 +77,7 @@ def load(path, check_digests=True):
             raise ZooError(f"{where}: file {f} does not exist")
         if check_digests and r.get("sha256") and sha256(f) != r["sha256"]:
             raise ZooError(f"{where}: file {f} differs from the manifest (sha256 {sha256(f)[:12]}..., manifest "
-                           f"{r['sha256'][:12]}...): re-run training/ladder_eval.py --zoo")
+                           f"{r['sha256'][:12]}...): re-run ngi_train.generator.ladder_eval --zoo")
         try:
             cfg = model_file.read_config(str(f))
         except Exception as e:  # a file that is not an ngi model at all
@@ -103,7 +103,7 @@ def device_key(zoo, info):
 
 
 def build(summary, zoo_path, root):
-    """The manifest from training/ladder_eval.py's summary (its file paths relative to `root`, the repository):
+    """The manifest from ngi_train.generator.ladder_eval's summary (its file paths relative to `root`, the repository):
     the shipped variants (each exported rung as exported and with the other batch-norm mode; the generators
     shipped before the ladder) and the direct-light rung."""
     zoo_dir = Path(zoo_path).resolve().parent
@@ -137,7 +137,7 @@ def build(summary, zoo_path, root):
     switches = [s["chosen"] for s in summary.get("switch", [])
                 if s["chosen"]["surround"] in shipped and s["chosen"]["single_view"] in shipped]
     return {"format": FORMAT, "version": VERSION,
-            "comment": "Written by training/ladder_eval.py (docs/RESULTS.md, 'The ladder'). cost: milliseconds per "
+            "comment": "Written by ngi_train.generator.ladder_eval (docs/RESULTS.md, 'The ladder'). cost: milliseconds per "
                        "frame on each device (generator alone: ngi_bench generator, median; lightmap: the whole "
                        "ngi lightmap command, median wall time); accuracy: mean over the held-out test frames against "
                        "converged references (ngi.scoring), and the two temporal sequences (ngi.temporal).",

@@ -25,7 +25,7 @@ torch = pytest.importorskip("torch")
 from onnx import TensorProto, helper  # noqa: E402
 
 from ngi import neural_gi as ngi_net  # noqa: E402
-from ngi.reference_models import build_generator  # noqa: E402
+from ngi.reference_models import ao_mlp, build_generator  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -94,10 +94,9 @@ def test_pix2pix_generator_round_trip(dev, tmp_path):
 
 
 def test_ao_mlp_round_trip(dev, tmp_path):
-    # training/ao_train.py's network (48 -> x -> y -> 1, tanh), exported on [N, 48] points: Gemm nodes.
+    # Seed 001's AO network as training builds it (48 -> x -> y -> 1, tanh), exported on [N, 48] points: Gemm nodes.
     torch.manual_seed(4)
-    net = torch.nn.Sequential(torch.nn.Linear(48, 16), torch.nn.Tanh(), torch.nn.Linear(16, 8), torch.nn.Tanh(),
-                              torch.nn.Linear(8, 1)).eval()
+    net = ao_mlp(16, 8).eval()
     rc, err, out = convert(tmp_path, export(net, torch.randn(5, 48)), "ao")
     assert rc == 0, err
     model = ngi.Model(dev, out)

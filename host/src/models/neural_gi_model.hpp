@@ -7,7 +7,7 @@
 //
 // The MLP's layers are 1 x 1 convolutions over the image (the packed GEMM), so every pixel's MLP is one column.
 // Tensors: the U-Net's under "buffer." (its UnetGenerator names), "mlp.layers.<i>.weight" [W, in, 1, 1] and
-// ".bias" [W], "mlp.output.weight" [3, W, 1, 1] and ".bias" [3] (PyTorch's training/neural_gi/model.py names).
+// ".bias" [W], "mlp.output.weight" [3, W, 1, 1] and ".bias" [3] (ngi.neural_gi's names).
 #pragma once
 #include <memory>
 #include <optional>

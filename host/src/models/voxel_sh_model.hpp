@@ -25,7 +25,7 @@ constexpr int kVoxelShOutputs = 27;  // SH bands 0-2 x RGB, [3][9]
 // Standardized inputs beyond +-this (a raw value some 10^6 training ranges outside it, +-Inf, FLT_MAX) are replaced
 // by it, NaN by 0 (the middle of the training range), and counted (RunInfo::sanitized_inputs). Far above any real
 // input, and small enough that the first layer's sums stay finite (docs/MODEL_FORMAT.md "voxel_sh"). Python reads
-// it from the generated ngi._constants (training/voxel_sh/networks.py INPUT_BOUND).
+// it from the generated ngi._constants (ngi.voxel_sh.INPUT_BOUND, bindings/python/ngi/voxel_sh.py).
 constexpr float kVoxelShInputBound = 1e6f;
 
 // The config of a voxel_sh file from its parsed metadata object (parse_model_config parses the JSON once and hands

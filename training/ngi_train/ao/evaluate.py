@@ -2,7 +2,8 @@
 """Evaluate seed 001's AO networks (run by ngi) and the baselines a careful user would try first, on the held-out
 views of each object, against the ray-traced reference (docs/RESULTS_AO.md).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/ao_eval.py --object sculpture=DATA1 --object trefoil=DATA2 \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.ao.evaluate \\
+        --object sculpture=DATA1 --object trefoil=DATA2 \\
         --models models --out docs/ao [--ngi build/ngi]
 
 Methods, each evaluated on every held-out view (`ngi ao-data`'s "heldout" orbit):
@@ -38,8 +39,8 @@ import numpy as np
 from skimage.metrics import structural_similarity
 from tqdm import tqdm
 
-import ao_common
-import ngi_paths
+from ngi_train import ngi_paths
+from ngi_train.ao import sampling
 
 SIZES = ("16x8", "32x16", "64x32")
 
@@ -60,7 +61,7 @@ def sh9(n):
 def surface_cells(v):
     """Per object pixel: the solid block's linear key and the face id (0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z)."""
     n = v["normal"].shape[1]
-    d, look, _, _ = ao_common.camera_rays(v["view"], n)
+    d, look, _, _ = sampling.camera_rays(v["view"], n)
     depth = v["depth"][0].astype(np.float64)
     t = depth / np.einsum("chw,c->hw", d, look)
     p = np.asarray(v["view"]["position"])[:, None, None] + d * t[None]
@@ -113,7 +114,7 @@ class VertexBake:
 def ssao(v, radius, samples=16, seed=7):
     """Normal-oriented hemisphere SSAO (Crytek/LearnOpenGL style) with a range check."""
     n = v["normal"].shape[1]
-    d, look, right, up = ao_common.camera_rays(v["view"], n)
+    d, look, right, up = sampling.camera_rays(v["view"], n)
     depth = v["depth"][0].astype(np.float64)
     mask = v["mask"]
     t = depth / np.einsum("chw,c->hw", d, look)
@@ -152,15 +153,15 @@ def run_ngi(ngi, env, frame, model, out, radius):
 
 
 def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
-    X, y, _ = ao_common.sample(data, 3.0)
+    X, y, _ = sampling.sample(data, 3.0)
     mean_ao = float(y.mean())
     coef, *_ = np.linalg.lstsq(sh9(X[:, :3].astype(np.float64)), y.astype(np.float64), rcond=None)
     # Bake per face (blocks) and per vertex (triangles) from every training view.
     sums, counts = {}, {}
     vertex_bake = VertexBake()
-    train = ao_common.views(data, "orbit")
+    train = sampling.views(data, "orbit")
     for folder in train:
-        v = ao_common.load_view(folder)
+        v = sampling.load_view(folder)
         if "surface" in v:
             vertex_bake.add(v)
         keys = surface_cells(v)
@@ -180,19 +181,19 @@ def evaluate_object(name, data, models_dir, out_dir, ngi, env, ablations=()):
     for r in (0.5, 1.0, 2.0, 4.0):
         errs = []
         for folder in train[::16]:
-            v = ao_common.load_view(folder)
+            v = sampling.load_view(folder)
             errs.append(np.mean((ssao(v, r) - v["ao"][0])[v["mask"]] ** 2))
         if np.mean(errs) < best_mse:
             best_r, best_mse = r, float(np.mean(errs))
 
-    held = ao_common.views(data, "heldout")
+    held = sampling.views(data, "heldout")
     methods = [f"mlp {s} ring" for s in SIZES] + [f"mlp {s} r=0" for s in SIZES] + ["constant", "sh2", "baked", "ssao"]
     methods += [label for label, _ in ablations]
     scores = {m: [] for m in methods}
     bar = tqdm(total=len(held), desc=f"eval {name}", unit="view", **ngi_paths.progress_options())
     example = None
     for i, folder in enumerate(held):
-        v = ao_common.load_view(folder)
+        v = sampling.load_view(folder)
         ref, mask = v["ao"][0], v["mask"]
         preds = {}
         for s in SIZES:
@@ -258,7 +259,7 @@ def save_compare(path, example):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--object", action="append", required=True, help="NAME=DATA (an ngi ao-data folder)")
-    ap.add_argument("--models", default=str(Path(__file__).resolve().parent.parent / "models"))
+    ap.add_argument("--models", default=str(ngi_paths.REPO / "models"))
     ap.add_argument("--out", required=True)
     ap.add_argument("--ngi", default=None)
     ap.add_argument("--ablation", action="append", default=[],

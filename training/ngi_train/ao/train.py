@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """Train seed 001's ambient-occlusion MLP (48 -> X tanh -> Y tanh -> 1) on one object and export it for ngi.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/ao_train.py --data DATA --size 16x8 \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.ao.train --data DATA --size 16x8 \\
         --out models/ao_sculpture_16x8.safetensors
 
 DATA is an `ngi ao-data` folder. As the seed (section 3): 512 random pixels from each of the 128 orbit views
-(65,536 samples), input = 16 normals on a circle around the pixel (ao_common.py), target = its AO; split
+(65,536 samples), input = 16 normals on a circle around the pixel (sampling.py), target = its AO; split
 50/25/25 at random; inputs and targets min-max scaled to [-1, 1] (MATLAB's default), the scaling folded into the
 first and last layers of the exported file; mean squared error. The seed used MATLAB's scaled conjugate
 gradient; here full-batch L-BFGS (also a second-order full-batch method, in PyTorch), with early stopping on
@@ -27,14 +27,10 @@ import torch
 from tqdm import tqdm
 
 import ngi.model_file as model_file
+import ngi.reference_models as reference_models
 
-import ao_common
-import ngi_paths
-
-
-def make_net(x, y):
-    return torch.nn.Sequential(torch.nn.Linear(48, x), torch.nn.Tanh(), torch.nn.Linear(x, y), torch.nn.Tanh(),
-                               torch.nn.Linear(y, 1))
+from ngi_train import ngi_paths
+from ngi_train.ao import sampling
 
 
 def main(argv=None):
@@ -43,7 +39,7 @@ def main(argv=None):
     ap.add_argument("--size", required=True, help="hidden widths XxY, e.g. 16x8")
     ap.add_argument("--out", required=True)
     ap.add_argument("--radius", type=float, default=3.0, help="ring radius in pixels at the data's resolution")
-    ap.add_argument("--normals", choices=sorted(ao_common.NORMAL_FILE), default="smooth",
+    ap.add_argument("--normals", choices=sorted(sampling.NORMAL_FILE), default="smooth",
                     help="which normals the ring reads: smooth (normal.npy) or the voxel face normals")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--max-iters", type=int, default=3000)
@@ -56,7 +52,7 @@ def main(argv=None):
     hx, hy = (int(v) for v in a.size.lower().split("x"))
     meta = json.loads((Path(a.data) / "ao_data.json").read_text())
 
-    X, y, _ = ao_common.sample(a.data, a.radius, seed=a.seed, normals=a.normals)
+    X, y, _ = sampling.sample(a.data, a.radius, seed=a.seed, normals=a.normals)
     perm = np.random.default_rng(a.seed).permutation(len(y))
     n_tr, n_va = len(y) // 2, len(y) // 4
     tr, va, te = perm[:n_tr], perm[n_tr:n_tr + n_va], perm[n_tr + n_va:]
@@ -68,7 +64,7 @@ def main(argv=None):
     Xs = torch.from_numpy(((X - xmin) * xscale - 1.0).astype(np.float32))
     ys = torch.from_numpy(((y - ymin) * yscale - 1.0).astype(np.float32))[:, None]
 
-    net = make_net(hx, hy)
+    net = reference_models.ao_mlp(hx, hy)
     opt = torch.optim.LBFGS(net.parameters(), lr=1.0, max_iter=a.check_every, history_size=50,
                             line_search_fn="strong_wolfe")
     mse = torch.nn.MSELoss()
@@ -134,14 +130,14 @@ def main(argv=None):
               "layers": [{"out": hx, "activation": "tanh"}, {"out": hy, "activation": "tanh"},
                          {"out": 1, "activation": "none"}],
               "input_range": [-1.0, 1.0],
-              "ao": {"neighbours": ao_common.RING, "radius_px": a.radius, "at_size": meta["n"],
+              "ao": {"neighbours": sampling.RING, "radius_px": a.radius, "at_size": meta["n"],
                      "normals": a.normals, "sigma": meta["sigma"], "max_distance": meta["max_distance"],
                      "rays": meta["rays"], "scene": meta["scene"]},
-              "source": f"training/ao_train.py --size {a.size} --data {Path(a.data).name}",
+              "source": f"ngi_train.ao.train --size {a.size} --data {Path(a.data).name}",
               "training": report}
     model_file.write_model(a.out, tensors, config, half=half)
     back = model_file.read_model(a.out)
-    assert back[1]["ao"]["neighbours"] == ao_common.RING, "metadata did not round-trip"
+    assert back[1]["ao"]["neighbours"] == sampling.RING, "metadata did not round-trip"
     print(json.dumps(report))
 
 

@@ -2,7 +2,8 @@
 """Seconds per training step of a config at a face size, on random data (no dataset needed), and the projected
 training time for the config's steps.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/bench.py --config training/configs/surround.json --n 128 --steps 8
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.bench \\
+        --config training/configs/surround.json --n 128 --steps 8
 
 One warm-up step, then --steps timed steps (G forward, D update, G update: what train.py does per frame).
 Prints every step's time, the minimum (the machine's speed when nothing else runs) and the median.
@@ -15,10 +16,7 @@ import time
 
 import torch
 
-import data
-import gan
-import networks
-import train
+from ngi_train.generator import data, gan, networks, train
 
 
 def main():

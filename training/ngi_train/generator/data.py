@@ -6,7 +6,7 @@ through the Python bindings (bindings/python: ngi.Pipeline.network_input / encod
 surround or [1, 10, N, N] front view only, values in [-1, 1]) and target.npy (SurroundPipeline::encode_lightmap of
 the frame's reference.exr: [1, 3, N, N], the front view's linear lighting through the Reinhard transfer into
 [-1, 1], i.e. the exact inverse of the decoding `ngi lightmap` applies to the generator's output). Nothing here
-re-implements the merge or the encoding; the loader only reads those files back. training/test_training.py checks
+re-implements the merge or the encoding; the loader only reads those files back. training/tests/test_training.py checks
 them against `ngi merge`'s files bit for bit.
 
 Cache layout (reused on rerun, one merge per new or changed frame):
@@ -40,6 +40,8 @@ import numpy as np
 import torch
 
 import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in this project's scripts
+
+from ngi_train import checkpoint
 
 CACHE_FORMAT = 2  # 2: front.npy
 LAYOUTS = ("surround", "single_view")
@@ -181,7 +183,7 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     names = list(ngi_py.single_view_input_channels() if single else ngi_py.surround_input_channels())
     if names != channels(layout):
         raise RuntimeError(f"ngi reports the channels {names}, the training code expects {channels(layout)} "
-                           "(docs/CONVENTIONS.md section 7 changed? update training/data.py)")
+                           "(docs/CONVENTIONS.md section 7 changed? update training/ngi_train/generator/data.py)")
     frame = ngi_py.read_frame(frame_dir)
     if frame.reference is None:
         raise RuntimeError(f"{frame_dir}: no reference.exr (a training frame needs its reference lighting)")
@@ -225,11 +227,11 @@ class MergeCache:
         if info_path.is_file():
             old = json.loads(info_path.read_text())
             if old == dict(info, format=1):  # format 1 lacks front.npy: _fresh() re-merges its entries as needed
-                write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
+                checkpoint.write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
             elif old != info:
                 raise RuntimeError(f"{info_path} describes another cache ({old}); use another cache folder")
         else:
-            write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
+            checkpoint.write_text_atomic(info_path, json.dumps(info, indent=1) + "\n")
 
     def entry(self, rel):
         return self.dir / rel
@@ -349,17 +351,3 @@ def load_split(dataset_dir, split, layout, cache_dir, device=None, jobs=1, max_f
 def default_cache_dir(dataset_dir, layout):
     return Path(dataset_dir) / "merge_cache" / layout
 
-
-def write_text_atomic(path, text):
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

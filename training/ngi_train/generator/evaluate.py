@@ -12,10 +12,12 @@ As a command, it evaluates an exported model with the C++ pipeline end to end: `
 of a split, and a summary of the per-frame metrics.json files (tone-mapped final images and linear lightmaps,
 the network against the direct-only baseline):
 
-    PYTHONPATH=build/python /usr/bin/python3 training/evaluate.py --model M.safetensors --dataset DATA \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.evaluate \\
+        --model M.safetensors --dataset DATA \\
         --split test --out DIR
 
-Under torchrun (`/usr/bin/python3 -m torch.distributed.run --nproc_per_node W training/evaluate.py ...`) the
+Under torchrun (`/usr/bin/python3 -m ngi_train.torchrun --nproc_per_node W --module ngi_train.generator.evaluate
+...`) the
 frames are split round robin over the W ranks and rank 0 writes the merged summary.json and per_frame.json,
 identical to a single process's.
 """
@@ -33,11 +35,8 @@ import torch
 
 import ngi.reference_models as reference_models
 
-import data
-import distributed
-import lightmap_loss
-import networks
-import ngi_paths
+from ngi_train import distributed, ngi_paths
+from ngi_train.generator import data, lightmap_loss, networks
 
 LIGHT_MAX = 65504.0
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Export a training checkpoint as an ngi model file (.safetensors, docs/MODEL_FORMAT.md).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/export.py --run runs/surround \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.export --run runs/surround \\
         --out models/surround.safetensors
 
 The generator's state_dict goes through ngi.convert.validate_state_dict (the tensor names are junyanz's, checked
@@ -35,9 +35,8 @@ import torch
 import ngi.convert as convert
 import ngi.model_file as model_file
 
-import checkpoint
-import data
-import evaluate
+from ngi_train import checkpoint
+from ngi_train.generator import data, evaluate
 
 
 def main(argv=None):
@@ -84,7 +83,7 @@ def main(argv=None):
                                     output_nc=3, ngf=cfg["ngf"], num_downs=cfg["num_downs"], dropout=args.dropout,
                                     dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
                                     output_mode=cfg.get("output_mode", "lightmap"),
-                                    source=f"ngi training/train.py, run {run.resolve().name}, step {state['step']}")
+                                    source=f"ngi_train.generator.train, run {run.resolve().name}, step {state['step']}")
     steps = state["step"]
     samples = state.get("samples", steps)  # checkpoints from before the effective batch: one image per step
     config["training"] = {

@@ -38,10 +38,8 @@ import contextlib
 import torch
 import torch.nn as nn
 
-import data
-import distributed
-import lightmap_loss
-import networks
+from ngi_train import distributed
+from ngi_train.generator import data, lightmap_loss, networks
 
 
 class Pix2Pix:

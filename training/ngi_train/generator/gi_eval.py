@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Issue 25's evaluation: is a generator worth running, i.e. better than direct light alone, on every scene group?
 
-    PYTHONPATH=build/python /usr/bin/python3 training/gi_eval.py --work runs/gi --data data/gi_n64 \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.gi_eval \\
+        --work runs/gi --data data/gi_n64 \\
         --seq data/seq_n64 --vox-dir ../shared/scenes/vox --out docs/results [--zoo models/zoo.json]
 
 Variants: direct light alone (the free baseline), every rung of the GI ladder (training/configs/gi.json: output
@@ -51,12 +52,11 @@ import ngi.scoring as scoring
 import ngi.temporal as temporal
 import ngi.zoo as zoo_mod
 
-import ladder as ladder_mod
-import ladder_eval as le
-import ngi_paths
+from ngi_train import ngi_paths
+from ngi_train.generator import ladder as ladder_mod, ladder_eval as le
 
 REPO = ngi_paths.REPO
-GI_LADDER = Path(__file__).resolve().parent / "configs" / "gi.json"
+GI_LADDER = REPO / "training" / "configs" / "gi.json"
 INDOOR = ("room", "cave", "backlit", "bleed", "cornell", "cornell_pink")
 OUTDOOR = ("street", "sculpture")
 VOX_GROUPS = {"monuments": ("monu0", "monu4", "monu5", "monu6-without-water", "monu7", "monu8-without-water", "monu9"),
@@ -205,7 +205,7 @@ def finite_mean(values):
 
 def mean_scores(rows):
     """Mean final-image PSNR / SSIM and linear-lightmap MSE / PSNR / SSIM over frames (a PSNR that is not finite,
-    identical images, is left out of its mean, as ladder_eval and training/report.py do)."""
+    identical images, is left out of its mean, as ladder_eval and training/ngi_train/generator/report.py do)."""
     if not rows:
         return None
     return {"frames": len(rows), "psnr": finite_mean([r["final"]["psnr"] for r in rows]),
@@ -380,9 +380,9 @@ def temporal_stage(args, runner, vs, work):
 
 def curves_stage(args, work, out_png):
     """Held-out scores of every kept checkpoint (module doc, stage 6) and the training loss, per GI rung."""
-    import checkpoint
-    import data
-    import evaluate
+    from ngi_train import checkpoint
+    from ngi_train.generator import data
+    from ngi_train.generator import evaluate
     cache_path = work / "gi_curves.json"
     cache = le.read_json(cache_path, {})
     gi = ladder_mod.load_ladder(GI_LADDER)
@@ -475,7 +475,7 @@ def fmt(x, spec=".2f"):
 def tables(summary):
     lines = ["# Issue 25: generators against direct light alone", "",
              "Final images (ACES, sRGB) against path-traced references; mean PSNR (dB) / SSIM per scene group. "
-             "Written by training/gi_eval.py.", ""]
+             "Written by training/ngi_train/generator/gi_eval.py.", ""]
     for part, label in (("heldout", "Held-out split"), ("vox", "Public MagicaVoxel scenes")):
         groups = list(next(iter(summary["variants"].values()))[part].keys())
         lines += [f"## {label}", "", "| variant | mode | " + " | ".join(groups) + " |",
@@ -623,7 +623,7 @@ def gi_cards(zoo):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--work", type=Path, required=True, help="the GI ladder's work folder (training/ladder.py --work)")
+    ap.add_argument("--work", type=Path, required=True, help="the GI ladder's work folder (ngi_train.generator.ladder --work)")
     ap.add_argument("--data", type=Path, required=True, help="the N = 64 dataset (configs/dataset_gi_n64.json)")
     ap.add_argument("--seq", type=Path, help="a rendered configs/sequences_clean_n64.json (default: render the frames "
                                              "used into WORK/seq)")

@@ -2,9 +2,11 @@
 """Train and export the speed/accuracy ladder (training/configs/ladder.json): every rung a pix2pix U-Net trained
 with the ladder's one recipe on the same frames, then exported as an ngi model file.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/ladder.py --data 64=data/clean_n64 --data 32=data/clean_n32 \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.ladder \\
+        --data 64=data/clean_n64 --data 32=data/clean_n32 \\
         --work runs/ladder --lane 0 &
-    PYTHONPATH=build/python /usr/bin/python3 training/ladder.py --data 64=data/clean_n64 --data 32=data/clean_n32 \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.ladder \\
+        --data 64=data/clean_n64 --data 32=data/clean_n32 \\
         --work runs/ladder --lane 1
 
 A lane runs its rungs one after the other (train.py with the rung's config in WORK/configs, run folder
@@ -20,10 +22,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-import ngi_paths
+from ngi_train import ngi_paths
 
-HERE = Path(__file__).resolve().parent
-LADDER = HERE / "configs" / "ladder.json"
+LADDER = ngi_paths.REPO / "training" / "configs" / "ladder.json"
 RUNG_KEYS = {"name", "layout", "n", "ngf", "num_downs", "seed", "lane", "ship", "recipe"}
 
 
@@ -107,13 +108,15 @@ def main(argv=None):
             log(f"ladder: {rung['name']}: exported, skipped")
             continue
         log(f"ladder: {rung['name']}: training ({dataset})")
-        cmd = [py, str(HERE / "train.py"), "--config", str(cfg_path), "--dataset", str(dataset), "--run", str(run)]
+        cmd = [py, "-m", "ngi_train.generator.train", "--config", str(cfg_path), "--dataset", str(dataset),
+               "--run", str(run)]
         if args.device:
             cmd += ["--device", args.device]
         subprocess.run(cmd, check=True)
         for out, extra in ((half, ["--half"]), (fp32, [])):
             out.parent.mkdir(parents=True, exist_ok=True)
-            cmd = [py, str(HERE / "export.py"), "--run", str(run), "--out", str(out), "--bn-mode", "auto"] + extra
+            cmd = [py, "-m", "ngi_train.generator.export", "--run", str(run), "--out", str(out), "--bn-mode",
+                   "auto"] + extra
             if args.device:
                 cmd += ["--device", args.device]
             subprocess.run(cmd, check=True)

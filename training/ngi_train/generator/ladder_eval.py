@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Evaluate the speed/accuracy ladder (training/ladder.py) and write the model zoo manifest.
+"""Evaluate the speed/accuracy ladder (training/ngi_train/generator/ladder.py) and write the model zoo manifest.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/ladder_eval.py --work runs/ladder \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.ladder_eval --work runs/ladder \\
         --data 64=data/clean_n64 --data 32=data/clean_n32 --seq 64=data/seq_n64 --seq 32=data/seq_n32 \\
         --devices pocl,rusticl --out docs/results --zoo models/zoo.json
 
@@ -43,9 +43,8 @@ import ngi.scoring as scoring
 import ngi.temporal as temporal
 import ngi.zoo as zoo_mod
 
-import ladder as ladder_mod
-import ladder_report
-import ngi_paths
+from ngi_train import ngi_paths
+from ngi_train.generator import ladder as ladder_mod, ladder_report
 
 REPO = ngi_paths.REPO
 MOVING_CAMERA = {"scene": "room_seed204", "frames": list(range(39, 82))}
@@ -444,7 +443,7 @@ def paired(held, a, b):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--ladder", type=Path, default=ladder_mod.LADDER)
-    ap.add_argument("--work", type=Path, required=True, help="the ladder's work folder (training/ladder.py --work)")
+    ap.add_argument("--work", type=Path, required=True, help="the ladder's work folder (ngi_train.generator.ladder --work)")
     ap.add_argument("--data", action="append", default=[], help="N=DIR (64 and 32)")
     ap.add_argument("--seq", action="append", default=[], help="N=DIR: the moving-camera sequence datasets")
     ap.add_argument("--devices", default="pocl", help="comma-separated ngi device specs to time on")

@@ -1,4 +1,4 @@
-"""Tables and figures of the ladder evaluation (training/ladder_eval.py): OUT/ladder_tables.md (pasted into
+"""Tables and figures of the ladder evaluation (ladder_eval.py): OUT/ladder_tables.md (pasted into
 docs/RESULTS.md, "The ladder") and OUT/ladder_pareto_<device>.png, OUT/ladder_temporal.png."""
 
 import math
@@ -110,7 +110,7 @@ def tables(summary):
     nf = summary.get("noise_floor", {}).get("64")
     if nf:
         L.append(f"Noise floor of the references (two independent {nf['reference_spp']}-spp renders of {nf['frames']} "
-                 f"test frames against each other, `training/noise_floor.py`): final SSIM "
+                 f"test frames against each other, `training/ngi_train/generator/noise_floor.py`): final SSIM "
                  f"{nf['final_ldr']['ssim']:.4f}, PSNR {nf['final_ldr']['psnr']:.2f} dB; lightmap PSNR "
                  f"{nf['lightmap_linear']['psnr']:.2f} dB. No score below can be resolved more finely than this.")
         L.append("")
@@ -204,8 +204,8 @@ def cards(zoo):
          "exported with F16 weights; each file's metadata records its architecture, input layout, value ranges, "
          "batch-norm mode and training provenance (docs/MODEL_FORMAT.md). Measured cost and accuracy of every variant: "
          "[models/zoo.json](../zoo.json); the comparison: [docs/RESULTS.md](../../docs/RESULTS.md#the-ladder).", "",
-         "Reproduce: `training/ladder.py` (two lanes, one core each), then `training/ladder_eval.py` (commands in "
-         "docs/RESULTS.md).", ""]
+         "Reproduce: `python3 -m ngi_train.generator.ladder` (two lanes, one core each), then "
+         "`python3 -m ngi_train.generator.ladder_eval` (commands in docs/RESULTS.md).", ""]
     recipe = zoo["protocol"]["recipe"]
     L.append(f"Recipe (every rung): {recipe['steps']} steps, batch 1, Adam {recipe['lr']} / beta1 {recipe['beta1']}, "
              f"BCE + {recipe['lambda_l1']}·L1 (thesis eq. 4.10), PatchGAN ({recipe['d_layers']} layers, ndf "

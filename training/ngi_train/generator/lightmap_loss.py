@@ -2,7 +2,7 @@
 indirect mode's direct + indirect, compose, tone map) and the losses on it.
 
 Every function mirrors a kernel of kernels/compose.cl for the model output range [-1, 1] and the Reinhard transfer
-(docs/CONVENTIONS.md section 8); training/test_training.py checks them against ngi's own pipeline on a frame.
+(docs/CONVENTIONS.md section 8); training/tests/test_training.py checks them against ngi's own pipeline on a frame.
 
 Output modes (the model file's `output_mode`, docs/MODEL_FORMAT.md):
   lightmap  the thesis: the decoded output is the whole front lightmap (direct + indirect)
@@ -12,7 +12,7 @@ Output modes (the model file's `output_mode`, docs/MODEL_FORMAT.md):
 
 import torch
 
-import data
+from ngi_train.generator import data
 
 OUTPUT_MODES = ("lightmap", "indirect")
 LIGHT_MAX = 65504.0  # compose.cl LIGHT_MAX: the decoded output stops at the largest half float

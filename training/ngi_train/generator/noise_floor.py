@@ -4,7 +4,8 @@ spp; different random seeds), scored against each other exactly like `ngi lightm
 final images = lighting x albedo + emission + env, ACES, sRGB, data range 1; linear lightmaps, data range = the
 first render's maximum). No model can be measured more finely than this against such a reference.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/noise_floor.py --dataset DATA --frames 5 --out noise.json
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.noise_floor \\
+        --dataset DATA --frames 5 --out noise.json
 
 For every test scene of DATA, its first --frames frames are rendered again with `ngi render --seed` (the
 dataset's seed + 7919) at the split's reference spp and compared with the dataset's reference; the two renders'
@@ -24,7 +25,7 @@ import tqdm
 
 import ngi
 import ngi.scoring as scoring
-import ngi_paths
+from ngi_train import ngi_paths
 
 
 def compare_frames(device, a_dir, b_dir):

@@ -2,7 +2,8 @@
 """The planner on scenes in no training set: for each (scene, budget) run `python3 -m ngi.plan` and collect its
 choice, the reasons and the validation on other frames of the scene (docs/RESULTS.md, "The planner").
 
-    PYTHONPATH=build/python /usr/bin/python3 training/plan_study.py --zoo models/zoo.json --work runs/plans \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.plan_study \\
+        --zoo models/zoo.json --work runs/plans \\
         --out docs/results/plan_study.json
 
 Plans already in --work are kept (a rerun only plans what is missing).

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Train a pix2pix generator for ngi on a rendered dataset (training/README.md has the whole recipe).
 
-    PYTHONPATH=build/python /usr/bin/python3 training/train.py --config training/configs/surround.json \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.train \\
+        --config training/configs/surround.json \\
         --dataset DATA --run runs/surround
 
 The run folder holds run.json (the resolved config), checkpoints/latest.pt (every checkpoint_every steps, at
@@ -13,7 +14,7 @@ bit for bit (same machine and thread count); --steps S extends or shortens a run
 Distributed (data parallel, PyTorch's DistributedDataParallel; training/README.md "Distributed training and
 evaluation"):
 
-    /usr/bin/python3 training/torchrun.py --standalone --nproc_per_node 2 training/train.py ...   (= torchrun)
+    /usr/bin/python3 -m ngi_train.torchrun --standalone --nproc_per_node 2 --module ngi_train.generator.train ...
 
 Each rank forwards its own images one at a time (per-image BatchNorm, batch_size stays 1) and DDP averages the
 gradients over the ranks: one optimizer step sees an effective batch of world_size x accumulate images. Rank 0
@@ -36,23 +37,15 @@ gan.py says what each does.
 import argparse
 import json
 import math
-import signal
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 from tqdm import tqdm
 
-import checkpoint
-import data
-import distributed
-import evaluate
-import gan
-import lightmap_loss
-import networks
-import ngi_paths
+from ngi_train import checkpoint, distributed, ngi_paths
+from ngi_train.generator import data, evaluate, gan, lightmap_loss, networks
 
 DEFAULTS = {
     "layout": "surround", "ngf": 32, "num_downs": 8, "dropout": True, "ndf": 32, "d_layers": 3,
@@ -103,31 +96,12 @@ def check_sizes(cfg, n):
         raise ValueError(f"the discriminator sees {n}x{n} front views; d_layers {cfg['d_layers']} needs >= {side}")
 
 
-def epoch_order(seed, epoch, count):
-    """The frame order of one epoch: a function of (seed, epoch) only, so resuming needs no data RNG state."""
-    return np.random.default_rng([seed, epoch]).permutation(count)
-
-
-def rewrite_log(path, max_step):
-    """Keep the log lines of steps <= max_step (a resumed run repeats the steps after its checkpoint)."""
-    if not path.is_file():
-        return
-    kept = []
-    for line in path.read_text().splitlines():
-        try:
-            if json.loads(line).get("step", 0) <= max_step:
-                kept.append(line)
-        except ValueError:
-            pass  # a line cut short by a hard kill
-    data.write_text_atomic(path, "".join(line + "\n" for line in kept))
-
-
 LOSS_KEYS = ("G_GAN", "G_L1", "D_real", "D_fake", "G_final")
 
 
 class SampleOrder:
-    """Global sample j (0, 1, 2, ... over the whole run) -> frame index: epoch j // L in epoch_order's order. Step s
-    of an effective batch B covers samples [samples_before, samples_before + B); rank r takes the positions r,
+    """Global sample j (0, 1, 2, ... over the whole run) -> frame index: epoch j // L in checkpoint.epoch_order's
+    order. Step s of an effective batch B covers samples [samples_before, samples_before + B); rank r takes the positions r,
     r + W, ..., r + (A - 1) W of it (W ranks, A = accumulate). The sequence does not depend on W or A, so a run
     resumed with another world size (same B) sees the same frames in the same steps."""
 
@@ -140,7 +114,7 @@ class SampleOrder:
         if epoch not in self.orders:
             if len(self.orders) > 2:
                 self.orders.pop(min(self.orders))
-            self.orders[epoch] = epoch_order(self.seed, epoch, self.count)
+            self.orders[epoch] = checkpoint.epoch_order(self.seed, epoch, self.count)
         return int(self.orders[epoch][k])
 
 
@@ -192,13 +166,7 @@ def train(args, cfg, d):
                          "every rank sees")
     resume = checkpoint.load(latest) if found[0] else None
     if resume is not None:
-        old = resume["config"]
-        changed = sorted(k for k in set(old) | set(cfg) if old.get(k, DEFAULTS.get(k)) != cfg.get(k)
-                         and k not in RESUMABLE_CHANGES)
-        if changed:
-            raise SystemExit(f"{run}: the checkpoint was trained with other settings: "
-                             + ", ".join(f"{k} {old.get(k)!r} -> {cfg.get(k)!r}" for k in changed)
-                             + " (use another --run folder)")
+        checkpoint.check_resumable(resume["config"], cfg, RESUMABLE_CHANGES, run, defaults=DEFAULTS)
         old_batch = resume.get("effective_batch", 1)
         if old_batch != batch and not args.allow_batch_change:
             raise SystemExit(
@@ -265,8 +233,8 @@ def train(args, cfg, d):
                 "backend": d.backend, "threads_per_rank": torch.get_num_threads()}
     if d.main:  # the other ranks never write into the run folder
         run.mkdir(parents=True, exist_ok=True)
-        data.write_text_atomic(run / "run.json", json.dumps(run_info, indent=1) + "\n")
-        rewrite_log(log_path, step)
+        checkpoint.write_text_atomic(run / "run.json", json.dumps(run_info, indent=1) + "\n")
+        checkpoint.rewrite_log(log_path, step)
         h, w = data.input_hw(n, cfg["layout"])
         print(f"train {cfg['layout']}: {len(train_set)} frames ({merge_stats['merged']} merged, "
               f"{merge_stats['reused']} cached), input [1, {data.input_nc(cfg['layout'])}, {h}, {w}], "
@@ -277,8 +245,8 @@ def train(args, cfg, d):
               + (f"resuming at step {step} ({samples} samples)" if resume is not None else "from scratch")
               + f", {cfg['steps']} steps", file=sys.stderr, flush=True)
 
-    def save(paths):
-        """Collective: every rank hands over its RNG state, rank 0 writes the checkpoint files."""
+    def save_to(paths, step):
+        """Collective: every rank hands over its RNG state, rank 0 writes the checkpoint files (after `step` steps)."""
         states = d.all_gather(rng_state(d.device))
         if not d.main:
             return
@@ -291,65 +259,61 @@ def train(args, cfg, d):
 
     order = SampleOrder(cfg["seed"], len(train_set))
     positions = [d.rank + d.world * a for a in range(cfg["accumulate"])]
-    stop = checkpoint.StopSignal(quiet=not d.main)
-    progress = tqdm(total=cfg["steps"], initial=step, unit="step", disable=not d.main,
-                    **ngi_paths.progress_options())
     shown = {}  # the losses on the bar, smoothed
-    exit_code = 0
     ran = False
+
+    def advance(step, stop):
+        nonlocal samples, train_seconds, ran
+        ran = True
+        t0 = time.monotonic()
+        indices = [order(samples + p) for p in positions]
+        items = [train_set[i] for i in indices]
+        fronts = [train_set.front(i)[None] for i in indices] if model.needs_front() else None
+        sums = model.step([x[None] for x, _, _ in items], [y[None] for _, y, _ in items], step, fronts)
+        # One small allreduce: the losses' sums over the effective batch, and whether any rank got a signal
+        # (all ranks then stop after the same step).
+        reduced = d.all_reduce_sum([sums[k] for k in LOSS_KEYS] + [float(stop.requested)])
+        losses = {k: reduced[i].item() / batch for i, k in enumerate(LOSS_KEYS)}
+        losses["lr"] = sums["lr"]
+        bad = [k for k, v in losses.items() if not math.isfinite(v)]
+        if bad:
+            raise FloatingPointError(f"step {step}: non-finite losses {bad}: {losses}")
+        step += 1
+        samples += batch
+        train_seconds += time.monotonic() - t0
+        scores = None
+        if cfg["eval_every"] and (step % cfg["eval_every"] == 0 or step == cfg["steps"]):
+            scores = evaluate.heldout_scores(model.G.state_dict(), cfg, eval_set, n, "per_image", dist=d)
+        if d.main:
+            log.write(json.dumps({"step": step, **losses, "samples": samples, "batch": batch,
+                                  "seconds": round(train_seconds, 3)}) + "\n")
+            if scores is not None:
+                log.write(json.dumps({"step": step, "eval": scores}) + "\n")
+            log.flush()
+            for k in LOSS_KEYS:
+                shown[k] = losses[k] if k not in shown else 0.9 * shown[k] + 0.1 * losses[k]
+            progress.set_postfix({k: f"{v:.4g}" for k, v in shown.items()}, refresh=False)
+            progress.update(step - progress.n)
+        return reduced[-1].item() > 0
+
+    def save(step_done):
+        paths = [latest]
+        if cfg["keep_every"] and step_done % cfg["keep_every"] == 0:
+            paths.append(ckpt_dir / f"step_{step_done:08d}.pt")
+        save_to(paths, step_done)
+
     log = open(log_path, "a") if d.main else None
     try:
-        while step < cfg["steps"]:
-            ran = True
-            t0 = time.monotonic()
-            indices = [order(samples + p) for p in positions]
-            items = [train_set[i] for i in indices]
-            fronts = [train_set.front(i)[None] for i in indices] if model.needs_front() else None
-            sums = model.step([x[None] for x, _, _ in items], [y[None] for _, y, _ in items], step, fronts)
-            # One small allreduce: the losses' sums over the effective batch, and whether any rank got a signal
-            # (all ranks then stop after the same step).
-            reduced = d.all_reduce_sum([sums[k] for k in LOSS_KEYS] + [float(stop.signum is not None)])
-            losses = {k: reduced[i].item() / batch for i, k in enumerate(LOSS_KEYS)}
-            losses["lr"] = sums["lr"]
-            stopping = reduced[-1].item() > 0
-            bad = [k for k, v in losses.items() if not math.isfinite(v)]
-            if bad:
-                raise FloatingPointError(f"step {step}: non-finite losses {bad}: {losses}")
-            step += 1
-            samples += batch
-            train_seconds += time.monotonic() - t0
-            scores = None
-            if cfg["eval_every"] and (step % cfg["eval_every"] == 0 or step == cfg["steps"]):
-                scores = evaluate.heldout_scores(model.G.state_dict(), cfg, eval_set, n, "per_image", dist=d)
-            if d.main:
-                log.write(json.dumps({"step": step, **losses, "samples": samples, "batch": batch,
-                                      "seconds": round(train_seconds, 3)}) + "\n")
-                if scores is not None:
-                    log.write(json.dumps({"step": step, "eval": scores}) + "\n")
-                log.flush()
-                for k in LOSS_KEYS:
-                    shown[k] = losses[k] if k not in shown else 0.9 * shown[k] + 0.1 * losses[k]
-                progress.set_postfix({k: f"{v:.4g}" for k, v in shown.items()}, refresh=False)
-                progress.update(step - progress.n)
-            if step % cfg["checkpoint_every"] == 0 or step == cfg["steps"] or stopping:
-                paths = [latest]
-                if cfg["keep_every"] and step % cfg["keep_every"] == 0:
-                    paths.append(ckpt_dir / f"step_{step:08d}.pt")
-                save(paths)
-            if stopping:
-                if d.main:
-                    print(f"stopped at step {step}; checkpoint {latest} (run the same command to resume)",
-                          file=sys.stderr)
-                exit_code = 128 + (stop.signum or signal.SIGTERM)
-                break
+        with tqdm(total=cfg["steps"], initial=step, unit="step", disable=not d.main,
+                  **ngi_paths.progress_options()) as progress:
+            step, exit_code = checkpoint.run_steps(step, cfg["steps"], advance, save, cfg["checkpoint_every"], latest,
+                                                   main=d.main)
     finally:
-        stop.restore()
-        progress.close()
         if log is not None:
             log.close()
     if exit_code == 0:
         if not ran and resume is None:
-            save([latest])
+            save_to([latest], step)
         if d.main:
             print(f"done: {step} steps ({samples} samples), {train_seconds:.0f} s of training; checkpoint {latest}",
                   file=sys.stderr)

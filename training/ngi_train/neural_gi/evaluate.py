@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Score a trained seed 002 model (train.py's file) on a scene's held-out frames, against the direct-light baseline.
 
-    PYTHONPATH=build/python nice -n 10 /usr/bin/python3 training/neural_gi/evaluate.py --dataset data/neural_gi_bleed \\
+    PYTHONPATH=training:build/python nice -n 10 /usr/bin/python3 -m ngi_train.neural_gi.evaluate \\
+        --dataset data/neural_gi_bleed \\
         --model models/neural_gi_bleed.safetensors --out results/neural_gi_bleed.json [--engine ngi]
 
 The held-out frames are chosen as train.py chooses them (--test-frames / --test-split, the same defaults). Per frame
@@ -35,7 +36,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-import data
+from ngi_train.neural_gi import data
 import ngi
 import ngi.model_file as model_file
 from ngi import _constants
@@ -61,7 +62,7 @@ def model_box(config):
     """neural_gi.scene_box (the format's field), else training.scene_box (train.py with an older ngi.neural_gi)."""
     box = config.get("neural_gi", {}).get("scene_box") or config.get("training", {}).get("scene_box")
     if not box:
-        raise ValueError("the model file has no scene box (write it with training/neural_gi/train.py)")
+        raise ValueError("the model file has no scene box (write it with training/ngi_train/neural_gi/train.py)")
     return box["min"], box["max"]
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Tables, learning curves and a summary JSON of seed 002's runs (docs/RESULTS_NEURAL_GI.md is written from them).
 
-    /usr/bin/python3 training/neural_gi/report.py --runs data/neural_gi_runs --results data/neural_gi_results \\
+    /usr/bin/python3 -m ngi_train.neural_gi.report --runs data/neural_gi_runs --results data/neural_gi_results \\
         --out docs/neural_gi
 
 RUNS/<scene>/<variant>/ are train.py work folders (run.json, log.jsonl); RESULTS/<scene>__<variant>__<set>.json

@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # Seed 002 end to end at this machine's scale (docs/RESULTS_NEURAL_GI.md): render, train, evaluate, report.
-# Every step resumes: `ngi dataset` skips written frames, train.py resumes its checkpoint, sequences.py skips
+# Every step resumes: `ngi dataset` skips written frames, train resumes its checkpoint, sequences skips
 # written renders; run the same command again after an interruption.
 #
-#   bash training/neural_gi/reproduce.sh [render|sequences|train|evaluate|report|all] [scene ...]
-#   bash training/neural_gi/reproduce.sh one SCENE VARIANT     # one training (variants: see variant_args)
+#   bash training/ngi_train/neural_gi/reproduce.sh [render|sequences|train|evaluate|report|all] [scene ...]
+#   bash training/ngi_train/neural_gi/reproduce.sh one SCENE VARIANT     # one training (variants: see variant_args)
 #
 # Environment: STEPS (training steps of every variant, default 5000, as shipped), DATA (default data), PT_SPP
 # (path tracing sample counts rendered and scored beside the models, default "16 32 100": 16 ~ the network's time,
 # 100 ~ the network plus its 256-spp direct-light input, measured in docs/RESULTS_NEURAL_GI.md), JOBS (trainings at
 # once, default 2, one thread each).
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$ROOT"
 STAGE="${1:-all}"
 shift || true
@@ -23,10 +23,10 @@ DATA="${DATA:-data}"
 PT_SPP="${PT_SPP:-16 32 100}"
 JOBS="${JOBS:-2}"
 PY=/usr/bin/python3
-export PYTHONPATH="$ROOT/build/python${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONPATH="$ROOT/training:$ROOT/build/python${PYTHONPATH:+:$PYTHONPATH}"
 export POCL_CACHE_DIR="${POCL_CACHE_DIR:-$ROOT/build/.cache/pocl}"
 NGI="$ROOT/build/ngi"
-T="$ROOT/training/neural_gi"
+T=ngi_train.neural_gi  # the family's commands: $PY -m $T.<command>
 RUNS="$DATA/neural_gi_runs"
 RESULTS="$DATA/neural_gi_results"
 SEQ="$DATA/neural_gi_seq_n32"
@@ -41,11 +41,11 @@ render() {
 
 sequences() {
   for s in "${SCENES[@]}"; do
-    "$PY" "$T/sequences.py" --config "configs/neural_gi_${s}_n32.json" --out "$SEQ" --ngi "$NGI" --pt-spp $PT_SPP
+    "$PY" -m "$T.sequences" --config "configs/neural_gi_${s}_n32.json" --out "$SEQ" --ngi "$NGI" --pt-spp $PT_SPP
   done
 }
 
-# variant -> extra train.py arguments (the network: C_B 16, ngf 32, num_downs 5 = a 1 x 1 bottleneck at N = 32,
+# variant -> extra arguments of the trainer (the network: C_B 16, ngf 32, num_downs 5 = a 1 x 1 bottleneck at N = 32,
 # MLP 8 x 256 with the input re-injected at layer 4)
 variant_args() {
   case "$1" in
@@ -64,7 +64,7 @@ train_one() {  # scene variant
   work="$RUNS/$f/$v"
   mkdir -p "$work"
   # shellcheck disable=SC2086
-  nice -n 5 "$PY" "$T/train.py" --dataset "$DATA/neural_gi_${s}_n32" --work "$work" --cache "$DATA/neural_gi_cache" \
+  nice -n 5 "$PY" -m "$T.train" --dataset "$DATA/neural_gi_${s}_n32" --work "$work" --cache "$DATA/neural_gi_cache" \
     --out "$work/model.safetensors" --steps "$STEPS" --num-downs 5 --eval-every 500 --threads 1 $args \
     > "$work/train.out" 2> "$work/train.err" || { echo "train $s $v failed: see $work/train.err" >&2; return 1; }
 }
@@ -85,10 +85,10 @@ evaluate() {
     for v in neural_gi neural_gi_seed2 no_buffer unet_only; do
       local m="$RUNS/$f/$v/model.safetensors"
       [ -f "$m" ] || continue
-      "$PY" "$T/evaluate.py" --dataset "$DATA/neural_gi_${s}_n32" --model "$m" --cache "$DATA/neural_gi_cache" \
+      "$PY" -m "$T.evaluate" --dataset "$DATA/neural_gi_${s}_n32" --model "$m" --cache "$DATA/neural_gi_cache" \
         --out "$RESULTS/${f}__${v}__heldout.json"
       for q in moving_camera moving_light; do
-        "$PY" "$T/evaluate.py" --dataset "$SEQ" --scene "$f" --split "$q" --test-split "$q" --model "$m" \
+        "$PY" -m "$T.evaluate" --dataset "$SEQ" --scene "$f" --split "$q" --test-split "$q" --model "$m" \
           --path-traced $(for x in $PT_SPP; do echo "${q}_pt$x"; done) --temporal --cache "$DATA/neural_gi_cache_seq" \
           --out "$RESULTS/${f}__${v}__${q}.json"
       done
@@ -97,7 +97,7 @@ evaluate() {
 }
 
 report() {
-  "$PY" "$T/report.py" --runs "$RUNS" --results "$RESULTS" --out docs/neural_gi
+  "$PY" -m "$T.report" --runs "$RUNS" --results "$RESULTS" --out docs/neural_gi
 }
 
 export -f train_one variant_args folder

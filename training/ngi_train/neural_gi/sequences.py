@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Seed 002's temporal and equal-time test data: two short sequences per scene, rendered with `ngi render`.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/neural_gi/sequences.py \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.neural_gi.sequences \\
         --config configs/neural_gi_bleed_n32.json --out data/neural_gi_seq_n32 [--frames 16] [--pt-spp 16]
 
 For the dataset config's (only) scene, at its N, feature and reference spp:
@@ -21,27 +21,24 @@ For the dataset config's (only) scene, at its N, feature and reference spp:
                                floor of the references: two independent renders compared)
 
 Each frame has its own path-tracer seed (as in a dataset). Every scene folder gets a scene.json with the grid size
-(data.py's scene box). render.json records each render's reference time (ms) and settings. Frames already written
-are skipped: an interrupted run resumes.
+(data.py's scene box). OUT/render.json records each render's reference time (ms) and settings, taken from the
+render.json `ngi render` writes into the frame folder. Frames already written are skipped: an interrupted run
+resumes.
 """
 
 import argparse
 import json
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 from tqdm import tqdm
 
-sys.path.append(str(Path(__file__).resolve().parents[1]))  # training/ngi_paths.py
-import ngi_paths  # noqa: E402
+from ngi_train import ngi_paths
 
 SEQUENCES = ("moving_camera", "moving_light")
 LIGHT_HALF_EDGE = 1.0  # metres: the fixed 2 x 2 m panel of the sequences (the dataset draws edges of 1-3 m)
-REFERENCE_MS = re.compile(r"^reference\s+(\d+) spp, \d+ bounces: ([0-9.]+) ms", re.M)
-FEATURE_MS = re.compile(r"^features\s+6 x \d+\^2, \d+ spp direct: ([0-9.]+) ms", re.M)
 
 
 def folder_name(spec):
@@ -122,30 +119,21 @@ def main(argv=None):
                "--bounces", str(config.get("max_bounces", 8)), "--seed", str(seed), "--device", a.device,
                "--out", str(out), *base]
         t0 = time.monotonic()
-        proc = subprocess.run(cmd, capture_output=True, text=True, env=ngi_paths.ngi_env())
-        if proc.returncode:
-            raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
-        m, fm = REFERENCE_MS.search(proc.stdout), FEATURE_MS.search(proc.stdout)
-        if not m or not fm:
-            raise SystemExit(f"no reference or feature timing in ngi render's output:\n{proc.stdout}")
-        record[key] = {"spp": int(m.group(1)), "reference_ms": float(m.group(2)),
-                       "feature_ms_six_faces": float(fm.group(1)), "seed": seed,
+        try:
+            ngi_paths.run(cmd)
+        except RuntimeError as e:
+            raise SystemExit(str(e)[-2000:]) from None
+        rendered = json.loads((out / "render.json").read_text())
+        record[key] = {"spp": rendered["settings"]["reference_spp"], "reference_ms": rendered["timing"]["reference_ms"],
+                       "feature_ms_six_faces": rendered["timing"]["features_ms"], "seed": seed,
                        "wall_s": round(time.monotonic() - t0, 3), "args": base}
-        size = scene_size(proc.stdout)
+        size = rendered["scene"]["size"]
         (folder / "scene.json").write_text(json.dumps({"spec": spec, "size": size,
                                                        "note": "sequences.py (ngi render frames)"}) + "\n")
         tmp = record_path.with_suffix(".tmp")
         tmp.write_text(json.dumps(record, indent=1) + "\n")
         tmp.replace(record_path)
     return 0
-
-
-def scene_size(render_stdout):
-    """The scene's grid size in blocks, from `ngi render`'s summary line ("scene  NAME (X x Y x Z blocks, ...")."""
-    m = re.search(r"^scene\s+\S+ \((\d+) x (\d+) x (\d+) blocks", render_stdout, re.M)
-    if not m:
-        raise SystemExit(f"no scene size in ngi render's output:\n{render_stdout}")
-    return [int(m.group(k)) for k in (1, 2, 3)]
 
 
 if __name__ == "__main__":

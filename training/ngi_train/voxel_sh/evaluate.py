@@ -24,14 +24,12 @@ Writes one JSON file (--out) and prints a table.
 import argparse
 import json
 import statistics
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import data  # noqa: E402
+from ngi_train.voxel_sh import data
 
 # Real SH bands 0-2 with the Condon-Shortley phase (docs/CONVENTIONS.md section 14) and the cosine lobe A_l.
 LOBE = np.array([np.pi] + [2 * np.pi / 3] * 3 + [np.pi / 4] * 5)

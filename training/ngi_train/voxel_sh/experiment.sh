@@ -2,16 +2,16 @@
 # Seed 004 end to end, as recorded in docs/RESULTS_VOXEL_SH.md: the Cornell-box data, the networks, the voxel-level
 # and frame-level evaluation. Every step skips what is already done (data folders, finished trainings resume from
 # their checkpoints), so an interrupted run continues where it stopped.
-# Usage: training/voxel_sh/experiment.sh WORK_DIR [STAGE...]   stages: data train eval (default: all three)
-# Needs a build (tools/build.sh) and the Python package of it (PYTHONPATH=build/python, set below).
+# Usage: training/ngi_train/voxel_sh/experiment.sh WORK_DIR [STAGE...]   stages: data train eval (default: all three)
+# Needs a build (tools/build.sh), its Python package and the training package (PYTHONPATH, set below).
 set -euo pipefail
-cd "$(dirname "$0")/../.."
+cd "$(dirname "$0")/../../.."
 root=$PWD
 work=${1:?usage: experiment.sh WORK_DIR [data] [train] [eval]}
 shift
 stages=${*:-data train eval}
 ngi=$root/build/ngi
-export PYTHONPATH=$root/build/python
+export PYTHONPATH=$root/training:$root/build/python
 dev=${NGI_DEVICE:-pocl}
 D=$work/vf
 train_scenes="$D/cornell_0 $D/cornell_1 $D/cornell_2 $D/cornell_3 $D/cornell_4"
@@ -32,10 +32,10 @@ data)
       --directions 256 --samples 16 --device "$dev"
   done ;;
 train)
-  # name architecture steps training-set [extra train.py options]
+  # name architecture steps training-set [extra trainer options]
   run() {
     local name=$1 arch=$2 steps=$3 set=$4; shift 4
-    /usr/bin/python3 training/voxel_sh/train.py --arch "$arch" --train $set --test $test_scenes --steps "$steps" \
+    /usr/bin/python3 -m ngi_train.voxel_sh.train --arch "$arch" --train $set --test $test_scenes --steps "$steps" \
       --work "$work/runs/$name" --out "$work/models/$name.safetensors" --card "$work/models/$name.md" --half "$@"
   }
   run voxel_sh_mlp mlp 3000 "$train_scenes"
@@ -46,7 +46,7 @@ train)
 eval)
   models=$(ls "$work"/models/*.safetensors)
   # Voxel level (SH MSE in standardized units, face and probe irradiance errors, model times) + the baseline SH.
-  /usr/bin/python3 training/voxel_sh/evaluate.py --train $train_scenes --test $test_scenes --models $models \
+  /usr/bin/python3 -m ngi_train.voxel_sh.evaluate --train $train_scenes --test $test_scenes --models $models \
     --devices pocl --baselines "$work/baselines" --out "$work/voxel_metrics.json"
   # Frame level: views of the test boxes lit from every field, against 1024-spp references (128^2: the surround
   # generator needs N divisible by 64).
@@ -63,7 +63,7 @@ eval)
     --frame 0 --face 128 --spp 1024 "${model_args[@]}" --sh "mean_position=$work/baselines/mean_position_cornell_5.npy" \
     --surround-model models/surround.safetensors --out "$work/frames/white_v0" --device "$dev"
   # The LTF's per-voxel lighting into the voxel-level table too.
-  /usr/bin/python3 training/voxel_sh/evaluate.py --train $train_scenes --test $test_scenes --models $models \
+  /usr/bin/python3 -m ngi_train.voxel_sh.evaluate --train $train_scenes --test $test_scenes --models $models \
     --devices pocl --ltf "$work/frames/pink_v0" "$work/frames/white_v0" --out "$work/voxel_metrics.json"
   # Costs on each OpenCL stack, with nothing else running: a small view (cheap reference), every method timed
   # (the frame runs above share the machine's 2 cores with whatever else runs).

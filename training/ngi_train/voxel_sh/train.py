@@ -1,13 +1,13 @@
 #!/usr/bin/python3
 """Train one of seed 004's networks (voxel attributes -> 27 SH coefficients) and export it for ngi.
 
-    PYTHONPATH=build/python /usr/bin/python3 training/voxel_sh/train.py --arch set \\
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.voxel_sh.train --arch set \\
         --train data/vox/train/* --test data/vox/test/* --steps 3000 \\
         --work /tmp/voxel_sh_set --out models/voxel_sh_set.safetensors --card models/voxel_sh_set.md
 
 One step = one whole training scene (the set network pools over the scene), scenes in a shuffled order per epoch
-that depends only on (seed, epoch). Inputs and targets are standardized with statistics of the training scenes
-(data.py); the loss is seed 004's Eq. 31, mean((y' - t')^2) + lambda ||W||^2: the mean squared error of the
+that depends only on (seed, epoch) (checkpoint.epoch_order). Inputs and targets are standardized with statistics of
+the training scenes (data.py); the loss is seed 004's Eq. 31, mean((y' - t')^2) + lambda ||W||^2: the mean squared error of the
 standardized coefficients plus --weight-decay times the sum of squares of every weight matrix (biases excluded),
 added to the loss explicitly; Adam's own weight_decay is not used (it would add lambda w to the gradient, i.e.
 (lambda / 2) ||w||^2, biases included).
@@ -23,7 +23,6 @@ written to --out (F32, or F16 with --half) through ngi.model_file and the model 
 import argparse
 import json
 import math
-import signal
 import sys
 import time
 from pathlib import Path
@@ -32,30 +31,13 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-import data
-import export
-import networks
+import ngi.voxel_sh as networks
 
-# training/checkpoint.py (atomic checkpoint writes, the Ctrl-C handler) is shared with the generator trainer. Appended,
-# not prepended: this folder's data.py must stay the one `import data` finds.
-sys.path.append(str(Path(__file__).resolve().parents[1]))
-import checkpoint  # noqa: E402
+from ngi_train import checkpoint, ngi_paths
+from ngi_train.voxel_sh import data, export
 
 # Keys of the run config that may change when a run is resumed (they do not change what a step computes).
 RESUMABLE = {"steps", "log_every", "checkpoint_every", "threads"}
-
-
-def progress_options():
-    """As training/ngi_paths.py: redrawn 4x a second on a terminal; in a log, plain ASCII at most every 30 s."""
-    tty = sys.stderr.isatty()
-    interval = 0.25 if tty else 30.0
-    return {"file": sys.stderr, "mininterval": interval, "maxinterval": max(10.0, interval), "ascii": not tty,
-            "dynamic_ncols": tty}
-
-
-def scene_order(seed, epoch, count):
-    """The scene order of one epoch: a function of (seed, epoch) only, so resuming needs no data RNG state."""
-    return np.random.default_rng([seed, epoch]).permutation(count)
 
 
 @torch.no_grad()
@@ -72,21 +54,6 @@ def mse(net, items):
 
 def parse_widths(text):
     return [int(v) for v in text.split(",")] if text else None
-
-
-def rewrite_log(path, max_step):
-    """Keep the log lines of steps <= max_step (a resumed run repeats the steps after its checkpoint)."""
-    if not path.is_file():
-        return
-    kept = [line for line in path.read_text().splitlines() if line.strip() and _step_of(line) <= max_step]
-    path.write_text("".join(line + "\n" for line in kept))
-
-
-def _step_of(line):
-    try:
-        return json.loads(line).get("step", 0)
-    except ValueError:
-        return math.inf  # a line cut short by a hard kill: dropped
 
 
 def write_card(path, run, result):
@@ -171,13 +138,8 @@ def main(argv=None):
     opt = torch.optim.Adam(net.parameters(), lr=a.lr)
     step, train_seconds = 0, 0.0
     if ckpt.is_file():
-        state = torch.load(ckpt, map_location="cpu")  # our own file
-        old = state["config"]
-        changed = sorted(k for k in set(old) | set(config) if old.get(k) != config.get(k) and k not in RESUMABLE)
-        if changed:
-            raise SystemExit(f"{work}: the checkpoint was trained with other settings or data: "
-                             + ", ".join(f"{k} {old.get(k)!r} -> {config.get(k)!r}" for k in changed)
-                             + " (use another --work folder)")
+        state = checkpoint.load(ckpt)
+        checkpoint.check_resumable(state["config"], config, RESUMABLE, work)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])
         torch.set_rng_state(state["torch_rng"])
@@ -189,9 +151,9 @@ def main(argv=None):
            "threads": torch.get_num_threads(), "torch": torch.__version__}
     (work / "run.json").write_text(json.dumps(run, indent=1) + "\n")
     log_path = work / "log.jsonl"
-    rewrite_log(log_path, step)
+    checkpoint.rewrite_log(log_path, step)
 
-    def save():
+    def save(step):
         checkpoint.save(ckpt, {"model": net.state_dict(), "optimizer": opt.state_dict(), "step": step,
                            "train_seconds": train_seconds, "torch_rng": torch.get_rng_state(), "config": config,
                            "stats": stats.to_dict(), "grid": list(grid), "train_scenes": run["train_scenes"],
@@ -202,49 +164,41 @@ def main(argv=None):
           f"{'x'.join(map(str, grid))}; {torch.get_num_threads()} threads; "
           + (f"resuming at step {step}" if step else "from scratch") + f", {a.steps} steps",
           file=sys.stderr, flush=True)
-    stop = checkpoint.StopSignal()
-    bar = tqdm(total=a.steps, initial=min(step, a.steps), unit="step", desc=f"voxel_sh {a.arch}",
-               **progress_options())
     wall0 = time.monotonic()
     losses = []
-    stopped = False
-    try:
-        with open(log_path, "a") as log:
-            while step < a.steps:
-                epoch, k = divmod(step, len(train_items))
-                x, t = train_items[int(scene_order(a.seed, epoch, len(train_items))[k])]
-                t0 = time.monotonic()
-                opt.zero_grad(set_to_none=True)
-                fit = torch.mean((net(x) - t) ** 2)
-                loss = fit + a.weight_decay * networks.l2_weights(net) if a.weight_decay else fit
-                loss.backward()
-                opt.step()
-                train_seconds += time.monotonic() - t0
-                step += 1
-                if not math.isfinite(loss.item()):
-                    raise FloatingPointError(f"step {step}: the loss is {loss.item()}")
-                losses.append(fit.item())
-                if step % a.log_every == 0 or step == a.steps:
-                    line = {"step": step, "train_batch_mse": float(np.mean(losses)), "train_mse": mse(net, train_items),
-                            "test_mse": mse(net, test_items), "seconds": round(train_seconds, 3)}
-                    log.write(json.dumps(line) + "\n")
-                    log.flush()
-                    losses = []
-                    bar.set_postfix({"train": _fmt(line["train_mse"]), "test": _fmt(line["test_mse"])}, refresh=False)
-                bar.update(step - bar.n)
-                if step % a.checkpoint_every == 0 or step == a.steps or stop.signum is not None:
-                    save()
-                if stop.signum is not None:
-                    stopped = True
-                    break
-    finally:
-        stop.restore()
-        bar.close()
-    if stopped:
-        print(f"stopped at step {step}; checkpoint {ckpt} (run the same command to resume)", file=sys.stderr)
-        return 128 + (stop.signum or signal.SIGTERM)
+
+    def advance(step, stop):
+        nonlocal train_seconds, losses
+        epoch, k = divmod(step, len(train_items))
+        x, t = train_items[int(checkpoint.epoch_order(a.seed, epoch, len(train_items))[k])]
+        t0 = time.monotonic()
+        opt.zero_grad(set_to_none=True)
+        fit = torch.mean((net(x) - t) ** 2)
+        loss = fit + a.weight_decay * networks.l2_weights(net) if a.weight_decay else fit
+        loss.backward()
+        opt.step()
+        train_seconds += time.monotonic() - t0
+        step += 1
+        if not math.isfinite(loss.item()):
+            raise FloatingPointError(f"step {step}: the loss is {loss.item()}")
+        losses.append(fit.item())
+        if step % a.log_every == 0 or step == a.steps:
+            line = {"step": step, "train_batch_mse": float(np.mean(losses)), "train_mse": mse(net, train_items),
+                    "test_mse": mse(net, test_items), "seconds": round(train_seconds, 3)}
+            log.write(json.dumps(line) + "\n")
+            log.flush()
+            losses = []
+            bar.set_postfix({"train": _fmt(line["train_mse"]), "test": _fmt(line["test_mse"])}, refresh=False)
+        bar.update(step - bar.n)
+        return stop.requested
+
+    with open(log_path, "a") as log, tqdm(total=a.steps, initial=min(step, a.steps), unit="step",
+                                          desc=f"voxel_sh {a.arch}", **ngi_paths.progress_options()) as bar:
+        step, exit_code = checkpoint.run_steps(step, a.steps, advance, save, a.checkpoint_every, ckpt)
+    if exit_code:
+        return exit_code
     if not ckpt.is_file():
-        save()
+        save(step)
 
     result = {"step": step, "train_seconds": train_seconds, "wall_seconds": time.monotonic() - wall0,
               "steps_per_second": step / train_seconds if train_seconds > 0 else float("nan"),
@@ -254,7 +208,7 @@ def main(argv=None):
                 "test_mse": result["test_mse"], "train_scenes": run["train_scenes"],
                 "test_scenes": run["test_scenes"], "parameters": run["parameters"]}
     export.export(net, a.arch, widths, stats, grid, a.out, half=a.half, training=training,
-                  source=f"training/voxel_sh/train.py --arch {a.arch} ({step} steps)")
+                  source=f"ngi_train.voxel_sh.train --arch {a.arch} ({step} steps)")
     if a.card:
         write_card(a.card, run, result)
     print(json.dumps({k: v for k, v in result.items()}), flush=True)

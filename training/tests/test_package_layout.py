@@ -1,0 +1,62 @@
+#!/usr/bin/python3
+"""The training code is one package, imported as a package (ctest training_package, a few seconds).
+
+    PYTHONPATH=training:build/python /usr/bin/python3 training/tests/test_package_layout.py
+
+1. No Python file of the repository's training, tests or Python bindings edits sys.path (sys.path.insert / append /
+   extend / assignment, site.addsitedir): modules are found through PYTHONPATH, never through the order of path
+   edits (issue 30: five files did, and which `data` module won depended on it).
+2. Every module of ngi_train imports from the package (no module relies on a script's own folder on the path).
+3. Each family's commands are modules under ngi_train, and no loose training script is left beside the package.
+"""
+
+import importlib
+import pkgutil
+import re
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+CHECKED = ("training", "tests", "bindings/python")
+SYS_PATH_EDIT = re.compile(r"\bsys\.path\s*(\.\s*(insert|append|extend)\s*\(|\+?=[^=])|\bsite\.addsitedir\s*\(")
+COMMANDS = ["ngi_train.generator.train", "ngi_train.generator.export", "ngi_train.generator.evaluate",
+            "ngi_train.ao.train", "ngi_train.ao.evaluate", "ngi_train.neural_gi.train", "ngi_train.neural_gi.evaluate",
+            "ngi_train.neural_gi.sequences", "ngi_train.voxel_sh.train", "ngi_train.voxel_sh.export",
+            "ngi_train.voxel_sh.evaluate", "ngi_train.torchrun"]
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+    print(f"ok  {what}")
+
+
+def python_files():
+    for top in CHECKED:
+        for path in sorted((REPO / top).rglob("*.py")):
+            if "__pycache__" not in path.parts:
+                yield path
+
+
+def main():
+    this = Path(__file__).resolve()
+    edits = [f"{p.relative_to(REPO)}:{n}: {line.strip()}"
+             for p in python_files() if p != this
+             for n, line in enumerate(p.read_text().splitlines(), 1) if SYS_PATH_EDIT.search(line)]
+    check(not edits, "no Python file in " + ", ".join(CHECKED) + " edits sys.path" + "".join(f"\n  {e}" for e in edits))
+
+    import ngi_train
+    package_dir = Path(ngi_train.__file__).parent
+    check(package_dir == REPO / "training" / "ngi_train", f"ngi_train comes from the repository ({package_dir})")
+    names = [m.name for m in pkgutil.walk_packages(ngi_train.__path__, "ngi_train.")]
+    for name in names:
+        importlib.import_module(name)
+    check(len(names) >= 30, f"every module of ngi_train imports as a package ({len(names)} modules)")
+    check(all(name in names for name in COMMANDS), "every training command is a module: " + ", ".join(COMMANDS))
+    loose = sorted(str(p.relative_to(REPO)) for p in (REPO / "training").glob("*.py"))
+    check(not loose, f"no loose scripts in training/ beside the package {loose}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
