@@ -438,8 +438,9 @@ NGI_API ngi_status ngi_voxels_release(ngi_voxels* voxels);
 NGI_API ngi_status ngi_neural_gi_new(ngi_device* device, ngi_neural_gi** out);
 /* Runs a neural_gi model (with a scene box) on a frame's front face: indirect and lighting (= direct + indirect),
  * 3 x n x n each, either may be NULL (not both). The frame needs its position and area light. upsample: 1, or K > 1
- * to run the network at n / K and upsample (n / K a multiple of 2^num_downs). sanitized_inputs (may be NULL): input
- * values the model's guard replaced. Blocking. */
+ * to run the network at n / K and upsample (n / K a multiple of 2^num_downs). sanitized_inputs (may be NULL): values
+ * replaced on the way in: NaN/Inf in the front face's albedo, normal, depth and direct light, plus input values the
+ * model's guard replaced (0 for a sound frame). Blocking. */
 NGI_API ngi_status ngi_neural_gi_run(ngi_neural_gi* renderer, ngi_model* model, const ngi_frame* frame, int upsample,
                                      float* indirect, size_t indirect_bytes, float* lighting, size_t lighting_bytes,
                                      int* sanitized_inputs);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -1288,7 +1289,10 @@ ngi_status ngi_neural_gi_run(ngi_neural_gi* renderer, ngi_model* model, const ng
         const ngi::NeuralGiImages out = r.renderer.run(m.model, f, options);
         if (indirect) std::memcpy(indirect, out.indirect.data.data(), need);
         if (lighting) std::memcpy(lighting, out.lighting.data.data(), need);
-        if (sanitized_inputs) *sanitized_inputs = out.sanitized_inputs;
+        // Every value replaced on the way in: NaN/Inf in the frame's features and the model guard's replacements.
+        if (sanitized_inputs)
+            *sanitized_inputs = int(std::min<std::size_t>(std::size_t(out.sanitized_inputs) + out.nonfinite_features,
+                                                          std::size_t(INT_MAX)));
         m.sanitized_inputs = out.sanitized_inputs;
         m.last_was_enqueue = false;
     });

@@ -29,6 +29,9 @@ struct NeuralGiImages {
     int network_size = 0;        // the side the network ran at (N / upsample)
     int jbu_fallbacks = 0;       // pixels the upsampling filled bilinearly (no low-resolution tap matched)
     int sanitized_inputs = 0;    // network input values the model's guard replaced (0 for a sound frame)
+    // NaN / +-Inf values in the front face's albedo, normal, depth and direct light, which the input assembly
+    // replaced (docs/MODEL_FORMAT.md "neural_gi": NaN -> 0, an infinite vector -> its signs, light clamped)
+    std::size_t nonfinite_features = 0;
 };
 
 // The channels NeuralGiRenderer assembles, in order (kernels/neural_gi.cl; training's ngi.neural_gi.INPUT_LAYOUT):

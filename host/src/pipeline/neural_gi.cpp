@@ -176,6 +176,11 @@ NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const Neu
 
     NeuralGiImages out;
     out.network_size = side;
+    // The inputs kernel replaces NaN (-> 0) and infinities (clamped, or a unit vector of their signs) without a
+    // trace on the device; they are counted here, on the host copy, so that a frame with NaN features is reported
+    // (the model's guard sees only the already-sanitized inputs).
+    for (const Image* feature : {&albedo, &normal, &depth, &direct})
+        for (float v : feature->data) out.nonfinite_features += !std::isfinite(v);
     cl_mem indirect = im.net_out.get();
     if (k > 1) {
         im.assemble(frame, cfg, 1, im.hi_inputs, im.hi_position, im.hi_normal);
