@@ -9,9 +9,15 @@
 #include <ImfOutputFile.h>
 #include <ImfTiledOutputFile.h>
 
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
+#include <map>
+#include <stdexcept>
 #include <fstream>
 #include <iostream>
 #include <set>
@@ -19,6 +25,7 @@
 
 #include "frame_folder_format.hpp"
 #include "io/file_util.hpp"
+#include "models/safetensors.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/tensor.hpp"
 
@@ -264,6 +271,76 @@ int main(int argc, char** argv) {
                                                 ngi::write_exr(p, ramp(3, 2, 3), ngi::ExrPixelType::Float);
                                             })));
     put("frame_folder", "missing_depth", record(index("left_depth.exr"), ""));
+    // Extreme values (fuzz/frame_folder_format.hpp extreme_record: a, b index extreme_values(); layout bits 0-1
+    // size (0 = 2x2), bit 2 half, bit 3 alpha, bits 4-6 pattern).
+    const auto& ev = ngi::fuzz::extreme_values();
+    auto value = [&](float v) {  // index of v in the table (NaN matched as NaN)
+        for (std::size_t i = 0; i < ev.size(); ++i)
+            if (ev[i] == v || (std::isnan(v) && std::isnan(ev[i]))) return std::uint8_t(i);
+        throw std::logic_error("make_corpus: value not in extreme_values()");
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    using ngi::fuzz::extreme_record;
+    put("frame_folder", "extreme_nan_direct", extreme_record(index("front_direct.exr"), value(nan), value(1.0f), 0x10));
+    put("frame_folder", "extreme_inf_albedo", extreme_record(index("back_albedo.exr"), value(inf), value(-inf), 0x10));
+    put("frame_folder", "extreme_flt_max_depth", extreme_record(index("up_depth.exr"), value(FLT_MAX), value(1e5f), 0x20));
+    put("frame_folder", "extreme_negative_depth", extreme_record(index("down_depth.exr"), value(0.5f), value(-1.0f), 0x20));
+    put("frame_folder", "extreme_normal_half", extreme_record(index("left_normal.exr"), value(65504.0f), value(nan), 0x34));
+    put("frame_folder", "extreme_reference_denormal",
+        extreme_record(index("reference.exr"), value(std::numeric_limits<float>::denorm_min()), value(-FLT_MAX), 0x48));
+    put("frame_folder", "extreme_zero", extreme_record(index("right_albedo.exr"), value(0.0f), value(0.0f), 0x00));
+    std::string env;  // env on all six faces, constant 65520 written as half (rounds to Inf)
+    for (const char* face : {"front", "back", "left", "right", "up", "down"})
+        env += extreme_record(index(std::string(face) + "_env.exr"), value(65520.0f), value(0.0f), 0x04);
+    put("frame_folder", "extreme_env_half_overflow", env);
+
+    // model configs: byte 0 picks the family (fuzz_model_config.cpp), the rest is the config. The shipped models'
+    // configs (their __metadata__["ngi"], two per family), each also with byte 6 (the "family" key as written).
+    const fs::path models = root.parent_path().parent_path() / "models";
+    const std::vector<std::string> families = {"pix2pix_unet", "deepillumination", "mlp", "neural_gi", "voxel_sh", "graph"};
+    std::map<std::string, int> per_family;
+    std::vector<fs::path> model_files;
+    for (const auto& e : fs::recursive_directory_iterator(models))
+        if (e.path().extension() == ".safetensors") model_files.push_back(e.path());
+    std::sort(model_files.begin(), model_files.end());
+    for (const fs::path& f : model_files) {
+        const std::string cfg = ngi::detail::read_safetensors(f.string()).metadata.at("ngi");
+        const std::string family = json::parse(cfg).at("family").get<std::string>();
+        if (per_family[family]++ >= 2) continue;
+        const char pick = char(std::find(families.begin(), families.end(), family) - families.begin());
+        put("model_config", f.stem().string(), std::string(1, pick) + cfg);
+        put("model_config", f.stem().string() + "_as_written", std::string(1, char(6)) + cfg);
+    }
+    put("model_config", "deepillumination", std::string(1, char(1)) + di.dump());  // the safetensors seed's config
+    // No graph model is shipped: a hand-written one with every op (docs/MODEL_FORMAT.md "graph").
+    const json graph = {
+        {"format_version", 1}, {"family", "graph"}, {"input_nc", 3}, {"output_nc", 3},
+        {"graph", {{"layout", "nchw"}, {"input", "x"}, {"output", "y"}, {"nodes", json::array({
+            {{"name", "clean"}, {"op", "nan_to_num"}, {"inputs", {"x"}}, {"output", "t0"}},
+            {{"name", "enc"}, {"op", "frequency_encode"}, {"inputs", {"t0"}}, {"output", "t1"},
+             {"encoding", {{"bands", 2}, {"include_input", true}}}},
+            {{"name", "conv"}, {"op", "conv2d"}, {"inputs", {"t1"}}, {"output", "t2"}, {"in", 15}, {"out", 4},
+             {"kernel", {4, 4}}, {"stride", 2}, {"pad", 1}, {"weight", "conv.w"}, {"activation", "leaky_relu"},
+             {"slope", 0.2}},
+            {{"name", "up"}, {"op", "conv_transpose2d"}, {"inputs", {"t2"}}, {"output", "t3"}, {"in", 4}, {"out", 3},
+             {"kernel", {4, 4}}, {"stride", 2}, {"pad", 1}, {"weight", "up.w"}, {"bias", "up.b"},
+             {"input_activation", "relu"}},
+            {{"name", "bn"}, {"op", "affine"}, {"inputs", {"t3"}}, {"output", "t4"}, {"scale", "bn.s"}, {"shift", "bn.t"}},
+            {{"name", "sum"}, {"op", "add"}, {"inputs", {"t4", "t0"}}, {"output", "t5"}},
+            {{"name", "prod"}, {"op", "mul"}, {"inputs", {"t5", "t0"}}, {"output", "t6"}},
+            {{"name", "cat"}, {"op", "concat"}, {"inputs", {"t6", "t0"}}, {"output", "t7"}},
+            {{"name", "act"}, {"op", "activation"}, {"inputs", {"t7"}}, {"output", "t8"}, {"activation", "tanh"}},
+            {{"name", "mix"}, {"op", "conv2d"}, {"inputs", {"t8"}}, {"output", "y"}, {"in", 6}, {"out", 3},
+             {"kernel", {1, 1}}, {"stride", 1}, {"pad", 0}, {"weight", "mix.w"}, {"activation", "sigmoid"}}})}}},
+        {"input_range", {-1, 1}}, {"source", "fuzz seed"}};
+    put("model_config", "graph_every_op", std::string(1, char(5)) + graph.dump());
+    json graph_nc = {{"family", "graph"}, {"input_nc", 4},
+                     {"graph", {{"layout", "nc"}, {"input", "in"}, {"output", "out"}, {"nodes", json::array({
+                         {{"name", "d0"}, {"op", "dense"}, {"inputs", {"in"}}, {"output", "h"}, {"in", 4}, {"out", 8},
+                          {"weight", "d0.w"}, {"bias", "d0.b"}, {"activation", "relu"}},
+                         {{"name", "d1"}, {"op", "dense"}, {"inputs", {"h"}}, {"output", "out"}, {"in", 8}, {"out", 2},
+                          {"weight", "d1.w"}, {"activation", "exp"}}})}}}};
+    put("model_config", "graph_nc", std::string(1, char(5)) + graph_nc.dump());
     std::cout << "wrote the seed corpora under " << root << "\n";
     return 0;
 }

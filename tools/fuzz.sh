@@ -41,7 +41,7 @@ fi
 seconds=${1:-20}
 runs=${2:-}
 declare -A max_len=([npy]=4096 [exr]=16384 [png]=8192 [camera_json]=1024 [dataset_config]=4096 [plan_file]=2048
-                    [safetensors]=32768 [frame_folder]=16384 [mesh]=8192)
+                    [safetensors]=32768 [frame_folder]=16384 [mesh]=8192 [model_config]=8192)
 targets=${NGI_FUZZ_TARGETS:-}
 if [[ -z "$targets" ]]; then
     for f in "$src"/fuzz/fuzz_*.cpp; do n=$(basename "$f" .cpp); targets+=" ${n#fuzz_}"; done

@@ -357,21 +357,10 @@ ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path)
     return c;
 }
 
-GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
-                                    const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm) {
-    GraphModelOps m;
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(cfg.json);
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(std::string("load model: metadata 'ngi': malformed JSON: ") + e.what());
-    }
-    m.desc = parse_graph_desc(j, "load model: metadata 'ngi': ");
-    const GraphDesc& d = m.desc;
+std::vector<GraphNodeWeights> check_graph_weights(const GraphDesc& d, const SafetensorsFile& file) {
     std::vector<int> channels = {d.input_nc};
     for (const GraphNodeDesc& n : d.nodes) channels.push_back(n.out_channels);
-
-    // Pass 1: every tensor a node names, present and of the shape the node implies; nothing else in the file.
+    // Every tensor a node names, present and of the shape the node implies; nothing else in the file.
     std::set<std::string> used;
     auto weight = [&](const GraphNodeDesc& n, const char* key, const std::vector<int>& shape) -> const StoredTensor* {
         if (!n.fields.contains(key)) return nullptr;
@@ -386,12 +375,11 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
         used.insert(name);
         return &it->second;
     };
-    struct Weights { const StoredTensor *w = nullptr, *b = nullptr, *scale = nullptr, *shift = nullptr; };
-    std::vector<Weights> weights(d.nodes.size());
+    std::vector<GraphNodeWeights> weights(d.nodes.size());
     for (std::size_t k = 0; k < d.nodes.size(); ++k) {
         const GraphNodeDesc& n = d.nodes[k];
         const int cin = channels[n.inputs[0]], cout = n.out_channels;
-        Weights& w = weights[k];
+        GraphNodeWeights& w = weights[k];
         if (n.op == "conv2d" || n.op == "conv_transpose2d") {
             const int kh = n.fields["kernel"][0].get<int>(), kw = n.fields["kernel"][1].get<int>();
             w.w = weight(n, "weight", n.op == "conv2d" ? std::vector<int>{cout, cin, kh, kw}
@@ -408,13 +396,31 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
     for (const auto& [name, t] : file.tensors)
         if (!used.count(name))
             throw InputError("load model: tensor '" + name + "' is not used by any node of the graph");
+    return weights;
+}
+
+GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
+                                    const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm) {
+    GraphModelOps m;
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(cfg.json);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(std::string("load model: metadata 'ngi': malformed JSON: ") + e.what());
+    }
+    m.desc = parse_graph_desc(j, "load model: metadata 'ngi': ");
+    const GraphDesc& d = m.desc;
+    std::vector<int> channels = {d.input_nc};
+    for (const GraphNodeDesc& n : d.nodes) channels.push_back(n.out_channels);
+    // Pass 1: the weights, checked before anything touches the device.
+    const std::vector<GraphNodeWeights> weights = check_graph_weights(d, file);
 
     // Pass 2: the ops (weights uploaded).
     const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
     m.copy = std::make_shared<CopyNode>();
     for (std::size_t k = 0; k < d.nodes.size(); ++k) {
         const GraphNodeDesc& n = d.nodes[k];
-        const Weights& w = weights[k];
+        const GraphNodeWeights& w = weights[k];
         const int cin = channels[n.inputs[0]], cout = n.out_channels;
         std::shared_ptr<Op> op;
         try {

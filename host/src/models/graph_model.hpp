@@ -43,6 +43,15 @@ ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path)
 // The node list of a config parse_graph_config accepted; `what` prefixes errors.
 GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what);
 
+// The weight tensors of one node (nullptr where the node names none), pointing into the file.
+struct GraphNodeWeights {
+    const StoredTensor *w = nullptr, *b = nullptr, *scale = nullptr, *shift = nullptr;
+};
+// Every tensor the nodes of `d` name present in `file` with the shape the node implies (docs/MODEL_FORMAT.md
+// "graph"), and no other tensor in the file: InputError naming the node and the tensor otherwise. Needs no device
+// (build_graph_model_ops runs it first; the fuzz target fuzz_model_config calls it directly).
+std::vector<GraphNodeWeights> check_graph_weights(const GraphDesc& d, const SafetensorsFile& file);
+
 struct GraphModelOps {
     GraphDesc desc;
     std::vector<std::shared_ptr<Op>> ops;  // per node; nullptr for concat

@@ -1,0 +1,178 @@
+// Model configs (__metadata__["ngi"], docs/MODEL_FORMAT.md) of every family, and what each family's loader does
+// with an accepted config before it needs an OpenCL device. The first input byte picks the family (modulo 7:
+// pix2pix_unet, deepillumination, mlp, neural_gi, voxel_sh, graph, or 6 = the "family" key as written); the rest is
+// the config's JSON text. For a family other than "as written", a text that parses as a JSON object gets that
+// family as its "family" key (re-serialized; a text whose "family" already matches is passed unchanged, so the
+// duplicate-key and number-format paths stay reachable), so that mutations explore one family's fields instead of
+// the family check. fuzz_safetensors covers the container and the pix2pix tensors; this target covers configs.
+//
+// After parse_model_config accepts a config, the target runs the family's device-free next step and checks what
+// the loader relies on:
+//   pix2pix_unet, deepillumination: the tensors the config implies (unet_spec, expected_tensors): every shape
+//       positive; a file holding exactly those shapes passes validate_unet_tensors;
+//   neural_gi: validate_neural_gi_tensors refuses a file without tensors (InputError);
+//   mlp: a file with the layer shapes docs/MODEL_FORMAT.md gives ([out, in], the first `in` the encoded width)
+//       passes mlp_spec, and its layers chain;
+//   voxel_sh: the widths and grid within their ranges;
+//   graph: the node list as build_graph_model_ops re-reads it (parse_graph_desc) agrees with the config (output
+//       channels, inputs made before use); a file with the weight shapes of docs/MODEL_FORMAT.md's op table passes
+//       check_graph_weights, unless two nodes name one tensor with different shapes (then an InputError).
+// Only ngi::Error may come out for bad input (fuzz_common.hpp); a failed check is a crash.
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "fuzz_common.hpp"
+#include "models/graph_model.hpp"
+#include "models/mlp_model.hpp"
+#include "models/neural_gi_model.hpp"
+#include "models/safetensors.hpp"
+#include "models/unet.hpp"
+#include "models/voxel_sh_model.hpp"
+
+namespace {
+
+const char* const kFamilies[] = {"pix2pix_unet", "deepillumination", "mlp", "neural_gi", "voxel_sh", "graph"};
+
+ngi::detail::StoredTensor shaped(std::vector<int> shape) {  // shape only: the checks below read no values
+    ngi::detail::StoredTensor t;
+    t.shape = std::move(shape);
+    t.dtype = "F32";
+    return t;
+}
+
+bool finite_range(const float r[2]) { return std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]; }
+
+void check_graph(const ngi::ModelConfig& cfg) {
+    using namespace ngi::detail;
+    const GraphDesc d = parse_graph_desc(nlohmann::json::parse(cfg.json), "fuzz: ");
+    if (d.nodes.empty() || d.output < 1 || std::size_t(d.output) > d.nodes.size()) __builtin_trap();
+    if (d.nodes[std::size_t(d.output) - 1].out_channels != cfg.output_nc || d.input_nc != cfg.input_nc) __builtin_trap();
+    std::vector<int> channels = {d.input_nc};
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) {
+        const GraphNodeDesc& n = d.nodes[k];
+        if (n.inputs.empty() || n.out_channels < 1 || n.out_channels > kMaxChannels) __builtin_trap();
+        for (int i : n.inputs)
+            if (i < 0 || std::size_t(i) > k) __builtin_trap();  // made before it is read: no cycle
+        channels.push_back(n.out_channels);
+    }
+    // The weights docs/MODEL_FORMAT.md's op table gives each node.
+    SafetensorsFile file;
+    bool clash = false;
+    auto want = [&](const GraphNodeDesc& n, const char* key, std::vector<int> shape) {
+        if (!n.fields.contains(key)) return;
+        const std::string name = n.fields[key].get<std::string>();
+        const auto it = file.tensors.find(name);
+        if (it != file.tensors.end()) clash |= it->second.shape != shape;
+        else file.tensors[name] = shaped(std::move(shape));
+    };
+    for (const GraphNodeDesc& n : d.nodes) {
+        const int cin = channels[std::size_t(n.inputs[0])], cout = n.out_channels;
+        if (n.op == "conv2d" || n.op == "conv_transpose2d") {
+            const int kh = n.fields["kernel"][0].get<int>(), kw = n.fields["kernel"][1].get<int>();
+            want(n, "weight", n.op == "conv2d" ? std::vector<int>{cout, cin, kh, kw} : std::vector<int>{cin, cout, kh, kw});
+            want(n, "bias", {cout});
+        } else if (n.op == "dense") {
+            want(n, "weight", {cout, cin});
+            want(n, "bias", {cout});
+        } else if (n.op == "affine") {
+            want(n, "scale", {cin});
+            want(n, "shift", {cin});
+        }
+    }
+    try {
+        const std::vector<GraphNodeWeights> w = check_graph_weights(d, file);
+        if (clash || w.size() != d.nodes.size()) __builtin_trap();
+    } catch (const ngi::Error&) {
+        if (!clash) __builtin_trap();  // the documented shapes were refused
+    }
+}
+
+void check_mlp(const ngi::ModelConfig& cfg) {
+    using namespace ngi::detail;
+    if (cfg.layers.empty() || cfg.output_nc != cfg.layers.back().out) __builtin_trap();
+    SafetensorsFile file;
+    int in = frequency_encoding(cfg).width(cfg.input_nc);
+    if (in < 1) __builtin_trap();
+    for (std::size_t i = 0; i < cfg.layers.size(); ++i) {
+        file.tensors["layers." + std::to_string(i) + ".weight"] = shaped({cfg.layers[i].out, in});
+        file.tensors["layers." + std::to_string(i) + ".bias"] = shaped({cfg.layers[i].out});
+        in = cfg.layers[i].out;
+    }
+    const MlpSpec s = mlp_spec(cfg, file, "fuzz.safetensors");  // must accept the documented shapes
+    if (s.layers.size() != cfg.layers.size()) __builtin_trap();
+    for (std::size_t i = 1; i < s.layers.size(); ++i)
+        if (s.layers[i].in != s.layers[i - 1].out) __builtin_trap();
+}
+
+void check_unet(const ngi::ModelConfig& cfg) {
+    using namespace ngi::detail;
+    const auto expected = expected_tensors(unet_spec(cfg));
+    if (expected.empty()) __builtin_trap();
+    SafetensorsFile file;
+    for (const auto& [name, shape] : expected) {
+        for (int d : shape)
+            if (d < 1) __builtin_trap();
+        file.tensors[name] = shaped(shape);
+    }
+    validate_unet_tensors(cfg, file);  // the implied tensors satisfy the config
+}
+
+void check_voxel_sh(const ngi::ModelConfig& cfg) {
+    const auto& v = cfg.voxel_sh;
+    for (int g : v.grid)
+        if (g < 1) __builtin_trap();
+    if (v.input_lo.size() != 10 || v.input_hi.size() != 10 || v.output_mean.size() != 27 || v.output_std.size() != 27)
+        __builtin_trap();
+    for (const auto* w : {&v.hidden, &v.phi, &v.rho})
+        for (int x : *w)
+            if (x < 1) __builtin_trap();
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    if (size < 1) return 0;
+    const unsigned pick = data[0] % 7u;
+    std::string text = ngi::fuzz::bytes(data + 1, size - 1);
+    if (pick < 6) {
+        try {
+            nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+            if (j.is_object() && !(j.contains("family") && j["family"] == kFamilies[pick])) {
+                j["family"] = kFamilies[pick];
+                text = j.dump();
+            }
+        } catch (const nlohmann::json::exception&) {
+            // not re-serializable (the harness's own step): the text goes in as it is
+        }
+    }
+    return ngi::fuzz::expect_ngi_errors_only([&] {
+        const ngi::ModelConfig cfg = ngi::detail::parse_model_config(text, "fuzz.safetensors");
+        if (cfg.input_nc < 1 || cfg.input_nc > ngi::detail::kMaxChannels || cfg.output_nc < 1 ||
+            cfg.output_nc > ngi::detail::kMaxChannels || !finite_range(cfg.output_range))
+            __builtin_trap();
+        // The graph family's default input range is unbounded (+-FLT_MAX, still finite).
+        if (!finite_range(cfg.input_range)) __builtin_trap();
+        if (cfg.family == "graph") {
+            check_graph(cfg);
+        } else if (cfg.family == "mlp") {
+            check_mlp(cfg);
+        } else if (cfg.family == "voxel_sh") {
+            check_voxel_sh(cfg);
+        } else if (cfg.family == "neural_gi") {
+            try {
+                ngi::detail::validate_neural_gi_tensors(cfg, ngi::detail::SafetensorsFile{});
+            } catch (const ngi::Error&) {
+                return;  // a network needs tensors
+            }
+            __builtin_trap();
+        } else if (cfg.family == "pix2pix_unet" || cfg.family == "deepillumination") {
+            check_unet(cfg);
+        } else {
+            __builtin_trap();  // parse_model_config returned a family it does not know
+        }
+    });
+}
