@@ -107,7 +107,7 @@ int run(const Options& o) {
             {"psnr_object", fg && mse > 0 ? nlohmann::json(10.0 * std::log10(1.0 / mse)) : nlohmann::json(nullptr)},
             {"whole_image", nlohmann::json::parse(ngi::to_json(whole))},
             {"whole_image_note", "background set to 1 in the reference as in the network output; masked SSIM: "
-                                 "training/ao_eval.py"}
+                                 "python3 -m ngi_train.ao.evaluate"}
         };
         out.write_text("metrics.json", m.dump(2) + "\n");
         out.write("compare.png", [&](const std::string& p) {

@@ -13,10 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "io/file_util.hpp"
 #include "ngi/camera_path.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
+#include "ngi/files.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/output_folder.hpp"
 #include "ngi/render.hpp"
@@ -123,7 +123,7 @@ int run(const Options& o) {
             img.data[i] = light * fr.get(ngi::Feature::Albedo, f).data[i] + fr.get(ngi::Feature::Emission, f).data[i] +
                           fr.get(ngi::Feature::Env, f).data[i];
         }
-        preview_tmp = ngi::detail::temp_name(preview);  // within NAME_MAX however long the name is
+        preview_tmp = ngi::staging_name(preview);  // within NAME_MAX however long the name is
         ngi::write_png(preview_tmp, img, ngi::PngEncoding::Srgb);
     }
     try {

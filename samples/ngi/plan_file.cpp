@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "io/file_util.hpp"
 #include "ngi/error.hpp"
+#include "ngi/files.hpp"
 #include "ngi/pipeline.hpp"
 
 namespace ngi_cli {
@@ -55,7 +55,7 @@ PlanRung read_rung(const json& j, const std::string& where, const std::string& p
 
 }  // namespace
 
-Plan Plan::load(const std::string& path) { return parse(ngi::detail::read_file(path, "plan"), path); }
+Plan Plan::load(const std::string& path) { return parse(ngi::read_input_file(path, "plan"), path); }
 
 Plan Plan::parse(const std::string& text, const std::string& path) {
     json j;

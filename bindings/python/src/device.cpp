@@ -4,7 +4,6 @@
 #include <cstring>
 
 #include "common.hpp"
-#include "ops/gemm_tuning.hpp"  // device_type_name: the one spelling of "cpu" / "gpu" / "other"
 
 namespace ngi_py {
 
@@ -29,7 +28,7 @@ py::dict info_dict(const ngi::DeviceInfo& i) {
     d["driver_version"] = i.driver_version;
     d["device_version"] = i.device_version;
     d["opencl_c_version"] = i.opencl_c_version;
-    d["type"] = ngi::detail::device_type_name(i);
+    d["type"] = i.type_name();
     d["fp16"] = i.fp16;
     d["compute_units"] = i.compute_units;
     d["global_mem_bytes"] = i.global_mem_bytes;

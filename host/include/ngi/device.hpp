@@ -43,6 +43,8 @@ struct DeviceInfo {
     std::size_t max_work_group_size = 0;
     unsigned compute_units = 0;
     std::string extensions;
+    // "gpu", "cpu" or "other": the one spelling (the GEMM tuning database's "type" field, ngi.Device.info()).
+    const char* type_name() const { return is_gpu ? "gpu" : is_cpu ? "cpu" : "other"; }
 };
 
 // Every OpenCL device of every platform, in platform/device order (the "P:D" indices).

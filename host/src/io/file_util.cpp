@@ -15,6 +15,7 @@
 #include <new>
 
 #include "ngi/error.hpp"
+#include "ngi/files.hpp"
 #include "ngi/host_memory.hpp"
 
 namespace ngi::detail {
@@ -149,3 +150,13 @@ std::string lower_extension(const std::string& path) {
 }
 
 }  // namespace ngi::detail
+
+namespace ngi {
+
+std::string read_input_file(const std::string& path, const std::string& op, std::uint64_t max_bytes) {
+    return detail::read_file(path, op, max_bytes);
+}
+
+std::string staging_name(const std::string& path) { return detail::temp_name(path); }
+
+}  // namespace ngi

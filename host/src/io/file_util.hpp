@@ -1,4 +1,5 @@
-// Whole-file reads and crash-safe whole-file writes, shared by the image readers and writers. Library-internal.
+// Whole-file reads and crash-safe whole-file writes, shared by the image readers and writers. Library-internal;
+// applications get read_file and temp_name as ngi::read_input_file and ngi::staging_name (ngi/files.hpp).
 #pragma once
 #include <cstdint>
 #include <string>

@@ -43,10 +43,8 @@ int GemmTuningEntry::specificity() const {
 bool GemmTuningEntry::matches(const DeviceInfo& info) const {
     return (platform.empty() || platform == info.platform_name) && (vendor.empty() || vendor == info.vendor) &&
            (device.empty() || device == info.name) && (driver.empty() || driver == info.driver_version) &&
-           (type.empty() || type == device_type_name(info));
+           (type.empty() || type == info.type_name());
 }
-
-std::string device_type_name(const DeviceInfo& info) { return info.is_gpu ? "gpu" : info.is_cpu ? "cpu" : "other"; }
 
 std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, const std::string& name) {
     json db;

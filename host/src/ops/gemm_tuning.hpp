@@ -42,9 +42,6 @@ const GemmTuningEntry* find_gemm_tuning(const std::vector<GemmTuningEntry>& db, 
 // gemm_conv has no local-memory variant: KWG must be 0.
 std::optional<GemmParams> conv_params_for(const DeviceInfo& info, const GemmParams& gemm);
 
-// "cpu", "gpu" or "other".
-std::string device_type_name(const DeviceInfo& info);
-
 // The database as JSON text with `entry` added, replacing an entry with the same match fields (what
 // `ngi_bench tune --write-db` writes back to kernels/gemm_tuning.json).
 std::string gemm_tuning_with(const std::string& json_text, const GemmTuningEntry& entry);
