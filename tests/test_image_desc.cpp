@@ -10,7 +10,7 @@
 #include "ngi/image_desc.hpp"
 #include "ngi/model.hpp"
 #include "ngi/pipeline.hpp"
-#include "io/half.hpp"
+#include "base/half.hpp"
 #include "ops/gather_image.hpp"
 #include "test_support.hpp"
 

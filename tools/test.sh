@@ -108,7 +108,7 @@ run_stage() {
       # its own case) and every GEMM knob set at the generators' layer shapes (258 s): every knob set runs here on
       # random small and odd shapes, the device's own choice at K up to 8192 (local-memory case, self-check).
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(ci_sanitizer_triage|training_package|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model|the path tracer feeds).*|image descriptors: (an engine|device buffers).*|gl_agreement|neural_gi( model files match|: hostile).*|neural GI on a frame: .*|generators match PyTorch for both families.*|GEMM: every knob set matches the reference at the generators. layer shapes)$'); then
+                 -E '^(ci_sanitizer_triage|layer_check|training_package|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|frame path: (run\(\) and enqueue|host in/out|a device on the application|device buffers and interop|an indirect-mode model|the path tracer feeds).*|image descriptors: (an engine|device buffers).*|gl_agreement|neural_gi( model files match|: hostile).*|neural GI on a frame: .*|generators match PyTorch for both families.*|GEMM: every knob set matches the reference at the generators. layer shapes)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;

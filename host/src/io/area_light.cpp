@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "io/vec_text.hpp"
+#include "base/vec_text.hpp"
 #include "ngi/error.hpp"
 
 namespace ngi {

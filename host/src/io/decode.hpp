@@ -8,10 +8,10 @@
 #include "ngi/image.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/tensor.hpp"
+#include "io/npy.hpp"  // decode_npy: in ngi_core with read_npy
 
 namespace ngi::detail {
 
-Tensor decode_npy(const std::string& bytes, const std::string& path);
 Image decode_exr(const std::string& bytes, const std::string& path, std::vector<std::string>* channel_names = nullptr);
 Image decode_png(const std::string& bytes, const std::string& path, PngEncoding encoding = PngEncoding::Linear);
 

@@ -4,10 +4,10 @@
 #include <cstdint>
 #include <cstring>
 
-#include "io/checked_size.hpp"
-#include "io/decode.hpp"
+#include "base/checked_size.hpp"
+#include "base/half.hpp"
 #include "io/file_util.hpp"
-#include "io/half.hpp"
+#include "io/npy.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/tensor.hpp"

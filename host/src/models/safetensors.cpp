@@ -7,9 +7,9 @@
 #include <climits>
 #include <nlohmann/json.hpp>
 
-#include "io/checked_size.hpp"
+#include "base/checked_size.hpp"
+#include "base/half.hpp"
 #include "io/file_util.hpp"
-#include "io/half.hpp"
 #include "ngi/error.hpp"
 #include "ngi/tensor.hpp"
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "graph/nodes.hpp"
-#include "io/json_strict.hpp"
+#include "base/json_strict.hpp"
 #include "models/float_field.hpp"
 #include "models/graph_model.hpp"
 #include "models/mlp_model.hpp"

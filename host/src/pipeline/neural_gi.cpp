@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-#include "io/vec_text.hpp"
+#include "base/vec_text.hpp"
 #include "models/model_access.hpp"
 #include "ops/jbu.hpp"
 #include "pipeline/neural_gi_inputs.hpp"

@@ -8,7 +8,7 @@
 #include <set>
 
 #include "io/file_util.hpp"
-#include "io/json_strict.hpp"
+#include "base/json_strict.hpp"
 #include "render/rand.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"

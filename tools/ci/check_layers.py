@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""Fails on an #include that crosses ngi's layers the wrong way (ctest layer_check; docs/ARCHITECTURE.md "Map").
+
+The rules, with CMakeLists.txt as the source of truth for which library compiles what and links what:
+  1. Libraries: a file of library L includes private headers (host/src/...) only of L and of the libraries L links
+     (target_link_libraries). A .cpp belongs to the library whose source list has it (most by directory: runtime,
+     ops, graph, models -> ngi_core; io -> ngi_io; pipeline -> ngi_pipeline; render -> ngi_render; the files
+     CMakeLists.txt appends to NGI_CORE_SOURCES from other directories -> ngi_core; base holds header-only
+     helpers of every library -> ngi_core); a header to the library of the .cpp with its stem, else to its
+     directory's.
+  2. Inside ngi_core, directories are ordered base < runtime < ops < graph < models (an op knows kernels, not
+     graphs; a graph knows ops, not model files); core's files in other directories (file access, the host-memory
+     limit, .npy, camera and feature conventions) sit with base, below the four.
+  3. Public headers (host/include/ngi) include only public headers; the applications and bindings (samples/,
+     bindings/) include only public headers (ngi/*.hpp, ngi.h) and their own.
+  4. docs/ARCHITECTURE.md's map names every directory `git ls-files` has (top level; host/src, bindings, samples
+     and training one level down), and every directory it names exists.
+Usage: check_layers.py [REPO_ROOT]   (prints every violation; exit 1 if any)
+"""
+import re
+import sys
+from pathlib import Path
+
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
+CORE_DIR_RANK = {"base": 0, "runtime": 1, "ops": 2, "graph": 3, "models": 4}
+DIR_LIBRARY = {"base": "ngi_core", "runtime": "ngi_core", "ops": "ngi_core", "graph": "ngi_core", "models": "ngi_core",
+               "io": "ngi_io", "pipeline": "ngi_pipeline", "render": "ngi_render"}
+CLIENT_DIRS = ["samples", "bindings"]
+# Build-time tools inside a client directory that read the library's internals by design: the generator of the
+# Python package's constants module (ngi/_constants.py) exists to copy the values the kernels are built with.
+CLIENT_EXEMPT = {"bindings/python/constants/gen_constants.cpp"}
+
+
+def cmake_facts(root):
+    """(files appended to ngi_core from other directories, {library: libraries it may include from})."""
+    text = (root / "CMakeLists.txt").read_text()
+    m = re.search(r"list\(APPEND NGI_CORE_SOURCES(.*?)\)", text, re.S)
+    if not m:
+        sys.exit("check_layers: no list(APPEND NGI_CORE_SOURCES ...) in CMakeLists.txt")
+    core_extra = set(re.findall(r"\$\{NGI_SRC\}/([\w/]+\.cpp)", m.group(1)))
+    links = {lib: {lib} for lib in set(DIR_LIBRARY.values())}
+    for lib, args in re.findall(r"target_link_libraries\((ngi_core|ngi_io|ngi_pipeline|ngi_render)\b(.*?)\)", text, re.S):
+        links[lib] |= set(re.findall(r"\bngi_(?:core|io|pipeline|render)\b", args))
+    return core_extra, links
+
+
+def library_of(rel, src, core_extra):
+    """rel: a path under host/src ("io/npy.cpp", "io/npy.hpp")."""
+    stem_cpp = str(Path(rel).with_suffix(".cpp"))
+    if stem_cpp in core_extra:
+        return "ngi_core"
+    top = rel.split("/")[0]
+    if top not in DIR_LIBRARY:
+        return None
+    return DIR_LIBRARY[top]
+
+
+def core_rank(rel, core_extra):
+    if str(Path(rel).with_suffix(".cpp")) in core_extra:
+        return 0
+    return CORE_DIR_RANK.get(rel.split("/")[0], 0)
+
+
+def check_map(root):
+    """docs/ARCHITECTURE.md's map names every directory of the repository, and every path it names exists."""
+    text = (root / "docs" / "ARCHITECTURE.md").read_text()
+    m = re.search(r"## Map\n.*?```\n(.*?)```", text, re.S)
+    if not m:
+        return ["docs/ARCHITECTURE.md: no '## Map' section with a code block"]
+    block = m.group(1)
+    problems = []
+    for line in block.splitlines()[1:]:  # the first line is the column header
+        for name in re.split(r",\s*", line[:20].strip()):
+            if name.endswith("/") and not (root / name).is_dir():
+                problems.append(f"docs/ARCHITECTURE.md map: {name} does not exist")
+    import subprocess
+    files = subprocess.run(["git", "ls-files"], cwd=root, capture_output=True, text=True).stdout.split()
+    dirs = set()
+    for f in files:
+        parts = f.split("/")
+        if len(parts) > 1:
+            dirs.add(parts[0] + "/")
+        if len(parts) > 2 and parts[0] in ("bindings", "samples", "training"):
+            dirs.add("/".join(parts[:2]) + "/")
+        if len(parts) > 3 and parts[:2] == ["host", "src"]:
+            dirs.add("/".join(parts[:3]) + "/")
+    for d in sorted(dirs):
+        if d not in block:
+            problems.append(f"docs/ARCHITECTURE.md map: the directory {d} (git ls-files) is not on the map")
+    return problems
+
+
+def includes(path):
+    text = path.read_text(errors="replace")
+    for m in INCLUDE.finditer(text):
+        yield text.count("\n", 0, m.start()) + 1, m.group(1)
+
+
+def main():
+    root = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[2]).resolve()
+    src = root / "host" / "src"
+    core_extra, links = cmake_facts(root)
+    problems = []
+    for f in sorted(src.rglob("*")):
+        if f.suffix not in (".cpp", ".hpp"):
+            continue
+        rel = f.relative_to(src).as_posix()
+        lib = library_of(rel, src, core_extra)
+        if lib is None:
+            problems.append(f"host/src/{rel}: in no library's directory ({', '.join(sorted(DIR_LIBRARY))})")
+            continue
+        for line, inc in includes(f):
+            if inc.startswith("ngi/") or inc == "ngi.h":
+                continue
+            if not (src / inc).exists():
+                continue  # generated or a sibling's relative include: not a layer question
+            target = library_of(inc, src, core_extra)
+            where = f"host/src/{rel}:{line}: #include \"{inc}\""
+            if target not in links[lib]:
+                problems.append(f"{where}: {lib} does not link {target} (CMakeLists.txt target_link_libraries)")
+            elif lib == target == "ngi_core" and core_rank(inc, core_extra) > core_rank(rel, core_extra):
+                problems.append(f"{where}: {rel.split('/')[0]} is below {inc.split('/')[0]} inside ngi_core "
+                                "(runtime < ops < graph < models)")
+    for f in sorted((root / "host" / "include" / "ngi").glob("*.hpp")):
+        for line, inc in includes(f):
+            if not inc.startswith("ngi/"):
+                problems.append(f"host/include/ngi/{f.name}:{line}: #include \"{inc}\": a public header includes "
+                                "only public headers")
+    for d in CLIENT_DIRS:
+        for f in sorted((root / d).rglob("*")):
+            if f.suffix not in (".c", ".cpp", ".hpp", ".h") or f.relative_to(root).as_posix() in CLIENT_EXEMPT:
+                continue
+            for line, inc in includes(f):
+                if inc.startswith("ngi/") or inc == "ngi.h" or (f.parent / inc).exists():
+                    continue
+                problems.append(f"{f.relative_to(root).as_posix()}:{line}: #include \"{inc}\": {d}/ uses the "
+                                "public API only (ngi/*.hpp, ngi.h) and its own headers")
+    problems += check_map(root)
+    for p in problems:
+        print(p)
+    files = sum(1 for f in src.rglob("*") if f.suffix in (".cpp", ".hpp"))
+    print(f"check_layers: {len(problems)} violation(s) in {files} library files, the public headers, "
+          f"{' and '.join(CLIENT_DIRS)}", file=sys.stderr)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
