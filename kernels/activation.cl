@@ -1,6 +1,6 @@
-// The activations of the dense, convolution, normalization and elementwise ops: built before the file that uses
-// them (programs "activation+gemm", "activation+mlp", ...: activation_program() in host/src/ops/op_types.hpp), with
-// the codes of ngi::Activation and the exp cap as build options (activation_defines(), the same header).
+// The activations of the dense, convolution, normalization and elementwise ops: listed before the file that uses
+// them (programs gemm, im2col, col2im, norm, elementwise, mlp in host/src/runtime/programs.cpp), with the codes of
+// ngi::Activation and the exp cap as build options (activation_defines(), host/src/ops/op_types.hpp).
 #if !defined(ACT_NONE) || !defined(ACT_RELU) || !defined(ACT_LEAKY_RELU) || !defined(ACT_TANH) || \
     !defined(ACT_SIGMOID) || !defined(ACT_EXP) || !defined(ACT_EXP_MAX)
 #error "activation.cl needs the activation codes: build it with activation_defines() (host/src/ops/op_types.hpp)"

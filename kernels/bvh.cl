@@ -1,8 +1,8 @@
 // Triangle BVH traversal: closest-hit and any-hit queries over the flattened tree of render/bvh.cpp, with
 // watertight ray/triangle intersection (Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection", JCGT 2013:
 // a ray through a shared edge or vertex hits at least one of the triangles that share it, so closed meshes do not
-// leak light). Used by the path tracer (built as "bvh+pathtrace") and, through bvh_trace_rays, by the BVH tests and
-// perf/bench_bvh.
+// leak light). Listed before scene.cl in the path tracer's programs, and the program "bvh" of its own, for
+// bvh_trace_rays (the BVH tests and perf/bench_bvh); geometry.cl comes first in both (safe_inv).
 //
 // Layout (render/bvh.hpp, struct Bvh): node i = nodes[2i] (lo.xyz, a) and nodes[2i+1] (hi.xyz, b), a and b being
 // int bit patterns; leaf (b >= 1): triangles a .. a+b-1; interior (b <= 0): left child i+1, right child a.
@@ -24,12 +24,11 @@ typedef struct {
 } BvhRay;
 
 static inline float bvh_comp(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
-static inline float bvh_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 
 static inline BvhRay bvh_ray(float3 o, float3 d) {
     BvhRay r;
     r.o = o; r.d = d;
-    r.inv = (float3)(bvh_inv(d.x), bvh_inv(d.y), bvh_inv(d.z));
+    r.inv = (float3)(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
     const float3 ad = fabs(d);
     r.kz = ad.x >= ad.y && ad.x >= ad.z ? 0 : (ad.y >= ad.z ? 1 : 2);
     r.kx = r.kz == 2 ? 0 : r.kz + 1;

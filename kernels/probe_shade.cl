@@ -3,8 +3,9 @@
 // host/src/ops/probe_shade.cpp; conventions and why: docs/VOXEL_LTF.md ("Probe shading").
 //
 // Units: lighting = irradiance / pi. Camera: docs/CONVENTIONS.md sections 1-3 (pixel (col, row) looks along
-// normalize(look + u right + v up), as pathtrace.cl's pixel_ray). Grid: block (x, y, z) covers [x, x+1) x [y, y+1)
-// x [z, z+1) metres, linear id x + X (y + Y z) (docs/RENDERER.md).
+// normalize(look + u right + v up), as scene.cl's pixel_ray). Grid: block (x, y, z) covers [x, x+1) x [y, y+1)
+// x [z, z+1) metres, linear id x + X (y + Y z) (docs/RENDERER.md). The SH basis is sh_basis.cl's, listed before
+// this file.
 
 // Build options, the host's (probe_shade_defines(), host/src/ops/probe_shade.hpp):
 //   PROBE_SKY_DEPTH       planar depth at or beyond this is "no surface" (the tracer writes 1e4 there)

@@ -1,6 +1,7 @@
 // Real spherical harmonics, bands 0-2 (9 coefficients), with the Condon-Shortley phase (seeds 004 and 002).
 // Conventions (basis order, axes, coefficient layout, the cosine lobe): docs/CONVENTIONS.md section 14.
-// The basis sh9() and the lobe factors kLobe live in common.cl: the path tracer projects onto the same basis.
+// The basis sh9() and the lobe factors kLobe are sh_basis.cl's, listed before this file: the voxel field projects
+// path-traced radiance onto the same basis.
 
 // out[i][c] = sum_k coef[i][c][k] * w_k * Y_k(dir_i) for n items, C channels: radiance along dir (irradiance = 0)
 // or irradiance around the normal dir (irradiance = 1: w_k = A_l). Directions need not be unit length (they are

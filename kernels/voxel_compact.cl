@@ -5,7 +5,8 @@
 //
 // Grid: palette index per block (uchar, 0 = air), id = x + X (y + Y z); outside the grid is air.
 // A tile is VC_LOCAL work-items x VC_ITEMS consecutive blocks each, so a work-item's blocks are contiguous and the
-// exclusive scan of the per-work-item counts gives every surface voxel its place in id order.
+// exclusive scan of the per-work-item counts gives every surface voxel its place in id order. Face normals are
+// geometry.cl's face_normal (the program "voxel_compact" lists it first): the tracer's face ids.
 
 // Build options, the host's (voxel_field.cpp): VC_LOCAL, the work-group size of every kernel here (kCompactLocal);
 // VC_ITEMS, consecutive blocks per work-item (kCompactItems); VC_ATTRIBUTES, floats per voxel: centre xyz, albedo
@@ -88,12 +89,6 @@ void vc_scan_tiles(__global const int* tile_count, int tiles, __global int* tile
     if (lid == 0) tile_offset[tiles] = carry;
 }
 
-static inline float3 vc_face_normal(int f) {
-    const float s = (f & 1) ? -1.0f : 1.0f;
-    const int a = f >> 1;
-    return (float3)(a == 0 ? s : 0.0f, a == 1 ? s : 0.0f, a == 2 ? s : 0.0f);
-}
-
 // Writes every surface voxel at its compact index k (running count in id order):
 //   cell_out[k] = (x, y, z, exposed mask); attr_out[k][VC_ATTRIBUTES]; normal_out[k][3]; probe_out[k][3]
 // and index_of[id] = k, or -1 for blocks that are not surface voxels. mats: per material albedo, emission (lamp
@@ -140,7 +135,7 @@ void vc_scatter(__global const uchar* grid, int sx, int sy, int sz, __global con
         const int pref = (m & inward) ? (m & inward) : m;
         const int first = (pref & 1) ? 0 : (pref & 2) ? 1 : (pref & 4) ? 2 : (pref & 8) ? 3 : (pref & 16) ? 4 : 5;
         const int flat = gx == 0 && gy == 0 && gz == 0;
-        const float3 nf = vc_face_normal(first);
+        const float3 nf = face_normal(first);
         const float3 normal = flat ? nf : normalize((float3)((float)gx, (float)gy, (float)gz));
         const int crease = !flat && vc_solid(grid, sx, sy, sz, x + gx, y + gy, z + gz);
         const float3 g = flat || crease ? nf : (float3)((float)gx, (float)gy, (float)gz);

@@ -14,10 +14,10 @@
 // The O(V) kernels take the variant as an argument and are built once, without the last four (the normalizer,
 // O(V^2) once per run, with LTF_VEC only).
 
-// LTF_LOCAL, LTF_R_MIN and LUMA_* are the host's (voxel_ltf.cpp kLtfLocal, voxel_ltf.hpp kLtfRMin, the Rec. 709
-// weights of ops/luminance.hpp behind common.cl's ngi_luminance()): always passed.
-#if !defined(LTF_LOCAL) || !defined(LTF_R_MIN) || !defined(LUMA_R)
-#error "voxel_ltf.cl needs LTF_LOCAL, LTF_R_MIN and the luminance weights LUMA_*: build it through VoxelLtf (host/src/ops/voxel_ltf.cpp)"
+// LTF_LOCAL and LTF_R_MIN are the host's (voxel_ltf.cpp kLtfLocal, voxel_ltf.hpp kLtfRMin): always passed, with
+// the luminance weights of luminance.cl (listed before this file), which checks its own.
+#if !defined(LTF_LOCAL) || !defined(LTF_R_MIN)
+#error "voxel_ltf.cl needs LTF_LOCAL and LTF_R_MIN: build it through VoxelLtf (host/src/ops/voxel_ltf.cpp)"
 #endif
 #ifndef LTF_PHYSICAL
 #define LTF_PHYSICAL 1

@@ -160,7 +160,7 @@ TEST_CASE("bvh: deterministic build, bounded depth on degenerate input, empty me
 
 // Small enough for the oclgrind stage: the traversal kernel (checked for out-of-bounds accesses, uninitialized
 // reads and races), then the path tracer on a scene of blocks and triangles ([oclgrind-small]: without the
-// uninitialized-value plugin, which crashes on pathtrace.cl's 3-vectors; tools/ci/oclgrind.sh).
+// uninitialized-value plugin, which crashes on the tracer's 3-vectors; tools/ci/oclgrind.sh).
 TEST_CASE("bvh: traversal kernel at simulator size", "[bvh][oclgrind]") {
     std::mt19937 rng(9);
     const TriangleMesh mesh = random_soup(rng, 40, 6.0f, 1.0f);

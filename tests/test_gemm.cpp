@@ -390,10 +390,10 @@ TEST_CASE("GEMM local-memory variant: a fixed-shape kernel, launched at L0 x L1 
     // reports 32). A halved launch would fail (CL_INVALID_WORK_GROUP_SIZE) or leave slots uncopied.
     auto& c = test::ctx();
     const GemmParams p = parse_gemm_params("4,4,1,1,8,8,1,16");
-    Kernel k = c.kernel(activation_program("gemm"), "gemm_local", gemm_kernel_defines(p));
+    Kernel k = c.kernel("gemm", "gemm_local", gemm_kernel_defines(p));
     CHECK(k.fixed_local());
     k.limit_work_group(32);
-    CHECK_FALSE(c.kernel(activation_program("gemm"), "gemm_packed", gemm_kernel_defines(parse_gemm_params("4,4,1,1,8,8,1"))).fixed_local());
+    CHECK_FALSE(c.kernel("gemm", "gemm_packed", gemm_kernel_defines(parse_gemm_params("4,4,1,1,8,8,1"))).fixed_local());
 
     std::mt19937 rng(25);
     const int M = 45, N = 70, K = 37;

@@ -1,4 +1,4 @@
-// The path tracer's ambient-occlusion estimator (Renderer::render_ao, kernels/pathtrace.cl pt_ao) against exact
+// The path tracer's ambient-occlusion estimator (Renderer::render_ao, kernels/render_ao.cl pt_ao) against exact
 // cases: a closed box (every ray hits: 0; no ray reaches with a short max distance: 1), and a point on a floor
 // next to a tall wall (an infinite wall hides exactly half of the cosine-weighted hemisphere).
 #include <glm/glm.hpp>

@@ -1,4 +1,4 @@
-// The rectangular area light (ngi/area_light.hpp, kernels/pathtrace.cl area_light) against the exact irradiance
+// The rectangular area light (ngi/area_light.hpp, kernels/lighting.cl area_light) against the exact irradiance
 // of a Lambertian polygon: the reference formula itself against brute-force integration, the tracer against it,
 // occlusion and one-sidedness, indirect light and energy conservation in a closed box, input checks, and the
 // frame folder's record of the light.

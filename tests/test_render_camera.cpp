@@ -13,7 +13,7 @@ using namespace ngi;
 // [oclgrind-small]: render test cases cheap enough to run under oclgrind (~10-15 s each there; the whole [render]
 // set takes far longer): `oclgrind --data-races --check-api --log LOG tests/ngi_tests "[oclgrind-small]"` with
 // NGI_TEST_DEVICE=0:0 (oclgrind's platform); oclgrind exits 0 even when it reports, so LOG must be empty.
-// This case also guards the DDA against oclgrind 21.10's wrong vector select (kernels/pathtrace.cl, trace_crossing).
+// This case also guards the DDA against oclgrind 21.10's wrong vector select (kernels/scene.cl, trace_grid).
 TEST_CASE("six faces: a ray through face pixel (col, row) of camera.hpp hits what the kernel reports",
           "[render][oclgrind-small]") {
     // A 9 m room whose six walls have distinct colours; interior [1, 8)^3.

@@ -1,4 +1,4 @@
-// The path tracer on triangle meshes (kernels/bvh.cl inside kernels/pathtrace.cl) against exact cases: sunlight on
+// The path tracer on triangle meshes (kernels/bvh.cl under kernels/scene.cl) against exact cases: sunlight on
 // a triangle floor with a block's shadow and on a block floor with a triangle box's shadow (blocks and triangles
 // occlude each other), the lighting from an emissive triangle (Lambert's polygon formula), a closed sphere's
 // furnace test (no leaks; Le / (1 - albedo)), and the AO of a floor point under a box.

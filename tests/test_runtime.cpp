@@ -13,7 +13,7 @@ using namespace ngi::detail;
 TEST_CASE("launch: a local size beyond the kernel's work-group limit is halved for free-shape kernels",
           "[runtime][oclgrind]") {
     auto& c = test::ctx();
-    Kernel k = c.kernel(activation_program("elementwise"), "activate_inplace", activation_defines());
+    Kernel k = c.kernel("elementwise", "activate_inplace", activation_defines());
     CHECK_FALSE(k.fixed_local());
     REQUIRE(k.max_work_group() >= 1);
     k.limit_work_group(24);  // as a device with few registers would report
@@ -85,7 +85,7 @@ TEST_CASE("upload at offsets and in pieces, partial clears: every byte where it 
     c.write(b, 100 * sizeof(float), 100 * sizeof(float), &x[100], "pieces");    // middle, last
     c.fill_zero(b, 150 * sizeof(float), 7 * sizeof(float), "pieces");           // a cleared run inside
     for (int i = 150; i < 157; ++i) x[i] = 0.0f;
-    Kernel k = c.kernel(activation_program("elementwise"), "activate_inplace", activation_defines());
+    Kernel k = c.kernel("elementwise", "activate_inplace", activation_defines());
     k.args(b, 0, n, int(Activation::LeakyReLU), 0.5f);
     const std::size_t global = n, local = 64;
     c.launch(k, 1, &global, &local);

@@ -20,7 +20,7 @@ using namespace ngi;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kRayOffset = 1.0e-3;  // pathtrace.cl RAY_OFFSET
+constexpr double kRayOffset = 1.0e-3;  // scene.cl RAY_OFFSET
 const double kLobeA[9] = {kPi, 2 * kPi / 3, 2 * kPi / 3, 2 * kPi / 3, kPi / 4, kPi / 4, kPi / 4, kPi / 4, kPi / 4};
 
 // Real SH bands 0-2, Condon-Shortley phase (docs/CONVENTIONS.md section 14), in double precision.

@@ -4,7 +4,7 @@
 #   [oclgrind]        every kernel but the path tracer at small shapes, with --data-races --check-api --uninitialized
 #   [oclgrind-small]  the cheapest path-tracer cases, with --data-races --check-api: oclgrind 21.10's
 #                     uninitialized-value plugin crashes on the shufflevector instructions clang emits for
-#                     3-component vectors in memory, which pathtrace.cl is full of (docs/RELIABILITY.md)
+#                     3-component vectors in memory, which the tracer's kernels are full of (docs/RELIABILITY.md)
 # Usage: tools/ci/oclgrind.sh BUILD_DIR. Writes BUILD_DIR/oclgrind/{*.log,cases}.
 #
 # Oclgrind presents one device (its own, reported as a GPU), so the GEMM's GPU table entry runs by default; the

@@ -58,7 +58,7 @@ Conv2d::Conv2d(Context& ctx, const GemmParams& p, const ConvSpec& spec, const fl
         if (g.kh == 1 && g.kw == 1 && g.stride == 1 && g.pad == 0)
             pack_.emplace(ctx, p);  // B is the input itself: a straight panel pack
         else
-            im2col_ = ctx.kernel(activation_program("im2col"), "im2col_packed", im2col_defines(p.nr()));
+            im2col_ = ctx.kernel("im2col", "im2col_packed", im2col_defines(p.nr()));
         ap_ = upload(ctx, pack_a(weight, spec.cout, K, K, p), "conv2d packed weights");
     }
     scale_ = upload(ctx, filled(affine.scale, spec.cout, 1.0f, "conv2d scale"), "conv2d scale");
@@ -115,7 +115,7 @@ ConvTranspose2d::ConvTranspose2d(Context& ctx, const GemmParams& p, const ConvSp
         const auto& g = spec.geom;
         gemm_.emplace(ctx, p);
         pack_.emplace(ctx, p);
-        col2im_ = ctx.kernel(activation_program("col2im"), "col2im_gather",
+        col2im_ = ctx.kernel("col2im", "col2im_gather",
                              "-DKH=" + std::to_string(g.kh) + " -DKW=" + std::to_string(g.kw) + " -DSTRIDE=" +
                                  std::to_string(g.stride) + " -DPAD=" + std::to_string(g.pad) + " " +
                                  activation_defines());

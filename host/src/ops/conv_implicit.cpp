@@ -119,8 +119,8 @@ ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string&
       stride_(stride),
       pad_(pad),
       transposed_(transposed),
-      pad_kernel_(ctx.kernel(activation_program("im2col"), "conv_pad", im2col_defines(p.nr()))),
-      gemm_(ctx.kernel(activation_program("gemm"), "gemm_conv",
+      pad_kernel_(ctx.kernel("im2col", "conv_pad", im2col_defines(p.nr()))),
+      gemm_(ctx.kernel("gemm", "gemm_conv",
                        gemm_kernel_defines(p) + " -DIMPLICIT=1" + taps)) {
     const std::size_t phases = transposed ? std::size_t(stride) * stride : 1;
     phase_floats_ = packed.size() / phases;

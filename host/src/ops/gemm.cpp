@@ -98,10 +98,10 @@ const GemmParams& fits_device(const Context& ctx, const GemmParams& p) {
 // Context::launch halves it. gemm_local (KWG > 0) is compiled with reqd_work_group_size(L0, L1, 1), which makes
 // it a fixed-shape kernel (Kernel::fixed_local): launched at exactly L0 x L1, never halved.
 Gemm::Gemm(Context& ctx, const GemmParams& p)
-    : p_(fits_device(ctx, p)), kernel_(ctx.kernel(activation_program("gemm"), p.kwg > 0 ? "gemm_local" : "gemm_packed", gemm_kernel_defines(p))) {}
+    : p_(fits_device(ctx, p)), kernel_(ctx.kernel("gemm", p.kwg > 0 ? "gemm_local" : "gemm_packed", gemm_kernel_defines(p))) {}
 
 PackB::PackB(Context& ctx, const GemmParams& p)
-    : p_(p), kernel_(ctx.kernel(activation_program("im2col"), "pack_panels", im2col_defines(p.nr()))) {}
+    : p_(p), kernel_(ctx.kernel("im2col", "pack_panels", im2col_defines(p.nr()))) {}
 
 cl_event PackB::enqueue(Context& ctx, cl_mem x, std::size_t x_off, int K, int N, cl_mem bp, std::size_t bp_off,
                         Act act, bool want_event) {

@@ -28,9 +28,9 @@ struct GemmParams {
 };
 
 // What kernels/gemm.cl is built with: the knobs (p.defines()) and the activation codes of its epilogue; the
-// program is activation_program("gemm").
+// program is "gemm" (activation.cl, gemm.cl).
 inline std::string gemm_kernel_defines(const GemmParams& p) { return p.defines() + " " + activation_defines(); }
-// What kernels/im2col.cl is built with (the program activation_program("im2col")): the panel width NR.
+// What kernels/im2col.cl is built with (the program "im2col"): the panel width NR.
 inline std::string im2col_defines(int nr) { return "-DNR=" + std::to_string(nr) + " " + activation_defines(); }
 
 // The device's knob set: $NGI_GEMM if set, else the tuning database's best match (ops/gemm_tuning.hpp).

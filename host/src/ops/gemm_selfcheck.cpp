@@ -74,7 +74,7 @@ GemmVerdict run_problem(Context& ctx, Gemm& gemm, const GemmProblem& pr, std::mt
 std::filesystem::path verdict_path(Context& ctx, const GemmParams& p) {
     // A verdict on the small set is kept apart: it must never stand in for the full check.
     const std::string set = gemm_selfcheck_is_small() ? "-small" : "";
-    return cache_dir() / ("gemmcheck-" + std::string(kCheckVersion) + set + "-" + ctx.variant_key(activation_program("gemm"), gemm_kernel_defines(p)) +
+    return cache_dir() / ("gemmcheck-" + std::string(kCheckVersion) + set + "-" + ctx.variant_key("gemm", gemm_kernel_defines(p)) +
                           "-" + std::to_string(p.local0) + "x" + std::to_string(p.local1) + ".txt");
 }
 

@@ -12,7 +12,7 @@ namespace ngi::detail {
 namespace {
 
 // kernels/mlp.cl after the activation helper (kernels/activation.cl).
-constexpr const char* kMlpProgram = "activation+mlp";
+constexpr const char* kMlpProgram = "mlp";
 
 // Per-layer descriptor of mlp_fused: kDescSize ints at these slots (kernels/mlp.cl D_*, from mlp_defines()).
 enum DescSlot : int { kDescIn, kDescInPad, kDescOut, kDescAct, kDescW, kDescB, kDescSize };

@@ -18,8 +18,8 @@ BatchNormPerImage::BatchNormPerImage(Context& ctx, int channels, const std::vect
     : channels_(channels),
       eps_(eps),
       act_(act),
-      stats_(ctx.kernel(activation_program("norm"), "channel_stats", defines(chunked.value_or(ctx.info().is_cpu)))),
-      apply_(ctx.kernel(activation_program("norm"), "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))) {
+      stats_(ctx.kernel("norm", "channel_stats", defines(chunked.value_or(ctx.info().is_cpu)))),
+      apply_(ctx.kernel("norm", "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))) {
     if (int(gamma.size()) != channels || int(beta.size()) != channels)
         throw InputError("batch norm: expected " + std::to_string(channels) + " gamma and beta values, got " +
                          std::to_string(gamma.size()) + " and " + std::to_string(beta.size()));

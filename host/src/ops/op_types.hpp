@@ -13,8 +13,6 @@ enum class Activation : int { None = 0, ReLU = 1, LeakyReLU = 2, Tanh = 3, Sigmo
 // section 13). Python's ngi.neural_gi.EXP_CLAMP.
 constexpr float kActExpMax = 88.0f;
 
-// A program whose kernels apply activations: kernels/activation.cl, then `file` (Context::kernel's program name).
-inline std::string activation_program(const std::string& file) { return "activation+" + file; }
 // The build options of kernels/activation.cl: ACT_NONE ... ACT_EXP (the codes above) and ACT_EXP_MAX.
 inline std::string activation_defines() {
     using detail::define;

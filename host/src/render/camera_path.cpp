@@ -60,7 +60,7 @@ float yaw_of(glm::vec3 d) { return std::atan2(d.z, d.x); }
 float safe_inv(float x) { return x != 0.0f ? 1.0f / x : 1.0e30f; }
 
 // Distance along o + t d (d unit) to the first solid block, or -1 if the ray leaves the grid without one. Like the
-// tracer's DDA (kernels/pathtrace.cl, trace_crossing), a ray that starts outside the grid enters it through its box.
+// tracer's DDA (kernels/scene.cl, trace_grid), a ray that starts outside the grid enters it through its box.
 float first_hit(const VoxelScene& s, glm::vec3 o, glm::vec3 d) {
     const glm::vec3 inv(safe_inv(d.x), safe_inv(d.y), safe_inv(d.z));
     const glm::vec3 ta = -o * inv, tb = (glm::vec3(s.size) - o) * inv;

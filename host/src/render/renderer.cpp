@@ -1,9 +1,10 @@
-// Host side of the path tracer (kernels/pathtrace.cl): scene upload, per-frame lights and camera, read-back into
-// a Frame.
+// Host side of the path tracer (the tracer programs of runtime/programs.cpp: kernels/scene.cl, lighting.cl,
+// pathtrace.cl, ...): scene upload, per-frame lights and camera, read-back into a Frame.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 #include "ngi/camera.hpp"
@@ -22,8 +23,9 @@ namespace {
 
 constexpr std::size_t kLocal = 64;   // fixed work-group size (PoCL compiles one work-group function per size)
 
-// Layout of pathtrace.cl's `light` parameter array (what each holds: the comment there). Defined here only: every
-// pathtrace.cl kernel is built with these as -D options (kPathtraceDefines), so host and device cannot disagree.
+// Layout of the tracer's `light` parameter array (what each holds: the comment in kernels/lighting.cl). Defined here
+// only: every tracer program is built with these as -D options (pathtrace_defines()), so host and device cannot
+// disagree.
 struct LightSlot {
     const char* name;
     int offset;
@@ -37,9 +39,8 @@ constexpr int kLightParams = 36;
 // The sun and sky part (what the sunlit-patch weights depend on, with the materials).
 constexpr int kSunSkyParams = 20;
 
-// The tracer's program: the BVH traversal (kernels/bvh.cl) first, then the path tracer that uses it.
-constexpr const char* kPathtraceProgram = "bvh+pathtrace";
-
+// The build options of every tracer program (pathtrace, ao_geometry, voxel_field, voxel_visibility in
+// runtime/programs.cpp): one set for all, whichever of them a program's files check.
 std::string pathtrace_defines() {
     std::string d;
     for (const LightSlot& l : kLightLayout) d += std::string(d.empty() ? "" : " ") + "-D" + l.name + "=" + std::to_string(l.offset);
@@ -121,7 +122,7 @@ Portals find_portals(const VoxelScene& s) {
 
 // Sunlit patches: faces of blocks that border covered air, grouped by that air's region. Per frame they are
 // weighted by the sunlight they reflect (kernel pt_patch_weights), and points in the region sample them as
-// secondary lights (pathtrace.cl: patch_light).
+// secondary lights (lighting.cl: patch_light).
 struct Patches {
     std::vector<std::int32_t> faces;  // per patch: cell x, y, z, face id; grouped by region
     std::vector<std::int32_t> range;  // per region: first patch, patch count
@@ -183,7 +184,9 @@ struct Renderer::Impl {
     std::vector<std::int32_t> patch_static_range;  // per region: first, count
     bool patches_lit = false;                        // any region has sunlit patches this frame
     std::vector<float> patch_light_key;              // light parameters the patch weights were computed for
-    detail::Kernel k_patch;
+    // pt_patch_weights of each program that lights the scene (pathtrace, voxel_field: both list patch_weights.cl),
+    // so a frame runs it from the program it is rendered with and never builds another one for it.
+    std::map<std::string, detail::Kernel> k_patch;
     detail::Buffer features, feature_rays, mean, var, ref_rays;
     int buffers_n = 0;
     int nlights = 0;
@@ -192,13 +195,25 @@ struct Renderer::Impl {
     detail::Kernel k_features, k_reference, k_ao, k_geometry, k_surface;
     detail::Buffer ao;  // render_ao's output
     detail::Buffer geometry;  // render_geometry's and render_surface's output
-    // Work-group size of every path-tracer launch: kLocal, or less where the driver allows fewer work-items for
-    // these register-heavy kernels than kLocal (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE
-    // of 32 and a conforming driver rejects a larger local size). Results do not depend on it.
-    std::size_t local = kLocal;
+
+    // The kernel `name` of the tracer program `program` in slot k, built at its first use: each render call compiles
+    // only the program it runs (an AO-only renderer never builds the path tracer's lighting).
+    detail::Kernel& kernel(detail::Kernel& k, const char* program, const char* name) {
+        if (!k.get()) k = ctx->kernel(program, name, pathtrace_defines());
+        return k;
+    }
+    // Work-group size of a tracer launch: kLocal, or less where the driver allows fewer work-items for these
+    // register-heavy kernels (Mesa 22.3 rusticl on llvmpipe reports a CL_KERNEL_WORK_GROUP_SIZE of 32 and a
+    // conforming driver rejects a larger local size). Results do not depend on it.
+    static std::size_t local_size(const detail::Kernel& k) {
+        const std::size_t wg = k.max_work_group();
+        return wg > 0 ? std::min(kLocal, wg) : kLocal;
+    }
 
     // Per frame: lamp level into the material table, the emitter list and its CDF, sun/sky, camera.
-    void upload_frame(const CameraPose& pose, const Lighting& l, const RenderSettings& rs) {
+    // `lit_program`: the program of the frame's kernels when they light the scene (the sunlit-patch weights are
+    // updated only for those, by its pt_patch_weights), else nullptr.
+    void upload_frame(const CameraPose& pose, const Lighting& l, const RenderSettings& rs, const char* lit_program) {
         check_area_light(l.area_light, "render");
         std::vector<float> m(palette.size() * 8, 0.0f);
         for (std::size_t i = 0; i < palette.size(); ++i) {
@@ -257,7 +272,7 @@ struct Renderer::Impl {
             area_normal.x, area_normal.y, area_normal.z,
             area};
         ctx->write(light, 0, sizeof(L), L, "render: upload lighting");
-        update_patches(L, m, rs);
+        if (lit_program) update_patches(L, m, rs, lit_program);
 
         const CameraCluster cluster = CameraCluster::from_look_up(pose.look, pose.up);
         float cb[3 + 9 * kFaceCount] = {pose.position.x, pose.position.y, pose.position.z};
@@ -314,16 +329,17 @@ struct Renderer::Impl {
 
     // Per-frame patch probabilities (only when the sun or the materials changed): weights on the device, then
     // normalized per region on the host.
-    void update_patches(const float* L, const std::vector<float>& m, const RenderSettings& rs) {
+    void update_patches(const float* L, const std::vector<float>& m, const RenderSettings& rs, const char* program) {
         if (npatches == 0) return;
         std::vector<float> key(L, L + kSunSkyParams);
         key.insert(key.end(), m.begin(), m.end());
         if (key == patch_light_key) return;
         patch_light_key = key;
         std::vector<float> w(static_cast<std::size_t>(npatches));
-        set_scene_args(k_patch, rs, npatches, patch_weight);
-        const std::size_t global = std::size_t(npatches);
-        ctx->launch(k_patch, 1, &global, &local);
+        detail::Kernel& k = kernel(k_patch[program], program, "pt_patch_weights");
+        set_scene_args(k, rs, npatches, patch_weight);
+        const std::size_t global = std::size_t(npatches), local = local_size(k);
+        ctx->launch(k, 1, &global, &local);
         ctx->read(patch_weight, 0, w.size() * 4, w.data(), "render: read patch weights");
         std::vector<float> prob(w.size(), 0.0f), cum(w.size(), 1.0f);
         std::vector<std::int32_t> range = patch_static_range;
@@ -447,19 +463,6 @@ Renderer::Renderer(const Device& device, const VoxelScene& scene) : impl_(std::m
     m.patch_prob = m.ctx->alloc(np, "render: patch probabilities");
     m.patch_cdf = m.ctx->alloc(np, "render: patch CDF");
     m.patch_weight = m.ctx->alloc(np, "render: patch weights");
-    m.k_patch = m.ctx->kernel(kPathtraceProgram, "pt_patch_weights", pathtrace_defines());
-    m.k_features = m.ctx->kernel(kPathtraceProgram, "pt_features", pathtrace_defines());
-    m.k_reference = m.ctx->kernel(kPathtraceProgram, "pt_reference", pathtrace_defines());
-    m.k_ao = m.ctx->kernel(kPathtraceProgram, "pt_ao", pathtrace_defines());
-    m.k_geometry = m.ctx->kernel(kPathtraceProgram, "pt_geometry", pathtrace_defines());
-    m.k_surface = m.ctx->kernel(kPathtraceProgram, "pt_surface", pathtrace_defines());
-    for (const detail::Kernel* k : {&m.k_patch, &m.k_features, &m.k_reference, &m.k_ao, &m.k_geometry, &m.k_surface}) {
-        std::size_t wg = 0;
-        if (clGetKernelWorkGroupInfo(k->get(), m.ctx->device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof wg, &wg, nullptr) ==
-                CL_SUCCESS &&
-            wg > 0)
-            m.local = std::min(m.local, wg);
-    }
 }
 
 Renderer::~Renderer() = default;
@@ -468,9 +471,10 @@ Renderer& Renderer::operator=(Renderer&&) noexcept = default;
 
 void Renderer::Impl::enqueue_features(const CameraPose& pose, const Lighting& lighting, const RenderSettings& s,
                                       cl_mem out) {
-    upload_frame(pose, lighting, s);
+    upload_frame(pose, lighting, s, "pathtrace");
     ensure_buffers(s.n);
-    const std::size_t global = std::size_t(s.n) * s.n * kFaceCount;
+    kernel(k_features, "pathtrace", "pt_features");
+    const std::size_t global = std::size_t(s.n) * s.n * kFaceCount, local = local_size(k_features);
     const int feature_chunk = samples_per_launch(0, "render: feature buffers");
     for (int first = 0; first < s.feature_spp; first += feature_chunk) {
         const int last = std::min(s.feature_spp, first + feature_chunk);
@@ -544,15 +548,16 @@ Image Renderer::render_ao(const CameraPose& pose, const RenderSettings& s, int r
     if (!(max_distance > 0.0f))
         throw InputError("render ambient occlusion: max distance " + std::to_string(max_distance) + " must be > 0");
     Impl& m = *impl_;
-    m.upload_frame(pose, Lighting{}, s);
+    m.upload_frame(pose, Lighting{}, s, nullptr);
     const std::size_t npix = std::size_t(s.n) * s.n;
+    const std::size_t local = Impl::local_size(m.kernel(m.k_ao, "ao_geometry", "pt_ao"));
     if (m.ao.bytes() < npix * sizeof(float)) m.ao = m.ctx->alloc(npix * sizeof(float), "render: ambient occlusion");
     const int chunk = m.samples_per_launch(0, "render: ambient occlusion");
     const float dist = std::min(max_distance, 1.0e30f);  // the tracer's "no limit"
     for (int first = 0; first < rays; first += chunk) {
         const int last = std::min(rays, first + chunk);
         m.set_scene_args(m.k_ao, s, m.cam, int(face), s.n, rays, first, last, dist, std::uint32_t(s.seed), m.ao);
-        m.ctx->launch(m.k_ao, 1, &npix, &m.local);
+        m.ctx->launch(m.k_ao, 1, &npix, &local);
     }
     Image ao(s.n, s.n, 1);
     m.ctx->read(m.ao, 0, npix * sizeof(float), ao.data.data(), "render: read ambient occlusion");
@@ -565,12 +570,14 @@ Image Renderer::render_geometry(const CameraPose& pose, const RenderSettings& s,
         throw InputError("render geometry: smoothing sigma " + std::to_string(smooth_sigma) + " not in 0.." +
                          std::to_string(kMaxSmoothSigma) + " blocks");
     Impl& m = *impl_;
-    m.upload_frame(pose, Lighting{}, s);
+    m.upload_frame(pose, Lighting{}, s, nullptr);
     const std::size_t npix = std::size_t(s.n) * s.n;
     if (m.geometry.bytes() < 7 * npix * sizeof(float))
         m.geometry = m.ctx->alloc(7 * npix * sizeof(float), "render: geometry");
-    m.set_scene_args(m.k_geometry, s, m.cam, int(face), s.n, smooth_sigma, m.geometry);
-    m.ctx->launch(m.k_geometry, 1, &npix, &m.local);
+    m.set_scene_args(m.kernel(m.k_geometry, "ao_geometry", "pt_geometry"), s, m.cam, int(face), s.n, smooth_sigma,
+                     m.geometry);
+    const std::size_t local = Impl::local_size(m.k_geometry);
+    m.ctx->launch(m.k_geometry, 1, &npix, &local);
     Image g(s.n, s.n, 7);
     m.ctx->read(m.geometry, 0, 7 * npix * sizeof(float), g.data.data(), "render: read geometry");
     return g;
@@ -579,12 +586,13 @@ Image Renderer::render_geometry(const CameraPose& pose, const RenderSettings& s,
 Image Renderer::render_surface(const CameraPose& pose, const RenderSettings& s, Face face) {
     check_settings(s);
     Impl& m = *impl_;
-    m.upload_frame(pose, Lighting{}, s);
+    m.upload_frame(pose, Lighting{}, s, nullptr);
     const std::size_t npix = std::size_t(s.n) * s.n;
     if (m.geometry.bytes() < 7 * npix * sizeof(float))
         m.geometry = m.ctx->alloc(7 * npix * sizeof(float), "render: geometry");
-    m.set_scene_args(m.k_surface, s, m.cam, int(face), s.n, m.geometry);
-    m.ctx->launch(m.k_surface, 1, &npix, &m.local);
+    m.set_scene_args(m.kernel(m.k_surface, "ao_geometry", "pt_surface"), s, m.cam, int(face), s.n, m.geometry);
+    const std::size_t local = Impl::local_size(m.k_surface);
+    m.ctx->launch(m.k_surface, 1, &npix, &local);
     Image g(s.n, s.n, 6);
     m.ctx->read(m.geometry, 0, 6 * npix * sizeof(float), g.data.data(), "render: read surface");
     return g;
@@ -595,15 +603,16 @@ Image Renderer::render_reference(const CameraPose& pose, const Lighting& lightin
     check_settings(s);
     Impl& m = *impl_;
     const auto t0 = std::chrono::steady_clock::now();
-    m.upload_frame(pose, lighting, s);
+    m.upload_frame(pose, lighting, s, "pathtrace");
     m.ensure_buffers(s.n);
     const std::size_t npix = std::size_t(s.n) * s.n;
+    const std::size_t local = Impl::local_size(m.kernel(m.k_reference, "pathtrace", "pt_reference"));
     const int chunk = m.samples_per_launch(s.max_bounces, "render: reference");
     for (int first = 0; first < s.reference_spp; first += chunk) {
         const int last = std::min(s.reference_spp, first + chunk);
         m.set_scene_args(m.k_reference, s, m.cam, int(s.reference_face), s.n, s.reference_spp, first, last,
                          s.max_bounces, s.rr_start, std::uint32_t(s.seed), m.mean, m.var, m.ref_rays);
-        m.ctx->launch(m.k_reference, 1, &npix, &m.local);
+        m.ctx->launch(m.k_reference, 1, &npix, &local);
     }
     Image mean(s.n, s.n, 3), var(s.n, s.n, 3);
     m.ctx->read(m.mean, 0, mean.data.size() * sizeof(float), mean.data.data(), "render: read reference");
@@ -726,19 +735,19 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
         throw InputError("voxel field: the lighting has an area light, which the voxel field does not support");
     const auto t0 = std::chrono::steady_clock::now();
     detail::Context& ctx = *m.ctx;
-    if (!m.k_vf_sh.get()) {
-        m.k_vf_sun = ctx.kernel(kPathtraceProgram, "vf_sun_visibility", pathtrace_defines());
-        m.k_vf_sh = ctx.kernel(kPathtraceProgram, "vf_sh", pathtrace_defines());
-        m.k_vf_probe = ctx.kernel(kPathtraceProgram, "vf_probe_lighting", pathtrace_defines());
-        m.k_vf_face = ctx.kernel(kPathtraceProgram, "vf_face_lighting", pathtrace_defines());
-    }
+    m.kernel(m.k_vf_sun, "voxel_field", "vf_sun_visibility");
+    m.kernel(m.k_vf_sh, "voxel_field", "vf_sh");
+    m.kernel(m.k_vf_probe, "voxel_field", "vf_probe_lighting");
+    m.kernel(m.k_vf_face, "voxel_field", "vf_face_lighting");
+    const std::size_t local_sun = Impl::local_size(m.k_vf_sun), local_sh = Impl::local_size(m.k_vf_sh),
+                      local_probe = Impl::local_size(m.k_vf_probe), local_face = Impl::local_size(m.k_vf_face);
     RenderSettings rs;
     rs.max_bounces = s.max_bounces;
     rs.rr_start = s.rr_start;
     rs.seed = s.seed;
     rs.sky_portals = s.sky_portals;
     rs.sunlit_patches = s.sunlit_patches;
-    m.upload_frame(CameraPose{}, lighting, rs);
+    m.upload_frame(CameraPose{}, lighting, rs, "voxel_field");
     const std::size_t V = voxels.size();
     const VoxelBuffers in = upload_voxels(ctx, voxels, true);
     detail::Buffer vis = ctx.alloc(V * 4, "voxel field: sun visibility");
@@ -761,7 +770,7 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
         for (int first = 0; first < s.sun_rays; first += chunk) {
             const int last = int(std::min<long>(s.sun_rays, long(first) + chunk));
             m.set_scene_args(m.k_vf_sun, rs, in.probe, in.cells, nvox, s.sun_rays, first, last, seed, vis, rays);
-            ctx.launch(m.k_vf_sun, 1, &global, &m.local);
+            ctx.launch(m.k_vf_sun, 1, &global, &local_sun);
         }
         out.rays += m.sum_rays(rays, V);
     } else {
@@ -776,7 +785,7 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
             const int last = int(std::min<long>(s.directions, long(first) + chunk));
             m.set_scene_args(m.k_vf_sh, rs, in.probe, in.cells, nvox, side, first, last, s.max_bounces, s.rr_start,
                              seed, vis, sh, rays);
-            ctx.launch(m.k_vf_sh, 1, &global, &m.local);
+            ctx.launch(m.k_vf_sh, 1, &global, &local_sh);
         }
         out.rays += m.sum_rays(rays, V);
     }
@@ -790,7 +799,7 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
             const int last = int(std::min<long>(s.point_samples, long(first) + chunk));
             m.set_scene_args(m.k_vf_probe, rs, in.probe, in.normal, in.cells, nvox, s.point_samples, first, last,
                              bounces, s.rr_start, seed, dst, rays);
-            ctx.launch(m.k_vf_probe, 1, &global, &m.local);
+            ctx.launch(m.k_vf_probe, 1, &global, &local_probe);
         }
         out.rays += m.sum_rays(rays, V);
     }
@@ -802,7 +811,7 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
             const int last = int(std::min<long>(s.point_samples, long(first) + chunk));
             m.set_scene_args(m.k_vf_face, rs, in.cells, nvox, s.point_samples, first, last, s.max_bounces,
                              s.rr_start, seed, face, rays);
-            ctx.launch(m.k_vf_face, 1, &global6, &m.local);
+            ctx.launch(m.k_vf_face, 1, &global6, &local_face);
         }
         out.rays += m.sum_rays(rays, 6 * V);
     }
@@ -823,12 +832,12 @@ std::vector<std::uint32_t> Renderer::voxel_visibility(const SurfaceVoxels& voxel
     Impl& m = *impl_;
     check_voxels(voxels, m.size, "voxel visibility", kMaxVisibilityVoxels);
     detail::Context& ctx = *m.ctx;
-    if (!m.k_vf_vis.get()) m.k_vf_vis = ctx.kernel(kPathtraceProgram, "vf_visibility", pathtrace_defines());
+    m.kernel(m.k_vf_vis, "voxel_visibility", "vf_visibility");
     const std::size_t V = voxels.size(), words = (V + 31) / 32;
     const VoxelBuffers in = upload_voxels(ctx, voxels, false);
     detail::Buffer mask = ctx.alloc(V * words * 4, "voxel visibility: mask");
     const int chunk = std::min(32, m.items_per_launch(64, m.trace_loops() + 8, 0, "voxel visibility"));
-    const std::size_t global[2] = {V, words}, local[2] = {m.local, 1};
+    const std::size_t global[2] = {V, words}, local[2] = {Impl::local_size(m.k_vf_vis), 1};
     for (int first = 0; first < 32; first += chunk) {
         const int last = std::min(32, first + chunk);
         m.k_vf_vis.args(m.grid, m.size.x, m.size.y, m.size.z, in.probe, in.cells, int(V), int(words), first, last,

@@ -1,5 +1,6 @@
-// Constants of the path tracer (kernels/pathtrace.cl) that other render code shares; they reach the kernels as
-// build options (renderer.cpp's pathtrace_defines(), voxel_field.cpp's compaction). Library-internal.
+// Constants of the path tracer (kernels/scene.cl and the programs built on it) that other render code shares;
+// they reach the kernels as build options (renderer.cpp's pathtrace_defines(), voxel_field.cpp's compaction).
+// Library-internal.
 #pragma once
 #include "ops/probe_shade.hpp"
 

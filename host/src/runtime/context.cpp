@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "io/file_util.hpp"
-#include "runtime/embedded_kernels.hpp"
+#include "runtime/programs.hpp"
 
 namespace ngi {
 namespace detail {
@@ -90,25 +90,6 @@ DeviceInfo describe(cl_platform_id p, cl_device_id d, int pi, int di) {
 std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603ull) {
     for (unsigned char c : s) { h ^= c; h *= 1099511628211ull; }
     return h;
-}
-
-const EmbeddedKernel& embedded(const std::string& file) {
-    for (std::size_t i = 0; i < kEmbeddedKernelCount; ++i)
-        if (file == kEmbeddedKernels[i].name) return kEmbeddedKernels[i];
-    throw Error("load kernel source: no embedded kernel file '" + file + ".cl'");
-}
-
-// The source of a program: kernels/common.cl, then each file of `files` ("a" or "a+b+c", in that order), as one
-// translation unit (OpenCL 1.2 has no linking of headers from the library). Line numbers restart in each file.
-std::string program_source(const std::string& files) {
-    std::string source = embedded("common").source;
-    for (std::size_t pos = 0; pos <= files.size();) {
-        const std::size_t plus = std::min(files.find('+', pos), files.size());
-        source += "\n#line 1\n";
-        source += embedded(files.substr(pos, plus - pos)).source;
-        pos = plus + 1;
-    }
-    return source;
 }
 
 std::string build_log(cl_program prog, cl_device_id dev) {
@@ -223,18 +204,18 @@ Context::~Context() {
     if (retained_device_) clReleaseDevice(device_);
 }
 
-cl_program Context::program(const std::string& file, const std::string& defines) {
+cl_program Context::program(const std::string& name, const std::string& defines) {
     // One lock for the cache and the build: two threads asking for the same program build it once (and never race
     // on its cache file); different programs of one device build one after the other (a Device is shared by
     // threads, and a build is a one-time cost per process, usually served from the disk cache).
     std::lock_guard<std::mutex> lock(programs_mutex_);
-    const std::string key = file + '\n' + defines;
+    const std::string key = name + '\n' + defines;
     if (auto it = programs_.find(key); it != programs_.end()) return it->second;
 
-    const std::string source = program_source(file);
+    const std::string source = program_source(name);
     const std::string options = build_options(defines);
-    const std::string op = "build kernels/" + file + ".cl [" + defines + "] for " + info_.name;
-    const std::filesystem::path cached = cache_dir() / (file + "-" + variant_key(file, defines) + ".bin");
+    const std::string op = "build program " + name + " [" + defines + "] for " + info_.name;
+    const std::filesystem::path cached = cache_dir() / (name + "-" + variant_key(name, defines) + ".bin");
 
     cl_int err = CL_SUCCESS;
     cl_program prog = nullptr;
@@ -284,8 +265,8 @@ cl_program Context::program(const std::string& file, const std::string& defines)
     return prog;
 }
 
-std::string Context::variant_key(const std::string& file, const std::string& defines) const {
-    const std::string source = program_source(file);
+std::string Context::variant_key(const std::string& program, const std::string& defines) const {
+    const std::string source = program_source(program);
     const std::uint64_t h = fnv1a(source, fnv1a(info_.platform_name + '\n' + info_.name + '\n' + info_.driver_version +
                                                  '\n' + info_.device_version + '\n' + build_options(defines)));
     char hex[17];
@@ -311,11 +292,11 @@ long Context::loop_limit() {
     return loop_limit_;
 }
 
-Kernel Context::kernel(const std::string& file, const std::string& name, const std::string& defines) {
-    cl_program prog = program(file, defines);
+Kernel Context::kernel(const std::string& program_name, const std::string& name, const std::string& defines) {
+    cl_program prog = program(program_name, defines);
     cl_int err = CL_SUCCESS;
     cl_kernel k = clCreateKernel(prog, name.c_str(), &err);
-    check(err, ("create kernel " + name + " from kernels/" + file + ".cl").c_str(), "clCreateKernel");
+    check(err, ("create kernel " + name + " from program " + program_name).c_str(), "clCreateKernel");
     std::size_t max_wg = 0, reqd[3] = {0, 0, 0};
     cl_ulong local_mem = 0;
     const cl_int errs[3] = {

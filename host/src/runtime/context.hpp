@@ -118,14 +118,14 @@ public:
     cl_command_queue queue() const { return queue_; }
     cl_device_id device() const { return device_; }
 
-    // Builds (once per process, and once per device+driver+source+options on disk) the embedded kernel file
-    // `file` (kernels/<file>.cl) with `defines` prepended as build options ("-DMWG=64 ..."), and returns a
+    // Builds (once per process, and once per device+driver+source+options on disk) the program `program` (its
+    // kernels/*.cl files: runtime/programs.cpp) with `defines` as build options ("-DMWG=64 ..."), and returns a
     // new kernel object for `kernel`. Kernel objects are cheap; keep them in the op that uses them.
-    Kernel kernel(const std::string& file, const std::string& kernel, const std::string& defines = "");
+    Kernel kernel(const std::string& program, const std::string& kernel, const std::string& defines = "");
 
-    // Hex key of (platform, device, driver, options, source) for kernels/<file>.cl built with `defines`: the key of
-    // the program cache, reused by anything cached per compiled variant (e.g. the GEMM self-check verdicts).
-    std::string variant_key(const std::string& file, const std::string& defines) const;
+    // Hex key of (platform, device, driver, options, source of every file) of `program` built with `defines`: the
+    // key of the program cache, reused by anything cached per compiled variant (e.g. the GEMM self-check verdicts).
+    std::string variant_key(const std::string& program, const std::string& defines) const;
 
     // Per-device state computed once and shared by every user of this context (e.g. the GEMM self-check): the
     // first call for `key` runs make(), later calls return the same object.
@@ -161,7 +161,7 @@ public:
     void finish();
 
 private:
-    cl_program program(const std::string& file, const std::string& defines);
+    cl_program program(const std::string& program, const std::string& defines);
     // True when a host store of [off, off + bytes) must be done by a kernel (kernels/transfer.cl): on Oclgrind,
     // whose uninitialized-value checker loses track of host stores that do not cover a whole buffer.
     bool host_stores_via_kernels(std::size_t off, std::size_t bytes) const;
@@ -175,7 +175,7 @@ private:
     cl_context context_ = nullptr;
     cl_command_queue queue_ = nullptr;
     std::mutex programs_mutex_;                   // guards programs_ (builds run under it: see program())
-    std::map<std::string, cl_program> programs_;  // key: file + '\n' + defines
+    std::map<std::string, cl_program> programs_;  // key: program + '\n' + defines
     std::mutex attached_mutex_;
     std::map<std::string, std::shared_ptr<void>> attached_;
     long loop_limit_ = -1;  // -1 = not probed yet
