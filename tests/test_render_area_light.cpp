@@ -446,7 +446,10 @@ TEST_CASE("area light: the frame folder records it (and the camera position), ol
     rewrite(json.substr(0, at) + "\"unused\": 1, " + json.substr(at));
     CHECK_THROWS_WITH(read_frame(edited), Catch::Contains("camera.json") && Catch::Contains("unknown key \"unused\""));
     std::string negative = json;
-    negative.insert(negative.find_first_of("0123456789", negative.find('[', at)), "-");  // the red channel
+    const std::size_t red = negative.find_first_of("0123456789", negative.find('[', at));  // the red channel
+    REQUIRE(red != std::string::npos);
+    negative = negative.substr(0, red) + "-" + negative.substr(red);  // (GCC 12 warns on insert(): a false
+                                                                      // -Wstringop-overflow, bound "up to 2^63")
     rewrite(negative);
     CHECK_THROWS_WITH(read_frame(edited), Catch::Contains("camera.json") && Catch::Contains("area light radiance") &&
                                               Catch::Contains("negative"));
