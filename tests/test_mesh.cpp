@@ -569,3 +569,11 @@ TEST_CASE("mesh: every file of the fuzz corpus loads or is refused cleanly", "[m
     CHECK(files >= 10);
     CHECK(loaded >= 10);  // the seeds are valid files
 }
+
+TEST_CASE("mesh: an OBJ line element of one vertex is refused before assimp reads it", "[mesh]") {
+    // fuzz_mesh's 807,213th input of the round-two campaign (fuzz/corpus/mesh/line_of_one_vertex_after_usemtl.obj):
+    // after a material switch, assimp 5.2.5 leaked the meshes it had built when it met "l 2".
+    using namespace ngi;
+    CHECK_THROWS_WITH(parse_mesh("v 0 1 0\nv 0 1 1\nusemtl 4\nl 2 1\nusemtl 1\nl 2\n", "bad.obj"),
+                      Catch::Contains("OBJ line 6") && Catch::Contains("a line element needs 2 or more vertices, this one has 1"));
+}

@@ -338,6 +338,11 @@ void check_obj(const std::string& b, const Fail& fail) {
         // so does this scan, and its strict index syntax refuses what is not one.
         if (!(c0 == 'f' || c0 == 'l' || c0 == 'p')) continue;
         const auto t = tokens(line.substr(s + 1));
+        // A line element of one vertex is no line: after a material switch, assimp 5.2.5 leaks the meshes it built
+        // when it meets one (fuzz_mesh, 807,213th input of the round-two campaign: usemtl, l 2 1, usemtl, l 2).
+        if (c0 == 'l' && t.size() < 2)
+            fail("OBJ line " + std::to_string(line_no) + ": a line element needs 2 or more vertices, this one has " +
+                 std::to_string(t.size()));
         if (c0 == 'f' && t.size() >= 3) triangles += t.size() - 2;
         indices += t.size();
         if (triangles > kMaxMeshTriangles)
