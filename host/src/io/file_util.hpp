@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "ngi/files.hpp"
+
 namespace ngi::detail {
 
 // ngi's one rule for opening an input file: only a regular file is read. Throws InputError("<op> <path>: cannot
@@ -15,10 +17,8 @@ namespace ngi::detail {
 // this first.
 void require_readable_file(const std::string& path, const std::string& op = "read");
 
-// Largest file read_file accepts: 4 GiB. Every file ngi reads (models, images, frames, configs) is far smaller
-// (the thesis-sized generator is ~220 MB); the cap turns a wrong path or a runaway file into a clear error
-// instead of exhausting memory.
-inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(4) << 30;
+// Largest file read_file accepts (ngi/files.hpp, the one definition).
+inline constexpr std::uint64_t kMaxFileBytes = kMaxInputFileBytes;
 
 // The whole file. Throws InputError("<op> <path>: ...") when it cannot be read, is not a regular file (a
 // directory, a FIFO, a device such as /dev/zero) or is larger than max_bytes or the host-memory limit
