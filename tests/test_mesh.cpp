@@ -577,3 +577,32 @@ TEST_CASE("mesh: an OBJ line element of one vertex is refused before assimp read
     CHECK_THROWS_WITH(parse_mesh("v 0 1 0\nv 0 1 1\nusemtl 4\nl 2 1\nusemtl 1\nl 2\n", "bad.obj"),
                       Catch::Contains("OBJ line 6") && Catch::Contains("a line element needs 2 or more vertices, this one has 1"));
 }
+
+TEST_CASE("mesh: a texture statement before any newmtl is refused before assimp's material reader sees it", "[mesh]") {
+    // fuzz_mesh's 811,578th input of the round-two campaign (fuzz/corpus/mesh/texture_before_newmtl_in_self_mtllib.obj):
+    // an OBJ naming itself as its mtllib, with a bare "map_ns" line. assimp 5.2.5 writes a texture statement
+    // into the current material without checking there is one: a SEGV, through parse_mesh and load_mesh alike.
+    CHECK_THROWS_WITH(parse_mesh("map_ns\nmtllib fuzz.obj", "fuzz.obj"),
+                      Contains("OBJ line 1") && Contains("texture statement 'map_ns' before any newmtl"));
+    test::TempDir dir("mesh-mtl");
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    // A material library beside the OBJ: each statement that crashed assimp (map_*, bump, disp, norm, options
+    // before the name), on a line after others and after leading blanks as assimp reads them.
+    for (const std::string mtl : {"map_Kd x.png\nnewmtl a\n", "# c\n  bump x.png\nnewmtl a\n", "disp x.png\n",
+                                  "norm x.png\r\nnewmtl a\n", "map_Kd -bm 2 x.png\n", "Kd 1 1 1\fmap_Kd -type sphere x\n"}) {
+        INFO(mtl);
+        spit(dir / "t.mtl", mtl);
+        spit(dir / "t.obj", "mtllib t.mtl\n" + tri);
+        CHECK_THAT(mesh_error(dir / "t.obj"), Contains("material library") && Contains("t.mtl line") &&
+                                                  Contains("before any newmtl"));
+    }
+    // After a newmtl the same statements are a material's textures: the mesh loads with the library's colour.
+    spit(dir / "t.mtl", "# c\nnewmtl a\nKd 0.5 0.5 0.5\nmap_Kd -bm 2 x.png\nbump x.png\nnorm y.png\nmap_ns z.png\n");
+    const LoadedMesh l = load_mesh(dir / "t.obj");
+    CHECK(l.mesh.triangle_count() == 1);
+    REQUIRE(l.materials.size() == 1);
+    CHECK_THAT(l.materials[0].albedo.x, Catch::Matchers::WithinAbs(0.214, 0.01));  // sRGB 0.5 -> linear 0.214
+    // Statements assimp guards itself (colours, scalars) before a newmtl are left to it: the file loads.
+    spit(dir / "t.mtl", "Kd 1 1 1\nNs 3\nd 0.5\nillum 2\nnewmtl a\nKd 0.5 0.5 0.5\n");
+    CHECK_NOTHROW(load_mesh(dir / "t.obj"));
+}

@@ -65,8 +65,9 @@ private:
 class GuardedIO : public Assimp::IOSystem {
 public:
     // `main` is served under `main_name`; other names are read from disk only when `sidecars` (load_mesh).
-    GuardedIO(std::string main_name, const std::string& main, bool sidecars)
-        : main_name_(std::move(main_name)), main_(main), sidecars_(sidecars), used_(main.size()) {}
+    // `obj`: the mesh is an OBJ, whose importer opens no other file than its material libraries.
+    GuardedIO(std::string main_name, const std::string& main, bool sidecars, bool obj)
+        : main_name_(std::move(main_name)), main_(main), sidecars_(sidecars), obj_(obj), used_(main.size()) {}
 
     bool Exists(const char* file) const override {
         if (file == main_name_) return true;
@@ -81,7 +82,9 @@ public:
         std::error_code ec;
         if (!std::filesystem::exists(file, ec)) return nullptr;  // assimp decides: an OBJ loads without its .mtl
         try {
-            return new BytesStream(read(file));
+            const std::string& bytes = read(file);
+            if (obj_) detail::precheck_material_library(bytes, main_name_, file);
+            return new BytesStream(bytes);
         } catch (const InputError& e) {  // assimp would swallow it: kept, and thrown after ReadFile
             if (error_.empty()) error_ = e.what();
             return nullptr;
@@ -107,6 +110,7 @@ private:
     std::string main_name_;
     const std::string& main_;
     bool sidecars_;
+    bool obj_;
     std::uint64_t used_;
     std::map<std::string, std::string> files_;  // node-based: stable addresses for the streams
     std::string error_;
@@ -363,7 +367,7 @@ LoadedMesh import(const std::string& bytes, const std::string& name, bool sideca
     const std::string ext = detail::lower_extension(name);
     const std::filesystem::path dir = std::filesystem::path(name).parent_path();
     Assimp::Importer importer;
-    auto* io = new GuardedIO(name, bytes, sidecars);
+    auto* io = new GuardedIO(name, bytes, sidecars, ext == ".obj");
     importer.SetIOHandler(io);  // owned by the importer from here
     detail::precheck_mesh(bytes, name, ext, [&](const std::string& uri) -> const std::string& {
         if (!sidecars)

@@ -2,6 +2,7 @@
 #include "render/mesh_precheck.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstring>
 #include <deque>
@@ -380,6 +381,42 @@ void check_obj(const std::string& b, const Fail& fail) {
                  std::to_string(max_index[k]) + " is out of range (the file has " + std::to_string(counts[k]) + ")");
 }
 
+// ---- MTL (an OBJ's material library) ---------------------------------------------------------------------------
+// assimp 5.2.5's material reader writes a texture statement (map_Kd, bump, disp, norm, ...) into "the current
+// material" without checking that there is one: a texture line before the first `newmtl` dereferences a null
+// material and crashes the process (fuzz_mesh, 811,578th input of the round-two campaign: an OBJ naming itself as
+// its `mtllib`, with a bare `map_ns` line). Such a line has no material to apply to, so it is refused. Lines are
+// split as assimp splits them (at LF, CR, NUL and form feed; leading blanks skipped) and matched without regard to
+// case, which refuses a little more than assimp would crash on (a first line with leading blanks, `MAP_KD`), never
+// less. assimp starts a material at any line whose first two characters are `N`/`n` then `e`: so does this scan.
+
+void check_mtl_statements(const std::string& b, const std::string& kind, const Fail& fail) {
+    static constexpr std::string_view kTextureStatements[] = {
+        "map_kd", "map_ka", "map_ks", "map_disp", "disp", "map_d", "map_emissive", "map_ke", "map_bump", "bump",
+        "map_kn", "norm", "refl", "map_ns", "map_pr", "map_pm", "map_ps"};
+    const auto line_end = [](char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; };
+    std::size_t pos = 0;
+    for (std::uint64_t line_no = 1; pos < b.size(); ++line_no) {
+        std::size_t end = pos;
+        while (end < b.size() && !line_end(b[end])) ++end;
+        std::size_t s = pos;
+        while (s < end && (b[s] == ' ' || b[s] == '\t')) ++s;
+        const std::string_view line(b.data() + s, end - s);
+        pos = end + 1;
+        if (line.size() >= 2 && (line[0] == 'N' || line[0] == 'n') && line[1] == 'e') return;  // a material exists
+        for (std::string_view t : kTextureStatements) {
+            if (line.size() < t.size()) continue;
+            bool same = true;
+            for (std::size_t i = 0; i < t.size() && same; ++i)
+                same = std::tolower(static_cast<unsigned char>(line[i])) == t[i];
+            if (same)
+                fail(kind + " line " + std::to_string(line_no) + ": texture statement '" +
+                     printable(line.substr(0, line.find_first_of(" \t"))) +
+                     "' before any newmtl (a material statement needs a material to apply to)");
+        }
+    }
+}
+
 // ---- glTF 2.0 -------------------------------------------------------------------------------------------------
 // Accessors say how many elements they hold and where: each must lie inside its buffer view, each view inside its
 // buffer, each buffer inside the bytes that back it (the GLB's BIN chunk, a data: URI, an external file). Accessors
@@ -724,12 +761,19 @@ void check_gltf(const std::string& b, bool binary, const Fail& fail, const Sidec
 
 }  // namespace
 
+void precheck_material_library(const std::string& bytes, const std::string& mesh_name, const std::string& file) {
+    check_mtl_statements(bytes, "material library " + file, Fail{mesh_name});
+}
+
 void precheck_mesh(const std::string& bytes, const std::string& name, const std::string& ext,
                    const SidecarBytes& sidecar) {
     const Fail fail{name};
     if (bytes.empty()) fail("the file is empty");
     if (ext == ".ply") check_ply(bytes, fail);
-    else if (ext == ".obj") check_obj(bytes, fail);
+    else if (ext == ".obj") {
+        check_obj(bytes, fail);
+        check_mtl_statements(bytes, "OBJ", fail);  // an OBJ may name itself as its mtllib: assimp then reads it as one
+    }
     else if (ext == ".gltf") check_gltf(bytes, false, fail, sidecar);
     else if (ext == ".glb") check_gltf(bytes, true, fail, sidecar);
     else fail("not a mesh file extension (.obj, .ply, .gltf, .glb)");

@@ -23,4 +23,9 @@ using SidecarBytes = std::function<const std::string&(const std::string& uri)>;
 void precheck_mesh(const std::string& bytes, const std::string& name, const std::string& ext,
                    const SidecarBytes& sidecar);
 
+// Checks the bytes of a material library an OBJ names (`mtllib`) before assimp reads them: a texture statement
+// before the first `newmtl` is refused (assimp 5.2.5 writes it through a null material). Throws
+// InputError("load mesh <mesh_name>: material library <file> line N: ...").
+void precheck_material_library(const std::string& bytes, const std::string& mesh_name, const std::string& file);
+
 }  // namespace ngi::detail
