@@ -38,6 +38,7 @@ Mesa rusticl (llvmpipe): RUSTICL_ENABLE=llvmpipe ... --device rusticl --sizes 64
 import argparse
 import copy
 import datetime
+import importlib.util
 import json
 import os
 import platform
@@ -59,11 +60,23 @@ import torch
 import ngi.neural_gi as neural_gi
 from bench_record import emit, git_head, load, log, relative
 
+import torch_generator  # perf/, beside this script: time_ms, blas_info, instance_norm_equivalent
+
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-sys.path.insert(0, str(REPO / "tests" / "parity"))
-import make_neural_gi_parity as parity  # noqa: E402  (the parity test's weights and inputs)
-import torch_generator  # noqa: E402  (perf/: time_ms, blas_info, instance_norm_equivalent)
+
+
+def _load_parity_module():
+    """The parity test's weights and inputs (tests/parity/make_neural_gi_parity.py), loaded from its file: the
+    script is not a package module, and nothing here edits sys.path (training/tests/test_package_layout.py)."""
+    path = REPO / "tests" / "parity" / "make_neural_gi_parity.py"
+    spec = importlib.util.spec_from_file_location("make_neural_gi_parity", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+parity = _load_parity_module()
 
 SCENE_BOX = ((0.0, 0.0, 0.0), (16.0, 16.0, 16.0))  # what parity.random_inputs normalizes positions with
 SEED = 1

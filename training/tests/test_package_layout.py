@@ -3,7 +3,7 @@
 
     PYTHONPATH=training:build/python /usr/bin/python3 training/tests/test_package_layout.py
 
-1. No Python file of the repository's training, tests or Python bindings edits sys.path (sys.path.insert / append /
+1. No Python file of the repository's training, tests, Python bindings or perf scripts edits sys.path (sys.path.insert / append /
    extend / assignment, site.addsitedir): modules are found through PYTHONPATH, never through the order of path
    edits (issue 30: five files did, and which `data` module won depended on it).
 2. Every module of ngi_train imports from the package (no module relies on a script's own folder on the path).
@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CHECKED = ("training", "tests", "bindings/python")
+CHECKED = ("training", "tests", "bindings/python", "perf")
 SYS_PATH_EDIT = re.compile(r"\bsys\.path\s*(\.\s*(insert|append|extend)\s*\(|\+?=[^=])|\bsite\.addsitedir\s*\(")
 COMMANDS = ["ngi_train.generator.train", "ngi_train.generator.export", "ngi_train.generator.evaluate",
             "ngi_train.ao.train", "ngi_train.ao.evaluate", "ngi_train.neural_gi.train", "ngi_train.neural_gi.evaluate",
