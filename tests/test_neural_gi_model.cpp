@@ -42,15 +42,16 @@ TEST_CASE("neural_gi model files match PyTorch (encoding, U-Net buffer, re-injec
         CHECK(info.sanitized_inputs == 0);
         // The output is exp(raw): its relative error is the raw output's absolute error. float32 against float64
         // through the U-Net (per-image batch norm at every level), the encoding (sin/cos of arguments up to 256 pi:
-        // float32 rounding of the argument alone is ~2e-5) and up to 650-term sums in 8 layers: observed < 2e-4;
-        // 2e-3 relative leaves room for other devices' sin/cos and exp.
+        // float32 rounding of the argument alone is ~2e-5) and up to 650-term sums in 8 layers: observed 8.5e-5 on
+        // PoCL (2026-11-28). 2e-4 relative is the figure README.md states: 2.3x the observation, for another device's
+        // sin/cos and exp (OpenCL 1.2 allows 4 ulp for sin/cos, 3 for exp; the argument's own rounding dominates).
         double case_worst = 0;
         for (std::size_t i = 0; i < y.data.size(); ++i) {
             REQUIRE(std::isfinite(y.data[i]));
             CHECK(y.data[i] >= 0.0f);
             case_worst = std::max(case_worst, std::abs(double(y.data[i]) - want.data[i]) / want.data[i]);
         }
-        CHECK(case_worst < 2e-3);
+        CHECK(case_worst < 2e-4);
         worst = std::max(worst, case_worst);
     }
     WARN("neural_gi parity: largest relative |ngi - PyTorch float64| of the indirect light: " << worst);

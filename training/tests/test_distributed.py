@@ -97,8 +97,9 @@ try:
     import torch
     import torch.distributed
 except ImportError as e:  # pragma: no cover
-    print(f"training_distributed: skipped ({e})")
-    sys.exit(77)
+    # Not a skip: tools/install-deps.sh installs numpy and torch, so their absence is a broken machine.
+    print(f"training_distributed: FAILED: cannot import numpy/torch ({e}); run tools/install-deps.sh")
+    sys.exit(1)
 
 from ngi_train import distributed, ngi_paths  # noqa: E402
 from ngi_train.generator import data  # noqa: E402

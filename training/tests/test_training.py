@@ -37,8 +37,9 @@ try:
     import numpy as np
     import torch
 except ImportError as e:  # pragma: no cover
-    print(f"training_smoke: skipped ({e})")
-    sys.exit(77)
+    # Not a skip: tools/install-deps.sh installs numpy and torch, so their absence is a broken machine.
+    print(f"training_smoke: FAILED: cannot import numpy/torch ({e}); run tools/install-deps.sh")
+    sys.exit(1)
 
 import ngi.model_file as model_file  # noqa: E402
 import ngi.reference_models as reference_models  # noqa: E402
