@@ -245,3 +245,35 @@ TEST_CASE("frequency encoding: Neural GI's Eq. 3 and tiny-cuda-nn's Frequency as
         for (int i = 0; i < w; ++i) CHECK(y[i] == Approx(want[i]).margin(1e-6));
     }
 }
+
+TEST_CASE("the shape-specialized MLP's vector tanh is within 2 ulp of float64 at every VEC", "[mlp][extremes]") {
+    // One layer, one input, weight 1, no bias: the network is tanh itself, evaluated by mlp_tanh_v on VEC lanes
+    // (kernels/mlp.cl; the same form as activation.cl's ngi_tanh, whose scalar test is in test_norm_elementwise).
+    auto& c = test::ctx();
+    MlpSpec spec;
+    spec.inputs = 1;
+    spec.layers.push_back(DenseSpec{1, 1, Act::tanh(), {1.0f}, {}});
+    std::vector<float> x;
+    for (int i = -30000; i <= 30000; ++i) x.push_back(float(i) * 3e-4f);
+    for (float v : {0.55f, std::nextafter(0.55f, 0.0f), -0.55f, 1e-30f, -1e-45f, 88.8f, -3.4e38f,
+                    std::numeric_limits<float>::infinity()})
+        x.push_back(v);
+    const int n = int(x.size());
+    for (int vec : {1, 2, 4, 8, 16}) {
+        INFO("VEC " << vec);
+        FusedMlp mlp(c, spec, vec);
+        REQUIRE(mlp.static_architecture());
+        Buffer xb = test::upload(x), yb = c.alloc(x.size() * sizeof(float), "y");
+        mlp.enqueue(c, xb.get(), 0, ItemLayout::points(1), n, yb.get(), 0, ItemLayout::points(1));
+        const std::vector<float> y = test::download(yb, x.size());
+        double worst = 0;
+        for (int i = 0; i < n; ++i) {
+            const double want = std::tanh(double(x[i]));
+            const float w = float(want);
+            const double ulp = double(std::nextafter(std::abs(w), INFINITY)) - double(std::abs(w));
+            worst = std::max(worst, std::abs(double(y[i]) - want) / ulp);
+        }
+        CHECK(worst <= 2.0);
+        CHECK(y[n - 1] == 1.0f);  // +Inf saturates to exactly 1
+    }
+}
