@@ -3,6 +3,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace ngi::ref {
@@ -127,6 +128,81 @@ inline std::vector<double> dense(const std::vector<double>& x, const std::vector
         y[o] = activate(s, act, alpha);
     }
     return y;
+}
+
+// C[m][n] = act(scale[m] * sum_k a[m][k] b[k][n] + shift[m]): a row-major M x K, b row-major K x N (LeakyReLU
+// slope 0.2, as the GEMM tests use).
+inline std::vector<float> gemm(int M, int N, int K, const std::vector<float>& a, const std::vector<float>& b,
+                               const std::vector<float>& scale, const std::vector<float>& shift, int act) {
+    std::vector<float> out(std::size_t(M) * N);
+    std::vector<double> row(N);
+    for (int m = 0; m < M; ++m) {
+        std::fill(row.begin(), row.end(), 0.0);
+        for (int k = 0; k < K; ++k) {
+            const double av = a[std::size_t(m) * K + k];
+            const float* br = &b[std::size_t(k) * N];
+            for (int n = 0; n < N; ++n) row[n] += av * br[n];
+        }
+        for (int n = 0; n < N; ++n)
+            out[std::size_t(m) * N + n] = float(activate(row[n] * scale[m] + shift[m], act, 0.2));
+    }
+    return out;
+}
+
+// Real SH Y_lm with the Condon-Shortley phase from the textbook definition: theta from +z, phi = atan2(y, x);
+// std::assoc_legendre omits the (-1)^m phase, so it is applied here. (x, y, z) a unit vector.
+inline double sh_basis(int l, int m, double x, double y, double z) {
+    const double kPi = 3.14159265358979323846;
+    const double theta = std::acos(std::clamp(z, -1.0, 1.0)), phi = std::atan2(y, x);
+    const int am = std::abs(m);
+    double fact = 1.0;  // (l - |m|)! / (l + |m|)!
+    for (int k = l - am + 1; k <= l + am; ++k) fact /= k;
+    const double K = std::sqrt((2 * l + 1) / (4 * kPi) * fact);
+    const double P = (am % 2 ? -1.0 : 1.0) * std::assoc_legendre(unsigned(l), unsigned(am), std::cos(theta));
+    if (m == 0) return K * P;
+    return std::sqrt(2.0) * K * P * (m > 0 ? std::cos(am * phi) : std::sin(am * phi));
+}
+
+// Input sanitizing (Elementwise::sanitize): NaN -> 0; beyond [lo, hi] widened by (hi - lo) / 1024 on each side
+// (+-Inf included) -> the nearer end; everything else unchanged.
+inline double sanitize(double v, double lo, double hi) {
+    const double margin = (hi - lo) / 1024.0;
+    if (std::isnan(v)) return 0.0;
+    if (v > hi + margin) return hi;
+    if (v < lo - margin) return lo;
+    return v;
+}
+
+// Whether seeded dropout keeps flat element i (docs/MODEL_FORMAT.md: the 32-bit finalizer hash of seed, site and
+// index; kept when (hash >> 8) / 2^24 >= p).
+inline bool dropout_keeps(std::uint32_t seed, std::uint32_t site, std::uint32_t i, double p) {
+    auto mix = [](std::uint32_t x) {
+        x ^= x >> 16; x *= 0x7feb352du;
+        x ^= x >> 15; x *= 0x846ca68bu;
+        x ^= x >> 16;
+        return x;
+    };
+    const std::uint32_t u = mix(mix(seed + 0x9E3779B9u * (site + 1u)) ^ i);
+    return double(u >> 8) / 16777216.0 >= p;
+}
+
+// Max (or mean) per set and channel: set s holds items first[s] .. first[s+1]-1; item i's channel c at
+// i * item_stride + c * channel_stride. Out [sets][channels]; an empty set pools to 0.
+inline std::vector<double> set_pool(const std::vector<float>& x, int item_stride, int channel_stride, int channels,
+                                    const std::vector<int>& first, bool max) {
+    const int sets = int(first.size()) - 1;
+    std::vector<double> out(std::size_t(sets) * channels, 0.0);
+    for (int s = 0; s < sets; ++s)
+        for (int c = 0; c < channels; ++c) {
+            double acc = max ? -INFINITY : 0.0;
+            for (int i = first[s]; i < first[s + 1]; ++i) {
+                const double v = x[std::size_t(i) * item_stride + std::size_t(c) * channel_stride];
+                acc = max ? std::max(acc, v) : acc + v;
+            }
+            const int count = first[s + 1] - first[s];
+            out[std::size_t(s) * channels + c] = count == 0 ? 0.0 : max ? acc : acc / count;
+        }
+    return out;
 }
 
 }  // namespace ngi::ref

@@ -44,23 +44,6 @@ std::vector<float> run_gemm(const GemmParams& p, int M, int N, int K, const std:
     return out;
 }
 
-std::vector<float> ref_gemm(int M, int N, int K, const std::vector<float>& a, const std::vector<float>& b,
-                            const std::vector<float>& scale, const std::vector<float>& shift, int act) {
-    std::vector<float> out(std::size_t(M) * N);
-    std::vector<double> row(N);
-    for (int m = 0; m < M; ++m) {
-        std::fill(row.begin(), row.end(), 0.0);
-        for (int k = 0; k < K; ++k) {
-            const double av = a[std::size_t(m) * K + k];
-            const float* br = &b[std::size_t(k) * N];
-            for (int n = 0; n < N; ++n) row[n] += av * br[n];
-        }
-        for (int n = 0; n < N; ++n)
-            out[std::size_t(m) * N + n] = float(ref::activate(row[n] * scale[m] + shift[m], act, 0.2));
-    }
-    return out;
-}
-
 // Largest error in tolerance units (<= 1 passes).
 double gemm_error(const GemmParams& p, int M, int N, int K, int act, std::mt19937& rng) {
     // Values like the generators': weights ~ U(-1/sqrt(K), 1/sqrt(K)) keep outputs O(1) at any K.
@@ -69,7 +52,7 @@ double gemm_error(const GemmParams& p, int M, int N, int K, int act, std::mt1993
     auto b = test::random_vector(std::size_t(K) * N, rng);
     auto scale = test::random_vector(M, rng, 0.5f, 1.5f), shift = test::random_vector(M, rng);
     auto y = run_gemm(p, M, N, K, a, b, scale, shift, act);
-    auto r = ref_gemm(M, N, K, a, b, scale, shift, act);
+    auto r = ref::gemm(M, N, K, a, b, scale, shift, act);
     // fp32 fma accumulation of K products of size ~1/sqrt(K) against a double reference: the observed error is
     // ~1e-6 at K = 8192; 1e-4 abs + rel flags any indexing or miscompile error (those are O(0.1-1)).
     return test::worst_ratio(y, r, 1e-4, 1e-4);
@@ -405,7 +388,7 @@ TEST_CASE("GEMM local-memory variant: a fixed-shape kernel, launched at L0 x L1 
     k.args(M, N, padded_k(K, p), ab, bb, 0, cb, 0, N, sb, tb, 0, 0.0f);
     const std::size_t global[2] = {std::size_t((M + 3) / 4), std::size_t((N + 3) / 4)}, wg[2] = {8, 8};
     c.launch(k, 2, global, wg);
-    CHECK(test::worst_ratio(test::download(cb, std::size_t(M) * N), ref_gemm(M, N, K, a, b, scale, shift, 0), 1e-4,
+    CHECK(test::worst_ratio(test::download(cb, std::size_t(M) * N), ref::gemm(M, N, K, a, b, scale, shift, 0), 1e-4,
                             1e-4) <= 1.0);
 }
 

@@ -6,27 +6,11 @@
 #include "ops/mlp.hpp"
 #include "ops/set_pool.hpp"
 #include "ops/sh.hpp"
+#include "reference.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
 using namespace ngi::detail;
-
-namespace {
-
-// Real SH with the Condon-Shortley phase from the textbook definition: theta from +z, phi = atan2(y, x);
-// std::assoc_legendre omits the (-1)^m phase, so it is applied here.
-double sh_reference(int l, int m, double x, double y, double z) {
-    const double theta = std::acos(std::clamp(z, -1.0, 1.0)), phi = std::atan2(y, x);
-    const int am = std::abs(m);
-    double fact = 1.0;  // (l - |m|)! / (l + |m|)!
-    for (int k = l - am + 1; k <= l + am; ++k) fact /= k;
-    const double K = std::sqrt((2 * l + 1) / (4 * M_PI) * fact);
-    const double P = (am % 2 ? -1.0 : 1.0) * std::assoc_legendre(unsigned(l), unsigned(am), std::cos(theta));
-    if (m == 0) return K * P;
-    return std::sqrt(2.0) * K * P * (m > 0 ? std::cos(am * phi) : std::sin(am * phi));
-}
-
-}  // namespace
 
 TEST_CASE("SH bands 0-2: basis = the Legendre definition, irradiance = the integral of the cosine lobe", "[sh]") {
     std::mt19937 rng(21);
@@ -52,7 +36,7 @@ TEST_CASE("SH bands 0-2: basis = the Legendre definition, irradiance = the integ
                 double s = 0;
                 for (int l = 0; l <= 2; ++l)
                     for (int m = -l; m <= l; ++m) {
-                        const double Y = len > 0 ? sh_reference(l, m, x / len, y / len, z / len) : (l == 0 ? sh_reference(0, 0, 0, 0, 1) : 0.0);
+                        const double Y = len > 0 ? ref::sh_basis(l, m, x / len, y / len, z / len) : (l == 0 ? ref::sh_basis(0, 0, 0, 0, 1) : 0.0);
                         s += coef[(std::size_t(i) * channels + c) * 9 + l * (l + 1) + m] * (irradiance ? lobe[l] : 1.0) * Y;
                     }
                 want[std::size_t(i) * channels + c] = float(s);
@@ -80,7 +64,7 @@ TEST_CASE("SH bands 0-2: basis = the Legendre definition, irradiance = the integ
             const double x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph), z = std::cos(th);
             double L = 0;
             for (int l = 0; l <= 2; ++l)
-                for (int m = -l; m <= l; ++m) L += c9[l * (l + 1) + m] * sh_reference(l, m, x, y, z);
+                for (int m = -l; m <= l; ++m) L += c9[l * (l + 1) + m] * ref::sh_basis(l, m, x, y, z);
             E += L * std::max(0.0, nx * x + ny * y + nz * z) * std::sin(th) * (M_PI / T) * (2 * M_PI / P);
         }
     CHECK(got == Approx(E).epsilon(1e-3));
@@ -102,17 +86,8 @@ TEST_CASE("set pooling: max and mean per set (empty sets included), broadcast ba
         for (PoolMode mode : {PoolMode::Max, PoolMode::Mean}) {
             pool.pool(ctx, xb.get(), channels, fb.get(), sets, mode, pb.get());
             const std::vector<float> got = test::download(pb, std::size_t(sets) * channels);
-            std::vector<float> want(got.size(), 0.0f);
-            for (int s = 0; s < sets; ++s)
-                for (int c = 0; c < channels; ++c) {
-                    double acc = mode == PoolMode::Max ? -INFINITY : 0.0;
-                    for (int i = first[s]; i < first[s + 1]; ++i) {
-                        const double v = x[std::size_t(i) * channels + c];
-                        acc = mode == PoolMode::Max ? std::max(acc, v) : acc + v;
-                    }
-                    const int count = first[s + 1] - first[s];
-                    want[std::size_t(s) * channels + c] = count == 0 ? 0.0f : float(mode == PoolMode::Max ? acc : acc / count);
-                }
+            const std::vector<double> r = ref::set_pool(x, channels, 1, channels, first, mode == PoolMode::Max);
+            const std::vector<float> want(r.begin(), r.end());
             CAPTURE(channels, int(mode));
             REQUIRE(test::worst_ratio(got, want, 1e-5, 1e-5) <= 1.0);
         }

@@ -1,0 +1,1174 @@
+#include "op_harness/op_cases.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "ops/conv.hpp"
+#include "ops/elementwise.hpp"
+#include "ops/gather_image.hpp"
+#include "ops/gemm_selfcheck.hpp"
+#include "ops/jbu.hpp"
+#include "ops/mlp.hpp"
+#include "ops/norm.hpp"
+#include "ops/probe_shade.hpp"
+#include "ops/set_pool.hpp"
+#include "ops/sh.hpp"
+#include "ops/voxel_ltf.hpp"
+#include "reference.hpp"
+#include "reference_image_desc.hpp"
+#include "reference_jbu.hpp"
+#include "reference_voxel.hpp"
+
+namespace ngi::harness {
+
+using namespace ngi::detail;
+using BufferPtr = std::shared_ptr<GuardedBuffer>;
+
+double normalized_error(const std::vector<float>& got, const std::vector<double>& want, const std::vector<char>& skip) {
+    if (got.size() != want.size()) return INFINITY;
+    double scale = 0, worst = 0;
+    for (std::size_t i = 0; i < want.size(); ++i)
+        if (skip.empty() || !skip[i]) scale = std::max(scale, std::abs(want[i]));
+    scale = std::max(scale, 1e-30);
+    for (std::size_t i = 0; i < want.size(); ++i) {
+        if (!skip.empty() && skip[i]) continue;
+        if (!std::isfinite(got[i])) return INFINITY;
+        worst = std::max(worst, std::abs(double(got[i]) - want[i]) / scale);
+    }
+    return worst;
+}
+
+namespace {
+
+// ---- buffers and data ----------------------------------------------------------------------------------------
+
+template <class T>
+BufferPtr add(Context& ctx, Prepared& p, const char* name, Role role, const std::vector<T>& v) {
+    static_assert(sizeof(T) == 4, "the harness counts buffers in 4-byte words");
+    auto b = std::make_shared<GuardedBuffer>(ctx, name, role, v.size(), v.empty() ? nullptr : v.data());
+    p.buffers.push_back(b);
+    return b;
+}
+
+BufferPtr add_out(Context& ctx, Prepared& p, const char* name, Role role, std::size_t words) {
+    auto b = std::make_shared<GuardedBuffer>(ctx, name, role, words, nullptr);
+    p.buffers.push_back(b);
+    return b;
+}
+
+std::vector<float> uniform(std::size_t n, std::mt19937& rng, float lo = -1.0f, float hi = 1.0f) {
+    std::uniform_real_distribution<float> u(lo, hi);
+    std::vector<float> v(n);
+    for (float& x : v) x = u(rng);
+    return v;
+}
+
+std::vector<double> to_double(const std::vector<float>& v) { return {v.begin(), v.end()}; }
+
+std::string dims(std::initializer_list<std::pair<const char*, long>> d) {
+    std::ostringstream s;
+    for (const auto& [k, v] : d) s << (s.tellp() > 0 ? " " : "") << k << v;
+    return s.str();
+}
+
+Act act_of(int code) { return {Activation(code), 0.2f}; }
+
+// ---- GEMM and packing ----------------------------------------------------------------------------------------
+
+Prepared gemm_case(Context& ctx, const GemmParams& p, int M, int N, int K, int act, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"M", M}, {"N", N}, {"K", K}, {"act", act}});
+    auto op = std::make_shared<Gemm>(ctx, p);
+    // Weights ~ U(-1/sqrt(K), 1/sqrt(K)), as the generators' layers: outputs O(1) at any K.
+    const float wa = 1.0f / std::sqrt(float(K));
+    const auto a = uniform(std::size_t(M) * K, rng, -wa, wa), b = uniform(std::size_t(K) * N, rng);
+    const auto scale = uniform(M, rng, 0.5f, 1.5f), shift = uniform(M, rng);
+    const int ldc = N + 3;  // a row stride > N, as the planner's arena rows
+    auto ap = add(ctx, r, "Ap", Role::Input, pack_a(a.data(), M, K, K, p));
+    auto bp = add(ctx, r, "Bp", Role::Input, pack_b(b.data(), K, N, N, p));
+    auto sc = add(ctx, r, "scale", Role::Input, scale), sh = add(ctx, r, "shift", Role::Input, shift);
+    auto c = add_out(ctx, r, "C", Role::Output, std::size_t(M) * ldc);
+    r.flops = 2.0 * M * N * K;
+    r.bytes = 4.0 * (double(ap->words()) + double(bp->words()) + double(M) * N + 2.0 * M);
+    r.run = [=](Context& cx) {
+        op->enqueue(cx, M, N, K, ap->payload(), bp->mem(), bp->offset(), c->mem(), c->offset(), ldc, sc->payload(),
+                    sh->payload(), act_of(act));
+    };
+    r.compare = [=](Context& cx) {
+        const auto full = c->read_floats(cx);
+        Comparison cmp;
+        for (int m = 0; m < M; ++m)
+            for (int n = 0; n < N; ++n) cmp.got.push_back(full[std::size_t(m) * ldc + n]);
+        cmp.want = to_double(ref::gemm(M, N, K, a, b, scale, shift, act));
+        return cmp;
+    };
+    return r;
+}
+
+Prepared pack_b_case(Context& ctx, const GemmParams& p, int K, int N, int act, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"K", K}, {"N", N}, {"act", act}});
+    auto op = std::make_shared<PackB>(ctx, p);
+    const auto x = uniform(std::size_t(K) * N, rng, -3.0f, 3.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto bp = add_out(ctx, r, "Bp", Role::Output, packed_b_floats(K, N, p));
+    r.bytes = 4.0 * (double(x.size()) + double(bp->words()));
+    r.run = [=](Context& cx) { op->enqueue(cx, xb->mem(), xb->offset(), K, N, bp->mem(), bp->offset(), act_of(act)); };
+    r.compare = [=](Context& cx) {
+        std::vector<float> activated(x.size());
+        for (std::size_t i = 0; i < x.size(); ++i) activated[i] = float(ref::activate(x[i], act, 0.2));
+        return Comparison{bp->read_floats(cx), to_double(pack_b(activated.data(), K, N, N, p)), {}, {}};
+    };
+    return r;
+}
+
+// ---- convolutions --------------------------------------------------------------------------------------------
+
+struct ConvShape {
+    int c, h, w, co, kh, kw, s, p, in_act, act;
+};
+
+Prepared conv_case(Context& ctx, const GemmParams& gp, const ConvShape& k, bool transposed, ConvPath path,
+                   std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", k.c}, {"H", k.h}, {"W", k.w}, {"Co", k.co}, {"k", k.kh}, {"x", k.kw}, {"s", k.s},
+                    {"p", k.p}, {"in_act", k.in_act}, {"act", k.act}});
+    const ConvSpec spec{k.c, k.co, {k.kh, k.kw, k.s, k.p}, act_of(k.in_act), act_of(k.act)};
+    const float wa = 1.0f / std::sqrt(float(k.c * k.kh * k.kw));
+    const auto x = uniform(std::size_t(k.c) * k.h * k.w, rng);
+    const auto w = uniform(std::size_t(k.c) * k.co * k.kh * k.kw, rng, -wa, wa);
+    const ChannelAffine aff{uniform(k.co, rng, 0.5f, 1.5f), uniform(k.co, rng)};
+    const Shape in{k.c, k.h, k.w};
+    // One of the two op classes behind a common run: both have output_shape, scratch_floats, enqueue, implicit.
+    std::shared_ptr<Conv2d> conv;
+    std::shared_ptr<ConvTranspose2d> up;
+    if (transposed) up = std::make_shared<ConvTranspose2d>(ctx, gp, spec, w.data(), aff, path);
+    else conv = std::make_shared<Conv2d>(ctx, gp, spec, w.data(), aff, path);
+    const Shape out = transposed ? up->output_shape(in) : conv->output_shape(in);
+    const std::size_t scratch = transposed ? up->scratch_floats(in) : conv->scratch_floats(in);
+    const bool implicit = transposed ? up->implicit() : conv->implicit();
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, out.size());
+    auto sb = add_out(ctx, r, "scratch", Role::Scratch, scratch);
+    const double macs = transposed ? double(in.size()) * k.co * k.kh * k.kw : double(out.size()) * k.c * k.kh * k.kw;
+    r.flops = 2.0 * macs;
+    r.bytes = 4.0 * (double(x.size()) + double(w.size()) + double(out.size()));
+    r.run = [=](Context& cx) {
+        const View xv{xb->mem(), xb->offset(), in}, yv{yb->mem(), yb->offset(), out};
+        if (up) up->enqueue(cx, xv, yv, sb->mem(), sb->offset());
+        else conv->enqueue(cx, xv, yv, sb->mem(), sb->offset());
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp;
+        cmp.got = yb->read_floats(cx);
+        int oh = 0, ow = 0;
+        cmp.want = to_double(transposed ? ref::conv_transpose2d(x, k.c, k.h, k.w, w, k.co, k.kh, k.kw, k.s, k.p,
+                                                                aff.scale, aff.shift, k.in_act, k.act, 0.2, oh, ow)
+                                        : ref::conv2d(x, k.c, k.h, k.w, w, k.co, k.kh, k.kw, k.s, k.p, aff.scale,
+                                                      aff.shift, k.in_act, k.act, 0.2, oh, ow));
+        if (oh != out.h || ow != out.w) cmp.mismatch = "output shape differs from the reference's";
+        // The case's name says which path it covers: the op must have taken it.
+        if ((path == ConvPath::implicit) != implicit)
+            cmp.mismatch = std::string("the op took the ") + (implicit ? "implicit" : "im2col") + " path";
+        return cmp;
+    };
+    return r;
+}
+
+// ---- batch norm and elementwise ------------------------------------------------------------------------------
+
+Prepared batch_norm_case(Context& ctx, bool chunked, int C, int H, int W, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", C}, {"H", H}, {"W", W}});
+    const auto x = uniform(std::size_t(C) * H * W, rng, -3.0f, 5.0f);
+    const auto g = uniform(C, rng, 0.5f, 1.5f), b = uniform(C, rng);
+    auto op = std::make_shared<BatchNormPerImage>(ctx, C, g, b, 1e-5f, Act::leaky(0.2f), chunked);
+    auto xb = add(ctx, r, "x", Role::InOut, x);
+    auto sb = add_out(ctx, r, "scratch", Role::Scratch, op->scratch_floats({C, H, W}));
+    r.flops = 6.0 * double(x.size());  // mean, variance, normalize, activation
+    r.bytes = 4.0 * 3 * double(x.size());  // two reads (statistics, apply) and a write
+    r.run = [=](Context& cx) { op->enqueue(cx, View{xb->mem(), xb->offset(), {C, H, W}}, sb->mem(), sb->offset()); };
+    r.compare = [=](Context& cx) {
+        return Comparison{xb->read_floats(cx),
+                          to_double(ref::batch_norm_per_image(x, C, H * W, g, b, 1e-5, int(Activation::LeakyReLU), 0.2)),
+                          {}, {}};
+    };
+    return r;
+}
+
+Prepared activate_case(Context& ctx, Act act, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}, {"act", int(act.kind)}});
+    auto op = std::make_shared<Elementwise>(ctx);
+    const auto x = uniform(n, rng, -6.0f, 6.0f);
+    auto xb = add(ctx, r, "x", Role::InOut, x);
+    r.bytes = 8.0 * n;
+    r.run = [=](Context& cx) { op->activate(cx, View{xb->mem(), xb->offset(), {1, 1, n}}, act); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{xb->read_floats(cx), {}, {}, {}};
+        for (float v : x) cmp.want.push_back(ref::activate(v, int(act.kind), act.alpha));
+        return cmp;
+    };
+    return r;
+}
+
+Prepared dropout_case(Context& ctx, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}});
+    auto op = std::make_shared<Elementwise>(ctx);
+    const auto x = uniform(n, rng);
+    const std::uint32_t seed = 1234, site = 3;
+    const float p = 0.3f;
+    auto xb = add(ctx, r, "x", Role::InOut, x);
+    r.bytes = 8.0 * n;
+    r.run = [=](Context& cx) { op->dropout(cx, View{xb->mem(), xb->offset(), {1, 1, n}}, seed, site, p); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{xb->read_floats(cx), {}, {}, {}};
+        for (int i = 0; i < n; ++i)
+            cmp.want.push_back(ref::dropout_keeps(seed, site, std::uint32_t(i), p) ? x[i] / (1.0 - p) : 0.0);
+        return cmp;
+    };
+    return r;
+}
+
+Prepared sanitize_case(Context& ctx, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}});
+    auto op = std::make_shared<Elementwise>(ctx);
+    auto x = uniform(n, rng, -1.2f, 1.2f);  // a sixth beyond [-1, 1] + its margin: replaced
+    const float inf = std::numeric_limits<float>::infinity();
+    const float specials[] = {std::numeric_limits<float>::quiet_NaN(), inf, -inf, 3.4e38f, -65504.0f};
+    for (std::size_t k = 0; k < x.size(); k += 7) x[k] = specials[(k / 7) % 5];
+    auto xb = add(ctx, r, "x", Role::InOut, x);
+    r.bytes = 8.0 * n;
+    r.run = [=](Context& cx) { op->sanitize(cx, View{xb->mem(), xb->offset(), {1, 1, n}}, -1.0f, 1.0f); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{xb->read_floats(cx), {}, {}, {}};
+        int replaced = 0;
+        for (float v : x) {
+            const double s = ref::sanitize(v, -1.0, 1.0);
+            replaced += std::isnan(v) || s != double(v);
+            cmp.want.push_back(s);
+        }
+        const int count = op->sanitized_count(cx);
+        if (count != replaced)
+            cmp.mismatch = "sanitized_count " + std::to_string(count) + ", the reference replaced " + std::to_string(replaced);
+        return cmp;
+    };
+    return r;
+}
+
+Prepared channel_affine_case(Context& ctx, bool points, int C, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", C}, {"n", n}}) + (points ? " points in" : " planar in");
+    auto op = std::make_shared<Elementwise>(ctx);
+    const auto x = uniform(std::size_t(C) * n, rng, -100.0f, 100.0f);
+    const auto scale = uniform(C, rng, -3.0f, 3.0f), shift = uniform(C, rng);
+    const int item_stride = points ? C : 1, channel_stride = points ? 1 : n;
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto sb = add(ctx, r, "scale", Role::Input, scale), tb = add(ctx, r, "shift", Role::Input, shift);
+    auto yb = add_out(ctx, r, "y", Role::Output, x.size());
+    r.flops = 2.0 * double(x.size());
+    r.bytes = 8.0 * double(x.size());
+    r.run = [=](Context& cx) {
+        op->channel_affine(cx, xb->mem(), xb->offset(), item_stride, channel_stride, C, n, sb->payload(),
+                           tb->payload(), yb->mem(), yb->offset());
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{yb->read_floats(cx), std::vector<double>(x.size()), {}, {}};
+        for (int c = 0; c < C; ++c)
+            for (int i = 0; i < n; ++i)
+                cmp.want[std::size_t(c) * n + i] =
+                    double(scale[c]) * x[std::size_t(i) * item_stride + std::size_t(c) * channel_stride] + shift[c];
+        return cmp;
+    };
+    return r;
+}
+
+Prepared binary_case(Context& ctx, bool multiply, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}});
+    auto op = std::make_shared<Elementwise>(ctx);
+    const auto x = uniform(n, rng, -2.0f, 2.0f), y = uniform(n, rng, -2.0f, 2.0f);
+    auto xb = add(ctx, r, "x", Role::InOut, x), yb = add(ctx, r, "y", Role::Input, y);
+    r.flops = n;
+    r.bytes = 12.0 * n;
+    r.run = [=](Context& cx) {
+        // Shapes that differ but hold the same count, as the voxel_sh runner's residual.
+        const View xv{xb->mem(), xb->offset(), {1, 1, n}}, yv{yb->mem(), yb->offset(), {n, 1, 1}};
+        if (multiply) op->mul(cx, xv, yv);
+        else op->add(cx, xv, yv);
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{xb->read_floats(cx), {}, {}, {}};
+        for (int i = 0; i < n; ++i) cmp.want.push_back(multiply ? double(x[i]) * y[i] : double(x[i]) + y[i]);
+        return cmp;
+    };
+    return r;
+}
+
+// ---- MLPs ----------------------------------------------------------------------------------------------------
+
+// An MLP of the given widths; hidden activations cycle through ReLU, LeakyReLU, tanh, sigmoid; the last is `last`.
+MlpSpec mlp_spec(int inputs, const FrequencyEncoding& enc, const std::vector<int>& widths, Act last, std::mt19937& rng) {
+    MlpSpec s;
+    s.inputs = inputs;
+    s.encoding = enc;
+    int in = enc.width(inputs);
+    const Act hidden[4] = {Act::relu(), Act::leaky(0.2f), Act::tanh(), Act::sigmoid()};
+    for (std::size_t l = 0; l < widths.size(); ++l) {
+        DenseSpec d;
+        d.in = in;
+        d.out = widths[l];
+        d.act = l + 1 == widths.size() ? last : hidden[l % 4];
+        const float a = std::sqrt(3.0f / float(in));  // He-like: activations O(1) through the layers
+        d.weight = uniform(std::size_t(d.in) * d.out, rng, -a, a);
+        d.bias = uniform(d.out, rng, -0.5f, 0.5f);
+        s.layers.push_back(std::move(d));
+        in = widths[l];
+    }
+    return s;
+}
+
+// The reference of n items: [n][out] in double (ref::frequency_encode, then ref::dense per layer).
+std::vector<std::vector<double>> mlp_reference(const MlpSpec& s, const std::vector<float>& x, int n, ItemLayout in) {
+    std::vector<std::vector<double>> out(n);
+    const FrequencyEncoding& e = s.encoding;
+    for (int i = 0; i < n; ++i) {
+        std::vector<double> v(s.inputs);
+        for (int c = 0; c < s.inputs; ++c) v[c] = x[std::size_t(i) * in.item_stride + std::size_t(c) * in.channel_stride];
+        v = ref::frequency_encode(v, e.bands, e.first_exponent, e.pi, e.include_input, int(e.order));
+        for (const DenseSpec& d : s.layers) v = ref::dense(v, d.weight, d.bias, d.out, int(d.act.kind), d.act.alpha);
+        out[i] = std::move(v);
+    }
+    return out;
+}
+
+double mlp_flops(const MlpSpec& s) {
+    double macs = 0;
+    for (const DenseSpec& d : s.layers) macs += double(d.in) * d.out;
+    return 2.0 * macs;
+}
+
+Prepared fused_mlp_case(Context& ctx, const MlpSpec& spec, int n, bool planar_in, std::mt19937& rng) {
+    Prepared r;
+    const int out_c = spec.layers.back().out;
+    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"layers", long(spec.layers.size())},
+                    {"out", out_c}}) + (planar_in ? " planar->points" : " points->planar");
+    const ItemLayout lin = planar_in ? ItemLayout::planar(n) : ItemLayout::points(spec.inputs);
+    const ItemLayout lout = planar_in ? ItemLayout::points(out_c) : ItemLayout::planar(n);
+    const auto x = uniform(std::size_t(n) * spec.inputs, rng);
+    std::shared_ptr<FusedMlp> op;
+    if (FusedMlp::fits_device(ctx, spec)) op = std::make_shared<FusedMlp>(ctx, spec);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, std::size_t(n) * out_c);
+    r.flops = n * mlp_flops(spec);
+    r.bytes = 4.0 * (double(x.size()) + double(n) * out_c);
+    r.run = [=](Context& cx) {
+        if (op) op->enqueue(cx, xb->mem(), xb->offset(), lin, n, yb->mem(), yb->offset(), lout);
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{yb->read_floats(cx), std::vector<double>(std::size_t(n) * out_c), {}, {}};
+        if (!op) cmp.mismatch = "FusedMlp::fits_device refused the case's network on this device";
+        const auto want = mlp_reference(spec, x, n, lin);
+        for (int i = 0; i < n; ++i)
+            for (int o = 0; o < out_c; ++o)
+                cmp.want[std::size_t(i) * lout.item_stride + std::size_t(o) * lout.channel_stride] = want[i][o];
+        return cmp;
+    };
+    return r;
+}
+
+Prepared dense_mlp_case(Context& ctx, const MlpSpec& spec, int n, std::mt19937& rng) {
+    Prepared r;
+    const int out_c = spec.layers.back().out;
+    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"layers", long(spec.layers.size())},
+                    {"out", out_c}});
+    auto op = std::make_shared<DenseMlp>(ctx, gemm_selection(ctx).params, spec);
+    const auto x = uniform(std::size_t(n) * spec.inputs, rng);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, std::size_t(n) * out_c);
+    auto sb = add_out(ctx, r, "scratch", Role::Scratch, op->scratch_floats(n));
+    r.flops = n * mlp_flops(spec);
+    r.bytes = 4.0 * (double(x.size()) + double(n) * out_c);
+    r.run = [=](Context& cx) {
+        op->enqueue(cx, View{xb->mem(), xb->offset(), Shape{spec.inputs, 1, n}},
+                    View{yb->mem(), yb->offset(), Shape{out_c, 1, n}}, sb->payload());
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{yb->read_floats(cx), std::vector<double>(std::size_t(n) * out_c), {}, {}};
+        const auto want = mlp_reference(spec, x, n, ItemLayout::planar(n));
+        for (int i = 0; i < n; ++i)
+            for (int o = 0; o < out_c; ++o) cmp.want[std::size_t(o) * n + i] = want[i][o];
+        return cmp;
+    };
+    return r;
+}
+
+Prepared frequency_encode_case(Context& ctx, int inputs, const FrequencyEncoding& enc, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}, {"in", inputs}, {"bands", enc.bands}, {"e0", enc.first_exponent}});
+    auto op = std::make_shared<FrequencyEncodePlanar>(ctx, inputs, enc);
+    const int width = op->width();
+    const auto x = uniform(std::size_t(n) * inputs, rng);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, std::size_t(n) * width);
+    r.flops = double(n) * width;
+    r.bytes = 4.0 * (double(x.size()) + double(n) * width);
+    r.run = [=](Context& cx) { op->enqueue(cx, xb->mem(), xb->offset(), yb->mem(), yb->offset(), n); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{yb->read_floats(cx), std::vector<double>(std::size_t(n) * width), {}, {}};
+        for (int i = 0; i < n; ++i) {
+            std::vector<double> v(inputs);
+            for (int c = 0; c < inputs; ++c) v[c] = x[std::size_t(c) * n + i];
+            const auto e = ref::frequency_encode(v, enc.bands, enc.first_exponent, enc.pi, enc.include_input, int(enc.order));
+            for (int k = 0; k < width; ++k) cmp.want[std::size_t(k) * n + i] = e[k];
+        }
+        return cmp;
+    };
+    return r;
+}
+
+// ---- joint bilateral upsampling ------------------------------------------------------------------------------
+
+// Guides of a w x h view of a fixed scene, sampled at pixel centres (u, v) in [0, 1]^2: a strip of sky at the top,
+// a floor on the left, a slanted wall on the right (a crease between them), so the geometric weights, the fallback
+// and surfaceless pixels all occur.
+void jbu_guides(int w, int h, std::vector<float>& normal, std::vector<float>& position) {
+    const std::size_t plane = std::size_t(w) * h;
+    normal.assign(3 * plane, 0.0f);
+    position.assign(3 * plane, 0.0f);
+    const double wall_n[3] = {0.6, 0.0, 0.8};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double u = (x + 0.5) / w, v = (y + 0.5) / h;
+            const std::size_t i = std::size_t(y) * w + x;
+            if (v < 0.15) continue;  // sky
+            if (u < 0.55) {          // floor y = 0
+                const double p[3] = {2.0 * u, 0.0, 2.0 * v}, n[3] = {0.0, 1.0, 0.0};
+                for (int k = 0; k < 3; ++k) { normal[k * plane + i] = float(n[k]); position[k * plane + i] = float(p[k]); }
+            } else {  // a wall through (1.1, 0, 0) spanned by (0.8, 0, -0.6) and (0, 1, 0)
+                const double s = 2.0 * (u - 0.55), t = 2.0 * v;
+                const double p[3] = {1.1 + 0.8 * s, t, -0.6 * s};
+                for (int k = 0; k < 3; ++k) { normal[k * plane + i] = float(wall_n[k]); position[k * plane + i] = float(p[k]); }
+            }
+        }
+}
+
+Prepared jbu_case(Context& ctx, int w, int h, int W, int H, int channels, int radius, std::mt19937& rng) {
+    Prepared r;
+    r.shape = std::to_string(w) + "x" + std::to_string(h) + " -> " + std::to_string(W) + "x" + std::to_string(H) +
+              " C" + std::to_string(channels) + " r" + std::to_string(radius);
+    test::JbuRefImage low{w, h, channels, uniform(std::size_t(channels) * w * h, rng, 0.0f, 4.0f), {}, {}};
+    jbu_guides(w, h, low.normal, low.position);
+    std::vector<float> normal, position;
+    jbu_guides(W, H, normal, position);
+    JbuParams params;
+    params.radius = radius;
+    auto op = std::make_shared<JointBilateralUpsample>(ctx);
+    auto vb = add(ctx, r, "low", Role::Input, low.values), lnb = add(ctx, r, "low_normal", Role::Input, low.normal);
+    auto lpb = add(ctx, r, "low_position", Role::Input, low.position);
+    auto nb = add(ctx, r, "normal", Role::Input, normal), pb = add(ctx, r, "position", Role::Input, position);
+    auto ob = add_out(ctx, r, "out", Role::Output, std::size_t(channels) * W * H);
+    const double taps = 4.0 * radius * radius;
+    r.flops = double(W) * H * taps * (2.0 * channels + 30.0);  // per tap: ~30 for the weight, 2 per channel
+    r.bytes = 4.0 * (double(low.values.size()) + 6.0 * w * h + 6.0 * W * H + double(channels) * W * H);
+    r.run = [=](Context& cx) {
+        JbuInputs in;
+        in.low_width = w;
+        in.low_height = h;
+        in.channels = channels;
+        in.low = vb->payload();
+        in.low_normal = lnb->payload();
+        in.low_position = lpb->payload();
+        in.width = W;
+        in.height = H;
+        in.normal = nb->payload();
+        in.position = pb->payload();
+        op->enqueue(cx, in, params, ob->payload(), false);
+    };
+    r.compare = [=](Context& cx) {
+        test::JbuRefParams rp;
+        rp.sigma_spatial = params.sigma_spatial;
+        rp.normal_power = params.normal_power;
+        rp.sigma_plane = params.sigma_plane;
+        rp.fallback_ratio = params.fallback_ratio;
+        rp.radius = params.radius;
+        const test::JbuRefResult want = test::jbu_reference(low, normal, position, W, H, rp);
+        Comparison cmp{ob->read_floats(cx), want.out, {}, {}};
+        int borderline = 0;
+        for (int c = 0; c < channels; ++c) cmp.skip.insert(cmp.skip.end(), want.borderline.begin(), want.borderline.end());
+        for (char b : want.borderline) borderline += b;
+        const int fallbacks = op->fallback_count(cx);
+        if (std::abs(fallbacks - want.fallbacks) > borderline)
+            cmp.mismatch = std::to_string(fallbacks) + " fallbacks, the reference " + std::to_string(want.fallbacks) +
+                           " (" + std::to_string(borderline) + " borderline)";
+        return cmp;
+    };
+    return r;
+}
+
+// ---- spherical harmonics and set pooling ---------------------------------------------------------------------
+
+Prepared sh_case(Context& ctx, int n, int channels, bool irradiance, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}, {"C", channels}}) + (irradiance ? " irradiance" : " radiance");
+    auto op = std::make_shared<ShEvaluate>(ctx);
+    std::vector<float> dir = uniform(3 * std::size_t(n), rng, -3.0f, 3.0f);  // not unit length: the kernel normalizes
+    dir[0] = dir[1] = dir[2] = 0.0f;                                           // a zero direction: band 0 only
+    const auto coef = uniform(std::size_t(n) * channels * kShCoefficients, rng);
+    auto cb = add(ctx, r, "coef", Role::Input, coef), db = add(ctx, r, "dir", Role::Input, dir);
+    auto ob = add_out(ctx, r, "out", Role::Output, std::size_t(n) * channels);
+    r.flops = double(n) * (30.0 + 2.0 * kShCoefficients * channels);
+    r.bytes = 4.0 * (double(coef.size()) + double(dir.size()) + double(n) * channels);
+    r.run = [=](Context& cx) { op->enqueue(cx, cb->payload(), db->payload(), n, channels, irradiance, ob->payload()); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{ob->read_floats(cx), std::vector<double>(std::size_t(n) * channels), {}, {}};
+        const double kPi = 3.14159265358979323846, lobe[3] = {kPi, 2 * kPi / 3, kPi / 4};
+        for (int i = 0; i < n; ++i) {
+            const double x = dir[3 * i], y = dir[3 * i + 1], z = dir[3 * i + 2];
+            const double len = std::sqrt(x * x + y * y + z * z);
+            for (int c = 0; c < channels; ++c) {
+                double s = 0;
+                for (int l = 0; l <= 2; ++l)
+                    for (int m = -l; m <= l; ++m) {
+                        const double Y = len > 0 ? ref::sh_basis(l, m, x / len, y / len, z / len)
+                                                 : (l == 0 ? ref::sh_basis(0, 0, 0, 0, 1) : 0.0);
+                        s += coef[(std::size_t(i) * channels + c) * 9 + l * (l + 1) + m] * (irradiance ? lobe[l] : 1.0) * Y;
+                    }
+                cmp.want[std::size_t(i) * channels + c] = s;
+            }
+        }
+        return cmp;
+    };
+    return r;
+}
+
+// Set boundaries: `sets` sets of 0 .. 2 * mean items, set 3 empty (when there is one).
+std::vector<int> set_boundaries(int sets, int mean, std::mt19937& rng) {
+    std::vector<int> first = {0};
+    for (int s = 0; s < sets; ++s) first.push_back(first.back() + (s == 3 ? 0 : int(rng() % unsigned(2 * mean + 1))));
+    return first;
+}
+
+Prepared pool_case(Context& ctx, PoolMode mode, int channels, int sets, int mean, std::mt19937& rng) {
+    Prepared r;
+    const std::vector<int> first = set_boundaries(sets, mean, rng);
+    const int n = first.back();
+    r.shape = dims({{"sets", sets}, {"items", n}, {"C", channels}});
+    auto op = std::make_shared<SetPool>(ctx);
+    const auto x = uniform(std::size_t(n) * channels, rng, -5.0f, 5.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x), fb = add(ctx, r, "first", Role::Input, first);
+    auto pb = add_out(ctx, r, "pooled", Role::Output, std::size_t(sets) * channels);
+    r.flops = double(x.size());
+    r.bytes = 4.0 * (double(x.size()) + double(first.size()) + double(sets) * channels);
+    r.run = [=](Context& cx) { op->pool(cx, xb->payload(), channels, fb->payload(), sets, mode, pb->payload()); };
+    r.compare = [=](Context& cx) {
+        return Comparison{pb->read_floats(cx), ref::set_pool(x, channels, 1, channels, first, mode == PoolMode::Max), {}, {}};
+    };
+    return r;
+}
+
+Prepared broadcast_case(Context& ctx, int cx_channels, int cp, int sets, int mean, std::mt19937& rng) {
+    Prepared r;
+    const std::vector<int> first = set_boundaries(sets, mean, rng);
+    const int n = first.back();
+    r.shape = dims({{"sets", sets}, {"items", n}, {"Cx", cx_channels}, {"Cp", cp}});
+    auto op = std::make_shared<SetPool>(ctx);
+    std::vector<int> set_of(n);
+    for (int s = 0; s < sets; ++s)
+        for (int i = first[s]; i < first[s + 1]; ++i) set_of[i] = s;
+    const auto x = uniform(std::size_t(n) * cx_channels, rng), pooled = uniform(std::size_t(sets) * cp, rng);
+    auto xb = add(ctx, r, "x", Role::Input, x), pb = add(ctx, r, "pooled", Role::Input, pooled);
+    auto sb = add(ctx, r, "set_of", Role::Input, set_of);
+    const int width = cx_channels + cp;
+    auto yb = add_out(ctx, r, "y", Role::Output, std::size_t(n) * width);
+    r.bytes = 4.0 * (double(x.size()) + double(pooled.size()) + n + double(n) * width);
+    r.run = [=](Context& cx) {
+        op->broadcast_concat(cx, xb->payload(), cx_channels, pb->payload(), cp, sb->payload(), n, yb->payload());
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{yb->read_floats(cx), {}, {}, {}};
+        for (int i = 0; i < n; ++i) {
+            for (int c = 0; c < cx_channels; ++c) cmp.want.push_back(x[std::size_t(i) * cx_channels + c]);
+            for (int c = 0; c < cp; ++c) cmp.want.push_back(pooled[std::size_t(set_of[i]) * cp + c]);
+        }
+        return cmp;
+    };
+    return r;
+}
+
+Prepared pool_planar_case(Context& ctx, PoolMode mode, int channels, int ld, int begin, int end, int max_per_launch,
+                          std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", channels}, {"ld", ld}}) + " items " + std::to_string(begin) + ".." + std::to_string(end) +
+              (max_per_launch ? " <= " + std::to_string(max_per_launch) + " per launch" : "");
+    auto op = std::make_shared<SetPool>(ctx);
+    const auto x = uniform(std::size_t(channels) * ld, rng, -3.0f, 2.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto pb = add_out(ctx, r, "pooled", Role::Output, channels);
+    r.flops = double(channels) * (end - begin);
+    r.bytes = 4.0 * (double(channels) * (end - begin) + channels);
+    r.run = [=](Context& cx) {
+        op->pool_planar(cx, xb->mem(), xb->offset(), channels, ld, begin, end, mode, pb->mem(), pb->offset(),
+                        max_per_launch);
+    };
+    r.compare = [=](Context& cx) {
+        return Comparison{pb->read_floats(cx), ref::set_pool(x, 1, ld, channels, {begin, end}, mode == PoolMode::Max), {}, {}};
+    };
+    return r;
+}
+
+// ---- image gathering -----------------------------------------------------------------------------------------
+
+// n x n image under a layout: `format`, `channels` stored, interleaved (padded pixels and rows) or planar.
+test::Layout gather_layout(PixelFormat format, int channels, int n, bool planar, bool bottom_up, bool scaled) {
+    test::Layout l;
+    l.format = format;
+    l.channels = channels;
+    const std::size_t elem = pixel_format_bytes(format);
+    l.offset = elem * 5;
+    if (planar) {
+        l.pixel_stride = elem;
+        l.row_stride = elem * (std::size_t(n) + 3);
+        l.channel_stride = l.row_stride * std::size_t(n) + elem;
+    } else {
+        l.channel_stride = elem;
+        l.pixel_stride = elem * std::size_t(channels + 1);
+        l.row_stride = l.pixel_stride * std::size_t(n) + 2 * elem;
+    }
+    l.bottom_up = bottom_up;
+    l.scale = scaled ? 2.0f : 1.0f;
+    l.bias = scaled ? -1.0f : 0.0f;
+    return l;
+}
+
+Prepared gather_case(Context& ctx, const test::Layout& l, int need, int n, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}, {"C", need}, {"of ", l.channels}}) + (l.channel_stride == pixel_format_bytes(l.format) ? " interleaved" : " planar") +
+              (l.bottom_up ? " bottom-up" : "");
+    auto op = std::make_shared<GatherImage>(ctx);
+    Image src(n, n, l.channels);
+    src.data = uniform(src.data.size(), rng, 0.0f, 1.0f);
+    if (l.format == PixelFormat::F32 || l.format == PixelFormat::F16)  // HDR values pass through
+        for (std::size_t i = 0; i < src.data.size(); i += 7) src.data[i] = (i % 3 ? 65504.0f : -3.5f);
+    std::vector<unsigned char> mem = test::store(l, n, src, rng);
+    std::vector<std::uint32_t> words((mem.size() + 3) / 4, 0);
+    std::memcpy(words.data(), mem.data(), mem.size());
+    auto ib = add(ctx, r, "image", Role::Input, words);
+    const int plane = n * n;
+    auto ob = add_out(ctx, r, "planes", Role::Output, std::size_t(plane) * need);
+    r.bytes = double(mem.size()) + 4.0 * plane * need;
+    r.run = [=](Context& cx) {
+        GatherSource gs;
+        gs.memory = ib->mem();
+        gs.offset = ib->offset_bytes() + l.offset;
+        gs.pixel_stride = l.pixel_stride;
+        gs.row_stride = l.row_stride;
+        gs.channel_stride = l.channel_stride;
+        gs.format = l.format;
+        gs.bottom_up = l.bottom_up;
+        gs.scale = l.scale;
+        gs.bias = l.bias;
+        op->enqueue(cx, gs, need, n, ob->mem(), int(ob->offset()), plane);
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp{ob->read_floats(cx), std::vector<double>(std::size_t(plane) * need), {}, {}};
+        for (int c = 0; c < need; ++c)
+            for (int row = 0; row < n; ++row)
+                for (int col = 0; col < n; ++col)
+                    cmp.want[std::size_t(c) * plane + std::size_t(row) * n + col] =
+                        double(test::decode(mem, test::byte_of(l, n, row, col, c), l.format)) * l.scale + l.bias;
+        return cmp;
+    };
+    return r;
+}
+
+// ---- probe shading -------------------------------------------------------------------------------------------
+
+// A face looking down -z from above an X x Y x Z grid: every surface pixel gets a random depth and an axis normal,
+// with its hit point kept 2e-3 m away from the 0.25 m lattice the lookups step on (where float and double could
+// pick different cells); a tenth of the pixels is sky, a few have no normal; about 60% of the blocks hold a voxel.
+test::ProbeRefInputs probe_scene(int n, bool sh, std::mt19937& rng) {
+    test::ProbeRefInputs r;
+    r.n = n;
+    r.sh = sh;
+    r.grid[0] = 9;
+    r.grid[1] = 8;
+    r.grid[2] = 7;
+    const double centre[3] = {4.6, 3.9, 9.3}, look[3] = {0, 0, -1}, right[3] = {1, 0, 0}, up[3] = {0, 1, 0};
+    for (int c = 0; c < 3; ++c) {
+        r.centre[c] = float(centre[c]);
+        r.look[c] = look[c];
+        r.right[c] = right[c];
+        r.up[c] = up[c];
+    }
+    const int npix = n * n;
+    r.depth.assign(npix, 1.0e4f);
+    r.normal.assign(std::size_t(3) * npix, 0.0f);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    auto near_lattice = [](double x) { return std::abs(x * 4.0 - std::round(x * 4.0)) < 8e-3; };
+    for (int pix = 0; pix < npix; ++pix) {
+        const double kind = u01(rng);
+        if (kind < 0.1) continue;  // sky
+        const int f = int(rng() % 6);
+        double nr[3] = {0, 0, 0};
+        if (kind >= 0.13) nr[f >> 1] = (f & 1) ? -1.0 : 1.0;  // else: a surface without a normal (a miss)
+        const int row = pix / n, col = pix % n;
+        const double u = 2.0 * (col + 0.5) / n - 1.0, v = 1.0 - 2.0 * (row + 0.5) / n;
+        for (;;) {
+            const float t = float(3.0 + u01(rng) * 6.0);
+            // Along -z the ray's point at planar depth t is centre + t (u, v, -1).
+            const double q[3] = {r.centre[0] + u * t - 0.5 * nr[0], r.centre[1] + v * t - 0.5 * nr[1],
+                                 r.centre[2] - t - 0.5 * nr[2]};
+            if (near_lattice(q[0]) || near_lattice(q[1]) || near_lattice(q[2])) continue;
+            r.depth[pix] = t;
+            for (int c = 0; c < 3; ++c) r.normal[std::size_t(c) * npix + pix] = float(nr[c]);
+            break;
+        }
+    }
+    r.index_of.assign(std::size_t(r.grid[0]) * r.grid[1] * r.grid[2], -1);
+    for (int& cell : r.index_of)
+        if (u01(rng) < 0.6) cell = r.voxels++;
+    r.index_of[5] = r.voxels + 3;  // out of range: empty
+    r.field = uniform(std::size_t(r.voxels) * (sh ? 27 : 4), rng);
+    for (int i = 0; i < r.voxels; ++i)  // band 0 mostly dominant (lit), some clamped at 0; per-voxel light >= 0
+        for (int c = 0; c < (sh ? 3 : 4); ++c) {
+            float& v = r.field[sh ? std::size_t(27) * i + 9 * c : std::size_t(4) * i + c];
+            v = std::abs(v) * 3.0f;
+        }
+    return r;
+}
+
+Prepared probe_case(Context& ctx, int n, bool sh, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"n", n}}) + (sh ? " SH-27" : " per-voxel");
+    const test::ProbeRefInputs s = probe_scene(n, sh, rng);
+    auto op = std::make_shared<ProbeShade>(ctx);
+    auto db = add(ctx, r, "depth", Role::Input, s.depth), nb = add(ctx, r, "normal", Role::Input, s.normal);
+    auto ib = add(ctx, r, "index_of", Role::Input, s.index_of), fb = add(ctx, r, "field", Role::Input, s.field);
+    auto ob = add_out(ctx, r, "out", Role::Output, std::size_t(3) * n * n);
+    r.flops = double(n) * n * (sh ? 120.0 : 40.0);
+    r.bytes = 4.0 * 7 * double(n) * n;
+    r.run = [=](Context& cx) {
+        ProbeShadeInputs in;
+        in.n = n;
+        in.depth = db->payload();
+        in.normal = nb->payload();
+        for (int c = 0; c < 3; ++c) {
+            in.camera.centre[c] = float(s.centre[c]);
+            in.camera.look[c] = float(s.look[c]);
+            in.camera.right[c] = float(s.right[c]);
+            in.camera.up[c] = float(s.up[c]);
+            in.grid[c] = s.grid[c];
+        }
+        in.index_of = ib->payload();
+        in.voxels = s.voxels;
+        in.mode = sh ? ProbeField::Sh : ProbeField::PerVoxel;
+        in.field = fb->payload();
+        op->enqueue(cx, in, ob->payload(), false);
+    };
+    r.compare = [=](Context& cx) {
+        const test::ProbeRefResult want = test::probe_shade_reference(s);
+        Comparison cmp{ob->read_floats(cx), want.lighting, {}, {}};
+        const ProbeShadeCounts counts = op->counts(cx);
+        if (counts.no_voxel != want.no_voxel || counts.non_finite != want.non_finite)
+            cmp.mismatch = "counts no_voxel " + std::to_string(counts.no_voxel) + " non_finite " +
+                           std::to_string(counts.non_finite) + ", the reference " + std::to_string(want.no_voxel) +
+                           " and " + std::to_string(want.non_finite);
+        return cmp;
+    };
+    return r;
+}
+
+// ---- light-transition function -------------------------------------------------------------------------------
+
+// V voxels at integer block centres (+0.5) of a cube of side `extent`, face or smooth normals, random exposed
+// faces, albedo in [0, 1], direct light in [0, 2].
+test::LtfScene ltf_scene(int V, int extent, std::mt19937& rng) {
+    test::LtfScene s;
+    s.voxels = V;
+    for (auto* v : {&s.position, &s.normal, &s.albedo, &s.direct}) v->assign(std::size_t(4) * V, 0.0f);
+    s.exposed.resize(V);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+    for (int i = 0; i < V; ++i) {
+        float* p = &s.position[std::size_t(4) * i];
+        float* nr = &s.normal[std::size_t(4) * i];
+        for (int c = 0; c < 3; ++c) p[c] = float(rng() % unsigned(extent)) + 0.5f;
+        if (i % 3 == 0) {
+            float len = 0;
+            for (int c = 0; c < 3; ++c) { nr[c] = g(rng); len += nr[c] * nr[c]; }
+            for (int c = 0; c < 3; ++c) nr[c] /= std::sqrt(len);
+        } else {
+            const int f = int(rng() % 6);
+            nr[f >> 1] = (f & 1) ? -1.0f : 1.0f;
+        }
+        s.exposed[i] = 1u + std::uint32_t(rng() % 63);
+        for (int c = 0; c < 3; ++c) {
+            s.albedo[std::size_t(4) * i + c] = u01(rng);
+            s.direct[std::size_t(4) * i + c] = 2.0f * u01(rng);
+        }
+    }
+    return s;
+}
+
+Prepared ltf_case(Context& ctx, int V, int bounces, LtfVariant variant, LtfKernelShape shape, bool mask,
+                  int max_senders, std::mt19937& rng) {
+    Prepared r;
+    const bool physical = variant == LtfVariant::Physical;
+    r.shape = dims({{"V", V}, {"bounces", bounces}}) + (mask ? " mask" : "") +
+              (max_senders ? " senders/launch " + std::to_string(max_senders) : "");
+    const test::LtfScene s = ltf_scene(V, V < 40 ? 4 : 12, rng);
+    const int words = (V + 31) / 32;
+    std::vector<std::uint32_t> vis(std::size_t(V) * words);
+    for (auto& w : vis) w = std::uint32_t(rng()) | std::uint32_t(rng());  // three pairs in four visible
+    auto op = std::make_shared<VoxelLtf>(ctx, shape);
+    op->set_max_senders_per_launch(max_senders);
+    auto pb = add(ctx, r, "position", Role::Input, s.position), nb = add(ctx, r, "normal", Role::Input, s.normal);
+    auto ab = add(ctx, r, "albedo", Role::Input, s.albedo), db = add(ctx, r, "direct", Role::Input, s.direct);
+    auto eb = add(ctx, r, "exposed", Role::Input, s.exposed);
+    BufferPtr mb = mask ? add(ctx, r, "visibility", Role::Input, vis) : nullptr;
+    auto ob = add_out(ctx, r, "out", Role::Output, std::size_t(4) * V);
+    r.flops = double(bounces) * V * double(V) * 40.0;  // ~40 flops per pair term (distance, cosines, areas, rgb)
+    r.bytes = 4.0 * 17 * V + (mask ? 4.0 * double(vis.size()) : 0.0);
+    r.run = [=](Context& cx) {
+        LtfInputs in;
+        in.voxels = V;
+        in.position = pb->payload();
+        in.normal = nb->payload();
+        in.albedo = ab->payload();
+        in.direct = db->payload();
+        in.exposed = eb->payload();
+        op->run(cx, in, bounces, variant, mb ? mb->payload() : nullptr, ob->payload());
+    };
+    r.compare = [=](Context& cx) {
+        return Comparison{ob->read_floats(cx), test::ltf_reference(s, bounces, physical, mask ? &vis : nullptr), {}, {}};
+    };
+    return r;
+}
+
+// ---- the table -----------------------------------------------------------------------------------------------
+
+// Tolerances (normalized_error, op_cases.hpp): each a small factor over the worst error observed for the op's rows
+// on PoCL 5 (CPU) and Mesa rusticl (llvmpipe), 2026-12, and never looser than what the docs and the op's own tests
+// claim (docs/RELIABILITY.md, "Op harness", has the table). One float rounding of the largest output is 2^-24 =
+// 6e-8 of it; exact ops (comparisons, copies) have tolerance 0: any difference is a bug.
+// GEMM: fp32 fma accumulation over K in another order than the double reference; worst 5.4e-7 at K = 512 (the
+// generator-layer row), 1.8e-7 at K = 45. docs/RELIABILITY.md claims "near 1e-6"; 4x the worst.
+constexpr double kTolGemm = 2e-6;
+// Convolutions: the same GEMM over K = Cin KH KW <= 192 here; worst 4.4e-7 (k4 s2 im2col).
+constexpr double kTolConv = 2e-6;
+// PackB: a copy, but for the activation's slope (0.2f on the device, 0.2 in the reference): worst 2.0e-8.
+constexpr double kTolPack = 1e-7;
+// Batch norm: fp32 statistics over H W (two-pass on the device); worst 2.0e-7 (tiny, interleaved).
+constexpr double kTolNorm = 1e-6;
+// Activations: OpenCL's exp and tanh may be 3 and 5 ulp off; worst 8.7e-8 (tanh).
+constexpr double kTolActivate = 5e-7;
+// One or two roundings (x / (1 - p), scale * x + shift, x + y, x * y): worst 6.2e-8 (channel_affine, rusticl).
+constexpr double kTolExactish = 2.5e-7;
+constexpr double kTolExact = 0.0;
+// MLPs: fp32 dense layers of <= 37 inputs, sin/cos of the encoding; worst 3.7e-7 (fused, band-major encoding).
+constexpr double kTolMlp = 2e-6;
+// Frequency encoding alone: sin/cos of arguments up to 2^2 pi, rounded in float first; worst 8.2e-7.
+constexpr double kTolEncode = 4e-6;
+// JBU: float exp/pow weights of up to 36 taps; worst 3.7e-7 (radius 3). Its test claims < 1e-5 of the range.
+constexpr double kTolJbu = 2e-6;
+// SH: 9 products per channel after a normalization; worst 2.5e-7 (irradiance).
+constexpr double kTolSh = 1e-6;
+// Mean pooling: fp32 sums of up to 5,000 items; worst 9.4e-8.
+constexpr double kTolPoolMean = 5e-7;
+// Image gathering: exact but for the sRGB curve, whose pow OpenCL allows 16 ulp (1e-6); worst 1.2e-7.
+constexpr double kTolGather = 1e-6;
+// Probe shading: SH-27 irradiance per pixel; worst 1.4e-7.
+constexpr double kTolProbe = 1e-6;
+// Light-transition function: fp32 sums over V = 97 senders per bounce, 2 bounces; worst 3.5e-7 (physical, tiled).
+constexpr double kTolLtf = 2e-6;
+
+int pick(Size size, int test, int perf) { return size == Size::Perf ? perf : test; }
+
+std::string knobs_name(const GemmParams& p) { return "knobs " + p.to_string(); }
+
+// The device's GEMM knob set, as the convolution tests use it; the implicit path needs a gemm_packed set (its
+// GPU entry's tiles without local memory).
+GemmParams device_gemm(Context& ctx) { return gemm_params_for(ctx.info()); }
+GemmParams implicit_gemm(Context& ctx) {
+    GemmParams p = gemm_params_for(ctx.info());
+    p.kwg = 0;
+    return p;
+}
+
+std::vector<OpCase> build_table() {
+    std::vector<OpCase> t;
+    auto row = [&t](std::string op, std::string name, bool tiny, double tol,
+                    std::function<Prepared(Context&, Size, std::mt19937&)> prepare) {
+        t.push_back(OpCase{std::move(op), std::move(name), tiny, tol, std::move(prepare)});
+    };
+
+    // GEMM: every knob set of the GPU and CPU tables with their fallback chains at one odd shape (every tile
+    // dimension has a remainder), the device's own set at a generator layer's shape (K 512), the first GPU and the
+    // first CPU set tiny.
+    const std::vector<GemmParams> variants = gemm_variants();
+    for (std::size_t i = 0; i < variants.size(); ++i) {
+        const GemmParams p = variants[i];
+        row("Gemm::enqueue", knobs_name(p), false, kTolGemm, [p](Context& c, Size z, std::mt19937& rng) {
+            return gemm_case(c, p, pick(z, 37, 256), pick(z, 67, 4099), pick(z, 45, 1152), 2, rng);
+        });
+    }
+    row("Gemm::enqueue", "device set, generator layer", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        return gemm_case(c, gemm_selection(c).params, 64, pick(z, 517, 8192), 512, 2, rng);
+    });
+    {
+        DeviceInfo gpu, cpu;
+        gpu.is_gpu = true;
+        cpu.is_cpu = true;
+        for (const GemmParams& p : {gemm_params_for(gpu), gemm_params_for(cpu)})
+            row("Gemm::enqueue", "tiny " + knobs_name(p), true, kTolGemm,
+                [p](Context& c, Size, std::mt19937& rng) { return gemm_case(c, p, 7, 9, 13, 3, rng); });
+    }
+
+    // PackB: the device's set, K and N not multiples of KU and NR, LeakyReLU on the way (the slope fast path).
+    row("PackB::enqueue", "device set", false, kTolPack, [](Context& c, Size z, std::mt19937& rng) {
+        const GemmParams p = device_gemm(c);
+        return pack_b_case(c, p, pick(z, 13, 512), pick(z, 2 * p.nr() + 1, 8192), 2, rng);
+    });
+    row("PackB::enqueue", "tiny", true, kTolPack,
+        [](Context& c, Size, std::mt19937& rng) { return pack_b_case(c, device_gemm(c), 3, 5, 1, rng); });
+
+    // Convolutions: each path (im2col / pack + GEMM; implicit GEMM) at odd sizes; perf at U-Net layer sizes.
+    const struct {
+        const char* name;
+        ConvShape test, perf;
+        ConvPath path;
+        bool transposed, tiny;
+    } convs[] = {
+        {"k3 s1 p1 im2col", {13, 23, 19, 11, 3, 3, 1, 1, 0, 2}, {32, 128, 256, 32, 3, 3, 1, 1, 0, 2}, ConvPath::im2col, false, false},
+        {"k4 s2 p1 im2col", {12, 33, 47, 16, 4, 4, 2, 1, 2, 0}, {32, 128, 256, 64, 4, 4, 2, 1, 2, 0}, ConvPath::im2col, false, false},
+        {"k4 s2 p1 implicit", {12, 33, 47, 16, 4, 4, 2, 1, 2, 0}, {32, 128, 256, 64, 4, 4, 2, 1, 2, 0}, ConvPath::implicit, false, false},
+        {"k1 1x1 (PackB) im2col", {13, 5, 31, 11, 1, 1, 1, 0, 1, 3}, {64, 64, 128, 64, 1, 1, 1, 0, 1, 3}, ConvPath::im2col, false, false},
+        {"k5x3 s3 p2 im2col", {4, 11, 6, 3, 5, 3, 3, 2, 0, 4}, {16, 128, 256, 16, 5, 3, 3, 2, 0, 4}, ConvPath::im2col, false, false},
+        {"tiny k3 s1 p1 im2col", {5, 7, 9, 6, 3, 3, 1, 1, 0, 2}, {}, ConvPath::im2col, false, true},
+        {"tiny k4 s2 p1 implicit", {5, 7, 9, 9, 4, 4, 2, 1, 2, 3}, {}, ConvPath::implicit, false, true},
+        {"k4 s2 p1 col2im", {16, 9, 13, 12, 4, 4, 2, 1, 1, 0}, {64, 32, 64, 32, 4, 4, 2, 1, 1, 0}, ConvPath::im2col, true, false},
+        {"k4 s2 p1 implicit", {16, 9, 13, 12, 4, 4, 2, 1, 1, 0}, {64, 32, 64, 32, 4, 4, 2, 1, 1, 0}, ConvPath::implicit, true, false},
+        {"k3 s2 p1 col2im", {5, 6, 7, 4, 3, 3, 2, 1, 0, 3}, {32, 64, 128, 16, 3, 3, 2, 1, 0, 3}, ConvPath::im2col, true, false},
+        {"tiny k4 s2 p1 col2im", {5, 3, 5, 3, 4, 4, 2, 1, 1, 0}, {}, ConvPath::im2col, true, true},
+        {"tiny k4 s2 p1 implicit", {5, 3, 5, 9, 4, 4, 2, 1, 1, 0}, {}, ConvPath::implicit, true, true},
+    };
+    for (const auto& k : convs)
+        row(k.transposed ? "ConvTranspose2d::enqueue" : "Conv2d::enqueue", k.name, k.tiny, kTolConv,
+            [k](Context& c, Size z, std::mt19937& rng) {
+                const GemmParams p = k.path == ConvPath::implicit ? implicit_gemm(c) : device_gemm(c);
+                return conv_case(c, p, z == Size::Perf && !k.tiny ? k.perf : k.test, k.transposed, k.path, rng);
+            });
+
+    // Per-image batch norm: both reductions.
+    for (bool chunked : {true, false}) {
+        const std::string name = chunked ? "chunked" : "interleaved";
+        row("BatchNormPerImage::enqueue", name, false, kTolNorm, [chunked](Context& c, Size z, std::mt19937& rng) {
+            return batch_norm_case(c, chunked, pick(z, 7, 64), pick(z, 37, 128), pick(z, 29, 256), rng);
+        });
+        row("BatchNormPerImage::enqueue", "tiny " + name, true, kTolNorm,
+            [chunked](Context& c, Size, std::mt19937& rng) { return batch_norm_case(c, chunked, 3, 5, 3, rng); });
+    }
+
+    // Elementwise.
+    for (int a = 0; a <= 5; ++a)
+        row("Elementwise::activate", to_string(Activation(a)), false, kTolActivate,
+            [a](Context& c, Size z, std::mt19937& rng) { return activate_case(c, act_of(a), pick(z, 1031, 1 << 22), rng); });
+    row("Elementwise::activate", "tiny tanh", true, kTolActivate,
+        [](Context& c, Size, std::mt19937& rng) { return activate_case(c, Act::tanh(), 17, rng); });
+    row("Elementwise::dropout", "p 0.3", false, kTolExactish,
+        [](Context& c, Size z, std::mt19937& rng) { return dropout_case(c, pick(z, 1031, 1 << 22), rng); });
+    row("Elementwise::dropout", "tiny", true, kTolExactish,
+        [](Context& c, Size, std::mt19937& rng) { return dropout_case(c, 9, rng); });
+    row("Elementwise::sanitize + sanitized_count", "[-1, 1]", false, kTolExact,
+        [](Context& c, Size z, std::mt19937& rng) { return sanitize_case(c, pick(z, 1031, 1 << 22), rng); });
+    row("Elementwise::sanitize + sanitized_count", "tiny", true, kTolExact,
+        [](Context& c, Size, std::mt19937& rng) { return sanitize_case(c, 15, rng); });
+    for (bool points : {true, false})
+        row("Elementwise::channel_affine", points ? "points in" : "planar in", false, kTolExactish,
+            [points](Context& c, Size z, std::mt19937& rng) {
+                return channel_affine_case(c, points, 10, pick(z, 1001, 1 << 18), rng);
+            });
+    row("Elementwise::channel_affine", "tiny points in", true, kTolExactish,
+        [](Context& c, Size, std::mt19937& rng) { return channel_affine_case(c, true, 3, 5, rng); });
+    for (bool multiply : {false, true}) {
+        const char* op = multiply ? "Elementwise::mul" : "Elementwise::add";
+        row(op, "odd n", false, kTolExactish,
+            [multiply](Context& c, Size z, std::mt19937& rng) { return binary_case(c, multiply, pick(z, 1031, 1 << 22), rng); });
+        row(op, "tiny", true, kTolExactish,
+            [multiply](Context& c, Size, std::mt19937& rng) { return binary_case(c, multiply, 15, rng); });
+    }
+
+    // MLPs. Static: no encoding, small enough for the shape-specialized kernel (one program per architecture: the
+    // perf size changes the item count only). Generic: an encoding, so the generic fused kernel.
+    const FrequencyEncoding none;
+    const FrequencyEncoding band_major{3, -1, true, true, FrequencyEncoding::Order::BandMajor};
+    const FrequencyEncoding component_major{2, 0, true, false, FrequencyEncoding::Order::ComponentMajor};
+    row("FusedMlp::enqueue", "static architecture", false, kTolMlp, [none](Context& c, Size z, std::mt19937& rng) {
+        const MlpSpec s = mlp_spec(5, none, {16, 8, 2}, Act::none(), rng);
+        return fused_mlp_case(c, s, pick(z, 517, 1 << 18), true, rng);
+    });
+    row("FusedMlp::enqueue", "generic, band-major encoding", false, kTolMlp,
+        [band_major](Context& c, Size z, std::mt19937& rng) {
+            const MlpSpec s = mlp_spec(3, band_major, {21, 13, 3}, Act::exp(), rng);
+            return fused_mlp_case(c, s, pick(z, 331, 1 << 18), false, rng);
+        });
+    row("FusedMlp::enqueue", "tiny", true, kTolMlp, [](Context& c, Size, std::mt19937& rng) {
+        const MlpSpec s = mlp_spec(3, {2, -1, true, true, FrequencyEncoding::Order::BandMajor}, {7, 2}, Act::exp(), rng);
+        return fused_mlp_case(c, s, 5, true, rng);
+    });
+    row("DenseMlp::enqueue", "component-major encoding", false, kTolMlp,
+        [component_major](Context& c, Size z, std::mt19937& rng) {
+            const MlpSpec s = mlp_spec(4, component_major, {37, 19, 3}, Act::none(), rng);
+            return dense_mlp_case(c, s, pick(z, 403, 1 << 18), rng);
+        });
+    row("DenseMlp::enqueue", "tiny", true, kTolMlp, [band_major](Context& c, Size, std::mt19937& rng) {
+        const MlpSpec s = mlp_spec(3, band_major, {7, 2}, Act::exp(), rng);
+        return dense_mlp_case(c, s, 5, rng);
+    });
+    row("FrequencyEncodePlanar::enqueue", "Eq. 3 style, 4 bands", false, kTolEncode, [](Context& c, Size z, std::mt19937& rng) {
+        return frequency_encode_case(c, 3, {4, -1, true, true, FrequencyEncoding::Order::BandMajor}, pick(z, 517, 1 << 18), rng);
+    });
+    row("FrequencyEncodePlanar::enqueue", "tiny", true, kTolEncode, [component_major](Context& c, Size, std::mt19937& rng) {
+        return frequency_encode_case(c, 2, component_major, 5, rng);
+    });
+
+    // JBU: a non-integer ratio, an integer one, tiny.
+    row("JointBilateralUpsample::enqueue", "non-integer ratio, radius 2", false, kTolJbu,
+        [](Context& c, Size z, std::mt19937& rng) {
+            return jbu_case(c, pick(z, 13, 128), pick(z, 9, 64), pick(z, 41, 512), pick(z, 29, 256), 3, 2, rng);
+        });
+    row("JointBilateralUpsample::enqueue", "ratio 3, radius 3", false, kTolJbu, [](Context& c, Size z, std::mt19937& rng) {
+        return jbu_case(c, pick(z, 11, 128), pick(z, 7, 64), pick(z, 33, 384), pick(z, 21, 192), 5, 3, rng);
+    });
+    row("JointBilateralUpsample::enqueue", "tiny", true, kTolJbu,
+        [](Context& c, Size, std::mt19937& rng) { return jbu_case(c, 5, 3, 19, 11, 3, 2, rng); });
+
+    // SH.
+    for (bool irr : {false, true})
+        row("ShEvaluate::enqueue", irr ? "irradiance" : "radiance", false, kTolSh,
+            [irr](Context& c, Size z, std::mt19937& rng) { return sh_case(c, pick(z, 301, 1 << 18), 3, irr, rng); });
+    row("ShEvaluate::enqueue", "tiny irradiance", true, kTolSh,
+        [](Context& c, Size, std::mt19937& rng) { return sh_case(c, 3, 3, true, rng); });
+
+    // Set pooling.
+    for (PoolMode mode : {PoolMode::Max, PoolMode::Mean}) {
+        const bool max = mode == PoolMode::Max;
+        const double tol = max ? kTolExact : kTolPoolMean;
+        row("SetPool::pool", max ? "max" : "mean", false, tol, [mode](Context& c, Size z, std::mt19937& rng) {
+            return pool_case(c, mode, 17, 9, pick(z, 150, 20000), rng);
+        });
+        row("SetPool::pool_planar", max ? "max, split launches" : "mean, split launches", false, tol,
+            [mode](Context& c, Size z, std::mt19937& rng) {
+                const int ld = pick(z, 5000, 1 << 18);
+                return pool_planar_case(c, mode, 7, ld, 3, ld - 2, pick(z, 640, 0), rng);
+            });
+        row("SetPool::pool_planar", max ? "max, one launch" : "mean, one launch", false, tol,
+            [mode](Context& c, Size z, std::mt19937& rng) {
+                return pool_planar_case(c, mode, 5, pick(z, 301, 1 << 18), 17, pick(z, 251, (1 << 18) - 1), 0, rng);
+            });
+    }
+    row("SetPool::pool", "tiny mean", true, kTolPoolMean,
+        [](Context& c, Size, std::mt19937& rng) { return pool_case(c, PoolMode::Mean, 2, 4, 2, rng); });
+    row("SetPool::pool_planar", "tiny max, split", true, kTolExact,
+        [](Context& c, Size, std::mt19937& rng) { return pool_planar_case(c, PoolMode::Max, 2, 70, 1, 69, 32, rng); });
+    row("SetPool::broadcast_concat", "odd widths", false, kTolExact,
+        [](Context& c, Size z, std::mt19937& rng) { return broadcast_case(c, 5, 17, 9, pick(z, 150, 20000), rng); });
+    row("SetPool::broadcast_concat", "tiny", true, kTolExact,
+        [](Context& c, Size, std::mt19937& rng) { return broadcast_case(c, 2, 3, 4, 2, rng); });
+
+    // Image gathering: each format, interleaved and planar, both row orders.
+    const struct {
+        const char* name;
+        PixelFormat format;
+        int channels, need, n, perf_n;
+        bool planar, bottom_up, scaled, tiny;
+    } gathers[] = {
+        {"F16 RGBA interleaved, bottom-up", PixelFormat::F16, 4, 3, 33, 1024, false, true, false, false},
+        {"F32 depth, planar", PixelFormat::F32, 1, 1, 17, 1024, true, false, false, false},
+        {"U8 sRGB planar, scale and bias", PixelFormat::U8Srgb, 3, 3, 13, 1024, true, true, true, false},
+        {"U8 unorm interleaved", PixelFormat::U8Unorm, 4, 3, 29, 1024, false, false, false, false},
+        {"tiny F16 interleaved", PixelFormat::F16, 4, 3, 3, 0, false, true, false, true},
+    };
+    for (const auto& g : gathers)
+        row("GatherImage::enqueue", g.name, g.tiny, kTolGather, [g](Context& c, Size z, std::mt19937& rng) {
+            const int n = z == Size::Perf && !g.tiny ? g.perf_n : g.n;
+            return gather_case(c, gather_layout(g.format, g.channels, n, g.planar, g.bottom_up, g.scaled), g.need, n, rng);
+        });
+
+    // Probe shading: both fields, odd n.
+    for (bool sh : {true, false})
+        row("ProbeShade::enqueue", sh ? "SH-27 field" : "per-voxel field", false, kTolProbe,
+            [sh](Context& c, Size z, std::mt19937& rng) { return probe_case(c, pick(z, 37, 512), sh, rng); });
+    row("ProbeShade::enqueue", "tiny SH-27", true, kTolProbe,
+        [](Context& c, Size, std::mt19937& rng) { return probe_case(c, 3, true, rng); });
+
+    // Light-transition function: each kernel shape, both variants, the visibility mask, a split of the senders.
+    const struct {
+        const char* name;
+        LtfVariant variant;
+        LtfKernelShape shape;
+        bool mask;
+        int split;
+        int v;
+        bool tiny;
+    } ltfs[] = {
+        {"physical, mask, plain", LtfVariant::Physical, LtfKernelShape::Plain, true, 0, 97, false},
+        {"physical, mask, tiled", LtfVariant::Physical, LtfKernelShape::Tiled, true, 0, 97, false},
+        {"physical, mask, vector, split senders", LtfVariant::Physical, LtfKernelShape::Vector, true, 40, 97, false},
+        {"as written, vector", LtfVariant::AsWritten, LtfKernelShape::Vector, false, 0, 97, false},
+        {"as written, tiled", LtfVariant::AsWritten, LtfKernelShape::Tiled, false, 0, 97, false},
+        {"tiny physical, mask, vector", LtfVariant::Physical, LtfKernelShape::Vector, true, 3, 5, true},
+        {"tiny as written, tiled", LtfVariant::AsWritten, LtfKernelShape::Tiled, false, 0, 5, true},
+    };
+    for (const auto& l : ltfs)
+        row("VoxelLtf::run", l.name, l.tiny, kTolLtf, [l](Context& c, Size z, std::mt19937& rng) {
+            const bool perf = z == Size::Perf && !l.tiny;
+            return ltf_case(c, perf ? 4096 : l.v, perf ? 1 : 2, l.variant, l.shape, l.mask, perf ? 0 : l.split, rng);
+        });
+    return t;
+}
+
+}  // namespace
+
+std::vector<GemmParams> gemm_variants() {
+    DeviceInfo gpu, cpu;
+    gpu.is_gpu = true;
+    cpu.is_cpu = true;
+    std::vector<GemmParams> sets;
+    for (const DeviceInfo* info : {&gpu, &cpu})
+        for (const GemmParams& p : gemm_fallback_chain(gemm_params_for(*info)))
+            if (std::find(sets.begin(), sets.end(), p) == sets.end()) sets.push_back(p);
+    return sets;
+}
+
+const std::vector<OpCase>& op_cases() {
+    static const std::vector<OpCase> table = build_table();
+    return table;
+}
+
+Outcome run_case(Context& ctx, const OpCase& c, Size size) {
+    // FNV-1a of the id: the same data on every run and device, independent of the table's order.
+    std::uint32_t seed = 2166136261u;
+    for (char ch : c.id()) seed = (seed ^ std::uint8_t(ch)) * 16777619u;
+    std::mt19937 rng(seed);
+    Prepared p = c.prepare(ctx, size, rng);
+    p.run(ctx);
+    ctx.finish();
+    Outcome o;
+    o.shape = p.shape;
+    for (const auto& b : p.buffers)
+        if (std::string damaged = b->check(ctx, c.id()); !damaged.empty() && o.failure.empty()) o.failure = damaged;
+    const Comparison cmp = p.compare(ctx);
+    if (o.failure.empty() && !cmp.mismatch.empty()) o.failure = c.id() + ": " + cmp.mismatch;
+    o.error = normalized_error(cmp.got, cmp.want, cmp.skip);
+    return o;
+}
+
+}  // namespace ngi::harness
