@@ -101,25 +101,51 @@ __kernel void mlp_fused(__global const float* restrict x, const int x_off, const
 }
 
 // The frequency encoding alone, materialized for the dense (GEMM) path and for graphs (Neural GI):
-// e[e_off + k * n + i] (planar, channel-major). Launch: 2-D (n, encoded width).
+// e[e_off + k * n + i] (planar, channel-major; x planar too: item i's channel c at x[c * x_chan + i]).
+// Launch: 2-D (ceil(n / ENC_VEC), encoded width). Knob ENC_VEC (build option, 1 by default; the device's
+// mlp_items_per_work_item): each work-item encodes ENC_VEC consecutive items in the lanes of a vector. Why: PoCL
+// evaluates a scalar sin or cos one value at a time (~40 ns on this machine's CPU) but the vector forms lane-parallel
+// (~5 ns per value at 8 lanes); the encoding was 34-37 % of Neural GI's device time (docs/PERFORMANCE.md). A GPU
+// runs work-items in SIMD lanes already: 1 there.
+#ifndef ENC_VEC
+#define ENC_VEC 1
+#endif
+#if ENC_VEC > 1
+#define ENC_CAT2(a, b) a##b
+#define ENC_CAT(a, b) ENC_CAT2(a, b)
+#define encV ENC_CAT(float, ENC_VEC)
+#define enc_vload ENC_CAT(vload, ENC_VEC)
+#define enc_vstore ENC_CAT(vstore, ENC_VEC)
+#endif
 __kernel void frequency_encode_planar(__global const float* restrict x, const int x_off, const int n, const int in_ch,
-                                      const int x_item, const int x_chan, const int bands, const int first_exp,
-                                      const int use_pi, const int include_raw, const int order,
-                                      __global float* restrict e, const int e_off) {
-    const int i = get_global_id(0), k = get_global_id(1);
+                                      const int x_chan, const int bands, const int first_exp, const int use_pi,
+                                      const int include_raw, const int order, __global float* restrict e,
+                                      const int e_off) {
+    const int i0 = get_global_id(0) * ENC_VEC, k = get_global_id(1);
     const int raw = include_raw ? in_ch : 0;
     x += x_off;
     e += e_off;
-    if (i >= n || k >= encoded_width(in_ch, bands, include_raw)) return;
-    float value;
-    if (k < raw) {
-        value = x[(size_t)i * x_item + (size_t)k * x_chan];
-    } else {
-        int comp, band, is_cos;
-        feature_index(k - raw, in_ch, bands, order, &comp, &band, &is_cos);
-        value = encode_one(x[(size_t)i * x_item + (size_t)comp * x_chan], band, is_cos, first_exp, use_pi);
+    if (i0 >= n || k >= encoded_width(in_ch, bands, include_raw)) return;
+    int comp = k, band = 0, is_cos = 0;
+    if (k >= raw) feature_index(k - raw, in_ch, bands, order, &comp, &band, &is_cos);
+    __global const float* src = x + (size_t)comp * x_chan;
+    __global float* dst = e + (size_t)k * n;
+#if ENC_VEC > 1
+    if (i0 + ENC_VEC <= n) {
+        const encV v = enc_vload(0, src + i0);
+        if (k < raw) {
+            enc_vstore(v, 0, dst + i0);
+        } else {
+            const encV t = band_scale(band, first_exp, use_pi) * v;
+            enc_vstore(is_cos ? cos(t) : sin(t), 0, dst + i0);
+        }
+        return;
     }
-    e[(size_t)k * n + i] = value;
+#endif
+    // One item per work-item, or the last ENC_VEC - 1 or fewer items of the vector form.
+    const int end = min(i0 + ENC_VEC, n);
+    for (int i = i0; i < end; ++i)
+        dst[i] = k < raw ? src[i] : encode_one(src[i], band, is_cos, first_exp, use_pi);
 }
 
 // ---- the same MLP with its architecture compiled in (no encoding), VEC items per work-item -----------------------

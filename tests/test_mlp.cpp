@@ -277,3 +277,37 @@ TEST_CASE("the shape-specialized MLP's vector tanh is within 2 ulp of float64 at
         CHECK(y[n - 1] == 1.0f);  // +Inf saturates to exactly 1
     }
 }
+
+TEST_CASE("the materialized frequency encoding matches the reference at every items-per-work-item", "[mlp]") {
+    // FrequencyEncodePlanar's knob ENC_VEC: items per work-item in vector lanes (the CPU form) or 1 (the GPU form);
+    // item counts that are not multiples of it take the scalar tail. Arguments up to 2^9 pi x 1.5 (Neural GI's
+    // highest band): float32 rounding of the argument alone is ~1e-4 of a radian there, so the tolerance follows it.
+    auto& ctx = test::ctx();
+    std::mt19937 rng(21);
+    for (const FrequencyEncoding& enc : {FrequencyEncoding{10, -1, true, true, FrequencyEncoding::Order::BandMajor},
+                                         FrequencyEncoding{4, 0, true, false, FrequencyEncoding::Order::ComponentMajor}}) {
+        for (int vec : {1, 4, 16}) {
+            for (int n : {1, 15, 16, 17, 203}) {
+                const int c = 3;
+                INFO("bands " << enc.bands << " vec " << vec << " n " << n);
+                const std::vector<float> x = test::random_vector(std::size_t(c) * n, rng, -1.5f, 1.5f);  // planar
+                FrequencyEncodePlanar op(ctx, c, enc, vec);
+                REQUIRE(op.items_per_work_item() == vec);
+                const Buffer xb = test::upload(x);
+                Buffer yb = ctx.alloc(std::size_t(op.width()) * n * sizeof(float), "test y");
+                op.enqueue(ctx, xb.get(), 0, yb.get(), 0, n);
+                const std::vector<float> y = test::download(yb, std::size_t(op.width()) * n);
+                double worst = 0;
+                for (int i = 0; i < n; ++i) {
+                    std::vector<double> v(c);
+                    for (int k = 0; k < c; ++k) v[k] = x[std::size_t(k) * n + i];
+                    const auto want = ref::frequency_encode(v, enc.bands, enc.first_exponent, enc.pi,
+                                                            enc.include_input, int(enc.order));
+                    for (int k = 0; k < op.width(); ++k)
+                        worst = std::max(worst, std::abs(double(y[std::size_t(k) * n + i]) - want[k]));
+                }
+                CHECK(worst < 5e-4);
+            }
+        }
+    }
+}

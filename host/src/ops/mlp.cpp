@@ -187,8 +187,9 @@ cl_event FusedMlp::enqueue(Context& ctx, cl_mem x, std::size_t x_off, ItemLayout
 
 // ---- the encoding alone ---------------------------------------------------------------------------------------
 
-FrequencyEncodePlanar::FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding)
-    : inputs_(inputs), encoding_(encoding), kernel_(ctx.kernel(kMlpProgram, "frequency_encode_planar", mlp_defines(16))) {}
+FrequencyEncodePlanar::FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding, int vec)
+    : inputs_(inputs), encoding_(encoding), vec_(vec ? vec : mlp_items_per_work_item(ctx.info())),
+      kernel_(ctx.kernel(kMlpProgram, "frequency_encode_planar", mlp_defines(16) + " -DENC_VEC=" + std::to_string(vec_))) {}
 
 cl_event FrequencyEncodePlanar::enqueue(Context& ctx, cl_mem x, std::size_t x_off, cl_mem y, std::size_t y_off, int n,
                                         bool want_event) {
@@ -196,9 +197,9 @@ cl_event FrequencyEncodePlanar::enqueue(Context& ctx, cl_mem x, std::size_t x_of
     if (double(width()) * n > 2147483647.0 || x_off > 2147483647u || y_off > 2147483647u)
         throw InputError("frequency encoding: " + std::to_string(n) + " items x " + std::to_string(width()) +
                          " features exceed the kernel's 32-bit indexing");
-    kernel_.args(x, int(x_off), n, inputs_, 1, n, e.bands, e.first_exponent, int(e.pi), int(e.include_input),
+    kernel_.args(x, int(x_off), n, inputs_, n, e.bands, e.first_exponent, int(e.pi), int(e.include_input),
                  int(e.order), y, int(y_off));
-    const std::size_t g[2] = {std::size_t(n), std::size_t(width())};
+    const std::size_t g[2] = {(std::size_t(n) + vec_ - 1) / vec_, std::size_t(width())};
     return ctx.launch(kernel_, 2, g, kEncodeLocal, want_event);
 }
 

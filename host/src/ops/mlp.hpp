@@ -93,8 +93,10 @@ private:
 // frequency_encode_planar). Used by DenseMlp and as a graph node (Neural GI's Eq. 3 over an image).
 class FrequencyEncodePlanar {
 public:
-    FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding);
+    // vec: items per work-item (kernels/mlp.cl ENC_VEC), 0 = the device's choice (mlp_items_per_work_item).
+    FrequencyEncodePlanar(Context& ctx, int inputs, const FrequencyEncoding& encoding, int vec = 0);
     int inputs() const { return inputs_; }
+    int items_per_work_item() const { return vec_; }
     int width() const { return encoding_.width(inputs_); }
     // x: inputs() channels of n items (n = h w of its shape); y: width() channels of n items.
     cl_event enqueue(Context& ctx, cl_mem x, std::size_t x_off, cl_mem y, std::size_t y_off, int n,
@@ -103,6 +105,7 @@ public:
 private:
     int inputs_;
     FrequencyEncoding encoding_;
+    int vec_;
     Kernel kernel_;
 };
 
