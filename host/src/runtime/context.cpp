@@ -350,7 +350,7 @@ void Context::write(const Buffer& b, std::size_t off, std::size_t bytes, const v
         Buffer staging = alloc(bytes, what);
         write(staging, 0, bytes, src, what);  // a whole-buffer upload: its shadow is exact
         Kernel k = kernel("transfer", "copy_words");
-        k.args(staging, b, cl_ulong(off / 4), cl_ulong(bytes / 4));
+        k.args(staging, cl_ulong(0), b, cl_ulong(off / 4), cl_ulong(bytes / 4));
         const std::size_t global = bytes / 4, local = 64;
         launch(k, 1, &global, &local);
         finish();  // staging is released on return
@@ -373,6 +373,13 @@ void Context::read(const Buffer& b, std::size_t off, std::size_t bytes, void* ds
 void Context::copy(cl_mem src, std::size_t src_off, cl_mem dst, std::size_t dst_off, std::size_t bytes,
                    const char* what) {
     if (bytes == 0) return;
+    if (src_off % 4 == 0 && host_stores_via_kernels(dst_off, bytes)) {  // Oclgrind: see kernels/transfer.cl
+        Kernel k = kernel("transfer", "copy_words");
+        k.args(src, cl_ulong(src_off / 4), dst, cl_ulong(dst_off / 4), cl_ulong(bytes / 4));
+        const std::size_t global = bytes / 4, local = 64;
+        launch(k, 1, &global, &local);
+        return;
+    }
     check(clEnqueueCopyBuffer(queue_, src, dst, src_off, dst_off, bytes, 0, nullptr, nullptr),
           (std::string("copy ") + what).c_str(), "clEnqueueCopyBuffer");
 }
