@@ -27,7 +27,8 @@ inline std::uint16_t to_half(float v) {
     return std::uint16_t(sign | std::uint32_t(exp) << 10 | ((b >> 13) & 0x3ffu));
 }
 
-inline float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
+// The sRGB EOTF (IEC 61966-2-1) in double; the kernel reads the same values, rounded once, from the host's table.
+inline double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
 // One stored value at `byte` of `mem` decoded as the kernel does (before scale and bias).
 inline float decode(const std::vector<unsigned char>& mem, std::size_t byte, PixelFormat f) {
@@ -35,7 +36,7 @@ inline float decode(const std::vector<unsigned char>& mem, std::size_t byte, Pix
         case PixelFormat::F32: { float v; std::memcpy(&v, &mem[byte], 4); return v; }
         case PixelFormat::F16: { std::uint16_t h; std::memcpy(&h, &mem[byte], 2); return detail::half_to_float(h); }
         case PixelFormat::U8Unorm: return float(mem[byte]) * (1.0f / 255.0f);
-        case PixelFormat::U8Srgb: return srgb_to_linear(float(mem[byte]) * (1.0f / 255.0f));
+        case PixelFormat::U8Srgb: return float(srgb_to_linear(mem[byte] / 255.0));
     }
     return 0;
 }

@@ -28,6 +28,7 @@ public:
 
 private:
     Kernel kernel_;
+    Buffer srgb_;  // 256 floats: the linear value of each U8 sRGB code
 };
 
 }  // namespace ngi::detail
