@@ -13,6 +13,7 @@
 #include "ngi/mesh.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    ngi::fuzz::remember_input(data, size);
     if (size < 1) return 0;
     static const char* names[4] = {"fuzz.obj", "fuzz.ply", "fuzz.gltf", "fuzz.glb"};
     const std::string bytes = ngi::fuzz::bytes(data + 1, size - 1);
