@@ -18,6 +18,10 @@
 #define PARAMS_SPACE __global
 #endif
 
+// Token pasting after expansion: MLP_CAT(float, 8) -> float8 (the vector widths of the VEC and ENC_VEC knobs).
+#define MLP_CAT2(a, b) a##b
+#define MLP_CAT(a, b) MLP_CAT2(a, b)
+
 // The encoding's scale of band b: 2^(first_exp + b), times pi when use_pi.
 static inline float band_scale(int b, int first_exp, int use_pi) {
     const float s = ldexp(1.0f, first_exp + b);
@@ -111,11 +115,9 @@ __kernel void mlp_fused(__global const float* restrict x, const int x_off, const
 #define ENC_VEC 1
 #endif
 #if ENC_VEC > 1
-#define ENC_CAT2(a, b) a##b
-#define ENC_CAT(a, b) ENC_CAT2(a, b)
-#define encV ENC_CAT(float, ENC_VEC)
-#define enc_vload ENC_CAT(vload, ENC_VEC)
-#define enc_vstore ENC_CAT(vstore, ENC_VEC)
+#define encV MLP_CAT(float, ENC_VEC)
+#define enc_vload MLP_CAT(vload, ENC_VEC)
+#define enc_vstore MLP_CAT(vstore, ENC_VEC)
 #endif
 __kernel void frequency_encode_planar(__global const float* restrict x, const int x_off, const int n, const int in_ch,
                                       const int x_chan, const int bands, const int first_exp, const int use_pi,
@@ -161,8 +163,6 @@ __kernel void frequency_encode_planar(__global const float* restrict x, const in
 #ifndef VEC
 #define VEC 1
 #endif
-#define MLP_CAT2(a, b) a##b
-#define MLP_CAT(a, b) MLP_CAT2(a, b)
 #if VEC == 1
 #define realV float
 #else
