@@ -12,6 +12,7 @@
 #include "base/half.hpp"
 #include "ngi/image.hpp"
 #include "ngi/image_desc.hpp"
+#include "ops/gather_image.hpp"
 
 namespace ngi::test {
 
@@ -57,6 +58,21 @@ struct Layout {
     bool bottom_up;
     float scale, bias;
 };
+
+// How a test hands a layout to the op (ops/gather_image.hpp): the image's bytes start base_offset bytes into memory.
+inline detail::GatherSource gather_source(const Layout& l, cl_mem memory, std::size_t base_offset = 0) {
+    detail::GatherSource gs;
+    gs.memory = memory;
+    gs.offset = base_offset + l.offset;
+    gs.pixel_stride = l.pixel_stride;
+    gs.row_stride = l.row_stride;
+    gs.channel_stride = l.channel_stride;
+    gs.format = l.format;
+    gs.bottom_up = l.bottom_up;
+    gs.scale = l.scale;
+    gs.bias = l.bias;
+    return gs;
+}
 
 // The byte of channel c of image pixel (row, col) under a layout (row 0 = top).
 inline std::size_t byte_of(const Layout& l, int n, int row, int col, int c) {

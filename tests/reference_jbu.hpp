@@ -6,6 +6,8 @@
 #include <cmath>
 #include <vector>
 
+#include "ops/jbu.hpp"
+
 namespace ngi::test {
 
 struct JbuRefImage {
@@ -19,6 +21,17 @@ struct JbuRefParams {
     double sigma_spatial = 0.75, normal_power = 32, sigma_plane = 0.1, fallback_ratio = 1e-6;
     int radius = 2;
 };
+
+// The op's parameters (ops/jbu.hpp) as the reference takes them, in double.
+inline JbuRefParams jbu_ref_params(const detail::JbuParams& p) {
+    JbuRefParams r;
+    r.sigma_spatial = p.sigma_spatial;
+    r.normal_power = p.normal_power;
+    r.sigma_plane = p.sigma_plane;
+    r.fallback_ratio = p.fallback_ratio;
+    r.radius = p.radius;
+    return r;
+}
 
 struct JbuRefResult {
     std::vector<double> out;       // [channels][H][W]

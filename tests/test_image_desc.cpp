@@ -152,17 +152,7 @@ TEST_CASE("gather_image: every format, stride, offset and row order against a na
         const int plane = n * n, dst_offset = plane + 5;
         const std::vector<float> sentinel(std::size_t(plane) * (need + 2) + 10, -7.0f);
         detail::Buffer dst = test::upload(sentinel);
-        detail::GatherSource gs;
-        gs.memory = buf.get();
-        gs.offset = l.offset;
-        gs.pixel_stride = l.pixel_stride;
-        gs.row_stride = l.row_stride;
-        gs.channel_stride = l.channel_stride;
-        gs.format = l.format;
-        gs.bottom_up = l.bottom_up;
-        gs.scale = l.scale;
-        gs.bias = l.bias;
-        op.enqueue(ctx, gs, need, n, dst.get(), dst_offset, plane);
+        op.enqueue(ctx, test::gather_source(l, buf.get()), need, n, dst.get(), dst_offset, plane);
         const std::vector<float> got = test::download(dst, sentinel.size());
         std::vector<float> want = sentinel;
         for (int c = 0; c < need; ++c)

@@ -138,15 +138,6 @@ Run run_jbu(const test::JbuRefImage& low, const std::vector<float>& normal, cons
     return r;
 }
 
-test::JbuRefParams ref_params(const JbuParams& p) {
-    test::JbuRefParams r;
-    r.sigma_spatial = p.sigma_spatial;
-    r.normal_power = p.normal_power;
-    r.sigma_plane = p.sigma_plane;
-    r.fallback_ratio = p.fallback_ratio;
-    r.radius = p.radius;
-    return r;
-}
 
 test::JbuRefImage low_view(const Scene& s, int w, int h, int channels, std::vector<float> values) {
     const Guides g = render_guides(s, w, h);
@@ -198,7 +189,7 @@ TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]")
         const test::JbuRefImage low =
             low_view(scene, w, h, channels, test::random_vector(std::size_t(channels) * w * h, rng, 0.0f, 4.0f));
         const Guides hi = render_guides(scene, W, H);
-        const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, ref_params(params));
+        const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, test::jbu_ref_params(params));
         const Run got = run_jbu(low, hi.normal, hi.position, W, H, params);
         INFO("trial " << trial << ": " << w << "x" << h << " -> " << W << "x" << H << ", " << channels
                       << " channels, radius " << params.radius << ", normal power " << params.normal_power);
