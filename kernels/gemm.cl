@@ -115,19 +115,28 @@
 #define STEP(u) { vtype bv[NV]; FOR_VECS(LOAD_B, u) FOR_ROWS(FMA_ROW) a += MR; }
 #endif
 
-// Stores vector x = C[m][np*NR + j*VW .. +VW) through the epilogue, masking n >= N (needs m, s, t, row in scope).
+// The epilogue's activation on whole accumulator vectors (activation.cl): ngi_activate_vt.
+NGI_DEFINE_VECTOR_ACTIVATE(vtype, vt)
 #if VW == 1
 #define TO_LANES(x, v) float v[1] = {x};
+#define VSTORE(x, p) (*(p) = (x))
 #else
 #define TO_LANES(x, v) float v[VW]; NGI_CAT(vstore, VW)(x, 0, v);
+#define VSTORE(x, p) NGI_CAT(vstore, VW)((x), 0, (p))
 #endif
-#define STORE_VEC(x, j)                                                               \
-    {                                                                                 \
-        TO_LANES(x, v)                                                                \
-        for (int l = 0; l < VW; ++l) {                                                \
-            const int n = np * NR + (j) * VW + l;                                     \
-            if (n < N) row[(j) * VW + l] = ngi_activate(fma(v[l], s, t), act, alpha); \
-        }                                                                             \
+// Stores vector x = C[m][np*NR + j*VW .. +VW) through the epilogue (needs m, s, t, row in scope): the affine and the
+// activation on the whole vector, then one vector store, or lane by lane masking n >= N in the last tile.
+#define STORE_VEC(x, j)                                                                    \
+    {                                                                                      \
+        const vtype o = ngi_activate_vt(fma(x, (vtype)(s), (vtype)(t)), act, alpha);       \
+        const int n0 = np * NR + (j) * VW;                                                 \
+        if (n0 + VW <= N) {                                                                \
+            VSTORE(o, row + (j) * VW);                                                     \
+        } else {                                                                           \
+            TO_LANES(o, v)                                                                 \
+            for (int l = 0; l < VW; ++l)                                                   \
+                if (n0 + l < N) row[(j) * VW + l] = v[l];                                  \
+        }                                                                                  \
     }
 #if UNROLL
 #define STORE(i, j) STORE_VEC(acc[i][j], j)
@@ -155,7 +164,11 @@
 // Junk lanes read whatever lies next (another row or channel, or the zeroed slack after xp): always initialized,
 // never stored. K = C*TH*TW; A is packed with Kpad = K (KU plays no role).
 // Output element (m, q, r) goes to y[y_off + m*y_plane + q*SY*ldy + r*SX]: SY = SX = 1 for a convolution, the
-// stride for one phase of a transposed convolution, whose offset is folded into y_off.
+// stride for one phase of a transposed convolution, whose offset is folded into y_off; with has_res, res indexed
+// the same way (from res_off) is added after the activation (a residual block's h + act(W h + b)).
+// A one-tap layer over a planar input can read the input itself as xp (a 1 x 1 convolution or a dense layer, no
+// copy): b_limit = the plane's floats then keeps the last tile inside it (see lane0 below), where a padded copy
+// has zeroed slack instead (b_limit = 0).
 // Taps that fit in the knob set's KU (at most 4; the U-Net's 2 x 2 with KU 4; -DTH -DTW > 0) are expanded by the
 // preprocessor, one micro-kernel step each: as a loop they measured 10-15% slower on PoCL. Otherwise (-DTH=0
 // -DTW=0) runtime loops over th x tw hold one step, and every geometry shares one program per knob set: an
@@ -170,25 +183,42 @@
     if (mp * MR + (i) < M) {                                               \
         const int m = mp * MR + (i);                                       \
         const float s = scale[m], t = shift[m];                            \
-        __global float* row = y + y_off + (size_t)m * y_plane;             \
+        __global float* row = y + y0 + (size_t)m * y_plane;                \
+        __global const float* rrow = res + res_off + (size_t)m * y_plane;  \
         FOR_VECS(CSTORE, i)                                                \
     }
 #endif
 // Lane e = j*VW + l of the tile is output (q, r): row tiles stay in row q0 (r = r0 + e); linear tiles wrap
-// at ROW (a division per lane, in narrow layers only). Lanes with r >= OW or q >= OH are junk. No per-lane table in
-// private memory: Mesa's compiler stalled for over 20 minutes on a dynamically indexed int[NR] here.
+// at ROW (a division per lane, in narrow layers only). Lanes with r >= OW or q >= OH are junk, and so are lanes
+// e < lane0 of a clamped last tile (the previous tile's, stored there). No per-lane table in private memory: Mesa's
+// compiler stalled for over 20 minutes on a dynamically indexed int[NR] here. A vector whose lanes are all this
+// tile's real outputs in one row, contiguous in y (SX = 1: not a phase of a transposed convolution), is stored
+// whole; the rest lane by lane. The affine, the activation and the residual run on the whole vector either way.
 #define CSTORE_VEC(x, j)                                                                \
     {                                                                                   \
-        TO_LANES(x, v)                                                                  \
-        for (int l = 0; l < VW; ++l) {                                                  \
-            const int e = (j) * VW + l;                                                 \
-            int qq = q0, rr = r0 + e;                                                   \
-            if (TPR == 0) {                                                             \
-                qq = (base + e) / ROW;                                                  \
-                rr = base + e - qq * ROW;                                               \
+        vtype o = ngi_activate_vt(fma(x, (vtype)(s), (vtype)(t)), act, alpha);          \
+        int q = q0, r = r0 + (j) * VW;                                                  \
+        if (TPR == 0) {                                                                 \
+            q = (base + (j) * VW) / ROW;                                                \
+            r = base + (j) * VW - q * ROW;                                              \
+        }                                                                               \
+        if (SX == 1 && q < OH && r + VW <= OW && (j) * VW >= lane0) {                   \
+            if (has_res) o += VLOAD(rrow + q * SY * ldy + r);                           \
+            VSTORE(o, row + q * SY * ldy + r);                                          \
+        } else {                                                                        \
+            TO_LANES(o, v)                                                              \
+            for (int l = 0; l < VW; ++l) {                                              \
+                const int e = (j) * VW + l;                                             \
+                int qq = q0, rr = r0 + e;                                               \
+                if (TPR == 0) {                                                         \
+                    qq = (base + e) / ROW;                                              \
+                    rr = base + e - qq * ROW;                                           \
+                }                                                                       \
+                if (qq < OH && rr < OW && e >= lane0) {                                 \
+                    const int at = qq * SY * ldy + rr * SX;                             \
+                    row[at] = has_res ? v[l] + rrow[at] : v[l];                         \
+                }                                                                       \
             }                                                                           \
-            if (qq < OH && rr < OW)                                                     \
-                row[qq * SY * ldy + rr * SX] = ngi_activate(fma(v[l], s, t), act, alpha); \
         }                                                                               \
     }
 
@@ -199,7 +229,9 @@ __kernel void gemm_conv(const int M, const int C, const int Kpad,
                         const int OW,
                         __global float* restrict y, const int y_off, const int y_plane, const int ldy, const int SY,
                         const int SX, __global const float* restrict scale, __global const float* restrict shift,
-                        const int act, const float alpha) {
+                        const int act, const float alpha, const int b_limit,
+                        __global const float* restrict res, const int res_off, const int has_res,
+                        const int phase_s, const int phase_p, const int a_phase) {
     const int mp = get_global_id(0);
     const int np = get_global_id(1);
     int q0, r0, base;  // the tile's first lane: output row and column, offset in xp
@@ -213,8 +245,31 @@ __kernel void gemm_conv(const int M, const int C, const int Kpad,
         r0 = base - q0 * ROW;
     }
     if (mp * MR >= M || q0 >= OH) return;
-    __global const float* a = ap + a_off + (size_t)mp * Kpad * MR;
-    __global const float* bc = xp + xp_off + base;
+    // b_limit > 0 (linear tiles over an input read in place, with nothing readable after a plane's b_limit floats):
+    // a last tile that would read past it starts NR lanes before the limit instead; its first lane0 lanes belong
+    // to the previous tile and are not stored. The host guarantees b_limit >= NR.
+    int lane0 = 0;
+    if (b_limit > 0 && base + NR > b_limit) {
+        lane0 = base - (b_limit - NR);
+        base = b_limit - NR;
+        q0 = base / ROW;
+        r0 = base - q0 * ROW;
+    }
+    // The sub-pixel phases of a transposed convolution in one launch (phase_s = its stride S > 0; 0: one phase):
+    // phase (py, px) = global id 2 has its own packed A (a_phase floats apart), reads xp from tap row and column
+    // offset (p + P) / S - P / S (the padding in front made every offset >= 0; ops/conv_implicit.cpp up_offset)
+    // and writes output pixels (S q + py, S r + px).
+    int phase_b = 0, phase_y = 0, phase_a = 0;
+    if (phase_s > 0) {
+        const int ph = get_global_id(2), py = ph / phase_s, px = ph - py * phase_s;
+        const int base_off = phase_p / phase_s;
+        phase_b = ((py + phase_p) / phase_s - base_off) * ROW + (px + phase_p) / phase_s - base_off;
+        phase_y = py * ldy + px;
+        phase_a = ph * a_phase;
+    }
+    const int y0 = y_off + phase_y;  // where this phase's output plane 0 starts
+    __global const float* a = ap + a_off + phase_a + (size_t)mp * Kpad * MR;
+    __global const float* bc = xp + xp_off + phase_b + base;
 
     vtype acc[MR][NV];
 #if UNROLL
@@ -268,7 +323,8 @@ __kernel void gemm_conv(const int M, const int C, const int Kpad,
         const int m = mp * MR + i;
         if (m >= M) break;
         const float s = scale[m], t = shift[m];
-        __global float* row = y + y_off + (size_t)m * y_plane;
+        __global float* row = y + y0 + (size_t)m * y_plane;
+        __global const float* rrow = res + res_off + (size_t)m * y_plane;
 #pragma unroll
         for (int j = 0; j < NV; ++j) CSTORE_VEC(acc[i][j], j);
     }

@@ -169,29 +169,14 @@ __kernel void frequency_encode_planar(__global const float* restrict x, const in
 #define realV MLP_CAT(float, VEC)
 #endif
 
-// activation.cl's ngi_tanh on VEC lanes (the same polynomial and exp form; select needs no branch).
-static inline realV mlp_tanh_v(realV x) {
-    const realV e = exp(-2.0f * fabs(x));
-    return select(copysign((1.0f - e) / (1.0f + e), x), x * NGI_TANH_POLY(x * x), fabs(x) < NGI_TANH_POLY_LIMIT);
-}
-
-static inline realV mlp_activate_v(realV x, int act, float alpha) {
-    switch (act) {
-        case ACT_RELU: return fmax(x, (realV)0.0f);
-        case ACT_LEAKY_RELU: return select(alpha * x, x, x >= (realV)0.0f);
-        case ACT_TANH: return mlp_tanh_v(x);
-        case ACT_SIGMOID: return (realV)1.0f / ((realV)1.0f + exp(-x));
-        case ACT_EXP: return exp(fmin(x, (realV)ACT_EXP_MAX));
-        default: return x;
-    }
-}
+NGI_DEFINE_VECTOR_ACTIVATE(realV, vec)  // ngi_activate_vec: activation.cl's activations on VEC lanes
 
 #define MLP_DENSE(IN, INPAD, OUT, ACT, WOFF, BOFF, src, dst)                              \
     _Pragma("unroll") for (int o = 0; o < (OUT); ++o) {                                   \
         PARAMS_SPACE const float* row = params + (WOFF) + o * (INPAD);                    \
         realV s = (realV)params[(BOFF) + o];                                              \
         _Pragma("unroll") for (int j = 0; j < (IN); ++j) s = mad((realV)row[j], src[j], s); \
-        dst[o] = mlp_activate_v(s, (ACT), alpha);                                         \
+        dst[o] = ngi_activate_vec(s, (ACT), alpha);                                         \
     }
 #define MLP_LAYER(l, p) \
     realV h##l[W##l];   \

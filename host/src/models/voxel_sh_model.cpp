@@ -192,29 +192,28 @@ ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::str
 
 // ---- one dense layer --------------------------------------------------------------------------------------
 
-VoxelShDense::VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
-                           const std::vector<float>& scale, const std::vector<float>& shift, Act act)
-    : in_(in),
-      out_(out),
-      act_(act),
-      gemm_(ctx, p),
-      pack_(ctx, p) {
+namespace {
+const std::vector<float>& checked_weight(const std::vector<float>& weight, int in, int out,
+                                         const std::vector<float>& scale, const std::vector<float>& shift) {
     if (weight.size() != std::size_t(in) * out || (!scale.empty() && int(scale.size()) != out) ||
         (!shift.empty() && int(shift.size()) != out))
         throw Error("voxel_sh dense layer: inconsistent sizes");
-    ap_ = upload(ctx, pack_a(weight.data(), out, in, in, p), "voxel_sh packed weights");
+    return weight;
+}
+}  // namespace
+
+VoxelShDense::VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
+                           const std::vector<float>& scale, const std::vector<float>& shift, Act act)
+    : act_(act), dense_(ctx, p, in, out, checked_weight(weight, in, out, scale, shift).data()) {
     scale_ = upload(ctx, scale.empty() ? std::vector<float>(out, 1.0f) : scale, "voxel_sh scale");
     shift_ = upload(ctx, shift.empty() ? std::vector<float>(out, 0.0f) : shift, "voxel_sh shift");
-    weight_bytes_ = ap_.bytes() + scale_.bytes() + shift_.bytes();
+    weight_bytes_ = dense_.weight_bytes() + scale_.bytes() + shift_.bytes();
 }
 
-std::size_t VoxelShDense::scratch_floats(int n) const { return packed_b_floats(in_, n, gemm_.params()); }
-
 void VoxelShDense::enqueue(Context& ctx, cl_mem x, std::size_t x_off, int n, cl_mem y, std::size_t y_off,
-                           cl_mem scratch, cl_mem shift) {
-    pack_.enqueue(ctx, x, x_off, in_, n, scratch, 0, Act::none());  // the [in][n] matrix into B panels
-    gemm_.enqueue(ctx, out_, n, in_, ap_.get(), scratch, 0, y, y_off, n, scale_.get(), shift ? shift : shift_.get(),
-                  act_);
+                           cl_mem scratch, cl_mem shift, cl_mem residual, bool item_major) {
+    const DenseOut out{y, y_off, item_major ? 1 : n, item_major ? dense_.out() : 1};
+    dense_.enqueue(ctx, x, x_off, n, n, out, scale_.get(), shift ? shift : shift_.get(), act_, residual, 0, scratch, 0);
 }
 
 // ---- the runner -------------------------------------------------------------------------------------------
@@ -322,8 +321,10 @@ std::size_t VoxelShRunner::weight_bytes() const {
 
 void VoxelShRunner::reserve(Context& ctx, int n) {
     if (n <= capacity_) return;
-    std::size_t scratch = 0;
+    std::size_t scratch = 1;  // a layer over fewer items than a GEMM tile copies them into zero-padded rows here
     for (const VoxelShDense& l : layers_) scratch = std::max(scratch, l.scratch_floats(n));
+    if (cfg_.architecture == "set")  // the per-scene bias: one "item", the pooled features
+        scratch = std::max(scratch, layers_[cfg_.phi.size()].scratch_floats(1));
     // Offsets and sizes reach the kernels as int.
     if (std::size_t(widest_) * std::size_t(n) > std::size_t(INT_MAX) || scratch > std::size_t(INT_MAX))
         throw InputError("voxel_sh model: " + std::to_string(n) + " voxels are too many for one run of a network " +
@@ -344,7 +345,8 @@ void VoxelShRunner::reserve(Context& ctx, int n) {
     capacity_ = n;
 }
 
-void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y) {
+void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y,
+                            bool item_major) {
     reserve(ctx, n);
     cl_mem xs = std_.get(), a = a_.get(), b = b_.get(), scratch = scratch_.get();
     elementwise_.channel_affine(ctx, x, 0, item_stride, channel_stride, kVoxelShInputs, n, in_scale_.get(),
@@ -356,7 +358,7 @@ void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel
         for (std::size_t l = first; l < end; ++l) {
             const bool last = to_y && l + 1 == end;
             cl_mem out = last ? y : (in == a ? b : a);
-            layers_[l].enqueue(ctx, in, 0, n, out, 0, scratch);
+            layers_[l].enqueue(ctx, in, 0, n, out, 0, scratch, nullptr, nullptr, last && item_major);
             in = out;
         }
         return in;
@@ -365,12 +367,12 @@ void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel
         chain(0, layers_.size(), xs, true);
     } else if (cfg_.architecture == "resnet") {
         layers_[0].enqueue(ctx, xs, 0, n, a, 0, scratch);
-        const Shape hidden{cfg_.width, 1, n};
-        for (int i = 1; i <= cfg_.blocks; ++i) {
-            layers_[i].enqueue(ctx, a, 0, n, b, 0, scratch);  // b = tanh(W a + bias)
-            elementwise_.add(ctx, View{a, 0, hidden}, View{b, 0, hidden});
+        cl_mem h = a, next = b;
+        for (int i = 1; i <= cfg_.blocks; ++i) {  // next = h + tanh(W h + bias): the residual in the epilogue
+            layers_[i].enqueue(ctx, h, 0, n, next, 0, scratch, nullptr, h);
+            std::swap(h, next);
         }
-        layers_.back().enqueue(ctx, a, 0, n, y, 0, scratch);
+        layers_.back().enqueue(ctx, h, 0, n, y, 0, scratch, nullptr, nullptr, item_major);
     } else {
         const std::size_t phis = cfg_.phi.size();
         const int p = cfg_.phi.back();
@@ -386,7 +388,7 @@ void VoxelShRunner::forward(Context& ctx, cl_mem x, int item_stride, int channel
 
 void VoxelShRunner::enqueue(Context& ctx, cl_mem in, cl_mem out, int n) {
     if (n < 1 || n > (1 << 30)) throw InputError("voxel_sh model: " + std::to_string(n) + " voxels (1 .. 2^30)");
-    forward(ctx, in, 1, n, n, out);
+    forward(ctx, in, 1, n, n, out, false);
 }
 
 Tensor VoxelShRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
@@ -404,13 +406,10 @@ Tensor VoxelShRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
     grow(ctx, raw_, in_bytes, "voxel_sh input");
     grow(ctx, out_, out_bytes, "voxel_sh output");
     ctx.write(raw_, 0, in_bytes, x.data.data(), "voxel_sh input");
-    forward(ctx, raw_.get(), kVoxelShInputs, 1, n, out_.get());  // the point list is transposed by the affine
-    std::vector<float> planar(std::size_t(kVoxelShOutputs) * n);
-    ctx.read(out_, 0, out_bytes, planar.data(), "voxel_sh output");
+    // The point list is transposed on the way in by the affine, and back by the last layer's item-major store.
+    forward(ctx, raw_.get(), kVoxelShInputs, 1, n, out_.get(), true);
     Tensor y({n, kVoxelShOutputs});
-    for (int i = 0; i < n; ++i)
-        for (int c = 0; c < kVoxelShOutputs; ++c)
-            y.data[std::size_t(i) * kVoxelShOutputs + c] = planar[std::size_t(c) * n + i];
+    ctx.read(out_, 0, out_bytes, y.data.data(), "voxel_sh output");
     if (info) {
         info->sanitized_inputs = elementwise_.sanitized_count(ctx);
         info->layers.clear();

@@ -15,6 +15,7 @@
 #include "models/safetensors.hpp"
 #include "ngi/model.hpp"
 #include "ops/elementwise.hpp"
+#include "ops/dense.hpp"
 #include "ops/gemm.hpp"
 #include "ops/set_pool.hpp"
 
@@ -32,26 +33,25 @@ constexpr float kVoxelShInputBound = 1e6f;
 // the "voxel_sh" family here); InputError naming the file and the field for every violation.
 ModelConfig parse_voxel_sh_config(const nlohmann::json& j, const std::string& path);
 
-// One dense layer over planar items on the packed GEMM: y[out][n] = act(scale * (W x) + shift), x [in][n] and
-// y [out][n] with row stride n. W in nn.Linear's [out][in] layout; empty scale = 1, empty shift = 0. The shift can be
-// replaced per call by a device buffer (the set network's per-scene bias).
+// One dense layer over planar items (ops/dense.hpp, its input read in place): y = act(scale * (W x) + shift)
+// (+ residual), x [in][n] with row stride n, y planar [out][n] or item-major [n][out]. W in nn.Linear's [out][in]
+// layout; empty scale = 1, empty shift = 0. The shift can be replaced per call by a device buffer (the set
+// network's per-scene bias); the residual (planar, as y) is added after the activation (the resnet's blocks).
 class VoxelShDense {
 public:
     VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
                  const std::vector<float>& scale, const std::vector<float>& shift, Act act);
-    int in() const { return in_; }
-    int out() const { return out_; }
-    std::size_t scratch_floats(int n) const;  // the packed input
+    int in() const { return dense_.in(); }
+    int out() const { return dense_.out(); }
+    std::size_t scratch_floats(int n) const { return dense_.scratch_floats(n); }
     std::size_t weight_bytes() const { return weight_bytes_; }
     void enqueue(Context& ctx, cl_mem x, std::size_t x_off, int n, cl_mem y, std::size_t y_off, cl_mem scratch,
-                 cl_mem shift = nullptr);
+                 cl_mem shift = nullptr, cl_mem residual = nullptr, bool item_major = false);
 
 private:
-    int in_, out_;
     Act act_;
-    Gemm gemm_;
-    PackB pack_;
-    Buffer ap_, scale_, shift_;
+    Dense dense_;
+    Buffer scale_, shift_;
     std::size_t weight_bytes_ = 0;
 };
 
@@ -68,8 +68,9 @@ public:
     std::size_t weight_bytes() const;
 
 private:
-    // x: item i's channel c at i * item_stride + c * channel_stride floats; y: planar [27][n].
-    void forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y);
+    // x: item i's channel c at i * item_stride + c * channel_stride floats; y: planar [27][n], or item-major
+    // [n][27] with item_major.
+    void forward(Context& ctx, cl_mem x, int item_stride, int channel_stride, int n, cl_mem y, bool item_major);
     void reserve(Context& ctx, int n);  // the intermediate buffers for n items
 
     ModelConfig::VoxelSh cfg_;

@@ -14,12 +14,13 @@ const std::size_t kPadLocal[2] = {8, 1};
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
+bool cout_fits_fewer_rows(int cout, const GemmParams& p) { return cout < p.mr; }
+
 // Transposed convolution, one axis: phase p of the output (o = S*q + p) reads the padded input at row
-// q + t + offset(p) with kernel tap k = (p + P) mod S + S*(T - 1 - t), t < T = K/S; PT = T - 1 - floor(P/S) is
+// q + t + offset(p) with kernel tap k = up_tap(p, t) = (p + P) mod S + S*(T - 1 - t), t < T = K/S; PT = T - 1 - floor(P/S) is
 // the zero padding in front that keeps every offset >= 0 (docs/ARCHITECTURE.md, "Implicit-GEMM convolution").
 int up_pad_front(int T, int S, int P) { return T - 1 - floor_div(P, S); }
 int up_offset(int p, int T, int S, int P) { return floor_div(p + P, S) - T + 1 + up_pad_front(T, S, P); }
-int up_tap(int p, int t, int T, int S, int P) { return (p + P) % S + S * (T - 1 - t); }
 
 // KU means the same in both kernels: micro-kernel steps written out per loop iteration. gemm_conv expands a
 // layer's taps when they fit in KU (at most 4): compile-time TH, TW. Otherwise runtime tap loops (TH = TW = 0),
@@ -61,56 +62,61 @@ std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p
     const long planes = long(spec.cin) * (transposed ? 1 : S * S);
     const long iterations = planes * (1 + long(th) * (1 + tw)) + p.nr() + long(p.mr) * p.nv * (p.vw + 1);
     if (const long limit = ctx.loop_limit(); limit > 0 && iterations > limit) return std::nullopt;
-    // Fewer output channels than a tile's MR rows: most of every tile would be padding, and with one A panel the
-    // padded input is streamed once per phase with no reuse. The im2col / col2im path, whose GEMM has M = Cout*KH*KW
-    // rows for a transposed convolution, measured 1.7x faster on the U-Net's 3-channel output layer (30 vs 51 ms,
-    // PERFORMANCE.md).
-    if (path == ConvPath::automatic && spec.cout < p.mr) return std::nullopt;
     if (transposed && (up_pad_front(th, S, P) < 0 || up_pad_front(tw, S, P) < 0)) return std::nullopt;
 
     GemmParams p1 = p;
+    // Fewer output channels than the knob set's MR rows (the U-Net's 3-channel output layer): tiles of exactly
+    // Cout rows, so no row of a tile is padding. With MR 8 five of its eight rows were, and the layer took the
+    // im2col / col2im path instead (col2im alone 3.7 of its 4.4 ms at N = 64; docs/PERFORMANCE.md "small shapes").
+    if (cout_fits_fewer_rows(spec.cout, p)) p1.mr = spec.cout;
     const std::string taps = tap_defines(th, tw, p.ku);
     p1.ku = 1;  // Kpad = K: gemm_conv walks exactly C planes x TH*TW taps
     const int cin = spec.cin, cout = spec.cout;
-    std::vector<float> packed;
-    if (!transposed) {
-        // k = ((c*S + py)*S + px)*TH*TW + ty*TW + tx  <->  weight[co][c][ty*S + py][tx*S + px]
-        const int K = cin * S * S * th * tw;
-        std::vector<float> a(std::size_t(cout) * K);
-        for (int co = 0; co < cout; ++co)
-            for (int c = 0; c < cin; ++c)
-                for (int py = 0; py < S; ++py)
-                    for (int px = 0; px < S; ++px)
-                        for (int ty = 0; ty < th; ++ty)
-                            for (int tx = 0; tx < tw; ++tx) {
-                                const int k = (((c * S + py) * S + px) * th + ty) * tw + tx;
-                                a[std::size_t(co) * K + k] =
-                                    weight[((std::size_t(co) * cin + c) * g.kh + ty * S + py) * g.kw + tx * S + px];
-                            }
-        packed = pack_a(a.data(), cout, K, K, p1);
-    } else {
-        // Phase (py, px): k = (c*TH + t)*TW + u  <->  weight[c][co][up_tap(py, t)][up_tap(px, u)]
-        const int K = cin * th * tw;
-        for (int py = 0; py < S; ++py)
-            for (int px = 0; px < S; ++px) {
-                std::vector<float> a(std::size_t(cout) * K);
-                for (int co = 0; co < cout; ++co)
-                    for (int c = 0; c < cin; ++c)
-                        for (int t = 0; t < th; ++t)
-                            for (int u = 0; u < tw; ++u) {
-                                const int ky = up_tap(py, t, th, S, P), kx = up_tap(px, u, tw, S, P);
-                                a[std::size_t(co) * K + (c * th + t) * tw + u] =
-                                    weight[((std::size_t(c) * cout + co) * g.kh + ky) * g.kw + kx];
-                            }
-                const auto phase = pack_a(a.data(), cout, K, K, p1);
-                packed.insert(packed.end(), phase.begin(), phase.end());
+    // Straight into pack_a's layout (Kpad = K): panel co / MR, row k, lane co % MR; each weight read once, in the
+    // file's order. (A row-major copy first, then pack_a, with the tap maps evaluated per element, was a fifth of
+    // `ngi lightmap`'s time for the ngf 32 rung: ~110 ms of its model load.)
+    const int mr = p1.mr, panels = (cout + mr - 1) / mr;
+    const int K = transposed ? cin * th * tw : cin * S * S * th * tw;
+    const std::size_t phase_floats = std::size_t(panels) * K * mr;
+    const std::size_t phases = transposed ? std::size_t(S) * S : 1;
+    std::vector<float> packed(phases * phase_floats, 0.0f);
+    // Per kernel tap (ky, kx): its phase and its row k within a channel's block of taps; no division per weight.
+    const int taps_per_channel = K / cin;
+    std::vector<std::size_t> tap_phase(std::size_t(g.kh) * g.kw);
+    std::vector<int> tap_k(std::size_t(g.kh) * g.kw);
+    for (int ky = 0; ky < g.kh; ++ky)
+        for (int kx = 0; kx < g.kw; ++kx) {
+            const std::size_t i = std::size_t(ky) * g.kw + kx;
+            if (!transposed) {
+                // k = ((c*S + py)*S + px)*TH*TW + ty*TW + tx  <->  weight[co][c][ty*S + py][tx*S + px]
+                const int py = ky % S, ty = ky / S, px = kx % S, tx = kx / S;
+                tap_phase[i] = 0;
+                tap_k[i] = ((py * S + px) * th + ty) * tw + tx;
+            } else {
+                // Phase (py, px): k = (c*TH + t)*TW + u  <->  weight[c][co][up_tap(py, t)][up_tap(px, u)]. Each
+                // kernel tap belongs to one phase: ky = up_tap(py, t) has ky mod S = (py + P) mod S, t = TH-1 - ky/S.
+                int py = 0, px = 0;
+                while ((py + P) % S != ky % S) ++py;
+                while ((px + P) % S != kx % S) ++px;
+                tap_phase[i] = std::size_t(py) * S + px;
+                tap_k[i] = (th - 1 - ky / S) * tw + (tw - 1 - kx / S);
             }
+        }
+    const std::size_t kernel_taps = std::size_t(g.kh) * g.kw;
+    for (int co = 0; co < cout; ++co) {
+        const std::size_t lane = std::size_t(co / mr) * K * mr + co % mr;  // row k of co's panel: lane + k * MR
+        for (int c = 0; c < cin; ++c) {
+            // PyTorch's layouts: conv2d [cout][cin][kh][kw], transposed [cin][cout][kh][kw].
+            const float* w = weight + (transposed ? std::size_t(c) * cout + co : std::size_t(co) * cin + c) * kernel_taps;
+            const std::size_t row0 = lane + std::size_t(c) * taps_per_channel * mr;
+            for (std::size_t i = 0; i < kernel_taps; ++i) packed[tap_phase[i] * phase_floats + row0 + std::size_t(tap_k[i]) * mr] = w[i];
+        }
     }
-    return ImplicitConv(ctx, p1, taps, th, tw, cout, cin, S, P, transposed, std::move(packed));
+    return ImplicitConv(ctx, p1, taps, th, tw, cout, cin, S, P, transposed, spec.in_act, std::move(packed));
 }
 
 ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
-                           bool transposed, std::vector<float> packed)
+                           bool transposed, Act in_act, std::vector<float> packed)
     : p_(p),
       th_(th),
       tw_(tw),
@@ -119,6 +125,7 @@ ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string&
       stride_(stride),
       pad_(pad),
       transposed_(transposed),
+      in_act_(in_act),
       pad_kernel_(ctx.kernel("im2col", "conv_pad", im2col_defines(p.nr()))),
       gemm_(ctx.kernel("gemm", "gemm_conv",
                        gemm_kernel_defines(p) + " -DIMPLICIT=1" + taps)) {
@@ -142,7 +149,6 @@ ImplicitConv::Layout ImplicitConv::layout(const Shape& in) const {
         l.ph = l.out_h + th_ - 1;
         l.rs = l.out_w + tw_ - 1;
         l.b_off = {0};
-        l.y_off = {0};
         l.out_step = 1;
     } else {
         l.out_h = in.h * S;  // exact geometries only: KH - 2P = S
@@ -158,7 +164,6 @@ ImplicitConv::Layout ImplicitConv::layout(const Shape& in) const {
         for (int py = 0; py < S; ++py)
             for (int px = 0; px < S; ++px) {
                 l.b_off.push_back(up_offset(py, th_, S, P) * l.rs + up_offset(px, tw_, S, P));
-                l.y_off.push_back(py * l.out_w + px);
             }
         l.out_step = S;
     }
@@ -195,15 +200,41 @@ ImplicitConv::Layout ImplicitConv::layout(const Shape& in) const {
     return l;
 }
 
+bool ImplicitConv::reads_input_in_place(const Shape& in) const {
+    // One tap, stride 1, no padding and nothing to apply to the input: xp would be a copy of x. gemm_conv reads x
+    // itself with linear tiles, its last tile kept inside the plane (b_limit), which needs a plane of at least NR.
+    return !transposed_ && th_ == 1 && tw_ == 1 && stride_ == 1 && pad_ == 0 && in_act_.kind == Activation::None &&
+           std::size_t(in.h) * in.w >= std::size_t(p_.nr()) && !direct_disabled();
+}
+
+bool ImplicitConv::direct_disabled() {
+    static const bool off = [] {  // experiments: NGI_CONV_DIRECT=0 keeps the copy (conv_pad) for 1 x 1 layers too
+        const char* e = std::getenv("NGI_CONV_DIRECT");
+        return e && std::strcmp(e, "0") == 0;
+    }();
+    return off;
+}
+
 std::size_t ImplicitConv::scratch_floats(const Shape& in) const {
+    if (reads_input_in_place(in)) return 0;
     const Layout l = layout(in);
     return l.floats + l.slack;
 }
 
 void ImplicitConv::enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch, std::size_t scratch_off,
                            cl_mem scale, cl_mem shift, Act in_act, Act out_act, std::vector<cl_event>* events) {
-    const Layout l = layout(x.shape);
     const bool ev = events != nullptr;
+    if (reads_input_in_place(x.shape)) {
+        const int hw = x.shape.h * x.shape.w;
+        const std::size_t global[2] = {std::size_t((cout_ + p_.mr - 1) / p_.mr), std::size_t((hw + p_.nr() - 1) / p_.nr())};
+        const std::size_t local[2] = {std::size_t(p_.local0), std::size_t(p_.local1)};
+        gemm_.args(cout_, cin_, cin_, ap_.get(), 0, x.mem, int(x.offset), hw, x.shape.w, 1, 1, 0, x.shape.h, x.shape.w,
+                   y.mem, int(y.offset), hw, x.shape.w, 1, 1, scale, shift, int(out_act.kind), out_act.alpha, hw, y.mem,
+                   0, 0, 0, 0, 0);
+        if (cl_event e = ctx.launch(gemm_, 2, global, local, ev); ev && e) events->push_back(e);
+        return;
+    }
+    const Layout l = layout(x.shape);
     pad_kernel_.args(x.mem, int(x.offset), x.shape.c, x.shape.h, x.shape.w, l.pad_stride, l.pty, l.ptx, l.ph, l.rs,
                      l.planes, l.cs, l.row, scratch, int(scratch_off), input_slope(in_act), int(l.floats),
                      int(l.slack));
@@ -213,15 +244,17 @@ void ImplicitConv::enqueue(Context& ctx, const View& x, const View& y, cl_mem sc
 
     const int K = l.planes * th_ * tw_;
     const int y_plane = l.out_h * l.out_w;
-    const std::size_t global[2] = {std::size_t((cout_ + p_.mr - 1) / p_.mr), std::size_t(l.tiles)};
-    const std::size_t local[2] = {std::size_t(p_.local0), std::size_t(p_.local1)};
-    for (std::size_t ph = 0; ph < l.b_off.size(); ++ph) {
-        // Each phase has its own packed A (back to back in ap_) and its own tap and output offsets.
-        gemm_.args(cout_, l.planes, K, ap_.get(), int(ph * phase_floats_), scratch, int(scratch_off) + l.b_off[ph],
-                   l.cs, l.row, th_, tw_, l.tiles_per_row, l.rows, l.cols, y.mem, int(y.offset) + l.y_off[ph], y_plane,
-                   l.out_w, l.out_step, l.out_step, scale, shift, int(out_act.kind), out_act.alpha);
-        if (cl_event e = ctx.launch(gemm_, 2, global, local, ev); ev && e) events->push_back(e);
-    }
+    // Every phase in one launch (global id 2): each has its own packed A (back to back in ap_) and its own tap and
+    // output offsets, which gemm_conv derives from the stride and the padding (l.b_off, and py * out_w + px). One
+    // launch instead of S*S: at N = 64 the phases of a layer are 50-300 us each on PoCL, launch-bound.
+    const std::size_t phases = l.b_off.size();
+    const std::size_t global[3] = {std::size_t((cout_ + p_.mr - 1) / p_.mr), std::size_t(l.tiles), phases};
+    const std::size_t local[3] = {std::size_t(p_.local0), std::size_t(p_.local1), 1};
+    gemm_.args(cout_, l.planes, K, ap_.get(), 0, scratch, int(scratch_off), l.cs, l.row, th_, tw_,
+               l.tiles_per_row, l.rows, l.cols, y.mem, int(y.offset), y_plane, l.out_w, l.out_step,
+               l.out_step, scale, shift, int(out_act.kind), out_act.alpha, 0, y.mem, 0, 0,
+               transposed_ ? stride_ : 0, pad_, int(phase_floats_));
+    if (cl_event e = ctx.launch(gemm_, transposed_ ? 3 : 2, global, local, ev); ev && e) events->push_back(e);
 }
 
 }  // namespace ngi::detail

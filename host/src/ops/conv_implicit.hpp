@@ -37,10 +37,13 @@ public:
     static std::optional<ImplicitConv> make(Context& ctx, const GemmParams& p, const ConvSpec& spec,
                                             const float* weight, bool transposed, ConvPath path);
 
-    std::size_t scratch_floats(const Shape& in) const;  // the padded input and its slack
-    // y = act(scale[co] * conv(x) + shift[co]); out is the layer's output shape.
+    std::size_t scratch_floats(const Shape& in) const;  // the padded input and its slack (0 when read in place)
+    // y = act(scale[co] * conv(x) + shift[co]); out is the layer's output shape. in_act must be the spec's.
     void enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch, std::size_t scratch_off,
                  cl_mem scale, cl_mem shift, Act in_act, Act out_act, std::vector<cl_event>* events);
+    // Whether a layer reads its input x in place (no padded copy): a 1 x 1, stride 1, unpadded convolution with no
+    // input activation over a plane of at least NR pixels (gemm_conv's b_limit). $NGI_CONV_DIRECT=0: never.
+    bool reads_input_in_place(const Shape& in) const;
 
 private:
     // Everything that depends on the input size.
@@ -53,16 +56,18 @@ private:
         std::size_t floats, slack;     // xp's size and the zeroed slack after it
         int rows, cols;                // output pixels per phase: q < rows, r < cols
         int out_h, out_w;              // the layer's output
-        std::vector<int> b_off, y_off; // per phase: offset of tap (0, 0) in xp, offset in an output plane
+        std::vector<int> b_off;        // per phase: offset of tap (0, 0) in xp (gemm_conv derives the same)
         int out_step;                  // output stride of a phase (1 for conv2d)
     };
     ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
-                 bool transposed, std::vector<float> packed);
+                 bool transposed, Act in_act, std::vector<float> packed);
+    static bool direct_disabled();
     Layout layout(const Shape& in) const;
 
     GemmParams p_;  // ku = 1: A is packed with Kpad = K
     int th_, tw_, cout_, cin_, stride_, pad_;
     bool transposed_;
+    Act in_act_;
     Kernel pad_kernel_, gemm_;
     Buffer ap_;  // one packed A per phase, back to back
     std::size_t phase_floats_ = 0;
