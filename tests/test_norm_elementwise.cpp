@@ -13,11 +13,14 @@ using namespace ngi::detail;
 
 namespace {
 
-// Runs both reductions (contiguous and interleaved work-item ranges) and requires them to agree.
-std::vector<float> run_bn_with(bool chunked, const std::vector<float>& x, int C, int H, int W,
+// Runs both reductions (contiguous and interleaved work-item ranges), each in two launches and in one
+// (channel_norm), and the one-work-item-per-channel form; requires the reductions to agree, the one-launch form to
+// give the same values exactly and the serial form to agree within rounding.
+using Form = BatchNormPerImage::Form;
+std::vector<float> run_bn_with(bool chunked, Form form, const std::vector<float>& x, int C, int H, int W,
                                const std::vector<float>& g, const std::vector<float>& b, Act act) {
     auto& c = test::ctx();
-    BatchNormPerImage bn(c, C, g, b, 1e-5f, act, chunked);
+    BatchNormPerImage bn(c, C, g, b, 1e-5f, act, chunked, form);
     Buffer xb = c.alloc((x.size() + 3) * sizeof(float), "x");
     c.write(xb, 3 * sizeof(float), x.size() * sizeof(float), x.data(), "x");
     Buffer sb = c.alloc((3 * C + 9) * sizeof(float), "stats");
@@ -27,9 +30,12 @@ std::vector<float> run_bn_with(bool chunked, const std::vector<float>& x, int C,
 
 std::vector<float> run_bn(const std::vector<float>& x, int C, int H, int W, const std::vector<float>& g,
                           const std::vector<float>& b, Act act) {
-    auto chunked = run_bn_with(true, x, C, H, W, g, b, act);
-    auto interleaved = run_bn_with(false, x, C, H, W, g, b, act);
+    auto chunked = run_bn_with(true, Form::two_pass, x, C, H, W, g, b, act);
+    auto interleaved = run_bn_with(false, Form::two_pass, x, C, H, W, g, b, act);
     CHECK(test::worst_ratio(chunked, interleaved, 1e-5, 1e-5) <= 1.0);
+    CHECK(run_bn_with(true, Form::work_group, x, C, H, W, g, b, act) == chunked);
+    CHECK(run_bn_with(false, Form::work_group, x, C, H, W, g, b, act) == interleaved);
+    CHECK(test::worst_ratio(run_bn_with(true, Form::serial, x, C, H, W, g, b, act), chunked, 1e-5, 1e-5) <= 1.0);
     return chunked;
 }
 
@@ -149,6 +155,30 @@ TEST_CASE("sanitize replaces NaN, Inf and far out-of-range values and counts the
     ew.sanitize(c, View{u.get(), 0, {1, 1, 6}}, -big, big);
     CHECK(ew.sanitized_count(c) == 3);
     CHECK(test::download(u, 6) == std::vector<float>{big, -big, big, -big, 0.0f, 3.0f});
+
+    // The vector form (16 values per work-item) with replaced and clean lanes mixed, whole vectors and a tail, at
+    // an offset that is no multiple of 16: every lane's own verdict, the clean vectors left as they were.
+    {
+        std::mt19937 rng(41);
+        std::vector<float> v = test::random_vector(3 * 16 + 7, rng, -0.9f, 0.9f), want = v;
+        const float bad[] = {nan, inf, -inf, 2.0f, -5.0f, big};
+        const float fixed[] = {0.0f, 1.0f, -1.0f, 1.0f, -1.0f, 1.0f};
+        int replaced = 0;
+        for (std::size_t i = 1; i < v.size(); i += 5) {  // vectors 0 and 2 and the tail get some; lanes vary
+            if (i >= 16 && i < 32) continue;             // vector 1 stays clean (not rewritten)
+            v[i] = bad[i % 6];
+            want[i] = fixed[i % 6];
+            ++replaced;
+        }
+        std::vector<float> padded(v.size() + 3, 7.0f);
+        std::copy(v.begin(), v.end(), padded.begin() + 3);
+        Buffer m = test::upload(padded);
+        ew.sanitize(c, View{m.get(), 3, {1, 1, int(v.size())}}, -1.0f, 1.0f);
+        CHECK(ew.sanitized_count(c) == replaced);
+        const auto got = test::download(m, padded.size());
+        CHECK(std::vector<float>(got.begin(), got.begin() + 3) == std::vector<float>(3, 7.0f));
+        CHECK(std::vector<float>(got.begin() + 3, got.end()) == want);
+    }
 
     // Many work-groups: the atomic count covers every element.
     std::vector<float> huge(100003, 3.4e38f);

@@ -43,8 +43,8 @@ void run_rows(std::initializer_list<const char*> ops, bool tiny) {
 
 }  // namespace
 
-TEST_CASE("op harness: GEMM and PackB, every knob set", "[op_harness]") {
-    run_rows({"Gemm::", "PackB::"}, false);
+TEST_CASE("op harness: GEMM, PackB and Dense, every knob set", "[op_harness]") {
+    run_rows({"Gemm::", "PackB::", "Dense::"}, false);
 }
 
 TEST_CASE("op harness: convolutions, both paths", "[op_harness]") {
@@ -75,7 +75,7 @@ TEST_CASE("op harness: every op entry point has rows, a tiny one among them, and
           "[op_harness]") {
     // Every public entry point of host/src/ops/ (a new op adds its name here and its rows to the table).
     const std::set<std::string> entry_points = {
-        "Gemm::enqueue", "PackB::enqueue", "Conv2d::enqueue", "ConvTranspose2d::enqueue",
+        "Gemm::enqueue", "PackB::enqueue", "Dense::enqueue", "Conv2d::enqueue", "ConvTranspose2d::enqueue",
         "BatchNormPerImage::enqueue", "Elementwise::activate", "Elementwise::dropout",
         "Elementwise::sanitize + sanitized_count", "Elementwise::channel_affine", "Elementwise::add",
         "Elementwise::mul", "FusedMlp::enqueue", "DenseMlp::enqueue", "FrequencyEncodePlanar::enqueue",

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "ops/conv.hpp"
+#include "ops/dense.hpp"
 #include "ops/elementwise.hpp"
 #include "ops/gather_image.hpp"
 #include "ops/gemm_selfcheck.hpp"
@@ -126,6 +127,46 @@ Prepared pack_b_case(Context& ctx, const GemmParams& p, int K, int N, int act, s
     return r;
 }
 
+// A dense layer over planar items (ops/dense.hpp), its input read in place: n >= NR reads x itself (the last tile
+// kept inside it: the guards after x must stay unread... and unwritten), n < NR through zero-padded rows in scratch.
+Prepared dense_case(Context& ctx, const GemmParams& p, int in, int out, int n, int x_ld, bool item_major,
+                    bool residual, int act, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"in", in}, {"out", out}, {"n", n}, {"ld", x_ld}, {"item_major", item_major},
+                    {"residual", residual}, {"act", act}});
+    const float wa = 1.0f / std::sqrt(float(in));
+    const auto w = uniform(std::size_t(out) * in, rng, -wa, wa), x = uniform(std::size_t(in) * x_ld, rng);
+    const auto scale = uniform(out, rng, 0.5f, 1.5f), shift = uniform(out, rng);
+    const auto res = uniform(std::size_t(out) * n, rng);
+    auto op = std::make_shared<Dense>(ctx, p, in, out, w.data());
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto sc = add(ctx, r, "scale", Role::Input, scale), sh = add(ctx, r, "shift", Role::Input, shift);
+    auto rb = add(ctx, r, "residual", Role::Input, res);
+    auto yb = add_out(ctx, r, "y", Role::Output, std::size_t(out) * n);
+    auto sb = add_out(ctx, r, "scratch", Role::Scratch, std::max<std::size_t>(1, op->scratch_floats(n)));
+    r.flops = 2.0 * in * out * double(n);
+    r.bytes = 4.0 * (double(in) * n + double(w.size()) + double(out) * n * (residual ? 2 : 1));
+    r.run = [=](Context& cx) {
+        const DenseOut o{yb->mem(), yb->offset(), item_major ? 1 : n, item_major ? out : 1};
+        op->enqueue(cx, xb->mem(), xb->offset(), x_ld, n, o, sc->payload(), sh->payload(), act_of(act),
+                    residual ? rb->mem() : nullptr, rb->offset(), sb->mem(), sb->offset());
+    };
+    r.compare = [=](Context& cx) {
+        Comparison cmp;
+        cmp.got = yb->read_floats(cx);
+        cmp.want.assign(std::size_t(out) * n, 0.0);
+        for (int o = 0; o < out; ++o)
+            for (int i = 0; i < n; ++i) {
+                double s = 0;
+                for (int k = 0; k < in; ++k) s += double(w[std::size_t(o) * in + k]) * x[std::size_t(k) * x_ld + i];
+                const std::size_t at = item_major ? std::size_t(i) * out + o : std::size_t(o) * n + i;
+                cmp.want[at] = ref::activate(s * scale[o] + shift[o], act, 0.2) + (residual ? res[at] : 0.0);
+            }
+        return cmp;
+    };
+    return r;
+}
+
 // ---- convolutions --------------------------------------------------------------------------------------------
 
 struct ConvShape {
@@ -181,12 +222,13 @@ Prepared conv_case(Context& ctx, const GemmParams& gp, const ConvShape& k, bool 
 
 // ---- batch norm and elementwise ------------------------------------------------------------------------------
 
-Prepared batch_norm_case(Context& ctx, bool chunked, int C, int H, int W, std::mt19937& rng) {
+Prepared batch_norm_case(Context& ctx, bool chunked, BatchNormPerImage::Form form, int C, int H, int W,
+                         std::mt19937& rng) {
     Prepared r;
     r.shape = dims({{"C", C}, {"H", H}, {"W", W}});
     const auto x = uniform(std::size_t(C) * H * W, rng, -3.0f, 5.0f);
     const auto g = uniform(C, rng, 0.5f, 1.5f), b = uniform(C, rng);
-    auto op = std::make_shared<BatchNormPerImage>(ctx, C, g, b, 1e-5f, Act::leaky(0.2f), chunked);
+    auto op = std::make_shared<BatchNormPerImage>(ctx, C, g, b, 1e-5f, Act::leaky(0.2f), chunked, form);
     auto xb = add(ctx, r, "x", Role::InOut, x);
     auto sb = add_out(ctx, r, "scratch", Role::Scratch, op->scratch_floats({C, H, W}));
     r.flops = 6.0 * double(x.size());  // mean, variance, normalize, activation
@@ -937,11 +979,15 @@ std::vector<OpCase> build_table() {
         {"k4 s2 p1 im2col", {12, 33, 47, 16, 4, 4, 2, 1, 2, 0}, {32, 128, 256, 64, 4, 4, 2, 1, 2, 0}, ConvPath::im2col, false, false},
         {"k4 s2 p1 implicit", {12, 33, 47, 16, 4, 4, 2, 1, 2, 0}, {32, 128, 256, 64, 4, 4, 2, 1, 2, 0}, ConvPath::implicit, false, false},
         {"k1 1x1 (PackB) im2col", {13, 5, 31, 11, 1, 1, 1, 0, 1, 3}, {64, 64, 128, 64, 1, 1, 1, 0, 1, 3}, ConvPath::im2col, false, false},
+        {"k1 1x1 implicit, input read in place", {13, 5, 31, 11, 1, 1, 1, 0, 0, 3}, {64, 64, 128, 64, 1, 1, 1, 0, 0, 1}, ConvPath::implicit, false, false},
+        {"tiny k1 1x1 implicit, input read in place", {5, 5, 7, 6, 1, 1, 1, 0, 0, 1}, {}, ConvPath::implicit, false, true},
         {"k5x3 s3 p2 im2col", {4, 11, 6, 3, 5, 3, 3, 2, 0, 4}, {16, 128, 256, 16, 5, 3, 3, 2, 0, 4}, ConvPath::im2col, false, false},
         {"tiny k3 s1 p1 im2col", {5, 7, 9, 6, 3, 3, 1, 1, 0, 2}, {}, ConvPath::im2col, false, true},
         {"tiny k4 s2 p1 implicit", {5, 7, 9, 9, 4, 4, 2, 1, 2, 3}, {}, ConvPath::implicit, false, true},
         {"k4 s2 p1 col2im", {16, 9, 13, 12, 4, 4, 2, 1, 1, 0}, {64, 32, 64, 32, 4, 4, 2, 1, 1, 0}, ConvPath::im2col, true, false},
         {"k4 s2 p1 implicit", {16, 9, 13, 12, 4, 4, 2, 1, 1, 0}, {64, 32, 64, 32, 4, 4, 2, 1, 1, 0}, ConvPath::implicit, true, false},
+        {"k4 s2 p1 implicit, Cout 3", {16, 9, 13, 3, 4, 4, 2, 1, 1, 3}, {32, 128, 64, 3, 4, 4, 2, 1, 1, 3}, ConvPath::implicit, true, false},
+        {"tiny k4 s2 p1 implicit, Cout 3", {5, 3, 5, 3, 4, 4, 2, 1, 1, 3}, {}, ConvPath::implicit, true, true},
         {"k3 s2 p1 col2im", {5, 6, 7, 4, 3, 3, 2, 1, 0, 3}, {32, 64, 128, 16, 3, 3, 2, 1, 0, 3}, ConvPath::im2col, true, false},
         {"tiny k4 s2 p1 col2im", {5, 3, 5, 3, 4, 4, 2, 1, 1, 0}, {}, ConvPath::im2col, true, true},
         {"tiny k4 s2 p1 implicit", {5, 3, 5, 9, 4, 4, 2, 1, 1, 0}, {}, ConvPath::implicit, true, true},
@@ -953,15 +999,54 @@ std::vector<OpCase> build_table() {
                 return conv_case(c, p, z == Size::Perf && !k.tiny ? k.perf : k.test, k.transposed, k.path, rng);
             });
 
-    // Per-image batch norm: both reductions.
+    // Dense layers over planar items: tiles of the device's set at odd sizes (n not a tile multiple, a row stride
+    // beyond n), item-major output, a residual, fewer items than a tile; perf at seed 004's 128-wide layers.
+    row("Dense::enqueue", "planar", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), pick(z, 37, 128), pick(z, 29, 128), pick(z, 203, 10000),
+                          pick(z, 211, 10000), false, false, 3, rng);
+    });
+    row("Dense::enqueue", "item-major", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), pick(z, 37, 128), 27, pick(z, 203, 10000), pick(z, 203, 10000), true,
+                          false, 0, rng);
+    });
+    row("Dense::enqueue", "residual", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), pick(z, 33, 128), pick(z, 33, 128), pick(z, 101, 10000),
+                          pick(z, 101, 10000), false, true, 3, rng);
+    });
+    row("Dense::enqueue", "fewer items than a tile", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), pick(z, 19, 256), pick(z, 23, 128), 1, 1, false, false, 0, rng);
+    });
+    row("Dense::enqueue", "tiny", true, kTolGemm, [](Context& c, Size, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), 5, 7, 3, 3, true, true, 1, rng);
+    });
+
+    // Per-image batch norm: both reductions, in two launches and in one (the small-plane form; at perf size a
+    // 64 x 32 plane, the N = 64 generators' largest normalized one); and one work-item per channel (the form of the
+    // planes of a few values: 8 x 4 at perf size).
+    using Form = BatchNormPerImage::Form;
     for (bool chunked : {true, false}) {
         const std::string name = chunked ? "chunked" : "interleaved";
         row("BatchNormPerImage::enqueue", name, false, kTolNorm, [chunked](Context& c, Size z, std::mt19937& rng) {
-            return batch_norm_case(c, chunked, pick(z, 7, 64), pick(z, 37, 128), pick(z, 29, 256), rng);
+            return batch_norm_case(c, chunked, Form::two_pass, pick(z, 7, 64), pick(z, 37, 128), pick(z, 29, 256), rng);
         });
-        row("BatchNormPerImage::enqueue", "tiny " + name, true, kTolNorm,
-            [chunked](Context& c, Size, std::mt19937& rng) { return batch_norm_case(c, chunked, 3, 5, 3, rng); });
+        row("BatchNormPerImage::enqueue", "tiny " + name, true, kTolNorm, [chunked](Context& c, Size, std::mt19937& rng) {
+            return batch_norm_case(c, chunked, Form::two_pass, 3, 5, 3, rng);
+        });
+        row("BatchNormPerImage::enqueue", "one launch " + name, false, kTolNorm,
+            [chunked](Context& c, Size z, std::mt19937& rng) {
+                return batch_norm_case(c, chunked, Form::work_group, pick(z, 7, 64), pick(z, 37, 32), pick(z, 29, 64),
+                                       rng);
+            });
+        row("BatchNormPerImage::enqueue", "tiny one launch " + name, true, kTolNorm,
+            [chunked](Context& c, Size, std::mt19937& rng) {
+                return batch_norm_case(c, chunked, Form::work_group, 3, 5, 3, rng);
+            });
     }
+    row("BatchNormPerImage::enqueue", "serial", false, kTolNorm, [](Context& c, Size z, std::mt19937& rng) {
+        return batch_norm_case(c, true, Form::serial, pick(z, 7, 128), pick(z, 13, 8), pick(z, 11, 4), rng);
+    });
+    row("BatchNormPerImage::enqueue", "tiny serial", true, kTolNorm,
+        [](Context& c, Size, std::mt19937& rng) { return batch_norm_case(c, true, Form::serial, 3, 5, 3, rng); });
 
     // Elementwise.
     for (int a = 0; a <= 5; ++a)

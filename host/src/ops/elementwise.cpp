@@ -9,15 +9,19 @@ const std::size_t kLocal[1] = {64};
 // kernels/elementwise.cl after the activation helper.
 const std::string kProgram = "elementwise";
 const std::size_t kLocal2[2] = {64, 1};
+// Values per work-item of sanitize_inplace (one float16): the kernel's SANITIZE_VEC.
+constexpr std::size_t kSanitizeVec = 16;
+// The program's build options: the activation codes and SANITIZE_VEC (the same for every kernel: one program).
+std::string defines() { return activation_defines() + " -DSANITIZE_VEC=" + std::to_string(kSanitizeVec); }
 }
 
 Elementwise::Elementwise(Context& ctx)
-    : act_(ctx.kernel(kProgram, "activate_inplace", activation_defines())),
-      dropout_(ctx.kernel(kProgram, "dropout_seeded", activation_defines())),
-      sanitize_(ctx.kernel(kProgram, "sanitize_inplace", activation_defines())),
-      affine_(ctx.kernel(kProgram, "channel_affine_planar", activation_defines())),
-      add_(ctx.kernel(kProgram, "add_inplace", activation_defines())),
-      mul_(ctx.kernel(kProgram, "mul_inplace", activation_defines())),
+    : act_(ctx.kernel(kProgram, "activate_inplace", defines())),
+      dropout_(ctx.kernel(kProgram, "dropout_seeded", defines())),
+      sanitize_(ctx.kernel(kProgram, "sanitize_inplace", defines())),
+      affine_(ctx.kernel(kProgram, "channel_affine_planar", defines())),
+      add_(ctx.kernel(kProgram, "add_inplace", defines())),
+      mul_(ctx.kernel(kProgram, "mul_inplace", defines())),
       counter_(ctx.alloc(sizeof(int), "sanitize counter")) {}
 
 cl_event Elementwise::activate(Context& ctx, const View& x, Act act, bool want_event) {
@@ -46,7 +50,7 @@ void Elementwise::sanitize(Context& ctx, const View& x, float lo, float hi) {
     if (!std::isfinite(below)) below = lo;
     if (!std::isfinite(above)) above = hi;
     sanitize_.args(x.mem, int(x.offset), n, lo, hi, below, above, counter_);
-    const std::size_t g[1] = {std::size_t(n)};
+    const std::size_t g[1] = {(std::size_t(n) + kSanitizeVec - 1) / kSanitizeVec};
     ctx.launch(sanitize_, 1, g, kLocal);
 }
 

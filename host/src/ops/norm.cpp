@@ -4,6 +4,8 @@ namespace ngi::detail {
 
 namespace {
 constexpr int kStatsLocal = 64;  // work-group of the reduction (norm.cl LOCAL)
+constexpr std::size_t kSerialLocal = 16;  // channels per work-group of channel_norm_serial (fixed: PoCL compiles one
+                                          // work-group function per local size)
 const std::size_t kApplyLocal[2] = {64, 1};
 
 std::string defines(bool chunked) {
@@ -14,12 +16,15 @@ std::string defines(bool chunked) {
 
 BatchNormPerImage::BatchNormPerImage(Context& ctx, int channels, const std::vector<float>& gamma,
                                      const std::vector<float>& beta, float eps, Act act,
-                                     std::optional<bool> chunked)
+                                     std::optional<bool> chunked, Form form)
     : channels_(channels),
       eps_(eps),
       act_(act),
+      form_(form),
       stats_(ctx.kernel("norm", "channel_stats", defines(chunked.value_or(ctx.info().is_cpu)))),
-      apply_(ctx.kernel("norm", "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))) {
+      apply_(ctx.kernel("norm", "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))),
+      fused_kernel_(ctx.kernel("norm", "channel_norm", defines(chunked.value_or(ctx.info().is_cpu)))),
+      serial_kernel_(ctx.kernel("norm", "channel_norm_serial", defines(chunked.value_or(ctx.info().is_cpu)))) {
     if (int(gamma.size()) != channels || int(beta.size()) != channels)
         throw InputError("batch norm: expected " + std::to_string(channels) + " gamma and beta values, got " +
                          std::to_string(gamma.size()) + " and " + std::to_string(beta.size()));
@@ -35,9 +40,27 @@ void BatchNormPerImage::enqueue(Context& ctx, const View& x, cl_mem scratch, std
         throw InputError("batch norm: input has " + std::to_string(x.shape.c) + " channels, expected " +
                          std::to_string(channels_));
     const int hw = x.shape.h * x.shape.w;
-    stats_.args(x.mem, int(x.offset), hw, eps_, scratch, int(scratch_off));
     const std::size_t gs[1] = {std::size_t(channels_) * kStatsLocal};
     const std::size_t ls[1] = {std::size_t(kStatsLocal)};
+    const Form form = form_ != Form::automatic ? form_
+                      : hw <= kSerialNormPlaneMax ? Form::serial
+                      : hw <= kFusedNormPlaneMax  ? Form::work_group
+                                                  : Form::two_pass;
+    if (form == Form::serial) {
+        serial_kernel_.args(x.mem, int(x.offset), channels_, hw, eps_, gamma_.get(), beta_.get(), int(act_.kind),
+                            act_.alpha);
+        const std::size_t g[1] = {std::size_t(channels_)}, l[1] = {kSerialLocal};
+        cl_event e = ctx.launch(serial_kernel_, 1, g, l, events != nullptr);
+        if (events && e) events->push_back(e);
+        return;
+    }
+    if (form == Form::work_group) {
+        fused_kernel_.args(x.mem, int(x.offset), hw, eps_, gamma_.get(), beta_.get(), int(act_.kind), act_.alpha);
+        cl_event e = ctx.launch(fused_kernel_, 1, gs, ls, events != nullptr);
+        if (events && e) events->push_back(e);
+        return;
+    }
+    stats_.args(x.mem, int(x.offset), hw, eps_, scratch, int(scratch_off));
     cl_event e = ctx.launch(stats_, 1, gs, ls, events != nullptr);
     if (events && e) events->push_back(e);
     apply_.args(x.mem, int(x.offset), channels_, hw, scratch, int(scratch_off), gamma_.get(), beta_.get(), int(act_.kind), act_.alpha);

@@ -10,12 +10,25 @@
 
 namespace ngi::detail {
 
+// Planes of at most this many values are normalized in one launch (channel_norm: statistics and normalization by one
+// work-group per channel, the second read from cache); larger ones in two (channel_stats, then channel_affine_act
+// over every value). 16,384 floats is 64 KiB per channel, within a CPU core's L2. Why: at the sizes a real-time
+// host runs (N = 64) the U-Net's batch norms are launch-bound, 11 of them with two launches each were ~15% of a
+// generator's device time on PoCL (docs/PERFORMANCE.md, "small shapes").
+constexpr int kFusedNormPlaneMax = 16384;
+// Planes of at most this many values: one work-item per channel (channel_norm_serial), no work-group per channel.
+constexpr int kSerialNormPlaneMax = 256;
+
 class BatchNormPerImage {
 public:
     // chunked: each work-item reduces a contiguous range (best on CPUs) rather than an interleaved one (best on
     // GPUs); by default chosen from the device type. Both give the same statistics up to rounding.
+    // form: automatic picks serial up to kSerialNormPlaneMax values per plane, work_group up to
+    // kFusedNormPlaneMax, two_pass above. two_pass and work_group compute the same values (the same arithmetic in
+    // the same order); serial the same statistics up to rounding.
+    enum class Form { automatic, two_pass, work_group, serial };
     BatchNormPerImage(Context& ctx, int channels, const std::vector<float>& gamma, const std::vector<float>& beta,
-                      float eps, Act act, std::optional<bool> chunked = std::nullopt);
+                      float eps, Act act, std::optional<bool> chunked = std::nullopt, Form form = Form::automatic);
     std::size_t scratch_floats(const Shape& s) const { return 3 * std::size_t(s.c); }  // shift, mean, rstd
     void enqueue(Context& ctx, const View& x, cl_mem scratch, std::size_t scratch_off,
                  std::vector<cl_event>* events = nullptr);
@@ -24,7 +37,8 @@ private:
     int channels_;
     float eps_;
     Act act_;
-    Kernel stats_, apply_;
+    Form form_;
+    Kernel stats_, apply_, fused_kernel_, serial_kernel_;
     Buffer gamma_, beta_;
 };
 
