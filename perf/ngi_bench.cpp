@@ -420,7 +420,9 @@ int run_generator(int argc, char** argv) {
     }
     {  // One profiled run for the per-op breakdown (profiling can perturb the total, so it is timed apart).
         Device d = Device::open(device_spec, DeviceOptions{true});
-        Model m = Model::load(d, path);
+        ModelOptions options;
+        options.bn_mode = arg(argc, argv, "--bn-mode");
+        Model m = Model::load(d, path, options);
         const auto& c = m.config();
         Tensor x({1, c.input_nc, h, w});
         RunInfo info;
@@ -428,15 +430,18 @@ int run_generator(int argc, char** argv) {
         m.run(x, &info);
         json ops = json::array();
         double total = 0, flop = 0;
+        int launches = 0;
         for (const auto& l : info.layers) {
             ops.push_back({{"name", l.name}, {"kind", l.kind}, {"ms", l.ms}, {"gflop", l.gflop},
-                           {"gflops", l.ms > 0 ? l.gflop / (l.ms * 1e-3) : 0.0}});
+                           {"gflops", l.ms > 0 ? l.gflop / (l.ms * 1e-3) : 0.0}, {"launches", l.launches}});
             total += l.ms;
             flop += l.gflop;
+            launches += l.launches;
         }
         out["per_op"] = ops;
         out["device_ms_total"] = total;
         out["gflop_total"] = flop;
+        out["launches"] = launches;  // kernels per run (+ the input guard's and the transfers, not counted)
     }
     std::printf("%s\n", out.dump(2).c_str());
     return 0;

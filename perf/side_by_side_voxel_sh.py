@@ -48,6 +48,50 @@ class Values(torch.nn.Module):
         return self.model(raw)
 
 
+def cases(ngi, dev, tmp, voxels):
+    """One synthetic scene of `voxels` voxels, and per architecture: (name, parameters, the three runs as
+    callables, the float64 reference output). perf/small_shapes.py runs the same cases."""
+    data.make_synthetic_scene(Path(tmp) / "scene", voxels=voxels, seed=1)
+    scene = data.load_scene(Path(tmp) / "scene")
+    stats = data.Stats.from_scenes([scene])
+    x = scene.attributes.astype(np.float32)
+    xt = torch.from_numpy(x)
+    out = []
+    for arch, widths in ARCHS.items():
+        net = networks.build(arch, **widths).eval()
+        path = Path(tmp) / f"{arch}.safetensors"
+        export.export(net, arch, widths, stats, scene.grid, path)
+        std = networks.Standardization(stats.input_lo, stats.input_hi, stats.output_mean, stats.output_std)
+        model = Values(networks.VoxelSh(net, std)).eval()
+        with torch.no_grad():
+            fastest = torch.jit.optimize_for_inference(torch.jit.freeze(torch.jit.trace(model, xt)))
+            ref = Values(networks.VoxelSh(networks.build(arch, **widths).double(), std.double())).eval()
+            ref.load_state_dict(model.state_dict())
+            y64 = ref(xt.double()).numpy()
+        m = ngi.Model(dev, str(path))
+        runs = {"ngi": lambda m=m: m.run(x), "pytorch_eager": lambda model=model: model(xt),
+                "pytorch_fastest": lambda fastest=fastest: fastest(xt)}
+        out.append((arch, networks.parameter_count(net), runs, y64))
+    return out
+
+
+def alternate(runs, warmups, repeats):
+    """Each callable of `runs` in turn, run by run: --warmups rounds untimed, then `repeats` timed. Returns the
+    times (ms) per name and each one's last result as float64."""
+    times = {k: [] for k in runs}
+    results = {}
+    with torch.no_grad():
+        for i in range(warmups + repeats):
+            for k, f in runs.items():
+                t0 = time.perf_counter()
+                r = f()
+                dt = (time.perf_counter() - t0) * 1e3
+                if i >= warmups:
+                    times[k].append(dt)
+                results[k] = np.asarray(r, dtype=np.float64)
+    return times, results
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--device", default="pocl")
@@ -63,38 +107,11 @@ def main():
     out = {"omp_wait_policy": os.environ["OMP_WAIT_POLICY"], "device": args.device, "voxels": args.voxels, "threads": args.threads, "repeats": args.repeats,
            "torch": torch.__version__, "cases": {}}
     with tempfile.TemporaryDirectory() as tmp, ngi.Device(args.device) as dev:
-        data.make_synthetic_scene(Path(tmp) / "scene", voxels=args.voxels, seed=1)
-        scene = data.load_scene(Path(tmp) / "scene")
-        stats = data.Stats.from_scenes([scene])
-        x = scene.attributes.astype(np.float32)
-        xt = torch.from_numpy(x)
-        for arch, widths in ARCHS.items():
-            net = networks.build(arch, **widths).eval()
-            path = Path(tmp) / f"{arch}.safetensors"
-            export.export(net, arch, widths, stats, scene.grid, path)
-            std = networks.Standardization(stats.input_lo, stats.input_hi, stats.output_mean, stats.output_std)
-            model = Values(networks.VoxelSh(net, std)).eval()
-            with torch.no_grad():
-                fastest = torch.jit.optimize_for_inference(torch.jit.freeze(torch.jit.trace(model, xt)))
-                ref = Values(networks.VoxelSh(networks.build(arch, **widths).double(), std.double())).eval()
-                ref.load_state_dict(model.state_dict())
-                y64 = ref(xt.double()).numpy()
-            m = ngi.Model(dev, str(path))
-            runs = {"ngi": lambda: m.run(x), "pytorch_eager": lambda: model(xt), "pytorch_fastest": lambda: fastest(xt)}
-            times = {k: [] for k in runs}
-            results = {}
-            with torch.no_grad():
-                for i in range(args.warmups + args.repeats):
-                    for k, f in runs.items():
-                        t0 = time.perf_counter()
-                        r = f()
-                        dt = (time.perf_counter() - t0) * 1e3
-                        if i >= args.warmups:
-                            times[k].append(dt)
-                        results[k] = np.asarray(r, dtype=np.float64)
+        for arch, parameters, runs, y64 in cases(ngi, dev, tmp, args.voxels):
+            times, results = alternate(runs, args.warmups, args.repeats)
             med = {k: statistics.median(v) for k, v in times.items()}
             out["cases"][arch] = {
-                "parameters": networks.parameter_count(net),
+                "parameters": parameters,
                 "ms_median": med,
                 "ngi_over_fastest": med["ngi"] / med["pytorch_fastest"],
                 "ngi_over_eager": med["ngi"] / med["pytorch_eager"],

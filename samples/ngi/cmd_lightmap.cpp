@@ -19,6 +19,7 @@
 #include "ngi/model.hpp"
 #include "ngi/output_folder.hpp"
 #include "ngi/pipeline.hpp"
+#include "phase_timer.hpp"
 #include "plan_file.hpp"
 #include "side_by_side.hpp"
 
@@ -54,9 +55,11 @@ std::string share_text(double v) {
 struct Options {
     std::string frame_dir, model_path, plan_path, bn_mode, out_dir, size, device;
     double guard = 0.0;  // 0: no --guard (the plan's guard, if any, applies)
+    bool timings = false;
 };
 
 int run(const Options& o) {
+    PhaseTimer timer(o.timings);
     const std::string &frame_dir = o.frame_dir, &model_path = o.model_path, &out_dir = o.out_dir;
     int width = 0, height = 0;  // 0: the frame's face size
     if (!o.size.empty()) parse_size(o.size, width, height);  // checked by the option
@@ -68,11 +71,13 @@ int run(const Options& o) {
     ngi::FrameReadStats read_stats;
     const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);  // the reference, if any, has the face size
     warn_frame_sanitized("lightmap", frame_dir, read_stats);
+    timer.mark("read_frame");
     double share = -1.0;
     const PlanRung* chosen = plan ? &plan->choose(frame, share) : nullptr;
     ngi::ModelOptions model_options;
     model_options.bn_mode = chosen ? chosen->bn_mode : o.bn_mode;
     ngi::Device device = ngi::Device::open(o.device);
+    timer.mark("open_device");
     if (width) {  // checked before the model runs: a presented image is width x height x 3 floats on the device
         const std::size_t image_bytes = std::size_t(width) * std::size_t(height) * 3 * sizeof(float);
         if (image_bytes > device.info().max_alloc_bytes)
@@ -88,6 +93,7 @@ int run(const Options& o) {
     if (!chosen || !chosen->model.empty())
         model = ngi::Model::load(device, chosen ? chosen->model : ngi::resolve_model(model_path), model_options);
     if (!width) width = height = frame.n;
+    timer.mark("load_model");
 
     ngi::SurroundPipeline pipeline(device, frame.n);
     ngi::PreprocessStats stats;
@@ -108,6 +114,7 @@ int run(const Options& o) {
         images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
         images.final_image = pipeline.compose(images.lightmap, frame);
     }
+    timer.mark("pipeline");
 
     // The per-frame guard (issue 25): when the lightmap's indirect share of the final image exceeds the threshold,
     // the network is unlikely to help this frame and the frame falls back to its own direct light, sanitized as
@@ -175,6 +182,7 @@ int run(const Options& o) {
     if (guard > 0.0 && !metrics.is_null())
         metrics["guard"] = {{"max_indirect_share", guard}, {"indirect_share", guard_share}, {"fell_back", fell_back}};
     mark_scores(metrics, read_stats);  // null scores with a note when the frame's files held NaN/Inf
+    timer.mark("present_and_score");
 
     // All files or none: they are staged and the folder is renamed into place only when every write succeeded.
     const ngi::Image lightmap_out = present(lightmap);
@@ -183,6 +191,7 @@ int run(const Options& o) {
         out.write(named.first, [&](const std::string& p) { ngi::write_png(p, named.second); });
     if (!metrics.is_null()) out.write_text("metrics.json", metrics.dump(2) + "\n");
     out.commit();
+    timer.mark("write");
     if (!metrics.is_null()) std::printf("%s\n", metrics.dump(2).c_str());
     if (plan)
         std::printf("plan       %s: rung %s%s\n", plan->path.c_str(), chosen->name.c_str(),
@@ -199,6 +208,7 @@ int run(const Options& o) {
                 out_dir.c_str(), width, height,
                 frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
                 input_text.c_str(), read_stats.total_sanitized(), stats.total_nonfinite());
+    timer.print();
     return 0;
 }
 
@@ -247,6 +257,9 @@ Run add_lightmap(CLI::App& app) {
             },
             ""));
     add_device(*cmd, o->device);
+    cmd->add_flag("--timings", o->timings,
+                  "print the wall time of each phase on stderr (read the frame, open the device, load the model, "
+                  "run the pipeline, present and score, write)");
     return [o] {
         if (o->model_path.empty() && o->plan_path.empty()) throw UsageError("lightmap: --model or --plan is required");
         return run(*o);

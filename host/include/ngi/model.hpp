@@ -97,7 +97,8 @@ struct ModelOptions {
 
 struct LayerTiming {
     std::string name, kind;
-    double ms = 0, gflop = 0;
+    double ms = 0, gflop = 0;  // device time (the sum of its kernels'), useful work
+    int launches = 0;          // kernels it enqueued: each costs the device's launch overhead
 };
 
 struct RunInfo {

@@ -176,6 +176,7 @@ RunStats Graph::run(Context& ctx, const float* input, float* output) {
                 check(clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof t1, &t1, nullptr),
                       "profile graph node", "clGetEventProfilingInfo");
                 p.ms += double(t1 - t0) * 1e-6;
+                ++p.launches;
                 clReleaseEvent(e);
             }
             stats.nodes.push_back(p);

@@ -32,6 +32,7 @@ struct NodeProfile {
     std::string name, kind;
     double ms = 0;      // sum of its kernels' device time
     double gflop = 0;   // useful work (convolutions); 0 for memory-bound ops
+    int launches = 0;   // kernels (and device copies) it enqueued
 };
 
 struct RunStats {

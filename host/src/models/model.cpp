@@ -117,7 +117,7 @@ Tensor Model::run(const Tensor& input, RunInfo* info) {
     if (info) {
         info->sanitized_inputs = stats.sanitized_inputs;
         info->layers.clear();
-        for (const auto& n : stats.nodes) info->layers.push_back({n.name, n.kind, n.ms, n.gflop});
+        for (const auto& n : stats.nodes) info->layers.push_back({n.name, n.kind, n.ms, n.gflop, n.launches});
         info->arena_bytes = graph->arena_bytes();
         info->naive_bytes = graph->naive_bytes();
         info->scratch_bytes = graph->scratch_bytes();

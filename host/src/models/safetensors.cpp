@@ -89,19 +89,17 @@ SafetensorsFile parse_safetensors(const std::string& bytes, const std::string& p
             const std::size_t n = std::size_t(*need / elem);
             const char* p = bytes.data() + data_start + offsets[0];
             t.data.resize(n);
+            std::size_t bad = n;  // the first value that is not finite
             if (elem == 4) {
                 std::memcpy(t.data.data(), p, n * 4);
+                for (std::size_t i = 0; i < n && bad == n; ++i)
+                    if (!std::isfinite(t.data[i])) bad = i;
             } else {
-                for (std::size_t i = 0; i < n; ++i) {
-                    std::uint16_t h;
-                    std::memcpy(&h, p + 2 * i, 2);
-                    t.data[i] = half_to_float(h);
-                }
+                bad = halves_to_floats(reinterpret_cast<const unsigned char*>(p), n, t.data.data());
             }
-            for (std::size_t i = 0; i < n; ++i)
-                if (!std::isfinite(t.data[i]))
-                    throw InputError(tw + "value " + std::to_string(i) + " is not finite (" + std::to_string(t.data[i]) +
-                                     "): the weights are corrupt");
+            if (bad < n)
+                throw InputError(tw + "value " + std::to_string(bad) + " is not finite (" + std::to_string(t.data[bad]) +
+                                 "): the weights are corrupt");
             file.tensors.emplace(name, std::move(t));
         } catch (const nlohmann::json::exception& e) {
             throw InputError(tw + "bad header entry: " + e.what());
