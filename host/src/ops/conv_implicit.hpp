@@ -42,7 +42,8 @@ public:
     void enqueue(Context& ctx, const View& x, const View& y, cl_mem scratch, std::size_t scratch_off,
                  cl_mem scale, cl_mem shift, Act in_act, Act out_act, std::vector<cl_event>* events);
     // Whether a layer reads its input x in place (no padded copy): a 1 x 1, stride 1, unpadded convolution with no
-    // input activation over a plane of at least NR pixels (gemm_conv's b_limit). $NGI_CONV_DIRECT=0: never.
+    // input activation over a plane of at least NR pixels (gemm_conv's b_limit) whose copy would be laid out as x
+    // is (see the definition). $NGI_CONV_DIRECT=0: never.
     bool reads_input_in_place(const Shape& in) const;
 
 private:
@@ -62,6 +63,9 @@ private:
     ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
                  bool transposed, Act in_act, std::vector<float> packed);
     static bool direct_disabled();
+    // Whether gemm_conv's tiles stay in output rows (row-interleaved copy) for rows of `cols` outputs, or run
+    // linearly over a planar one ($NGI_CONV_TILES=rows|linear overrides).
+    bool tiles_by_rows(int cols) const;
     Layout layout(const Shape& in) const;
 
     GemmParams p_;  // ku = 1: A is packed with Kpad = K

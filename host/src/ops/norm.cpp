@@ -21,6 +21,7 @@ BatchNormPerImage::BatchNormPerImage(Context& ctx, int channels, const std::vect
       eps_(eps),
       act_(act),
       form_(form),
+      cpu_(ctx.info().is_cpu),
       stats_(ctx.kernel("norm", "channel_stats", defines(chunked.value_or(ctx.info().is_cpu)))),
       apply_(ctx.kernel("norm", "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))),
       fused_kernel_(ctx.kernel("norm", "channel_norm", defines(chunked.value_or(ctx.info().is_cpu)))),
@@ -43,9 +44,9 @@ void BatchNormPerImage::enqueue(Context& ctx, const View& x, cl_mem scratch, std
     const std::size_t gs[1] = {std::size_t(channels_) * kStatsLocal};
     const std::size_t ls[1] = {std::size_t(kStatsLocal)};
     const Form form = form_ != Form::automatic ? form_
-                      : hw <= kSerialNormPlaneMax ? Form::serial
-                      : hw <= kFusedNormPlaneMax  ? Form::work_group
-                                                  : Form::two_pass;
+                      : hw <= kSerialNormPlaneMax                 ? Form::serial
+                      : cpu_ || hw <= kFusedNormPlaneMax          ? Form::work_group
+                                                                  : Form::two_pass;
     if (form == Form::serial) {
         serial_kernel_.args(x.mem, int(x.offset), channels_, hw, eps_, gamma_.get(), beta_.get(), int(act_.kind),
                             act_.alpha);

@@ -10,11 +10,12 @@
 
 namespace ngi::detail {
 
-// Planes of at most this many values are normalized in one launch (channel_norm: statistics and normalization by one
-// work-group per channel, the second read from cache); larger ones in two (channel_stats, then channel_affine_act
-// over every value). 16,384 floats is 64 KiB per channel, within a CPU core's L2. Why: at the sizes a real-time
-// host runs (N = 64) the U-Net's batch norms are launch-bound, 11 of them with two launches each were ~15% of a
-// generator's device time on PoCL (docs/PERFORMANCE.md, "small shapes").
+// On a GPU, planes of at most this many values are normalized in one launch (channel_norm: statistics and
+// normalization by one work-group per channel, the second read from cache); larger ones in two (channel_stats, then
+// channel_affine_act over every value, which fills a GPU where one work-group per channel would not). 16,384 floats
+// is 64 KiB per channel. CPUs take the one-launch form at every size: on PoCL it measured faster everywhere, from
+// the launch-bound planes of the N = 64 generators (11 batch norms, 2.2 -> 0.4 ms) to the thesis generator's 32K-value
+// planes (its batch norms 82-97 ms in two launches, 12-13 ms in one; docs/PERFORMANCE.md, "small shapes").
 constexpr int kFusedNormPlaneMax = 16384;
 // Planes of at most this many values: one work-item per channel (channel_norm_serial), no work-group per channel.
 constexpr int kSerialNormPlaneMax = 256;
@@ -23,8 +24,8 @@ class BatchNormPerImage {
 public:
     // chunked: each work-item reduces a contiguous range (best on CPUs) rather than an interleaved one (best on
     // GPUs); by default chosen from the device type. Both give the same statistics up to rounding.
-    // form: automatic picks serial up to kSerialNormPlaneMax values per plane, work_group up to
-    // kFusedNormPlaneMax, two_pass above. two_pass and work_group compute the same values (the same arithmetic in
+    // form: automatic picks serial up to kSerialNormPlaneMax values per plane, then work_group (on a GPU up to
+    // kFusedNormPlaneMax, two_pass above). two_pass and work_group compute the same values (the same arithmetic in
     // the same order); serial the same statistics up to rounding.
     enum class Form { automatic, two_pass, work_group, serial };
     BatchNormPerImage(Context& ctx, int channels, const std::vector<float>& gamma, const std::vector<float>& beta,
@@ -38,6 +39,7 @@ private:
     float eps_;
     Act act_;
     Form form_;
+    bool cpu_;
     Kernel stats_, apply_, fused_kernel_, serial_kernel_;
     Buffer gamma_, beta_;
 };
