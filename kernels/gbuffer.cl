@@ -8,10 +8,11 @@
 //                                       land contiguously, so the host uploads them without repacking)
 //   COUNT_ALBEDO ... COUNT_ENV          counter slots of the non-finite values per Feature
 //   COUNT_SKY, COUNT_FAR, COUNT_SLOTS   then sky normals and far depths; the number of slots
+//   PREPROCESS_LOCAL                    the largest work-group size (per-work-item counts are summed in local memory)
 // Output: 10 planes of npix = faces * face_texels values, faces in order inside each plane (the layout the merge
 // table indexes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
 #if !defined(TRANSFER_REINHARD) || !defined(TRANSFER_CLAMP) || !defined(F_CHANNELS) || !defined(F_ENV) || \
-    !defined(COUNT_ENV) || !defined(COUNT_SLOTS)
+    !defined(COUNT_ENV) || !defined(COUNT_SLOTS) || !defined(PREPROCESS_LOCAL)
 #error "gbuffer.cl needs the host's constants: build it with preprocess_defines() (host/src/pipeline/preprocess.cpp)"
 #endif
 
@@ -36,8 +37,8 @@ static inline float lum_encode(float x, int transfer) {
 
 // S = [alpha; beta; gamma] (cluster basis rows) maps world-space normals into cluster space. lo/hi: the model's
 // input range; every feature is first brought to [0, 1], then to lo + v * (hi - lo).
-// Launch: 2-D (face_texels, faces), local (64, 1); the counters are summed per work-group in local memory,
-// then added once.
+// Launch: 2-D (face_texels, faces), local (PREPROCESS_LOCAL, 1); the counters are summed per work-group in local
+// memory, then added once.
 __kernel void preprocess_gbuffer(__global const float* restrict raw, __global float* restrict out,
                                  const int face_texels, const int faces, const int has_emission, const int has_env,
                                  const float ax, const float ay, const float az,
@@ -45,16 +46,18 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
                                  const float gx, const float gy, const float gz,
                                  const float lo, const float hi, const int transfer,
                                  __global int* restrict counters) {
-    __local int group_counts[COUNT_SLOTS];
+    // Each work-item's counts go to local memory once, after its texel; COUNT_SLOTS work-items then sum them and add
+    // to the global counters. No atomic inside the per-texel code: PoCL ran the kernel one texel at a time with a
+    // local atomic in a branch there (0.84 ms for a 6 x 64 x 64 frame, ~35 ns per texel; docs/PERFORMANCE.md
+    // "small shapes").
+    __local int group_counts[COUNT_SLOTS][PREPROCESS_LOCAL];
     const int t = get_global_id(0), face = get_global_id(1), lid = get_local_id(0);
     const int npix = face_texels * faces, p = face * face_texels + t;
-    if (lid < COUNT_SLOTS) group_counts[lid] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    int bad_albedo = 0, bad_normal = 0, bad_depth = 0, bad_direct = 0, bad_emission = 0, bad_env = 0, sky = 0, far = 0;
 
     if (t < face_texels) {
         __global const float* r = raw + face * F_CHANNELS * face_texels + t;
         const float scale = hi - lo;
-        int bad_albedo = 0, bad_normal = 0, bad_depth = 0, bad_direct = 0, bad_emission = 0, bad_env = 0;
 
         // Albedo: reflectance, clamped to [0, 1].
         for (int c = 0; c < 3; ++c) {
@@ -77,7 +80,7 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
             cy = bx * nx + by * ny + bz * nz;
             cz = gx * nx + gy * ny + gz * nz;
         } else {
-            atomic_inc(&group_counts[COUNT_SKY]);
+            sky = 1;
         }
         // [-1, 1] -> [0, 1] (the zero vector of the sky lands on 0.5), clamped against rounding.
         out[3 * npix + p] = lo + clamp(cx * 0.5f + 0.5f, 0.0f, 1.0f) * scale;
@@ -86,7 +89,7 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
 
         // Depth in metres -> depth / 1000 in [0, 1]; unknown (NaN) and +Inf are as far as it gets.
         const float d = clean(r[F_DEPTH * face_texels], MAX_DEPTH_M, 0.0f, MAX_DEPTH_M, &bad_depth);
-        if (d > MAX_DEPTH_M) atomic_inc(&group_counts[COUNT_FAR]);
+        far = d > MAX_DEPTH_M;
         out[6 * npix + p] = lo + clamp(d / MAX_DEPTH_M, 0.0f, 1.0f) * scale;
 
         // Lumination = direct + emission + env (eq. 4.2): light is >= 0; +Inf is the brightest finite light, and
@@ -100,14 +103,20 @@ __kernel void preprocess_gbuffer(__global const float* restrict raw, __global fl
             out[(7 + c) * npix + p] = lo + lum_encode(l, transfer) * scale;
         }
 
-        if (bad_albedo) atomic_add(&group_counts[COUNT_ALBEDO], bad_albedo);
-        if (bad_normal) atomic_add(&group_counts[COUNT_NORMAL], bad_normal);
-        if (bad_depth) atomic_add(&group_counts[COUNT_DEPTH], bad_depth);
-        if (bad_direct) atomic_add(&group_counts[COUNT_DIRECT], bad_direct);
-        if (bad_emission) atomic_add(&group_counts[COUNT_EMISSION], bad_emission);
-        if (bad_env) atomic_add(&group_counts[COUNT_ENV], bad_env);
     }
 
+    group_counts[COUNT_ALBEDO][lid] = bad_albedo;
+    group_counts[COUNT_NORMAL][lid] = bad_normal;
+    group_counts[COUNT_DEPTH][lid] = bad_depth;
+    group_counts[COUNT_DIRECT][lid] = bad_direct;
+    group_counts[COUNT_EMISSION][lid] = bad_emission;
+    group_counts[COUNT_ENV][lid] = bad_env;
+    group_counts[COUNT_SKY][lid] = sky;
+    group_counts[COUNT_FAR][lid] = far;
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (lid < COUNT_SLOTS && group_counts[lid] != 0) atomic_add(&counters[lid], group_counts[lid]);
+    if (lid < COUNT_SLOTS) {
+        int sum = 0;
+        for (int i = 0; i < (int)get_local_size(0); ++i) sum += group_counts[lid][i];  // the launch may shrink the group
+        if (sum) atomic_add(&counters[lid], sum);
+    }
 }

@@ -81,8 +81,9 @@ int main(int argc, char** argv) {
 
             const std::function<void()> paths[3] = {
                 [&] {
-                    const ngi::Image light =
-                        pl.front_lightmap(model.run(pl.network_input(frame, model.config())), model.config());
+                    // With the frame: an indirect-mode model's lightmap adds the frame's direct light.
+                    const ngi::Image light = pl.front_lightmap(model.run(pl.network_input(frame, model.config())),
+                                                               model.config(), frame);
                     pl.tonemap(pl.compose(light, frame), tm);
                 },
                 [&] { pl.run(model, frame, true, true, true, tm); },

@@ -13,7 +13,8 @@ std::string detail::compose_defines() {
     return join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
                          define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)),
                          define("CURVE_ACES", int(ToneCurve::AcesFitted)), define("CURVE_REINHARD", int(ToneCurve::Reinhard)),
-                         define("CURVE_CLAMP", int(ToneCurve::Clamp)), define("LIGHT_MAX", kLightMax)});
+                         define("CURVE_CLAMP", int(ToneCurve::Clamp)), define("LIGHT_MAX", kLightMax),
+                         define("TONEMAP_VEC", kTonemapVec)});
 }
 
 namespace {
@@ -185,7 +186,7 @@ Image SurroundPipeline::tonemap(const Image& linear, const ToneMapOptions& optio
     detail::ensure_buffer(im.ctx, im.out, bytes, "tone map output");
     const int count = int(out.data.size());
     im.tonemap.args(im.aux[0], im.out, count, std::exp2(options.exposure_ev), int(options.curve), int(options.srgb));
-    const std::size_t g[1] = {std::size_t(count)};
+    const std::size_t g[1] = {detail::tonemap_items(count)};
     im.ctx.launch(im.tonemap, 1, g, kLocal1);
     im.ctx.read(im.out, 0, bytes, out.data.data(), "tone map output");
     return out;

@@ -79,7 +79,8 @@ void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, cons
     ctx.launch(compose, 1, g, kLocal1);
     if (!display_dst) return;
     tonemap.args(final_dst, display_dst, count, std::exp2(tm.exposure_ev), int(tm.curve), int(tm.srgb));
-    ctx.launch(tonemap, 1, g, kLocal1);
+    const std::size_t gt[1] = {detail::tonemap_items(count)};
+    ctx.launch(tonemap, 1, gt, kLocal1);
 }
 
 void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc,

@@ -18,6 +18,8 @@ constexpr int kFeaturePlanes = 10; // albedo 3, normal 3, depth 1, lumination 3
 // Counter slots of preprocess_gbuffer: the non-finite values per Feature (slot = the Feature's value), then sky
 // normals and far depths.
 constexpr int kCountSky = kFeatureCount, kCountFar = kFeatureCount + 1, kCounterSlots = kFeatureCount + 2;
+// preprocess_gbuffer's work-group size (its PREPROCESS_LOCAL): fixed, as PoCL compiles one work-group function per size.
+constexpr int kPreprocessLocal = 64;
 const Face kAllFaces[kFaceCount] = {Face::Front, Face::Back, Face::Left, Face::Right, Face::Up, Face::Down};
 
 }  // namespace
@@ -65,7 +67,7 @@ std::string preprocess_defines() {
     std::string d = join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
                                   define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)), frame_plane_defines(),
                                   define("COUNT_SKY", kCountSky), define("COUNT_FAR", kCountFar),
-                                  define("COUNT_SLOTS", kCounterSlots)});
+                                  define("COUNT_SLOTS", kCounterSlots), define("PREPROCESS_LOCAL", kPreprocessLocal)});
     for (int f = 0; f < kFeatureCount; ++f) {
         std::string name = "COUNT_";
         for (const char* c = feature_name(Feature(f)); *c; ++c) name += char(std::toupper(static_cast<unsigned char>(*c)));
@@ -110,7 +112,7 @@ const detail::Buffer& SurroundPipeline::Impl::enqueue_input(cl_mem raw_planes, i
     const glm::vec3 a = cluster.alpha, b = cluster.beta, g = cluster.gamma;
     preprocess.args(raw_planes, stack, int(face_plane), faces, int(has_emission), int(has_env), a.x, a.y, a.z, b.x,
                     b.y, b.z, g.x, g.y, g.z, config.input_range[0], config.input_range[1], int(transfer), counters);
-    static const std::size_t local[2] = {64, 1};
+    static const std::size_t local[2] = {kPreprocessLocal, 1};
     const std::size_t global[2] = {face_plane, std::size_t(faces)};
     ctx.launch(preprocess, 2, global, local);
     if (!surround) return stack;
