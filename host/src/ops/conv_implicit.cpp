@@ -14,7 +14,11 @@ const std::size_t kPadLocal[2] = {8, 1};
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-bool cout_fits_fewer_rows(int cout, const GemmParams& p) { return cout < p.mr; }
+// Tiles of at most 4 rows for layers with fewer output channels than the knob set's MR (and a set with more): one
+// more program per knob set, whatever Cout is (a program per Cout would be minutes of compiling on llvmpipe for the
+// tests' random shapes); the 3-channel output layer wastes one row in four instead of five in eight.
+constexpr int kFewRowsMr = 4;
+bool cout_fits_fewer_rows(int cout, const GemmParams& p) { return cout < p.mr && p.mr > kFewRowsMr; }
 
 // Transposed convolution, one axis: phase p of the output (o = S*q + p) reads the padded input at row
 // q + t + offset(p) with kernel tap k = up_tap(p, t) = (p + P) mod S + S*(T - 1 - t), t < T = K/S; PT = T - 1 - floor(P/S) is
@@ -65,10 +69,10 @@ std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p
     if (transposed && (up_pad_front(th, S, P) < 0 || up_pad_front(tw, S, P) < 0)) return std::nullopt;
 
     GemmParams p1 = p;
-    // Fewer output channels than the knob set's MR rows (the U-Net's 3-channel output layer): tiles of exactly
-    // Cout rows, so no row of a tile is padding. With MR 8 five of its eight rows were, and the layer took the
-    // im2col / col2im path instead (col2im alone 3.7 of its 4.4 ms at N = 64; docs/PERFORMANCE.md "small shapes").
-    if (cout_fits_fewer_rows(spec.cout, p)) p1.mr = spec.cout;
+    // Fewer output channels than the knob set's MR rows (the U-Net's 3-channel output layer): tiles of 4 rows. With
+    // MR 8 five of its eight rows were padding, and the layer took the im2col / col2im path instead (col2im alone 3.7
+    // of its 4.4 ms at N = 64; docs/PERFORMANCE.md "small shapes").
+    if (cout_fits_fewer_rows(spec.cout, p)) p1.mr = kFewRowsMr;
     const std::string taps = tap_defines(th, tw, p.ku);
     p1.ku = 1;  // Kpad = K: gemm_conv walks exactly C planes x TH*TW taps
     const int cin = spec.cin, cout = spec.cout;
