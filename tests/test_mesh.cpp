@@ -578,6 +578,24 @@ TEST_CASE("mesh: an OBJ line element of one vertex is refused before assimp read
                       Catch::Contains("OBJ line 6") && Catch::Contains("a line element needs 2 or more vertices, this one has 1"));
 }
 
+TEST_CASE("mesh: an OBJ index with a number past its v/vt/vn parts is refused before assimp reads it", "[mesh]") {
+    // assimp 5.2.5 drops the rest of a face, line or point statement at a number past the third part, so
+    // "l 1/1/1/1 2" became a line of one vertex; two such lines before "l 1 2 3" made createVertexArray write 12 bytes
+    // past its vertex array (valgrind: "Invalid write of size 8 ... 0 bytes after a block of size 48"): the write
+    // into freed memory behind fuzz_mesh's unexplained ASan report (fuzz/corpus/mesh/line_index_with_four_parts.obj).
+    using namespace ngi;
+    const std::string head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+    CHECK_THROWS_WITH(parse_mesh(head + "l 1/1/1/1 2\nl 1/1/1/1 3\nl 1 2 3\n", "bad.obj"),
+                      Catch::Contains("OBJ line 6") && Catch::Contains("'1/1/1/1' has a number past"));
+    CHECK_THROWS_WITH(parse_mesh(head + "f 1 2 3/1/1/1\n", "bad.obj"), Catch::Contains("'3/1/1/1' has a number past"));
+    // With normals but no texture coordinates, assimp reads a second part as the normal: a third is one too many.
+    CHECK_THROWS_WITH(parse_mesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1/1/1 2 3\n", "bad.obj"),
+                      Catch::Contains("'1/1/1' has a number past"));
+    // What assimp takes as written still loads: v//vn with only normals, v/vt/vn, and a trailing slash.
+    CHECK_NOTHROW(parse_mesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n", "ok.obj"));
+    CHECK_NOTHROW(parse_mesh(head + "f 1/1/1 2/1/1 3/1/1\nl 1/1/1/ 2\n", "ok.obj"));
+}
+
 TEST_CASE("mesh: a texture statement before any newmtl is refused before assimp's material reader sees it", "[mesh]") {
     // fuzz_mesh's 811,578th input of the round-two campaign (fuzz/corpus/mesh/texture_before_newmtl_in_self_mtllib.obj):
     // an OBJ naming itself as its mtllib, with a bare "map_ns" line. assimp 5.2.5 writes a texture statement

@@ -352,6 +352,29 @@ void check_obj(const std::string& b, const Fail& fail) {
         if (indices > kMaxMeshIndices)
             fail("OBJ line " + std::to_string(line_no) + ": more than " + std::to_string(kMaxMeshIndices) + " indices");
         for (std::string_view tok : t) {
+            // A number after the third slash-separated part is one assimp 5.2.5 does not take: it drops the rest of the
+            // line there (ObjFileParser::reportErrorTokenInFace), so "l 1/1/1/1 2" becomes a line of one vertex. Its
+            // vertex count then falls short of the indices it writes, and a later line writes 12 bytes past its
+            // vertex array (createVertexArray's unchecked mVertices[newIndex + 1]): found by valgrind behind
+            // fuzz_mesh's unexplained ASan heap-metadata report (docs/RELIABILITY.md). The position is assimp's:
+            // one more per '/', and a number in the texture coordinate's place moves to the normal's when there are
+            // normals but no texture coordinates so far ("1/2/3" is then a number in the fourth place).
+            {
+                const bool shifted = counts[1] == 0 && counts[2] > 0;
+                int position = 0;
+                for (std::size_t i = 0; i < tok.size(); ++i) {
+                    if (tok[i] == '/') {
+                        ++position;
+                        continue;
+                    }
+                    if (i > 0 && tok[i - 1] != '/') continue;  // inside the number
+                    if (position == 1 && shifted) position = 2;
+                    if (position >= 3)
+                        fail("OBJ line " + std::to_string(line_no) + ": '" + printable(tok) +
+                             "' has a number past its vertex/texture/normal parts (assimp would drop the rest of the "
+                             "line)");
+                }
+            }
             for (int k = 0; k < 3 && !tok.empty(); ++k) {  // "v", "v/vt", "v//vn", "v/vt/vn"
                 const std::size_t slash = tok.find('/');
                 const std::string_view part = tok.substr(0, slash);
