@@ -596,6 +596,24 @@ TEST_CASE("mesh: an OBJ index with a number past its v/vt/vn parts is refused be
     CHECK_NOTHROW(parse_mesh(head + "f 1/1/1 2/1/1 3/1/1\nl 1/1/1/ 2\n", "ok.obj"));
 }
 
+TEST_CASE("mesh: a PLY with a second vertex or face element is refused before assimp reads it", "[mesh]") {
+    // assimp 5.2.5 sizes the vertex array by the first vertex element and writes the second's into it: past the end
+    // when the second is longer (valgrind: an invalid write 0 bytes after a block of 12; through parse_mesh glibc
+    // aborted with "malloc(): corrupted top size"). Found reading assimp's PLY loader for issue 31's unexplained
+    // report (fuzz/corpus/mesh/ply_second_vertex_element.ply).
+    using namespace ngi;
+    const std::string props = "property float x\nproperty float y\nproperty float z\n";
+    const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+    CHECK_THROWS_WITH(parse_mesh("ply\nformat ascii 1.0\nelement vertex 1\n" + props + "element vertex 3\n" + props +
+                                     face + "end_header\n0 0 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                                 "bad.ply"),
+                      Catch::Contains("a second 'vertex' element on header line 7"));
+    CHECK_THROWS_WITH(parse_mesh("ply\nformat ascii 1.0\nelement vertex 3\n" + props + face + face +
+                                     "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n",
+                                 "bad.ply"),
+                      Catch::Contains("a second 'face' element"));
+}
+
 TEST_CASE("mesh: a texture statement before any newmtl is refused before assimp's material reader sees it", "[mesh]") {
     // fuzz_mesh's 811,578th input of the round-two campaign (fuzz/corpus/mesh/texture_before_newmtl_in_self_mtllib.obj):
     // an OBJ naming itself as its mtllib, with a bare "map_ns" line. assimp 5.2.5 writes a texture statement

@@ -144,6 +144,15 @@ void check_ply(const std::string& b, const Fail& fail) {
             // assimp 5.2.5 reads a tristrips element wrongly (one triangle per strip) and leaks its indices:
             // refused rather than loaded wrong. Real PLY files (scans, exporters) write faces.
             if (t[1] == "tristrips") fail("PLY tristrips elements are not supported (write faces)");
+            // assimp 5.2.5 sizes the mesh's vertex (face) array by the first vertex (face) element and writes every
+            // later one's at the same indices: a second, longer one writes past the array (valgrind: "Invalid write
+            // ... 0 bytes after a block"; through parse_mesh, glibc aborted on a corrupted heap). Upstream checks
+            // since (assimp PR 5739).
+            if (t[1] == "vertex" || t[1] == "face")
+                for (const auto& e : elements)
+                    if (e.name == t[1])
+                        fail("PLY header: a second '" + std::string(t[1]) + "' element on header line " +
+                             std::to_string(line_no + 1) + " (one of each is supported)");
             elements.push_back({std::string(t[1]), *n, {}});
             const std::uint64_t limit = elements.back().name == "vertex" ? kMaxMeshVertices : kMaxMeshTriangles;
             // Every element is a vertex, a face or something else the same size or larger: the triangle limit
