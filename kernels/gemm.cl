@@ -20,7 +20,8 @@
 //        packed rows of its A and B panels in __local memory (L0, L1 = the work-group shape, also -D defines).
 //        A program is built with one of the two kernels, never both (Mesa compiles unrolled bodies slowly).
 //   IMPLICIT  1: gemm_conv below instead, the implicit-GEMM convolution (B read from a padded image; -DTH -DTW:
-//             its taps when at most 4, else 0 for runtime tap loops); KWG must be 0. host/src/ops/conv_implicit.cpp.
+//             its taps when at most 4, else 0 for runtime tap loops); the convolutions take it with KWG 0 sets only
+//             (host/src/ops/conv_implicit.cpp), dense layers with every set (ops/dense.cpp: KWG is then unused).
 // Why UNROLL exists: #pragma unroll is a hint. Mesa's OpenCL path (clc -> SPIR-V -> NIR) does not honour it for
 // large bodies, and llvmpipe (gallivm) stops *every* loop of a kernel silently after 65,535 iterations in total
 // per invocation (LP_MAX_TGSI_LOOP_ITERATIONS). With loops left in, one k step costs 1 + NV + MR*(1 + NV)
@@ -165,7 +166,8 @@ NGI_DEFINE_VECTOR_ACTIVATE(vtype, vt)
 // never stored. K = C*TH*TW; A is packed with Kpad = K (KU plays no role).
 // Output element (m, q, r) goes to y[y_off + m*y_plane + q*SY*ldy + r*SX]: SY = SX = 1 for a convolution, the
 // stride for one phase of a transposed convolution, whose offset is folded into y_off; with has_res, res indexed
-// the same way (from res_off) is added after the activation (a residual block's h + act(W h + b)).
+// the same way (from res_off, plus the phase's output offset) is added after the activation (a residual block's
+// h + act(W h + b)).
 // A one-tap layer over a planar input can read the input itself as xp (a 1 x 1 convolution or a dense layer, no
 // copy): b_limit = the plane's floats then keeps the last tile inside it (see lane0 below), where a padded copy
 // has zeroed slack instead (b_limit = 0).
@@ -184,7 +186,7 @@ NGI_DEFINE_VECTOR_ACTIVATE(vtype, vt)
         const int m = mp * MR + (i);                                       \
         const float s = scale[m], t = shift[m];                            \
         __global float* row = y + y0 + (size_t)m * y_plane;                \
-        __global const float* rrow = res + res_off + (size_t)m * y_plane;  \
+        __global const float* rrow = res + res_off + phase_y + (size_t)m * y_plane; \
         FOR_VECS(CSTORE, i)                                                \
     }
 #endif
@@ -324,7 +326,7 @@ __kernel void gemm_conv(const int M, const int C, const int Kpad,
         if (m >= M) break;
         const float s = scale[m], t = shift[m];
         __global float* row = y + y0 + (size_t)m * y_plane;
-        __global const float* rrow = res + res_off + (size_t)m * y_plane;
+        __global const float* rrow = res + res_off + phase_y + (size_t)m * y_plane;
 #pragma unroll
         for (int j = 0; j < NV; ++j) CSTORE_VEC(acc[i][j], j);
     }

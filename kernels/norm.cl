@@ -119,7 +119,8 @@ void channel_stats(__global const float* restrict x, const int x_off, const int 
 }
 
 // channel_norm: statistics and normalization of a channel in one launch, one work-group per channel, for planes
-// small enough that the second read comes from cache (BatchNormPerImage picks it below kFusedPlaneMax): the same
+// small enough that the second read comes from cache (BatchNormPerImage picks it on CPUs, and on GPUs up to
+// kFusedNormPlaneMax values): the same
 // arithmetic as channel_stats followed by channel_affine_act, so the same results, with half the launches. On a
 // CPU device a launch of a small kernel costs about as much as the normalization of a 2K-value plane.
 __kernel __attribute__((reqd_work_group_size(LOCAL, 1, 1)))

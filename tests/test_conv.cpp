@@ -198,10 +198,10 @@ TEST_CASE("implicit-GEMM convolution: exact geometries at odd sizes, against the
         {3, 4, 5, 8, 8, 8, 4, 2, 1, 0},    // k8 s4 p2: 16 phases of 2 x 2 taps
         {6, 7, 3, 9, 3, 3, 1, 1, 0, 4},    // k3 s1 p1: one phase, a flipped 3 x 3 convolution
         {5, 3, 4, 11, 3, 3, 3, 0, 1, 0},   // k3 s3 p0: 9 phases of one tap
-        {6, 5, 9, 3, 4, 4, 2, 1, 1, 3},    // Cout 3 < MR: tiles of 3 rows
+        {6, 5, 9, 3, 4, 4, 2, 1, 1, 3},    // Cout 3 < MR: tiles of 4 rows
     };
     for (const auto& k : up) check_both_paths(k, true, rng, gp);
-    // The automatic choice: implicit where exact, the 3-channel output layer too (tiles of Cout rows).
+    // The automatic choice: implicit where exact, the 3-channel output layer too (tiles of 4 rows).
     if (!std::getenv("NGI_CONV")) {
         CHECK(check_case({16, 4, 8, 12, 4, 4, 2, 1, 1, 0}, true, rng, gp));
         CHECK(check_case({6, 5, 9, 3, 4, 4, 2, 1, 1, 3}, true, rng, gp));

@@ -594,6 +594,9 @@ TEST_CASE("mesh: an OBJ index with a number past its v/vt/vn parts is refused be
     // What assimp takes as written still loads: v//vn with only normals, v/vt/vn, and a trailing slash.
     CHECK_NOTHROW(parse_mesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n", "ok.obj"));
     CHECK_NOTHROW(parse_mesh(head + "f 1/1/1 2/1/1 3/1/1\nl 1/1/1/ 2\n", "ok.obj"));
+    // Leading zeros: assimp steps over a number by its value's digits, so "010" would read as 10 and then 0.
+    CHECK_THROWS_WITH(parse_mesh(head + "f 010 2 3\n", "bad.obj"), Catch::Contains("'010' is not a vertex index"));
+    CHECK_THROWS_WITH(parse_mesh(head + "f 1 2 -01\n", "bad.obj"), Catch::Contains("'-01' is not a vertex index"));
 }
 
 TEST_CASE("mesh: a PLY with a second vertex or face element is refused before assimp reads it", "[mesh]") {

@@ -321,15 +321,17 @@ std::size_t VoxelShRunner::weight_bytes() const {
 
 void VoxelShRunner::reserve(Context& ctx, int n) {
     if (n <= capacity_) return;
-    std::size_t scratch = 1;  // a layer over fewer items than a GEMM tile copies them into zero-padded rows here
-    for (const VoxelShDense& l : layers_) scratch = std::max(scratch, l.scratch_floats(n));
-    if (cfg_.architecture == "set")  // the per-scene bias: one "item", the pooled features
-        scratch = std::max(scratch, layers_[cfg_.phi.size()].scratch_floats(1));
+    // A layer over fewer items than a GEMM tile copies them into zero-padded rows here. Sized for the smallest item
+    // count (scratch_floats(1) is the most any count needs), not for n: buffers only grow, and a later run with fewer
+    // items than a tile (or the set network's one pooled "item") must fit in what a run with many allocated.
+    std::size_t scratch = 1;
+    for (const VoxelShDense& l : layers_) scratch = std::max(scratch, l.scratch_floats(1));
     // Offsets and sizes reach the kernels as int.
     if (std::size_t(widest_) * std::size_t(n) > std::size_t(INT_MAX) || scratch > std::size_t(INT_MAX))
         throw InputError("voxel_sh model: " + std::to_string(n) + " voxels are too many for one run of a network " +
                          std::to_string(widest_) + " wide (at most " + std::to_string(INT_MAX / widest_) + ")");
     const std::size_t f = sizeof(float), items = std::size_t(n);
+    capacity_ = 0;  // if an allocation below throws, the next call allocates again instead of using reset buffers
     std_.reset();
     a_.reset();
     b_.reset();

@@ -33,7 +33,9 @@ public:
     int out() const { return out_; }
     std::size_t weight_bytes() const { return ap_.bytes(); }
     std::size_t scratch_floats(int n) const;  // 0 when n >= NR (x read in place)
-    // residual: nullptr, or a buffer addressed as y (from res_offset). scale, shift: out floats each.
+    // residual: nullptr, or a buffer addressed as y (from res_offset). scale, shift: out floats each. With fewer
+    // items than a tile (n < NR) the rows must be exactly n floats apart (x_ld == n); the zero-padding copy is a
+    // second launch, which the returned event does not cover.
     cl_event enqueue(Context& ctx, cl_mem x, std::size_t x_off, int x_ld, int n, const DenseOut& y, cl_mem scale,
                      cl_mem shift, Act act, cl_mem residual, std::size_t res_offset, cl_mem scratch,
                      std::size_t scratch_off, bool want_event = false);

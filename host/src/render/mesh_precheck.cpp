@@ -361,8 +361,9 @@ void check_obj(const std::string& b, const Fail& fail) {
         if (indices > kMaxMeshIndices)
             fail("OBJ line " + std::to_string(line_no) + ": more than " + std::to_string(kMaxMeshIndices) + " indices");
         for (std::string_view tok : t) {
-            // A number after the third slash-separated part is one assimp 5.2.5 does not take: it drops the rest of the
-            // line there (ObjFileParser::reportErrorTokenInFace), so "l 1/1/1/1 2" becomes a line of one vertex. Its
+            // A number after the third slash-separated part is one assimp 5.2.5 does not take: it ends the statement
+            // there (ObjFileParser::reportErrorTokenInFace skips to the next line; its reader then continues from
+            // bytes left in its line buffer), so "l 1/1/1/1 2" becomes a line of one vertex. Its
             // vertex count then falls short of the indices it writes, and a later line writes 12 bytes past its
             // vertex array (createVertexArray's unchecked mVertices[newIndex + 1]): found by valgrind behind
             // fuzz_mesh's unexplained ASan heap-metadata report (docs/RELIABILITY.md). The position is assimp's:
@@ -380,8 +381,8 @@ void check_obj(const std::string& b, const Fail& fail) {
                     if (position == 1 && shifted) position = 2;
                     if (position >= 3)
                         fail("OBJ line " + std::to_string(line_no) + ": '" + printable(tok) +
-                             "' has a number past its vertex/texture/normal parts (assimp would drop the rest of the "
-                             "line)");
+                             "' has a number past its vertex/texture/normal parts (assimp would end the statement "
+                             "there)");
                 }
             }
             for (int k = 0; k < 3 && !tok.empty(); ++k) {  // "v", "v/vt", "v//vn", "v/vt/vn"
@@ -390,7 +391,10 @@ void check_obj(const std::string& b, const Fail& fail) {
                 tok = slash == std::string_view::npos ? std::string_view() : tok.substr(slash + 1);
                 if (part.empty() && k > 0) continue;
                 const auto v = parse_int<std::int64_t>(part);
-                if (!v || *v == 0)
+                // No leading zero: assimp steps over a number by its value's digits, not the text's, so "010" reads
+                // as 10 and then 0 (an exception inside assimp), "01" as 1 twice.
+                const std::size_t d = !part.empty() && part[0] == '-' ? 1 : 0;
+                if (!v || *v == 0 || (part.size() > d + 1 && part[d] == '0'))
                     fail("OBJ line " + std::to_string(line_no) + ": '" + std::string(part) + "' is not a " + kinds[k] +
                          " index");
                 if (*v < 0) {
