@@ -31,7 +31,9 @@ const char* kDb = R"({"entries": [
   {"match": {"vendor": "ACME", "type": "gpu"}, "params": "8,4,1,1,8,8"},
   {"match": {"vendor": "ACME", "device": "Rocket 9000"}, "params": "8,4,2,1,8,8"},
   {"match": {"vendor": "ACME", "device": "Rocket 9000", "driver": "1.2.3"}, "params": "8,4,2,4,8,8,0"},
-  {"match": {"type": "cpu"}, "params": "6,16,2,1,1,4"}
+  {"match": {"type": "cpu"}, "params": "6,16,2,1,1,4"},
+  {"match": {"type": "cpu", "vector_width": "8"}, "params": "4,16,1,4,1,4"},
+  {"match": {"platform": "rusticl", "type": "cpu"}, "params": "6,16,2,1,1,4,0"}
 ]})";
 
 std::string lookup(const std::vector<GemmTuningEntry>& db, const DeviceInfo& info) {
@@ -43,12 +45,22 @@ std::string lookup(const std::vector<GemmTuningEntry>& db, const DeviceInfo& inf
 
 TEST_CASE("GEMM tuning database: the most specific matching entry wins", "[gemm][tuning]") {
     const auto db = parse_gemm_tuning(kDb, "test");
-    REQUIRE(db.size() == 6);
+    REQUIRE(db.size() == 8);
     CHECK(lookup(db, device_info("P", "ACME", "Rocket 9000", "1.2.3", true)) == "8,4,2,4,8,8,0");  // exact
     CHECK(lookup(db, device_info("P", "ACME", "Rocket 9000", "2.0", true)) == "8,4,2,1,8,8,1");    // other driver
     CHECK(lookup(db, device_info("P", "ACME", "Rocket 5", "1.2.3", true)) == "8,4,1,1,8,8,1");     // vendor + type
     CHECK(lookup(db, device_info("P", "Other", "X", "1", true)) == "4,4,1,1,16,16,1");            // type
     CHECK(lookup(db, device_info("P", "Other", "X", "1", false)) == "6,16,2,1,1,4,1");            // cpu
+    // A CPU of 8-float registers (AVX2) takes the vector-width entry; one of 16 (AVX-512) the type's.
+    DeviceInfo avx2 = device_info("P", "Other", "X", "1", false), avx512 = avx2;
+    avx2.native_float_vector_width = 8;
+    avx512.native_float_vector_width = 16;
+    CHECK(lookup(db, avx2) == "4,16,1,4,1,4,1");
+    CHECK(lookup(db, avx512) == "6,16,2,1,1,4,1");
+    // A platform entry outranks a vector width: rusticl keeps its own entry on an AVX2 machine.
+    DeviceInfo rusticl_avx2 = device_info("rusticl", "Other", "X", "1", false);
+    rusticl_avx2.native_float_vector_width = 8;
+    CHECK(lookup(db, rusticl_avx2) == "6,16,2,1,1,4,0");
     DeviceInfo accel = device_info("P", "Other", "X", "1", false);
     accel.is_cpu = false;
     CHECK(lookup(db, accel) == "1,1,1,1,1,1,1");                                                   // default
@@ -72,6 +84,8 @@ TEST_CASE("GEMM tuning database: broken entries are refused with the entry named
     refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1"}, {"match": {}, "params": "4,4,1,1,1,1"}]})",
             "same match");
     refused(R"({"entries": [{"match": {"vendor": ""}, "params": "1,1,1,1,1,1"}]})", "non-empty");
+    refused(R"({"entries": [{"match": {"vector_width": "3"}, "params": "1,1,1,1,1,1"}]})", "vector_width");
+    refused(R"({"entries": [{"match": {"vector_width": 8}, "params": "1,1,1,1,1,1"}]})", "non-empty string");
     refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": "4,4,1,1,8,8,1,16"}]})",
             "no local-memory variant");
     refused(R"({"entries": [{"match": {}, "params": "1,1,1,1,1,1", "conv_params": 8}]})", "conv_params");
@@ -124,11 +138,11 @@ TEST_CASE("GEMM tuning database: the tuner's write-back adds or replaces one ent
     e.note = "tuned";
     const std::string replaced = gemm_tuning_with(kDb, e);
     auto db = parse_gemm_tuning(replaced, "replaced");
-    CHECK(db.size() == 6);
+    CHECK(db.size() == 8);
     CHECK(lookup(db, device_info("P", "ACME", "Rocket 9000", "1.2.3", true)) == "2,8,1,1,4,4,1");
     e.driver = "1.2.4";
     db = parse_gemm_tuning(gemm_tuning_with(replaced, e), "added");
-    CHECK(db.size() == 7);
+    CHECK(db.size() == 9);
     CHECK(lookup(db, device_info("P", "ACME", "Rocket 9000", "1.2.3", true)) == "2,8,1,1,4,4,1");
     CHECK(db.back().note == "tuned");
     CHECK_THROWS_AS(gemm_tuning_with("{\"entries\": [{}]}", e), InputError);

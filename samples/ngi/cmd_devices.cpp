@@ -25,10 +25,11 @@ int run(bool no_check) {
         std::printf("      platform %s, %s, driver %s, %s\n", d.platform_name.c_str(), d.device_version.c_str(),
                     d.driver_version.c_str(), d.opencl_c_version.c_str());
         std::printf("      %u compute units, max work-group %zu, local memory %zu KiB (%s), global %zu MiB, "
-                    "max alloc %zu MiB, fp16 %s\n",
+                    "max alloc %zu MiB, fp16 %s, native float vector %u\n",
                     d.compute_units, d.max_work_group_size, d.local_mem_bytes / 1024,
                     d.local_mem_is_dedicated ? "dedicated" : "global", d.global_mem_bytes >> 20,
-                    d.max_alloc_bytes >> 20, d.fp16 ? "yes" : "no");
+                    d.max_alloc_bytes >> 20, d.fp16 ? "yes" : "no",
+                    d.native_float_vector_width);
         if (no_check) continue;
         try {
             const ngi::Device dev =

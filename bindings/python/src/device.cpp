@@ -31,6 +31,7 @@ py::dict info_dict(const ngi::DeviceInfo& i) {
     d["type"] = i.type_name();
     d["fp16"] = i.fp16;
     d["compute_units"] = i.compute_units;
+    d["native_float_vector_width"] = i.native_float_vector_width;
     d["global_mem_bytes"] = i.global_mem_bytes;
     d["max_alloc_bytes"] = i.max_alloc_bytes;
     d["local_mem_bytes"] = i.local_mem_bytes;

@@ -42,6 +42,9 @@ struct DeviceInfo {
     std::size_t max_alloc_bytes = 0;
     std::size_t max_work_group_size = 0;
     unsigned compute_units = 0;
+    // CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT: floats per native SIMD register (PoCL on a CPU: 8 with AVX2, 16 with
+    // AVX-512). The GEMM tuning database's "vector_width" field: a CPU's register tiles depend on it.
+    unsigned native_float_vector_width = 0;
     std::string extensions;
     // "gpu", "cpu" or "other": the one spelling (the GEMM tuning database's "type" field, ngi.Device.info()).
     const char* type_name() const { return is_gpu ? "gpu" : is_cpu ? "cpu" : "other"; }

@@ -12,7 +12,7 @@ namespace {
 
 using json = nlohmann::json;
 
-const char* const kMatchKeys[] = {"platform", "vendor", "device", "driver", "type"};
+const char* const kMatchKeys[] = {"platform", "vendor", "device", "driver", "type", "vector_width"};
 
 std::string* field(GemmTuningEntry& e, const std::string& key) {
     if (key == "platform") return &e.platform;
@@ -20,6 +20,7 @@ std::string* field(GemmTuningEntry& e, const std::string& key) {
     if (key == "device") return &e.device;
     if (key == "driver") return &e.driver;
     if (key == "type") return &e.type;
+    if (key == "vector_width") return &e.vector_width;
     return nullptr;
 }
 
@@ -33,17 +34,19 @@ json match_json(const GemmTuningEntry& e) {
 
 }  // namespace
 
-// A device name outranks any combination of vendor, platform and type (CLBlast's order: device, then vendor,
-// then type); a driver version refines a device name.
+// A device name outranks any combination of vendor, platform, type and vector width (CLBlast's order: device,
+// then vendor, then type); a driver version refines a device name. A vector width refines a type alone ("cpu" +
+// 8 over "cpu") but not a platform (rusticl's "cpu" entry keeps its reasons on an AVX2 machine).
 int GemmTuningEntry::specificity() const {
-    return 16 * int(!device.empty()) + 8 * int(!driver.empty()) + 4 * int(!vendor.empty()) +
-           2 * int(!platform.empty()) + int(!type.empty());
+    return 32 * int(!device.empty()) + 16 * int(!driver.empty()) + 8 * int(!vendor.empty()) +
+           4 * int(!platform.empty()) + 2 * int(!type.empty()) + int(!vector_width.empty());
 }
 
 bool GemmTuningEntry::matches(const DeviceInfo& info) const {
     return (platform.empty() || platform == info.platform_name) && (vendor.empty() || vendor == info.vendor) &&
            (device.empty() || device == info.name) && (driver.empty() || driver == info.driver_version) &&
-           (type.empty() || type == info.type_name());
+           (type.empty() || type == info.type_name()) &&
+           (vector_width.empty() || vector_width == std::to_string(info.native_float_vector_width));
 }
 
 std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, const std::string& name) {
@@ -65,13 +68,18 @@ std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, con
         GemmTuningEntry e;
         for (const auto& [key, value] : j["match"].items()) {
             std::string* f = field(e, key);
-            if (!f) throw InputError(where + ": unknown match key '" + key + "' (platform, vendor, device, driver, type)");
+            if (!f) throw InputError(where + ": unknown match key '" + key +
+                                               "' (platform, vendor, device, driver, type, vector_width)");
             if (!value.is_string() || value.get<std::string>().empty())
                 throw InputError(where + ": match." + key + " must be a non-empty string");
             *f = value.get<std::string>();
         }
         if (!e.type.empty() && e.type != "cpu" && e.type != "gpu" && e.type != "other")
             throw InputError(where + ": match.type must be cpu, gpu or other, not '" + e.type + "'");
+        if (!e.vector_width.empty() && e.vector_width != "1" && e.vector_width != "2" && e.vector_width != "4" &&
+            e.vector_width != "8" && e.vector_width != "16")
+            throw InputError(where + ": match.vector_width must be \"1\", \"2\", \"4\", \"8\" or \"16\", not '" +
+                             e.vector_width + "'");
         try {
             e.params = parse_gemm_params(j["params"].get<std::string>());
         } catch (const InputError& err) {

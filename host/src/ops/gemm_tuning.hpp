@@ -1,8 +1,8 @@
 // The GEMM tuning database (CLBlast style): per-device knob sets measured by `ngi_bench tune` and compiled into the
 // library (kernels/gemm_tuning.json, embedded at build time). Lookup goes from the most specific entry that matches
-// the device (platform + vendor + device name + driver) to the least (device type, then the default), so a device
-// nobody tuned still gets its type's starting point. Every choice is then confirmed by the self-check
-// (ops/gemm_selfcheck.hpp) before a model uses it.
+// the device (platform + vendor + device name + driver) to the least (device type with its native float vector
+// width, the type alone, then the default), so a device nobody tuned still gets its type's starting point. Every
+// choice is then confirmed by the self-check (ops/gemm_selfcheck.hpp) before a model uses it.
 #pragma once
 #include <optional>
 #include <string>
@@ -15,15 +15,15 @@ namespace ngi::detail {
 
 struct GemmTuningEntry {
     // Fields that must equal the device's (empty = any): DeviceInfo::platform_name, vendor, name, driver_version,
-    // and the type ("cpu", "gpu", "other").
-    std::string platform, vendor, device, driver, type;
+    // the type ("cpu", "gpu", "other") and native_float_vector_width as text ("8": AVX2, "16": AVX-512).
+    std::string platform, vendor, device, driver, type, vector_width;
     GemmParams params;
     // The implicit-GEMM convolution's knob set (gemm_conv, ops/conv_implicit.hpp) where it was tuned apart: its B
     // operand comes from a padded image, not a packed panel, and prefers other tiles. Unset: `params`.
     std::optional<GemmParams> conv_params;
     bool conv_im2col = false;  // conv_params "im2col": the implicit path is off on matching devices
     std::string note;     // where the numbers came from (tool, date, what was measured)
-    int specificity() const;  // device > driver > vendor > platform > type; 0 = the default: the lookup prefers the highest
+    int specificity() const;  // device > driver > vendor > platform > type > vector width; 0 = the default
     bool matches(const DeviceInfo& info) const;
 };
 
