@@ -309,11 +309,14 @@ def main():
               "machine": {"cpus": os.cpu_count(), "torch": torch.__version__, "torch_threads": torch.get_num_threads(),
                           "blas": torch_generator.blas_info(), "omp_wait_policy": os.environ["OMP_WAIT_POLICY"]},
               "settings": {"device": args.device, "warmups": args.warmups, "repeats": args.repeats, "block": args.block,
-                           "build": relative(args.build), "rusticl_enable": os.environ.get("RUSTICL_ENABLE")},
+                           "build": relative(args.build), "rusticl_enable": os.environ.get("RUSTICL_ENABLE"),
+                           # knob overrides (the tuning database's choice otherwise: ngi_device's gemm entry)
+                           "ngi_gemm": os.environ.get("NGI_GEMM"), "ngi_conv_gemm": os.environ.get("NGI_CONV_GEMM")},
               "load_average": {"start": start_load}, "cases": {}}
     with ngi.Device(args.device) as dev:
         info = dev.info
-        result["ngi_device"] = {k: info[k] for k in ("platform", "name", "driver_version", "compute_units")}
+        result["ngi_device"] = {k: info[k] for k in ("platform", "name", "driver_version", "compute_units",
+                                                               "native_float_vector_width")}
         if "generator" in only:
             result["cases"]["generator"] = generator_cases(args, ngi, dev)
         if "voxel_sh" in only:
