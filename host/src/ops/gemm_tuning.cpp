@@ -68,8 +68,11 @@ std::vector<GemmTuningEntry> parse_gemm_tuning(const std::string& json_text, con
         GemmTuningEntry e;
         for (const auto& [key, value] : j["match"].items()) {
             std::string* f = field(e, key);
-            if (!f) throw InputError(where + ": unknown match key '" + key +
-                                               "' (platform, vendor, device, driver, type, vector_width)");
+            if (!f) {
+                std::string known;
+                for (const char* k : kMatchKeys) known += std::string(known.empty() ? "" : ", ") + k;
+                throw InputError(where + ": unknown match key '" + key + "' (" + known + ")");
+            }
             if (!value.is_string() || value.get<std::string>().empty())
                 throw InputError(where + ": match." + key + " must be a non-empty string");
             *f = value.get<std::string>();
