@@ -61,7 +61,7 @@ import ngi.model_file as model_file
 import ngi.reference_models as reference_models
 
 import torch_generator
-from bench_record import emit, git_head, load, log
+from bench_record import emit, git_head, load, log, relative
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
@@ -296,8 +296,10 @@ def main():
         "git_head": git_head(),
         "settings": {"quick": args.quick, "repeats": args.repeats, "torch_warmups": args.warmups,
                      "reference": args.reference, "ngi_device_spec": args.device,
-                     "pocl_cache_dir": os.environ.get("POCL_CACHE_DIR"),
-                     "ngi_cache_dir": os.environ.get("NGI_CACHE_DIR")},
+                     "pocl_cache_dir": relative(os.environ["POCL_CACHE_DIR"]) if "POCL_CACHE_DIR" in os.environ
+                     else None,
+                     "ngi_cache_dir": relative(os.environ["NGI_CACHE_DIR"]) if "NGI_CACHE_DIR" in os.environ
+                     else None},
         "targets": {"ngi_over_torch_fastest": TARGET_RATIO, "ngi_gflops_over_gemm_1024": TARGET_ROOF_FRACTION},
         "load_average": {"start": start_load, "end": load()},
         "wall_seconds": time.time() - start,

@@ -191,6 +191,8 @@ def frame_case(args):
     env = dict(os.environ, NGI_DEVICE=args.device)
     bench = run_json([args.frame_bench, "--model", REPO / FRAME_RUNG, "--n", N, "--runs", args.runs, "--device",
                       args.device])
+    if "model" in bench:
+        bench["model"] = relative(bench["model"])  # frame_bench prints the absolute path it was given
     row = {"case": f"frame N {N} {Path(FRAME_RUNG).stem}", "model": FRAME_RUNG, "frame_bench": bench}
     with tempfile.TemporaryDirectory() as tmp:
         frame = args.frame
