@@ -248,10 +248,14 @@ TEST_CASE("implicit-GEMM convolution: row and linear tilings agree with the refe
     const int nr = gp.nr();
     const std::vector<Case> conv = {{5, 10, 2 * nr, 9, 4, 4, 2, 1, 2, 0},       // OW = nr: one exact tile a row
                                     {4, 7, 2 * nr + 6, 10, 4, 4, 2, 1, 0, 2},   // OW = nr + 3: a remainder
-                                    {3, 9, 13, 9, 3, 3, 1, 1, 1, 0}};           // OW = 13 < nr
+                                    {3, 9, 13, 9, 3, 3, 1, 1, 1, 0},            // OW = 13 < nr
+                                    // conv_pad's 8-wide loops and their scalar tails: 18 / 19 source columns per
+                                    // stride-2 phase, a LeakyReLU input through the vector select
+                                    {2, 5, 37, 5, 4, 4, 2, 1, 2, 0}};
     const std::vector<Case> up = {{6, 5, nr, 9, 4, 4, 2, 1, 1, 0},              // each phase one tile a row
                                   {5, 3, nr + 5, 8, 4, 4, 2, 1, 1, 3},          // a remainder
-                                  {4, 4, 7, 9, 2, 2, 2, 0, 0, 0}};              // narrow
+                                  {4, 4, 7, 9, 2, 2, 2, 0, 0, 0},               // narrow
+                                  {2, 3, 19, 5, 4, 4, 2, 1, 2, 0}};             // conv_pad's stride-1 8-wide loop
     for (const char* tiling : {"rows", "linear"}) {
         INFO("NGI_CONV_TILES=" << tiling);
         setenv("NGI_CONV_TILES", tiling, 1);
