@@ -83,7 +83,6 @@ std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p
     const int K = transposed ? cin * th * tw : cin * S * S * th * tw;
     const std::size_t phase_floats = std::size_t(panels) * K * mr;
     const std::size_t phases = transposed ? std::size_t(S) * S : 1;
-    std::vector<float> packed(phases * phase_floats, 0.0f);
     // Per kernel tap (ky, kx): its phase and its row k within a channel's block of taps; no division per weight.
     const int taps_per_channel = K / cin;
     std::vector<std::size_t> tap_phase(std::size_t(g.kh) * g.kw);
@@ -107,20 +106,34 @@ std::optional<ImplicitConv> ImplicitConv::make(Context& ctx, const GemmParams& p
             }
         }
     const std::size_t kernel_taps = std::size_t(g.kh) * g.kw;
-    for (int co = 0; co < cout; ++co) {
-        const std::size_t lane = std::size_t(co / mr) * K * mr + co % mr;  // row k of co's panel: lane + k * MR
-        for (int c = 0; c < cin; ++c) {
-            // PyTorch's layouts: conv2d [cout][cin][kh][kw], transposed [cin][cout][kh][kw].
-            const float* w = weight + (transposed ? std::size_t(c) * cout + co : std::size_t(co) * cin + c) * kernel_taps;
-            const std::size_t row0 = lane + std::size_t(c) * taps_per_channel * mr;
-            for (std::size_t i = 0; i < kernel_taps; ++i) packed[tap_phase[i] * phase_floats + row0 + std::size_t(tap_k[i]) * mr] = w[i];
+    // The loops walk the file's weights in their stored order (PyTorch's layouts: conv2d [cout][cin][kh][kw],
+    // transposed [cin][cout][kh][kw]), so the reads stream and the writes of consecutive co fill one panel's lanes.
+    // With co outer for both, a transposed layer's reads strode cout * KH * KW floats (16 KiB at cout 256): a TLB
+    // miss per weight, ~60 ms of the ngf 32 rung's model load.
+    const std::size_t floats = phases * phase_floats;
+    Buffer packed = ctx.upload_in_place(floats * sizeof(float), transposed ? "conv_transpose2d packed weights" : "conv2d packed weights",
+                                        [&](void* dst) {
+        float* a = static_cast<float*>(dst);
+        std::fill(a, a + floats, 0.0f);  // the last panel's rows past cout
+        const auto pack_one = [&](int co, int c, const float* w) {
+            // row k of co's panel: lane + k * MR
+            const std::size_t row0 = std::size_t(co / mr) * K * mr + co % mr + std::size_t(c) * taps_per_channel * mr;
+            for (std::size_t i = 0; i < kernel_taps; ++i) a[tap_phase[i] * phase_floats + row0 + std::size_t(tap_k[i]) * mr] = w[i];
+        };
+        const float* w = weight;
+        if (transposed) {
+            for (int c = 0; c < cin; ++c)
+                for (int co = 0; co < cout; ++co, w += kernel_taps) pack_one(co, c, w);
+        } else {
+            for (int co = 0; co < cout; ++co)
+                for (int c = 0; c < cin; ++c, w += kernel_taps) pack_one(co, c, w);
         }
-    }
-    return ImplicitConv(ctx, p1, taps, th, tw, cout, cin, S, P, transposed, spec.in_act, std::move(packed));
+    });
+    return ImplicitConv(ctx, p1, taps, th, tw, cout, cin, S, P, transposed, spec.in_act, std::move(packed), phase_floats);
 }
 
 ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
-                           bool transposed, Act in_act, std::vector<float> packed)
+                           bool transposed, Act in_act, Buffer packed, std::size_t phase_floats)
     : p_(p),
       th_(th),
       tw_(tw),
@@ -132,12 +145,9 @@ ImplicitConv::ImplicitConv(Context& ctx, const GemmParams& p, const std::string&
       in_act_(in_act),
       pad_kernel_(ctx.kernel("im2col", "conv_pad", im2col_defines(p.nr()))),
       gemm_(ctx.kernel("gemm", "gemm_conv",
-                       gemm_kernel_defines(p) + " -DIMPLICIT=1" + taps)) {
-    const std::size_t phases = transposed ? std::size_t(stride) * stride : 1;
-    phase_floats_ = packed.size() / phases;
-    ap_ = ctx.alloc(packed.size() * sizeof(float), transposed ? "conv_transpose2d packed weights" : "conv2d packed weights");
-    ctx.write(ap_, 0, packed.size() * sizeof(float), packed.data(), "implicit conv packed weights");
-}
+                       gemm_kernel_defines(p) + " -DIMPLICIT=1" + taps)),
+      ap_(std::move(packed)),
+      phase_floats_(phase_floats) {}
 
 ImplicitConv::Layout ImplicitConv::layout(const Shape& in) const {
     const int S = stride_, P = pad_;

@@ -61,7 +61,7 @@ private:
         int out_step;                  // output stride of a phase (1 for conv2d)
     };
     ImplicitConv(Context& ctx, const GemmParams& p, const std::string& taps, int th, int tw, int cout, int cin, int stride, int pad,
-                 bool transposed, Act in_act, std::vector<float> packed);
+                 bool transposed, Act in_act, Buffer packed, std::size_t phase_floats);
     static bool direct_disabled();
     // Whether gemm_conv's tiles stay in output rows (row-interleaved copy) for rows of `cols` outputs, or run
     // linearly over a planar one ($NGI_CONV_TILES=rows|linear overrides).

@@ -332,6 +332,34 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
     return b;
 }
 
+Buffer Context::upload_in_place(std::size_t bytes, const char* what, const std::function<void(void* dst)>& fill) {
+    Buffer b = alloc(bytes, what);
+    if (bytes == 0) return b;
+    if (info_.platform_name == "Oclgrind") {  // its checker tracks host stores by write (see alloc): one whole store
+        std::vector<unsigned char> host(bytes);
+        fill(host.data());
+        write(b, 0, bytes, host.data(), what);
+        return b;
+    }
+    cl_int err = CL_SUCCESS;
+    void* dst = clEnqueueMapBuffer(queue_, b.get(), CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes, 0, nullptr,
+                                   nullptr, &err);
+    check(err, (std::string("map ") + what + " for upload").c_str(), "clEnqueueMapBuffer");
+    try {
+        fill(dst);
+    } catch (...) {
+        clEnqueueUnmapMemObject(queue_, b.get(), dst, 0, nullptr, nullptr);  // the buffer is released with b
+        clFinish(queue_);
+        throw;
+    }
+    // The queue is in order: kernels enqueued later see the unmapped contents.
+    check(clEnqueueUnmapMemObject(queue_, b.get(), dst, 0, nullptr, nullptr),
+          (std::string("unmap ") + what + " after upload").c_str(), "clEnqueueUnmapMemObject");
+    uploads_.fetch_add(1, std::memory_order_relaxed);
+    upload_bytes_.fetch_add((long long)bytes, std::memory_order_relaxed);
+    return b;
+}
+
 std::string Context::build_options(const std::string& defines) const {
     // Oclgrind 21.10's uninitialized-value checker aborts the kernel ("Unsupported instruction: freeze") on the
     // `freeze` that LLVM's optimizer inserts when it splits a paired x / d and x % d (im2col, col2im, SSIM):

@@ -143,6 +143,12 @@ public:
     long loop_limit();
 
     Buffer alloc(std::size_t bytes, const char* what);
+    // A new buffer of `bytes` whose whole contents fill(dst) writes, through a host mapping
+    // (CL_MAP_WRITE_INVALIDATE_REGION): where device memory is host memory (CPU drivers) fill writes the buffer
+    // itself, so there is no staging copy and each page is touched once. Packed weights take this way: a host
+    // vector, then clEnqueueWriteBuffer, touched 80 MB of fresh pages for the ngf 32 rung's 40 MB (page faults
+    // were a third of `ngi lightmap`'s samples). Counted as one upload. fill must write every byte it needs.
+    Buffer upload_in_place(std::size_t bytes, const char* what, const std::function<void(void* dst)>& fill);
     // Host <-> device transfers (blocking, counted in transfers()); copy() stays on the device (not counted).
     void write(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const void* src, const char* what);
     void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
