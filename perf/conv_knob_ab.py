@@ -2,10 +2,10 @@
 """Implicit-convolution knob sets against each other on one generator, per node, interleaved in one run.
 
 Each variant is a knob set for $NGI_CONV_GEMM ("MR,VW,NV,KU,L0,L1[,UNROLL]", kernels/gemm.cl) or "base" (what the
-tuning database gives this device), optionally with --bench B: another ngi_bench build (an A/B of two builds of
-the library: "before=base@/path/to/old/ngi_bench"; "label=" names a variant). Every round runs each variant once, in the same order, as a fresh
-`ngi_bench generator` process (its warm-up + --calls timed calls: a wall median, and one profiled run for per-node
-device times); medians over --rounds. Interleaving rounds, not variants in blocks, keeps this VM's drift (the same
+tuning database gives this device), as "[label=]knobs[@bench]": "@bench" runs another ngi_bench build (an A/B of
+two builds: "before=base@/path/to/old/ngi_bench"), "label=" names the variant. Every round runs each variant once,
+in the same order, as a fresh `ngi_bench generator` process (its warm-up + --calls timed calls: a wall median, and
+one profiled run for per-node device times); medians over --rounds. Interleaving rounds, not variants in blocks, keeps this VM's drift (the same
 binary 7.4-9.1 ms minutes apart) out of the comparison.
 
 Why it exists: a tuning entry's conv_params are chosen from whole-network times on a noisy machine; this says which
@@ -30,9 +30,9 @@ from tqdm import tqdm  # noqa: E402
 
 
 def parse_variant(text, default_bench):
-    """[label=]knobs[@bench]; the label names the variant in the output (default: the text without the bench)."""
-    label, _, rest = text.rpartition("=") if "=" in text.split("@")[0] else ("", "", text)
-    knobs, _, bench = rest.partition("@")
+    """[label=]knobs[@bench]; the label names the variant in the output (default: its knobs)."""
+    spec, _, bench = text.partition("@")
+    label, _, knobs = spec.rpartition("=")
     return {"name": label or knobs, "knobs": knobs, "bench": bench or default_bench}
 
 
