@@ -23,10 +23,8 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import bench_record  # noqa: E402
-
-from tqdm import tqdm  # noqa: E402
+import bench_record
+from tqdm import tqdm
 
 
 def parse_variant(text, default_bench):
