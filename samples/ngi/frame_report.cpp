@@ -9,8 +9,9 @@ std::string sanitized_files_text(const ngi::FrameReadStats& stats) {
     for (const ngi::SanitizedFile& s : stats.sanitized) {
         if (!text.empty()) text += "; ";
         text += s.file + ":";
-        if (s.nan) text += " " + std::to_string(s.nan) + " NaN";
-        if (s.inf) text += std::string(s.nan ? "," : "") + " " + std::to_string(s.inf) + " Inf";
+        // Appended piece by piece: GCC 12's -Wrestrict misfires on `"literal" + std::string&&`.
+        if (s.nan) text.append(" ").append(std::to_string(s.nan)).append(" NaN");
+        if (s.inf) text.append(s.nan ? ", " : " ").append(std::to_string(s.inf)).append(" Inf");
     }
     return text;
 }
