@@ -3,14 +3,20 @@
 //   ngi_bench gemm [--device D] [--repeats R]          GEMM GFLOP/s at 1024^3 and at the thesis generator's
 //                                                       layer shapes (conv: M=Cout, N=HWout, K=Cin*16;
 //                                                       transposed conv: M=Cout*16, N=HWin, K=Cin)
-//   ngi_bench tune [--device D] [--max N | --sets "A;B;..."] [--write-db kernels/gemm_tuning.json]
+//   ngi_bench tune [--device D] [--max N | --sets "A;B;..."] [--shapes "M,N,K;..."] [--repeats R]
+//                  [--write-db kernels/gemm_tuning.json]
 //                                                       try GEMM parameter sets (each checked against a
 //                                                       reference first; failing to build or launch = rejected,
-//                                                       CLBlast style) and rank them; --max: the first N of the
-//                                                       space only (slow devices); --sets: these knob sets
-//                                                       only (each still checked first); --write-db: add or replace
-//                                                       this device's entry in the tuning database
-//                                                       (platform + vendor + device + driver) with the winner
+//                                                       CLBlast style) and rank them by the geomean GFLOP/s over
+//                                                       the shapes (default 1024^3, down1, up2); --max: the first N
+//                                                       of the space only; --sets: these knob sets only (each
+//                                                       still checked first); --shapes: other GEMM shapes (slow
+//                                                       devices such as llvmpipe, where one 1024^3 run takes
+//                                                       minutes); each row also has check_ms, the wall time of the
+//                                                       self-check including the program build (cold with an
+//                                                       empty NGI_CACHE_DIR); --write-db: add or replace this
+//                                                       device's entry in the tuning database (platform + vendor
+//                                                       + device + driver) with the winner
 //   ngi_bench mlp --model M.safetensors [--width 1920 --height 1080] [--path fused|dense] [--ao] [--repeats R]
 //                                                       a per-pixel MLP over W x H pixels, device in, device out
 //                                                       (Model::enqueue): median ms and GFLOP/s (2 x MACs); --ao:
@@ -160,6 +166,27 @@ GemmBuffers make_gemm_buffers(Context& ctx, const GemmParams& p, int M, int N, i
     if (a_out) *a_out = std::move(a);
     if (b_out) *b_out = std::move(b);
     return g;
+}
+
+// "M,N,K;M,N,K" -> shapes named "MxNxK" (ngi_bench tune --shapes).
+std::vector<GemmShape> parse_gemm_shapes(const std::string& list) {
+    std::vector<GemmShape> shapes;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t end = std::min(list.find(';', start), list.size());
+        if (end > start) {
+            const std::string item = list.substr(start, end - start);
+            GemmShape s{"", 0, 0, 0};
+            char tail = 0;
+            if (std::sscanf(item.c_str(), "%d,%d,%d%c", &s.m, &s.n, &s.k, &tail) != 3 || s.m < 1 || s.n < 1 || s.k < 1)
+                throw InputError("tune: --shapes takes \"M,N,K;M,N,K\" with positive sizes, got '" + item + "'");
+            s.name = std::to_string(s.m) + "x" + std::to_string(s.n) + "x" + std::to_string(s.k);
+            shapes.push_back(s);
+        }
+        start = end + 1;
+    }
+    if (shapes.empty()) throw InputError("tune: --shapes names no shape");
+    return shapes;
 }
 
 json bench_gemm(Context& ctx, const GemmParams& p, const GemmShape& s, int repeats) {
@@ -330,20 +357,27 @@ int run_tune(int argc, char** argv) {
             start = end + 1;
         }
     }
-    const GemmShape shapes[] = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
+    std::vector<GemmShape> shapes = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
+    if (const std::string list = arg(argc, argv, "--shapes"); !list.empty()) shapes = parse_gemm_shapes(list);
+    const int repeats = std::stoi(arg(argc, argv, "--repeats", "3"));
+    if (repeats < 1) throw InputError("tune: --repeats must be at least 1");
+    std::string shape_names;
+    for (const auto& s : shapes) shape_names += (shape_names.empty() ? "" : ", ") + s.name;
     json results = json::array();
     for (const auto& p : space) {
         json r = {{"params", p.to_string()}};
+        const auto check_start = std::chrono::steady_clock::now();
         const GemmVerdict v = check_gemm_variant(ngi::detail::context_of(d), p, gemm_check_problems());
+        r["check_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - check_start).count();
         if (!v.ok) {
             r["rejected"] = v.reason;
         } else {
             double sum = 0;
             for (const auto& s : shapes) {
-                r[s.name] = bench_gemm(ngi::detail::context_of(d), p, s, 3)["gflops"];
+                r[s.name] = bench_gemm(ngi::detail::context_of(d), p, s, repeats)["gflops"];
                 sum += std::log(r[s.name].get<double>());
             }
-            r["geomean_gflops"] = std::exp(sum / 3);
+            r["geomean_gflops"] = std::exp(sum / double(shapes.size()));
         }
         std::fprintf(stderr, "%s\n", r.dump().c_str());
         results.push_back(r);
@@ -351,7 +385,8 @@ int run_tune(int argc, char** argv) {
     std::sort(results.begin(), results.end(), [](const json& a, const json& b) {
         return a.value("geomean_gflops", 0.0) > b.value("geomean_gflops", 0.0);
     });
-    std::printf("%s\n", json{{"device", device_json(d, gemm_params_for(d.info()))}, {"ranked", results}}.dump(2).c_str());
+    std::printf("%s\n", json{{"device", device_json(d, gemm_params_for(d.info()))}, {"shapes", shape_names},
+                             {"repeats", repeats}, {"ranked", results}}.dump(2).c_str());
     if (const std::string db_path = arg(argc, argv, "--write-db"); !db_path.empty()) {
         if (results.empty() || !results[0].contains("geomean_gflops"))
             throw Error("tune: no candidate passed the check on " + d.info().name + "; " + db_path + " left unchanged");
@@ -365,10 +400,10 @@ int run_tune(int argc, char** argv) {
         double current = 0;  // the entry the database gave this device before, measured in the same run
         for (const auto& r : results)
             if (r["params"] == space.front().to_string()) current = r.value("geomean_gflops", 0.0);
-        char note[256];
-        std::snprintf(note, sizeof note, "ngi_bench tune: geomean %.1f GFLOP/s over 1024^3, down1, up2 (the previous "
+        char note[512];
+        std::snprintf(note, sizeof note, "ngi_bench tune: geomean %.1f GFLOP/s over %s (the previous "
                       "choice %s: %.1f), %zu candidates checked", results[0]["geomean_gflops"].get<double>(),
-                      space.front().to_string().c_str(), current, space.size());
+                      shape_names.c_str(), space.front().to_string().c_str(), current, space.size());
         e.note = note;
         std::ifstream in(db_path);
         if (!in) throw InputError("tune: cannot read " + db_path);
