@@ -98,7 +98,7 @@ run_stage() {
       # The CLI, training, C ABI, C sample, Python, GL viewer and threading tests exercise host code covered on PoCL (and by
       # the sanitize and tsan stages); each of them would recompile the generators' programs in new processes and
       # contexts. The Catch2 kernel and model tests are what runs the device, all of them here since rusticl got its own
-      # tiles (1 x 1 per work-item, kernels/gemm_tuning.json; 2026-12-06: the frame-path, image-descriptor, Neural GI
+      # tiles (2 x 2 per work-item, kernels/gemm_tuning.json; 2026-12-06: the frame-path, image-descriptor, Neural GI
       # network and generator-matrix cases that had left this stage at 379-829 s each now take 1-51 s, and the stage
       # with them ~11 min cold where it took 17-32 without them). Left out: the three cases that run every knob set of
       # the CPU tuning space (6 x 32 tiles in float16 vectors: about a minute of llvmpipe compiling per program, the
