@@ -168,22 +168,28 @@ GemmBuffers make_gemm_buffers(Context& ctx, const GemmParams& p, int M, int N, i
     return g;
 }
 
-// "M,N,K;M,N,K" -> shapes named "MxNxK" (ngi_bench tune --shapes).
-std::vector<GemmShape> parse_gemm_shapes(const std::string& list) {
-    std::vector<GemmShape> shapes;
+// "a;b;;c" -> {"a", "b", "c"} (empty items skipped): ngi_bench tune's --sets and --shapes.
+std::vector<std::string> split_list(const std::string& list) {
+    std::vector<std::string> items;
     std::size_t start = 0;
     while (start <= list.size()) {
         const std::size_t end = std::min(list.find(';', start), list.size());
-        if (end > start) {
-            const std::string item = list.substr(start, end - start);
-            GemmShape s{"", 0, 0, 0};
-            char tail = 0;
-            if (std::sscanf(item.c_str(), "%d,%d,%d%c", &s.m, &s.n, &s.k, &tail) != 3 || s.m < 1 || s.n < 1 || s.k < 1)
-                throw InputError("tune: --shapes takes \"M,N,K;M,N,K\" with positive sizes, got '" + item + "'");
-            s.name = std::to_string(s.m) + "x" + std::to_string(s.n) + "x" + std::to_string(s.k);
-            shapes.push_back(s);
-        }
+        if (end > start) items.push_back(list.substr(start, end - start));
         start = end + 1;
+    }
+    return items;
+}
+
+// "M,N,K;M,N,K" -> shapes named "MxNxK" (ngi_bench tune --shapes).
+std::vector<GemmShape> parse_gemm_shapes(const std::string& list) {
+    std::vector<GemmShape> shapes;
+    for (const std::string& item : split_list(list)) {
+        GemmShape s{"", 0, 0, 0};
+        char tail = 0;
+        if (std::sscanf(item.c_str(), "%d,%d,%d%c", &s.m, &s.n, &s.k, &tail) != 3 || s.m < 1 || s.n < 1 || s.k < 1)
+            throw InputError("tune: --shapes takes \"M,N,K;M,N,K\" with positive sizes, got '" + item + "'");
+        s.name = std::to_string(s.m) + "x" + std::to_string(s.n) + "x" + std::to_string(s.k);
+        shapes.push_back(s);
     }
     if (shapes.empty()) throw InputError("tune: --shapes names no shape");
     return shapes;
@@ -350,12 +356,7 @@ int run_tune(int argc, char** argv) {
         space.resize(std::size_t(max));  // the database's current choice stays first
     if (const std::string sets = arg(argc, argv, "--sets"); !sets.empty()) {  // "a;b;c": exactly these candidates
         space.clear();
-        std::size_t start = 0;
-        while (start <= sets.size()) {
-            const std::size_t end = std::min(sets.find(';', start), sets.size());
-            if (end > start) space.push_back(parse_gemm_params(sets.substr(start, end - start)));
-            start = end + 1;
-        }
+        for (const std::string& item : split_list(sets)) space.push_back(parse_gemm_params(item));
     }
     std::vector<GemmShape> shapes = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
     if (const std::string list = arg(argc, argv, "--shapes"); !list.empty()) shapes = parse_gemm_shapes(list);
@@ -401,8 +402,8 @@ int run_tune(int argc, char** argv) {
         for (const auto& r : results)
             if (r["params"] == space.front().to_string()) current = r.value("geomean_gflops", 0.0);
         char note[512];
-        std::snprintf(note, sizeof note, "ngi_bench tune: geomean %.1f GFLOP/s over %s (the previous "
-                      "choice %s: %.1f), %zu candidates checked", results[0]["geomean_gflops"].get<double>(),
+        std::snprintf(note, sizeof note, "ngi_bench tune: geomean %.3g GFLOP/s over %s (the previous "
+                      "choice %s: %.3g), %zu candidates checked", results[0]["geomean_gflops"].get<double>(),
                       shape_names.c_str(), space.front().to_string().c_str(), current, space.size());
         e.note = note;
         std::ifstream in(db_path);
