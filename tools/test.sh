@@ -99,8 +99,9 @@ run_stage() {
       # the sanitize and tsan stages); each of them would recompile the generators' programs in new processes and
       # contexts. The Catch2 kernel and model tests are what runs the device, all of them here since rusticl got its own
       # tiles (2 x 2 per work-item, kernels/gemm_tuning.json; 2026-12-06: the frame-path, image-descriptor, Neural GI
-      # network and generator-matrix cases that had left this stage at 379-829 s each now take 1-51 s, and the stage
-      # with them ~11 min cold where it took 17-32 without them). Left out: the three cases that run every knob set of
+      # and generator-matrix cases that had left this stage at 379 s to over 18 min each now take 1-67 s, the Neural
+      # GI stability row 172 s, and the stage with them 891 s cold beside lane A, where it took 1,053-1,916 s without
+      # them; docs/RELIABILITY.md "Stage times"). Left out: the three cases that run every knob set of
       # the CPU tuning space (6 x 32 tiles in float16 vectors: about a minute of llvmpipe compiling per program, the
       # GEMM at the generators' layer shapes, the dense layer, the convolution) -- they run on PoCL and under oclgrind,
       # and here the GPU and CPU entries' sets and their fallback chains still run at small odd shapes.
