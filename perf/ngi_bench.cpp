@@ -168,22 +168,10 @@ GemmBuffers make_gemm_buffers(Context& ctx, const GemmParams& p, int M, int N, i
     return g;
 }
 
-// "a;b;;c" -> {"a", "b", "c"} (empty items skipped): ngi_bench tune's --sets and --shapes.
-std::vector<std::string> split_list(const std::string& list) {
-    std::vector<std::string> items;
-    std::size_t start = 0;
-    while (start <= list.size()) {
-        const std::size_t end = std::min(list.find(';', start), list.size());
-        if (end > start) items.push_back(list.substr(start, end - start));
-        start = end + 1;
-    }
-    return items;
-}
-
 // "M,N,K;M,N,K" -> shapes named "MxNxK" (ngi_bench tune --shapes).
 std::vector<GemmShape> parse_gemm_shapes(const std::string& list) {
     std::vector<GemmShape> shapes;
-    for (const std::string& item : split_list(list)) {
+    for (const std::string& item : split(list, ';')) {
         GemmShape s{"", 0, 0, 0};
         char tail = 0;
         if (std::sscanf(item.c_str(), "%d,%d,%d%c", &s.m, &s.n, &s.k, &tail) != 3 || s.m < 1 || s.n < 1 || s.k < 1)
@@ -273,7 +261,8 @@ int run_conv(int argc, char** argv) {
     std::uniform_real_distribution<float> u(-0.05f, 0.05f);
     json layers = json::array();
     double total[2] = {0, 0};
-    const std::string only = "," + arg(argc, argv, "--only") + ",";  // e.g. --only up1,down3
+    // e.g. --only up1,down3; built by append: GCC 12's -Wrestrict misfires on `"literal" + std::string&&`
+    const std::string only = std::string(",").append(arg(argc, argv, "--only")).append(",");
     for (const auto& l : generator_conv_layers(width, height)) {
         if (only != ",," && only.find("," + l.name + ",") == std::string::npos) continue;
         const ConvSpec spec{l.cin, l.cout, {4, 4, 2, 1}, {l.in_act, 0.2f}, {l.out_act, 0.2f}};
@@ -356,7 +345,7 @@ int run_tune(int argc, char** argv) {
         space.resize(std::size_t(max));  // the database's current choice stays first
     if (const std::string sets = arg(argc, argv, "--sets"); !sets.empty()) {  // "a;b;c": exactly these candidates
         space.clear();
-        for (const std::string& item : split_list(sets)) space.push_back(parse_gemm_params(item));
+        for (const std::string& item : split(sets, ';')) space.push_back(parse_gemm_params(item));
     }
     std::vector<GemmShape> shapes = {{"1024^3", 1024, 1024, 1024}, {"down1", 128, 32768, 1024}, {"up2", 2048, 2048, 1024}};
     if (const std::string list = arg(argc, argv, "--shapes"); !list.empty()) shapes = parse_gemm_shapes(list);
