@@ -60,6 +60,7 @@ TEST_CASE("kernel defines: every kernel file that needs host constants refuses t
         {"gbuffer", "preprocess_gbuffer", "preprocess_defines"},
         {"compose", "tonemap", "compose_defines"},
         {"neural_gi", "neural_gi_inputs", "NGI_RADIANCE_MAX"},
+        {"ssgi", "ssgi_gather", "ssgi_defines"},
         {"voxel_compact", "vc_flag", "VC_LOCAL"},
         {"bvh", "bvh_trace_rays", "bvh_defines"},
         // The tracer's programs: each file's guard names what it needs (luminance.cl: luminance_defines, scene.cl:

@@ -319,9 +319,10 @@ int main(int argc, char** argv) {
     try {
         model = ngi::Model::load(*device, o.model);
         const ngi::ModelConfig& c = model->config();
-        if (c.input_nc != 12)
+        if (c.input_nc != 12 && !(c.family == "ssgi" && c.ssgi.view == "surround"))
             throw ngi::InputError("model " + o.model + " has input_nc " + std::to_string(c.input_nc) +
-                                  ": the viewer runs surround models (12 input channels)");
+                                  ": the viewer runs surround models (12 input channels, or an ssgi rung of view "
+                                  "\"surround\")");
     } catch (const ngi::ClError& e) {
         std::fprintf(stderr, "ngi_gl_viewer: device failure loading the model: %s\n", one_line(e.what()).c_str());
         return 3;

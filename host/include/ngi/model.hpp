@@ -17,7 +17,7 @@ namespace detail { struct ModelAccess; }
 
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi" | "graph"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi" | "graph" | "ssgi"
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;
@@ -86,6 +86,20 @@ struct ModelConfig {
     struct GraphFamily {
         std::string layout = "nchw";
     } graph;
+
+    // family "ssgi" (docs/MODEL_FORMAT.md "ssgi", docs/CONVENTIONS.md section 19): no network and no tensors. The
+    // surround pipeline gathers the light the cluster's faces send to the front face (one bounce, or more by iterating
+    // over the faces) and adds it to the frame's direct light, as for output_mode "indirect". Model::run and
+    // Model::enqueue refuse it: it runs on frames (SurroundPipeline::run / enqueue and every API built on them).
+    struct Ssgi {
+        std::string view = "surround";  // "surround": senders on all six faces; "front": the front face alone
+        int cluster_level = 3;          // far senders grouped in blocks of 2^level x 2^level texels (0: none)
+        float near_factor = 4.0f;       // a block whose mean position is closer than this many standard
+                                        // deviations of its positions is replaced by its quarters, and a quarter
+                                        // that close by its texels
+        float min_distance = 0.5f;      // metres: closer sender-receiver pairs are skipped
+        int bounces = 1;                // 2+: each further bounce first gathers at every sender face
+    } ssgi;
 };
 
 // Overrides of the file's settings; an empty string keeps the file's value.

@@ -60,6 +60,12 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
     auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr, nullptr});
     auto& ctx = ngi::detail::context_of(device);
+    if (cfg.family == "ssgi") {  // no network: nothing to build; the pipeline runs it on frames
+        if (!options.bn_mode.empty() || !options.dropout.empty() || !options.mlp_path.empty())
+            throw InputError("load model " + path + ": bn_mode, dropout and mlp_path apply to networks; an ssgi rung "
+                             "has none");
+        return Model(std::move(impl));
+    }
     if (cfg.family == "voxel_sh") {
         if (!options.mlp_path.empty())
             throw InputError("load model " + path + ": mlp_path applies to the mlp family, this is voxel_sh");
@@ -92,8 +98,20 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
 
 const ModelConfig& Model::config() const { return impl_->config; }
 
+namespace {
+
+// Family "ssgi" has no network to run on a tensor.
+void refuse_ssgi(const ModelConfig& c, const char* what) {
+    if (c.family == "ssgi")
+        throw InputError(std::string(what) + ": family ssgi has no network; it runs on frames (SurroundPipeline::run "
+                         "or enqueue, ngi lightmap, ngi_pipeline_run, Pipeline.run)");
+}
+
+}  // namespace
+
 Tensor Model::run(const Tensor& input, RunInfo* info) {
     const auto& c = impl_->config;
+    refuse_ssgi(c, "run model");
     if (impl_->mlp) {
         impl_->mlp_enqueued = false;
         return impl_->mlp->run(ngi::detail::context_of(impl_->device), input, info);
@@ -153,6 +171,7 @@ namespace detail {
 void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem out, std::size_t out_offset,
                           int height, int width) {
     Model::Impl& im = *model.impl_;
+    refuse_ssgi(im.config, "the surround pipeline's network");
     if (im.mlp) throw InputError("the surround pipeline runs image generators; this model is an mlp");
     if (im.voxel_sh) throw InputError("the surround pipeline runs image generators; this model is a voxel_sh network");
     Graph& g = im.graph(height, width);
@@ -185,6 +204,7 @@ void check_device_buffer(const DeviceBuffer& b, const Device& device, std::size_
 
 void Model::enqueue(const DeviceBuffer& input, const DeviceBuffer& output, int height, int width) {
     const auto& c = impl_->config;
+    refuse_ssgi(c, "enqueue model");
     if (impl_->mlp) {
         if (height < 1 || width < 1 || double(height) * width > double(1 << 30))
             throw InputError("enqueue model: " + std::to_string(height) + "x" + std::to_string(width) +

@@ -10,6 +10,7 @@
 #include "models/float_field.hpp"
 #include "models/graph_model.hpp"
 #include "models/mlp_model.hpp"
+#include "models/ssgi_config.hpp"
 #include "models/neural_gi_model.hpp"
 #include "models/voxel_sh_model.hpp"
 
@@ -136,6 +137,11 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         c.json = text;
         return c;
     }
+    if (j.contains("family") && j["family"].is_string() && j["family"] == "ssgi") {
+        ModelConfig c = parse_ssgi_config(j, path);  // no network: the gather's settings (models/ssgi_config.cpp)
+        c.json = text;
+        return c;
+    }
     if (j.contains("family") && j["family"].is_string() && j["family"] == "graph") {
         ModelConfig c = parse_graph_config(j, path);  // its own fields and node list (models/graph_model.cpp)
         c.json = text;
@@ -184,7 +190,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
         const std::string s = j[key].get<std::string>();
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
             if (std::string(key) == "family")  // the most common mistake gets the most specific message
-                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh, neural_gi, graph)");
+                throw InputError(what + "family '" + s + "' is not supported (pix2pix_unet, deepillumination, mlp, voxel_sh, neural_gi, graph, ssgi)");
             throw fail(key, rule);
         }
         return s;

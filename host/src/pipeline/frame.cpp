@@ -32,7 +32,65 @@ void check_tonemap(const ToneMapOptions& t) {
         throw InputError("tone map: exposure " + std::to_string(t.exposure_ev) + " EV is not in [-64, 64]");
 }
 
+// Timed stages end with a wait for the device; the gather (descriptor inputs) was timed by the caller.
+class StageClock {
+public:
+    StageClock(detail::Context& ctx, FrameTimings* timings) : ctx_(ctx), timings_(timings), t_(Clock::now()) {}
+    void operator()(double FrameTimings::*field) {
+        if (!timings_) return;
+        ctx_.finish();
+        const auto now = Clock::now();
+        timings_->*field = std::chrono::duration<double, std::milli>(now - t_).count();
+        t_ = now;
+    }
+
+private:
+    detail::Context& ctx_;
+    FrameTimings* timings_;
+    Clock::time_point t_;
+};
+
 }  // namespace
+
+void SurroundPipeline::Impl::check_frame_buffers(const DeviceBuffer& planes, int faces_used,
+                                                 const FrameOutputs& outputs) {
+    const std::size_t out_bytes = 3 * std::size_t(n) * n * sizeof(float);
+    check_buffer(planes, device, frame_planes_bytes(n, faces_used), false, "planes");
+    const DeviceBuffer* outs[3] = {&outputs.lightmap, &outputs.final_image, &outputs.display};
+    const char* names[3] = {"lightmap", "final image", "display"};
+    for (int i = 0; i < 3; ++i)
+        if (*outs[i]) check_buffer(*outs[i], device, out_bytes, true, names[i]);
+    if (outputs.display) check_tonemap(outputs.tonemap);
+}
+
+// Family "ssgi": no network. The preprocessing runs for its counters (the same sanitizing report as a network's
+// input), the gather writes the lightmap (direct + its indirect light), then compose and tone map as for a network.
+void SurroundPipeline::Impl::enqueue_ssgi(const ModelConfig& config, const DeviceBuffer& planes, const FrameDesc& desc,
+                                          const FrameOutputs& outputs, PreprocessStats* stats, FrameTimings* timings) {
+    const int faces_used = detail::frame_faces(config);
+    if (desc.faces != 1 && desc.faces != kFaceCount)
+        throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
+    if (desc.faces < faces_used)
+        throw InputError("enqueue frame: the ssgi rung (view \"" + config.ssgi.view + "\") gathers from all 6 faces, "
+                         "the frame holds " + std::to_string(desc.faces));
+    check_frame_buffers(planes, faces_used, outputs);
+    if (!ssgi) ssgi = std::make_unique<detail::Ssgi>(ctx);
+    StageClock lap(ctx, timings);
+    enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env, desc.look, desc.up, config, false);
+    lap(&FrameTimings::input_ms);
+    cl_mem light_dst = outputs.lightmap.opencl_mem();
+    if (!light_dst) {
+        detail::ensure_buffer(ctx, frame_light, 3 * std::size_t(n) * n * sizeof(float), "frame lightmap");
+        light_dst = frame_light.get();
+    }
+    ssgi->enqueue(ctx, planes.opencl_mem(), faces_used, n, desc.has_emission,
+                  CameraCluster::from_look_up(desc.look, desc.up), config.ssgi, light_dst);
+    lap(&FrameTimings::network_ms);
+    enqueue_final(light_dst, planes.opencl_mem(), desc.has_emission, desc.has_env, outputs.final_image.opencl_mem(),
+                  outputs.display.opencl_mem(), outputs.tonemap);
+    lap(&FrameTimings::outputs_ms);
+    if (stats) read_stats(*stats);
+}
 
 void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes,
                                              bool has_emission, bool has_env, cl_mem light_dst, cl_mem final_dst,
@@ -60,7 +118,15 @@ void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, cons
         decode.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer));
         ctx.launch(decode, 1, g, kLocal1);
     }
+    enqueue_final(light_dst, planes, has_emission, has_env, final_dst, display_dst, tm);
+}
+
+void SurroundPipeline::Impl::enqueue_final(cl_mem light_dst, cl_mem planes, bool has_emission, bool has_env,
+                                           cl_mem final_dst, cl_mem display_dst, const ToneMapOptions& tm) {
     if (!final_dst && !display_dst) return;
+    const std::size_t face_plane = std::size_t(n) * n, bytes = 3 * face_plane * sizeof(float);
+    const int count = int(3 * face_plane);
+    const std::size_t g[1] = {std::size_t(count)};
 
     // The front face's albedo, emission and env planes (contiguous RGB triples of face 0) for compose_final.
     auto front_planes = [&](Feature f, detail::Buffer& dst, const char* what) {
@@ -87,9 +153,13 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
                                const FrameOutputs& outputs, PreprocessStats* stats, FrameTimings* timings) {
     Impl& im = *impl_;
     const ModelConfig& config = model.config();
-    const bool surround = detail::check_model_input(config);
     if (detail::shared_context_of(detail::ModelAccess::device(model)) != detail::shared_context_of(im.device))
         throw InputError("enqueue frame: the model was loaded on another device than the pipeline's");
+    if (config.family == "ssgi") {
+        im.enqueue_ssgi(config, planes, desc, outputs, stats, timings);
+        return;
+    }
+    const bool surround = detail::check_model_input(config);
     if (desc.faces != 1 && desc.faces != kFaceCount)
         throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
     if (surround && desc.faces != kFaceCount)
@@ -110,25 +180,10 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
         throw InputError("enqueue frame: the model needs sizes divisible by 2^num_downs = " + std::to_string(step) +
                          "; this pipeline's network input is " + std::to_string(h) + "x" + std::to_string(w) +
                          " (N = " + std::to_string(im.n) + ")");
-    const std::size_t out_bytes = 3 * std::size_t(im.n) * im.n * sizeof(float);
     // Only the faces the model reads must be present, but they must all be there.
     const int faces_used = surround ? kFaceCount : 1;
-    check_buffer(planes, im.device, frame_planes_bytes(im.n, faces_used), false, "planes");
-    const DeviceBuffer* outs[3] = {&outputs.lightmap, &outputs.final_image, &outputs.display};
-    const char* names[3] = {"lightmap", "final image", "display"};
-    for (int i = 0; i < 3; ++i)
-        if (*outs[i]) check_buffer(*outs[i], im.device, out_bytes, true, names[i]);
-    if (outputs.display) check_tonemap(outputs.tonemap);
-
-    // Timed stages end with a wait for the device; the gather (descriptor inputs) was timed by the caller.
-    auto t = Clock::now();
-    auto lap = [&](double FrameTimings::*field) {
-        if (!timings) return;
-        im.ctx.finish();
-        const auto now = Clock::now();
-        timings->*field = std::chrono::duration<double, std::milli>(now - t).count();
-        t = now;
-    };
+    im.check_frame_buffers(planes, faces_used, outputs);
+    StageClock lap(im.ctx, timings);
     const detail::Buffer& input = im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
                                                    desc.look, desc.up, config, surround);
     lap(&FrameTimings::input_ms);
@@ -144,11 +199,10 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
 
 FrameImages SurroundPipeline::run(Model& model, const Frame& frame, bool lightmap, bool final_image, bool display,
                                   const ToneMapOptions& tonemap, PreprocessStats* stats, FrameTimings* timings) {
-    const bool surround = detail::check_model_input(model.config());
+    const int faces = detail::frame_faces(model.config());
     if (frame.n != 0 && frame.n != impl_->n)
         throw InputError("run frame: the frame has N = " + std::to_string(frame.n) + ", this pipeline N = " +
                          std::to_string(impl_->n));
-    const int faces = surround ? kFaceCount : 1;
     const std::vector<float> planes = pack_frame_planes(frame, faces);  // checks every image it packs
     return run(model, planes.data(), planes.size() * sizeof(float), FrameDesc::of(frame, faces), lightmap,
                final_image, display, tonemap, stats, timings);

@@ -25,7 +25,7 @@ struct InputPlan {
 
 InputPlan plan_inputs(const FrameInputs& in, const ModelConfig& config, int n, const Device& device) {
     InputPlan plan;
-    plan.faces = detail::check_model_input(config) ? kFaceCount : 1;
+    plan.faces = detail::frame_faces(config);
     for (int f = 0; f < plan.faces; ++f)
         for (Feature feat : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct})
             validate_image_desc(in.at(Face(f), feat), Face(f), feat, n, device);

@@ -8,6 +8,7 @@
 
 #include "ngi/pipeline.hpp"
 #include "ops/gather_image.hpp"
+#include "pipeline/ssgi.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {
@@ -49,6 +50,9 @@ constexpr float kLightMax = 65504.0f;
 // Which input the model wants: true = global view (12 channels), false = front view only (10). Throws InputError
 // for a model whose input width, input_layout or input_range the pipeline cannot serve.
 bool check_model_input(const ModelConfig& config);
+// The faces a model reads from a frame: 6 (a surround-aware network, an ssgi rung of view "surround") or 1 (the
+// front face). Throws InputError as check_model_input for a network the pipeline cannot serve.
+int frame_faces(const ModelConfig& config);
 // Whether the model's output is indirect light only (output_mode "indirect"), which the output side adds to the
 // frame's front direct light. Throws InputError naming `what` for an output_mode other than "lightmap" and
 // "indirect" (a hand-built ModelConfig: the loader refuses other values).
@@ -98,6 +102,16 @@ struct SurroundPipeline::Impl {
     void enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes, bool has_emission,
                          bool has_env, cl_mem light_dst, cl_mem final_dst, cl_mem display_dst,
                          const ToneMapOptions& tonemap);
+    // Compose and tone map of a lightmap already in light_dst (>= 3 N^2 floats); nothing when neither is asked for.
+    void enqueue_final(cl_mem light_dst, cl_mem planes, bool has_emission, bool has_env, cl_mem final_dst,
+                       cl_mem display_dst, const ToneMapOptions& tonemap);
+    // enqueue()'s checks of the planes (faces_used faces) and of the outputs asked for.
+    void check_frame_buffers(const DeviceBuffer& planes, int faces_used, const FrameOutputs& outputs);
+    // enqueue() for a model of family "ssgi" (no network): the gather of pipeline/ssgi.cpp, then compose and tone map.
+    void enqueue_ssgi(const ModelConfig& config, const DeviceBuffer& planes, const FrameDesc& desc,
+                      const FrameOutputs& outputs, PreprocessStats* stats, FrameTimings* timings);
+    std::unique_ptr<detail::Ssgi> ssgi;  // built on first use
+
     // run(): scratch device outputs for the images asked for, and their one download (timed into outputs_ms).
     FrameOutputs scratch_outputs(bool lightmap, bool final_image, bool display, const ToneMapOptions& tonemap);
     FrameImages download_outputs(const FrameOutputs& outputs, FrameTimings* timings);

@@ -77,7 +77,15 @@ std::string preprocess_defines() {
     return d;
 }
 
+int frame_faces(const ModelConfig& config) {
+    if (config.family == "ssgi") return config.ssgi.view == "front" ? 1 : kFaceCount;
+    return check_model_input(config) ? kFaceCount : 1;
+}
+
 bool check_model_input(const ModelConfig& config) {
+    if (config.family == "ssgi")
+        throw InputError("network input: family ssgi has no network and no network input; run it on frames "
+                         "(SurroundPipeline::run or enqueue)");
     const bool surround = config.input_nc == int(surround_input_channels().size());
     const auto& names = surround ? surround_input_channels() : single_view_input_channels();
     if (!surround && config.input_nc != int(names.size()))

@@ -26,6 +26,7 @@ const std::vector<ProgramSources>& programs() {
         {"compose", {"compose"}},
         {"metrics", {"metrics"}},
         {"neural_gi", {"neural_gi"}},
+        {"ssgi", {"ssgi"}},
         {"ao", {"ao"}},
         // Renderer (host/src/render): every tracing program is the scene (geometry, BVH, grid DDA) and its kernels;
         // only those that trace paths add the lighting (with the sunlit-patch weights every lit frame needs), its

@@ -1,0 +1,264 @@
+// Surround screen-space global illumination (SSGI): one bounce of the light that the cluster's faces see, gathered
+// at the front face's texels as a point-to-patch form-factor sum (docs/CONVENTIONS.md section 19; host:
+// host/src/pipeline/ssgi.cpp; naive reference: tests/reference_ssgi.hpp). No network: physics the generators must
+// beat, and the estimate they correct.
+//
+//   E(p) = sum_q L_q cos(theta_p) cos(theta_q) A_q / r^2,   indirect lighting = E(p) / pi   (irradiance / pi)
+//
+// with L_q = albedo_q * (direct_q [+ the previous bounce's indirect_q]) + emission_q the radiance a Lambertian
+// texel q sends, A_q its surface area (solid angle * |q|^2 / cos between its normal and the camera ray) and
+// positions from planar depth along each face's look axis. Far senders are clustered: a record stands for a block
+// of texels (its area, area-weighted normal sum, area-weighted mean radiance and position, and the positions'
+// variance), so one term stands for the block; a receiver near a block (closer than near_factor standard deviations
+// of its positions) gathers its four quarter blocks instead, and those near it their texels one by one (a two-step
+// hierarchy: a near block rarely needs all of its texels). Pairs closer than min_distance are skipped.
+//
+// Build options, the host's (ssgi_defines(), host/src/pipeline/ssgi.cpp):
+//   F_ALBEDO ... F_ENV, F_CHANNELS   the raw frame planes (pipeline/frame_planes.hpp)
+//   SSGI_MAX_DEPTH                   metres: a texel farther away (the renderer's sky, 1e4) is no surface
+//   SSGI_MIN_COS                     smallest |cos| between a sender's normal and its camera ray in its area
+//   SSGI_MAX_RADIANCE                sender radiance is clamped to this (so sums of area x radiance stay finite)
+//   SSGI_LOCAL                       the work-group size every kernel here is launched with
+//   SSGI_VEC                         sender records a gathering work-item reads as one vector (4, 8 or 16): the
+//                                    far field is summed branch-free in SIMD lanes across senders, which PoCL's
+//                                    implicit vectorization across work-items cannot do with the refinement's
+//                                    branches (a knob, as CLBlast's; record counts are padded to its multiple)
+#if !defined(F_ALBEDO) || !defined(F_NORMAL) || !defined(F_DEPTH) || !defined(F_DIRECT) || !defined(F_EMISSION) || \
+    !defined(F_CHANNELS) || !defined(SSGI_MAX_DEPTH) || !defined(SSGI_MIN_COS) || !defined(SSGI_MAX_RADIANCE) || \
+    !defined(SSGI_LOCAL) || \
+    !defined(SSGI_VEC)
+#error "ssgi.cl needs the host's constants: build it with ssgi_defines() (host/src/pipeline/ssgi.cpp)"
+#endif
+
+// Record planes (structure of arrays, plane stride = the padded record count). A texel's record is itself (variance 0);
+// a cluster's holds its texels' area sum, the sum of A n (whose length against the area says how coherent the
+// normals are, and whose dot product with a direction is the block's projected area for a flat block), the
+// area-weighted means of radiance and position, and the positions' variance about that mean. Records past the last
+// (padding) and texels without a surface are all zero and send nothing.
+#define R_AREA 0
+#define R_NORMAL 1    // 3 planes: sum of A n
+#define R_RADIANCE 4  // 3 planes: mean radiance L
+#define R_POSITION 7  // 3 planes: mean position p
+#define R_VARIANCE 10 // mean of |p - mean|^2
+#define R_PLANES 11
+
+#define VTYPE NGI_CAT(float, SSGI_VEC)
+#define ITYPE NGI_CAT(int, SSGI_VEC)
+#define VLOAD NGI_CAT(vload, SSGI_VEC)
+#define VSTORE NGI_CAT(vstore, SSGI_VEC)
+
+// Light terms as compose cleans them: NaN and negative -> 0, +Inf -> FLT_MAX.
+static inline float3 ssgi_clean(float3 v) {
+    return clamp(select(v, (float3)(0.0f), isnan(v)), (float3)(0.0f), (float3)(FLT_MAX));
+}
+
+// A sender's light terms: cleaned, then capped at SSGI_MAX_RADIANCE.
+static inline float3 ssgi_light(float3 v) { return fmin(ssgi_clean(v), (float3)(SSGI_MAX_RADIANCE)); }
+
+static inline float3 ssgi_load3(__global const float* q, int plane, int stride) {
+    return (float3)(q[(size_t)plane * stride], q[(size_t)(plane + 1) * stride], q[(size_t)(plane + 2) * stride]);
+}
+
+static inline void ssgi_store3(__global float* q, int plane, int stride, float3 v) {
+    q[(size_t)plane * stride] = v.x;
+    q[(size_t)(plane + 1) * stride] = v.y;
+    q[(size_t)(plane + 2) * stride] = v.z;
+}
+
+// The surface texel `pix` of face `f` shows: its world position relative to the cluster centre and its unit normal,
+// and the (unnormalized) camera ray through it. False for no surface: sky (zero normal, depth beyond
+// SSGI_MAX_DEPTH), non-finite or non-positive depth or normal. basis: per face look, right, up (9 floats, world).
+static inline int ssgi_surface(__global const float* planes, __global const float* basis, int f, int pix, int n,
+                               float3* p, float3* nrm, float3* ray) {
+    const int npix = n * n;
+    __global const float* q = planes + (size_t)f * F_CHANNELS * npix + pix;
+    float3 m = ssgi_load3(q, F_NORMAL, npix);
+    const float depth = q[(size_t)F_DEPTH * npix];
+    if (!(depth > 0.0f && depth <= SSGI_MAX_DEPTH)) return 0;  // also NaN
+    if (any(isnan(m)) || any(isinf(m))) return 0;
+    const float big = fmax(fabs(m.x), fmax(fabs(m.y), fabs(m.z)));
+    if (!(big >= 1e-6f)) return 0;
+    m /= big;  // scaled by the largest component first, so huge values cannot overflow
+    *nrm = normalize(m);
+    const int row = pix / n, col = pix - row * n;
+    const float u = 2.0f * ((float)col + 0.5f) / (float)n - 1.0f, v = 1.0f - 2.0f * ((float)row + 0.5f) / (float)n;
+    __global const float* b = basis + 9 * f;
+    const float3 d = (float3)(b[0], b[1], b[2]) + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]);
+    *p = depth * d;
+    *ray = d;
+    return 1;
+}
+
+// The record index of texel (col, row) of face f, for clusters of b x b texels refined through their four quarters
+// of bm x bm (bm = b / 2; b = 1: row-major): blocks of a face row-major, each block's texels contiguous, and inside
+// it each quarter's (row-major quarters, texels row-major in a quarter), so a cluster's quarters and a quarter's
+// texels are contiguous runs of records (vector loads).
+static inline int ssgi_record_index(int f, int row, int col, int n, int b) {
+    const int s = n / b, by = row / b, bx = col / b, ry = row - by * b, rx = col - bx * b;
+    const int bm = b > 1 ? b / 2 : 1, qy = ry / bm, qx = rx / bm;
+    return f * n * n + (by * s + bx) * b * b + (qy * (b / bm) + qx) * bm * bm + (ry - qy * bm) * bm + (rx - qx * bm);
+}
+
+// One record per texel of `faces` faces (at ssgi_record_index), and zero records up to `stride` (global size stride,
+// the plane stride of rec, >= faces n^2). bounce: when has_bounce, the previous bounce's indirect lighting per texel,
+// [face][3][n][n], added to the direct light before the albedo (a further bounce); else unused.
+__kernel void ssgi_senders(__global const float* planes, int faces, int n, int b, __global const float* basis,
+                           int has_emission, __global const float* bounce, int has_bounce, int stride,
+                           __global float* rec) {
+    const int gid = get_global_id(0), npix = n * n;
+    if (gid >= stride) return;
+    const int f = gid / npix, pix = gid - f * npix;
+    float3 p, nrm, ray;
+    float area = 0.0f;
+    float3 light = (float3)(0.0f);
+    if (gid < faces * npix && ssgi_surface(planes, basis, f, pix, n, &p, &nrm, &ray)) {
+        __global const float* q = planes + (size_t)f * F_CHANNELS * npix + pix;
+        float3 albedo = ssgi_load3(q, F_ALBEDO, npix);
+        albedo = clamp(select(albedo, (float3)(0.0f), isnan(albedo)), (float3)(0.0f), (float3)(1.0f));
+        float3 incoming = ssgi_light(ssgi_load3(q, F_DIRECT, npix));
+        if (has_bounce)
+            incoming = ssgi_light(incoming + ssgi_light(ssgi_load3(bounce + (size_t)f * 3 * npix + pix, 0, npix)));
+        light = albedo * incoming;
+        if (has_emission) light += ssgi_light(ssgi_load3(q, F_EMISSION, npix));
+        light = ssgi_light(light);
+        // Solid angle of the texel (2/n)^2 / |d|^3 times |p|^2, over the cosine with the camera ray.
+        const float len = length(ray);
+        const float c = fmax(fabs(dot(nrm, ray)) / len, SSGI_MIN_COS);
+        const float s = 2.0f / (float)n;
+        area = s * s * dot(p, p) / (len * len * len) / c;
+    }
+    if (!(area > 0.0f)) {
+        area = 0.0f;
+        p = nrm = light = (float3)(0.0f);
+    }
+    const int row = pix / n;
+    __global float* r = rec + (gid < faces * npix ? ssgi_record_index(f, row, pix - row * n, n, b) : gid);
+    r[(size_t)R_AREA * stride] = area;
+    ssgi_store3(r, R_NORMAL, stride, area * nrm);
+    ssgi_store3(r, R_RADIANCE, stride, light);
+    ssgi_store3(r, R_POSITION, stride, p);
+    r[(size_t)R_VARIANCE * stride] = 0.0f;
+}
+
+// Parent records: record i sums the k child records [i k, (i + 1) k) of `child` (plane stride child_stride) for
+// i < count, and zero records up to `stride` (global size stride).
+__kernel void ssgi_cluster(__global const float* child, int child_stride, int k, int count, int stride,
+                           __global float* parent) {
+    const int gid = get_global_id(0);
+    if (gid >= stride) return;
+    float a = 0.0f, spread = 0.0f;
+    float3 an = (float3)(0.0f), al = (float3)(0.0f), ap = (float3)(0.0f);
+    for (int t = 0; gid < count && t < k; ++t) {
+        __global const float* r = child + gid * k + t;
+        const float ai = r[(size_t)R_AREA * child_stride];
+        const float3 pi = ssgi_load3(r, R_POSITION, child_stride);
+        a += ai;
+        an += ssgi_load3(r, R_NORMAL, child_stride);
+        al += ai * ssgi_load3(r, R_RADIANCE, child_stride);
+        ap += ai * pi;
+        spread += ai * (r[(size_t)R_VARIANCE * child_stride] + dot(pi, pi));
+    }
+    __global float* r = parent + gid;
+    const float inv = a > 0.0f ? 1.0f / a : 0.0f;
+    const float3 mean = ap * inv;
+    r[(size_t)R_AREA * stride] = a;
+    ssgi_store3(r, R_NORMAL, stride, an);
+    ssgi_store3(r, R_RADIANCE, stride, fmin(al * inv, (float3)(SSGI_MAX_RADIANCE)));
+    ssgi_store3(r, R_POSITION, stride, mean);
+    r[(size_t)R_VARIANCE * stride] = fmax(spread * inv - dot(mean, mean), 0.0f);
+}
+
+// SSGI_VEC records from record c of `rec` (plane stride `stride`) sent to point p with unit normal np, added to
+// the lanes of er, eg, eb: each record's mean radiance times the form factor of its projected area,
+// max(0, np . w) max(0, -(sum A n) . w) / r^2, w the unit vector to its mean position. Zero for pairs closer than
+// sqrt(min_d2) (> 0) and for records that must be refined (near2 > 0: mean position within sqrt(near2) standard
+// deviations of its positions); returns that refine mask.
+static inline ITYPE ssgi_terms(__global const float* rec, int stride, int c, float3 p, float3 np, float min_d2,
+                               float near2, VTYPE* er, VTYPE* eg, VTYPE* eb) {
+    __global const float* r = rec + c;
+    const VTYPE wx = VLOAD(0, r + (size_t)R_POSITION * stride) - p.x;
+    const VTYPE wy = VLOAD(0, r + (size_t)(R_POSITION + 1) * stride) - p.y;
+    const VTYPE wz = VLOAD(0, r + (size_t)(R_POSITION + 2) * stride) - p.z;
+    const VTYPE d2 = wx * wx + wy * wy + wz * wz;
+    const VTYPE inv = rsqrt(fmax(d2, min_d2));
+    const VTYPE cp = (np.x * wx + np.y * wy + np.z * wz) * inv;
+    const VTYPE proj = -(VLOAD(0, r + (size_t)R_NORMAL * stride) * wx + VLOAD(0, r + (size_t)(R_NORMAL + 1) * stride) * wy +
+                         VLOAD(0, r + (size_t)(R_NORMAL + 2) * stride) * wz) * inv;
+    const ITYPE refine = near2 > 0.0f ? d2 < near2 * VLOAD(0, r + (size_t)R_VARIANCE * stride) : (ITYPE)(0);
+    const VTYPE g = select(fmax(cp, 0.0f) * fmax(proj, 0.0f) * inv * inv, (VTYPE)(0.0f), (d2 < min_d2) | refine);
+    *er += g * VLOAD(0, r + (size_t)R_RADIANCE * stride);
+    *eg += g * VLOAD(0, r + (size_t)(R_RADIANCE + 1) * stride);
+    *eb += g * VLOAD(0, r + (size_t)(R_RADIANCE + 2) * stride);
+    return refine;
+}
+
+// One record's term, as ssgi_terms computes each lane, added to *e; or, when near2 > 0 and its mean position is within
+// sqrt(near2) standard deviations of its positions, nothing: returns 1 (refine it).
+static inline int ssgi_record(__global const float* rec, int stride, int i, float3 p, float3 np, float min_d2,
+                              float near2, float3* e) {
+    const float3 w = ssgi_load3(rec + i, R_POSITION, stride) - p;
+    const float d2 = dot(w, w);
+    if (near2 > 0.0f && d2 < near2 * rec[(size_t)R_VARIANCE * stride + i]) return 1;
+    if (!(d2 >= min_d2)) return 0;
+    const float inv = rsqrt(d2);
+    const float cp = dot(np, w) * inv, proj = -dot(ssgi_load3(rec + i, R_NORMAL, stride), w) * inv;
+    *e += ssgi_load3(rec + i, R_RADIANCE, stride) * (fmax(cp, 0.0f) * fmax(proj, 0.0f) * inv * inv);
+    return 0;
+}
+
+static inline float ssgi_hsum(VTYPE v) {
+    float lane[SSGI_VEC];
+    VSTORE(v, 0, lane);
+    float s = 0.0f;
+    for (int k = 0; k < SSGI_VEC; ++k) s += lane[k];
+    return s;
+}
+
+// Gathers at the texels of faces [first_face, first_face + faces_out) (global size faces_out n^2).
+// coarse: the sender clusters, `cstride` records (a multiple of SSGI_VEC, zero past the last); mid: their quarters,
+// four per cluster (mid_stride); fine: the texels, `per_mid` per quarter (fine_stride). refine = 0: the coarse
+// records are all there is (texels, or clusters gathered whole). near2: a record whose mean position is closer than
+// sqrt(near2) standard deviations of its positions is replaced by its children. min_d2 > 0. Output,
+// out_lightmap = 0: the indirect lighting E / pi, [face][3][n][n] over the receiving faces; out_lightmap = 1: the
+// lightmap clean(direct) + E / pi of the receiving face (faces_out 1), saturating at FLT_MAX.
+__kernel void ssgi_gather(__global const float* planes, int n, __global const float* basis, __global const float* coarse,
+                          int cstride, __global const float* mid, int mid_stride, __global const float* fine,
+                          int fine_stride, int per_mid, int refine_on, float near2, float min_d2, int first_face,
+                          int faces_out, int out_lightmap, __global float* out) {
+    const int gid = get_global_id(0), npix = n * n;
+    if (gid >= faces_out * npix) return;
+    const int rf = gid / npix, pix = gid - rf * npix, f = first_face + rf;
+    float3 p, np, ray;
+    float3 e = (float3)(0.0f);
+    if (ssgi_surface(planes, basis, f, pix, n, &p, &np, &ray)) {
+        const float near_top = refine_on ? near2 : 0.0f;
+        VTYPE er = (VTYPE)(0.0f), eg = (VTYPE)(0.0f), eb = (VTYPE)(0.0f);
+        for (int c = 0; c < cstride; c += SSGI_VEC) {
+            const ITYPE refine = ssgi_terms(coarse, cstride, c, p, np, min_d2, near_top, &er, &eg, &eb);
+            if (!any(refine)) continue;
+            int lanes[SSGI_VEC];
+            VSTORE(refine, 0, lanes);
+            for (int k = 0; k < SSGI_VEC; ++k) {
+                if (!lanes[k]) continue;
+                for (int m = 4 * (c + k); m < 4 * (c + k) + 4; ++m) {  // the cluster's quarters
+                    if (!ssgi_record(mid, mid_stride, m, p, np, min_d2, near2, &e)) continue;
+                    const int first = m * per_mid;  // the quarter's texels (ssgi_record_index)
+                    if (per_mid % SSGI_VEC == 0)
+                        for (int t = first; t < first + per_mid; t += SSGI_VEC)
+                            ssgi_terms(fine, fine_stride, t, p, np, min_d2, 0.0f, &er, &eg, &eb);
+                    else
+                        for (int t = first; t < first + per_mid; ++t)
+                            ssgi_record(fine, fine_stride, t, p, np, min_d2, 0.0f, &e);
+                }
+            }
+        }
+        e += (float3)(ssgi_hsum(er), ssgi_hsum(eg), ssgi_hsum(eb));
+    }
+    const float3 indirect = fmin(e * M_1_PI_F, (float3)(FLT_MAX));  // an overflowed sum (+Inf) saturates
+    if (!out_lightmap) {
+        ssgi_store3(out + (size_t)rf * 3 * npix + pix, 0, npix, indirect);
+        return;
+    }
+    __global const float* q = planes + (size_t)f * F_CHANNELS * npix + pix;
+    ssgi_store3(out + pix, 0, npix, fmin(ssgi_clean(ssgi_load3(q, F_DIRECT, npix)) + indirect, (float3)(FLT_MAX)));
+}
