@@ -58,6 +58,7 @@ int check_sun_floor(const VoxelScene& scene, float y0, glm::vec3 lo, glm::vec3 h
     light.sun.direction = glm::normalize(glm::vec3(0.35f, 1.0f, 0.2f));
     light.sun.irradiance = glm::vec3(2.0f, 1.5f, 1.0f);
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 32;
     rs.reference_spp = 2;
     rs.max_bounces = 0;
@@ -125,6 +126,7 @@ TEST_CASE("mesh render: lighting from an emissive triangle follows Lambert's pol
     Renderer r(test::device(), s);
     const CameraPose pose = looking_down(glm::vec3(8.0f, 2.0f, 8.0f));
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 8;
     rs.reference_spp = 8192;
     rs.max_bounces = 0;
@@ -157,6 +159,7 @@ TEST_CASE("mesh render: furnace inside a closed sphere (no leaks, Le / (1 - albe
     Lighting sky;  // a bright sky: any ray that leaked out would bring it in
     sky.sky.zenith = sky.sky.horizon = sky.sky.ground = glm::vec3(100.0f);
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 8;
     rs.feature_spp = 4;
     rs.reference_spp = 512;
@@ -194,6 +197,7 @@ TEST_CASE("mesh render: AO of a floor under a triangle box = 1 - the box bottom'
     Renderer r(test::device(), s);
     const CameraPose pose = looking_down(glm::vec3(8.0f, 2.0f, 8.0f));
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 8;
     rs.seed = 3;
     const int rays = 8192;
@@ -220,6 +224,7 @@ TEST_CASE("mesh render: surface ids and barycentric weights reproduce the visibl
     pose.position = glm::vec3(13.0f, 7.0f, 14.0f);
     pose.look = glm::normalize(glm::vec3(8.0f, 3.0f, 8.0f) - pose.position);
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 32;
     const Image surf = r.render_surface(pose, rs);
     const Image geo = r.render_geometry(pose, rs, 0.0f);

@@ -103,6 +103,7 @@ TEST_CASE("voxel GI: a frame lit from the path-traced field matches the referenc
     pose.look = glm::vec3(0, -1, 0);
     pose.up = glm::vec3(0, 0, -1);
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 16;
     rs.reference_spp = 64;
     rs.max_bounces = 2;
@@ -148,6 +149,7 @@ TEST_CASE("voxel GI: bad input is refused naming what is wrong", "[voxel_gi]") {
 
     Renderer r(test::device(), scene);
     RenderSettings rs;
+    rs.feature_spp = 8;  // noise is fine here: these checks are not about light quality
     rs.n = 8;
     rs.reference = false;
     const Frame frame = r.render(CameraPose{{4.5f, 2.5f, 4.5f}, {0, -1, 0}, {0, 0, -1}}, l, rs);

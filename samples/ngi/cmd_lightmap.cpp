@@ -71,6 +71,7 @@ int run(const Options& o) {
     ngi::FrameReadStats read_stats;
     const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);  // the reference, if any, has the face size
     warn_frame_sanitized("lightmap", frame_dir, read_stats);
+    warn_noisy_direct_light("lightmap", frame_dir);
     timer.mark("read_frame");
     double share = -1.0;
     const PlanRung* chosen = plan ? &plan->choose(frame, share) : nullptr;
@@ -106,10 +107,15 @@ int run(const Options& o) {
             std::fprintf(stderr,
                          "ngi lightmap: warning: the model's input guard replaced %d values of the network input\n",
                          replaced);
-        const bool surround = model->config().input_nc == 12;
-        input_text = ngi::shape_string({1, model->config().input_nc, surround ? 2 * frame.n : frame.n,
-                                        surround ? 4 * frame.n : frame.n}) +
-                     ", output " + model->config().output_mode;  // "indirect": + the frame's direct light
+        const ngi::ModelConfig& c = model->config();
+        const bool surround = c.input_nc == 12;
+        if (c.family == "ssgi")  // no network: the gather of the faces' light, added to the direct light
+            input_text = "none (ssgi, " + c.ssgi.view + " faces, " + std::to_string(c.ssgi.bounces) + " bounce" +
+                         (c.ssgi.bounces > 1 ? "s" : "") + ")";
+        else
+            input_text = ngi::shape_string({1, c.input_nc, surround ? 2 * frame.n : frame.n,
+                                            surround ? 4 * frame.n : frame.n}) +
+                         ", output " + c.output_mode;  // "indirect": + the frame's direct light
     } else {
         images.lightmap = frame.get(ngi::Feature::Direct, ngi::Face::Front);
         images.final_image = pipeline.compose(images.lightmap, frame);

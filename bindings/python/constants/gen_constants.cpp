@@ -9,6 +9,7 @@
 
 #include "models/voxel_sh_model.hpp"
 #include "ops/luminance.hpp"
+#include "ngi/render.hpp"
 #include "ops/op_types.hpp"
 #include "pipeline/neural_gi_inputs.hpp"
 #include "pipeline/pipeline_impl.hpp"
@@ -47,6 +48,8 @@ int main(int argc, char** argv) {
     s += "# host/src/ops/luminance.hpp kRec709Luma: Rec. 709 luminance weights (R, G, B).\n";
     s += "REC709_LUMA = (" + py_float(detail::kRec709Luma[0]) + ", " + py_float(detail::kRec709Luma[1]) + ", " +
          py_float(detail::kRec709Luma[2]) + ")\n";
+    s += "# host/include/ngi/render.hpp kEngineFeatureSpp: direct-light samples per pixel of an engine's (converged) input.\n";
+    s += "ENGINE_FEATURE_SPP = " + std::to_string(kEngineFeatureSpp) + "\n";
     const std::string tmp = std::string(argv[1]) + ".tmp";
     {
         std::ofstream f(tmp, std::ios::binary);

@@ -88,7 +88,7 @@ time, settings and seed: same image). A pose is either frame `frame` of the scen
             if (!(hours >= 0.0f && hours <= 48.0f)) throw py::value_error("Renderer.render: time must be in 0 .. 48 hours");
             py::gil_scoped_release release;
             return std::make_shared<ngi::Frame>(r.renderer.render(pose, ngi::lighting_at(hours, s.sun_azimuth), rs));
-        }, py::arg("n") = 128, py::arg("spp") = 64, py::arg("feature_spp") = 8, py::arg("bounces") = 8,
+        }, py::arg("n") = 128, py::arg("spp") = 64, py::arg("feature_spp") = ngi::kEngineFeatureSpp, py::arg("bounces") = 8,
            py::arg("reference") = true, py::arg("time") = py::none(), py::arg("frame") = 0, py::arg("frames") = 100,
            py::arg("position") = py::none(), py::arg("look") = py::none(), py::arg("up") = py::none(),
            py::arg("seed") = py::none(),

@@ -61,9 +61,14 @@ struct CameraPose {
     glm::vec3 look{0, 0, -1}, up{0, 1, 0};
 };
 
+// Samples per pixel of the direct-light feature that make it an engine's input: converged, as a shadow-mapped sun and
+// a prefiltered sky are noise-free (issue 45: with 8 spp the networks' apparent gain was smoothing the tracer's own
+// noise). The default of RenderSettings, `ngi render`, ngi.Renderer.render and the planner.
+constexpr int kEngineFeatureSpp = 1024;
+
 struct RenderSettings {
     int n = 128;               // face size in pixels
-    int feature_spp = 8;       // samples per pixel of the "direct" feature (the other features are exact)
+    int feature_spp = kEngineFeatureSpp;  // samples per pixel of the "direct" feature (the other features are exact)
     int reference_spp = 64;    // samples per pixel of the reference lighting
     int max_bounces = 8;       // indirect bounces of the reference (0 = direct light only); Russian roulette
     int rr_start = 2;          // bounces before Russian roulette starts
