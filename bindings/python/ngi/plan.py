@@ -10,23 +10,47 @@ ngi.scoring, exactly as the ladder's held-out evaluation does. The cost of a run
 frame on this device (--cost lightmap: the whole `ngi lightmap` command; generator: the network alone); a device
 the zoo has not measured gets the rung's in-process pipeline time measured here instead.
 
-Choice: with a quality floor (--min-ssim / --min-psnr, the mean over the calibration frames) the fastest rung
-that meets it (and --max-ms, if given); with only --max-ms the most accurate rung (SSIM, then PSNR) within it.
-Surround-aware rungs with a measured per-frame switch in the zoo are also tried with it (frames with little
-light outside the front view run the single-view twin; docs/RESULTS.md). --validate K renders K other frames of
-the path and checks that the chosen rung keeps its promise there; the plan records the answer.
+Noise: two candidates are compared on the same calibration frames, pairwise. For each metric (final-image PSNR and
+SSIM) the margin of a over b is the mean over the frames of a's score minus b's on the same frame, and its noise is
+the standard error of that mean (sample standard deviation of the per-frame differences / sqrt(frames)), never less
+than a floor of 0.1 dB PSNR / 0.002 SSIM (NOISE_FLOORS; with one calibration frame there is no spread to measure
+and the floor alone is the noise). a is better than b beyond noise in a metric when the margin exceeds the noise,
+worse beyond noise when it is below minus the noise, and within noise otherwise.
 
-Candidates: the direct-light rung and the rungs whose network predicts indirect light (zoo "output_mode":
-"indirect": the pipeline adds it to the frame's direct light), each as exported. The thesis-mode rungs (the network
-predicts the whole lightmap; they lose to direct light alone on the held-out split, docs/RESULTS.md) and the other
-batch-norm mode of each rung are measured comparisons, tried only with --all-rungs. A zoo without indirect rungs
-offers all of its rungs. A rung with a measured per-frame guard in the zoo (rung "guard": {"max_indirect_share": t},
-ngi_train.generator.gi_eval) runs with it (a frame whose indirect share exceeds t falls back to direct light: ngi.indirect_share,
-`ngi lightmap --guard`), and the plan records it.
+Choice: a rung earns its cost over a cheaper candidate only by being better beyond noise in at least one metric
+and worse beyond noise in neither; a rung that does not earn it over every cheaper candidate is dominated and never
+chosen. So a rung is not chosen for a metric it wins when a cheaper one is better in the other (a worse image for
+a metric), nor for margins within noise (the cheaper one is as good as the frames can tell). The cheapest
+candidate is never dominated. Among the rungs that are not dominated and fit the budget: with a quality floor
+(--min-ssim / --min-psnr, on the mean over the calibration frames) the cheapest that meets it (and --max-ms, if
+given); with only --max-ms the most expensive that fits, which by the rule above is within noise of or better than
+every cheaper candidate in both metrics at once: the most accurate in PSNR and SSIM together, with no ranking of
+one metric over the other needed. Only rungs of equal cost are ordered by a metric: PSNR first, then SSIM (SSIM
+saturates near 1 where PSNR still separates images: the user's report that prompted this rule was a 4.4 dB worse
+image that SSIM rated 0.002 better). choose() is that decision, pure (no device). Surround-aware rungs with a
+measured per-frame switch in the zoo are also tried with it (frames with little light outside the front view run
+the single-view twin; docs/RESULTS.md).
 
-Nothing meets the budget: exit code 1, the closest rung named, nothing written. The plan is JSON
-("format": "ngi-plan", version 1; docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder,
-bn_mode, face size n, the optional switch, and the calibration and validation evidence.
+Validation: --validate K renders K other frames of the path (disjoint from the calibration frames) and scores the
+chosen rung and every cheaper candidate on them. The plan records the chosen rung's margin over each cheaper
+candidate on both frame sets, whether a quality floor held, and whether the choice held: a chosen rung that is
+worse beyond noise (same definition, over the validation frames) than a cheaper candidate there did not hold; the
+plan names those candidates and the planner prints a warning.
+
+Candidates: the direct-light rung and the rungs that compute indirect light for the pipeline to add to the frame's
+direct light: the rungs whose network predicts it (zoo "output_mode": "indirect") and the physics rungs (zoo
+"kind": "ssgi": no network, the pipeline gathers light over the frame's faces with the model file's settings),
+each as exported. The thesis-mode rungs (the network predicts the whole lightmap; they lose to direct light alone on
+the held-out split, docs/RESULTS.md) and the other batch-norm mode of each rung are measured comparisons, tried only
+with --all-rungs. A zoo with no indirect-light rung offers all of its rungs. A rung with a measured per-frame guard
+in the zoo (rung "guard": {"max_indirect_share": t}, ngi_train.generator.gi_eval) runs with it (a frame whose
+indirect share exceeds t falls back to direct light: ngi.indirect_share, `ngi lightmap --guard`), and the plan
+records it.
+
+Nothing meets the budget (or only rungs that a cheaper candidate dominates do): exit code 1, the closest rung (or
+the dominated rung and its margins) named, nothing written. The plan is JSON ("format": "ngi-plan", version 1;
+docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder, bn_mode, face size n, the optional
+switch, and the calibration and validation evidence.
 """
 
 import argparse
@@ -38,14 +62,20 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _ngi, scoring, zoo as zoo_mod
+from . import _constants, _ngi, scoring, zoo as zoo_mod
 
 DEFAULT_ZOO = Path(os.environ.get("NGI_ZOO", "models/zoo.json"))  # the repository's, run from its root
 PATH_FRAMES = 100
+# The metrics a choice weighs (module doc, "Noise"): score key, margin key in the plan, noise floor. A floor is the
+# least a margin must exceed to count even when the frames agree on it exactly (one frame, or the same difference
+# on every frame): a rung is not worth its cost for less than 0.1 dB or 0.002 SSIM (the SSIM margin by which a rung
+# 4.4 dB worse than direct light was once chosen). PSNR first: it orders rungs of equal cost.
+METRICS = (("psnr", "psnr_db", 0.1), ("ssim", "ssim", 0.002))
+NOISE_FLOORS = {key: floor for _, key, floor in METRICS}
 
 
 class PlanError(Exception):
-    """No rung meets the budget (the message names the closest one)."""
+    """No rung meets the budget, or only dominated ones do (the message names the closest or dominated one)."""
 
 
 def progress(iterable, desc):
@@ -85,7 +115,8 @@ class Evaluator:
 
     def model(self, rung):
         if rung["name"] not in self.models:
-            self.models[rung["name"]] = _ngi.Model(self.device, rung["path"], bn_mode=rung["bn_mode"])
+            # An ssgi rung has no batch norm (bn_mode null): its file's own settings.
+            self.models[rung["name"]] = _ngi.Model(self.device, rung["path"], bn_mode=rung.get("bn_mode"))
         return self.models[rung["name"]]
 
     def lightmap(self, rung, frames):
@@ -106,8 +137,16 @@ class Evaluator:
         return float(np.median(ts))
 
 
+def frame_scores(psnr, ssim, switched=0):
+    """A candidate's final-image scores over a frame set: per frame, in the frame set's order (comparisons pair the
+    frames), and the means a quality floor is about."""
+    psnr, ssim = [float(x) for x in psnr], [float(x) for x in ssim]
+    return {"ssim": float(np.mean(ssim)), "psnr": float(np.mean(psnr)), "switched": switched, "frames": len(ssim),
+            "per_frame": {"psnr": psnr, "ssim": ssim}}
+
+
 def score_all(ev, candidates, frame_sets):
-    """Mean final SSIM / PSNR of every candidate over the frame sets, and the per-frame outside light shares."""
+    """frame_scores of every candidate over the frame sets, and the per-frame outside light shares."""
     top = max(max(fs) for fs in frame_sets)
     scores = {c["name"]: {"ssim": [], "psnr": [], "switched": 0} for c in candidates}
     shares = []
@@ -130,8 +169,7 @@ def score_all(ev, candidates, frame_sets):
             s = cache[rung["name"]]
             scores[c["name"]]["ssim"].append(s["ssim"])
             scores[c["name"]]["psnr"].append(s["psnr"])
-    return {k: {"ssim": float(np.mean(v["ssim"])), "psnr": float(np.mean(v["psnr"])), "switched": v["switched"],
-                "frames": len(v["ssim"])} for k, v in scores.items()}, shares
+    return {k: frame_scores(v["psnr"], v["ssim"], v["switched"]) for k, v in scores.items()}, shares
 
 
 def meets(c, s, args):
@@ -151,21 +189,86 @@ def shortfall(c, s, args):
     return d
 
 
-def choose(candidates, scores, args):
-    ok = [c for c in candidates if meets(c, scores[c["name"]], args)]
-    if not ok:
-        closest = min(candidates, key=lambda c: shortfall(c, scores[c["name"]], args))
+def margin(a, b):
+    """a's margin over b (frame_scores of the same frames): per metric the mean paired difference and its noise
+    (module doc, "Noise")."""
+    if a["frames"] != b["frames"]:
+        raise ValueError(f"margins pair frames: {a['frames']} frames against {b['frames']}")
+    out = {}
+    for m, key, floor in METRICS:
+        d = np.subtract(a["per_frame"][m], b["per_frame"][m])
+        se = np.std(d, ddof=1) / np.sqrt(d.size) if d.size > 1 else 0.0
+        out[key], out[f"noise_{key}"] = float(d.mean()), float(max(se, floor))
+    return out
+
+
+def beyond_noise(mg, sign):
+    """The metrics (margin keys) in which the margin `mg` is beyond its noise: above it (sign +1) or below minus it
+    (sign -1)."""
+    return [key for _, key, _ in METRICS if sign * mg[key] > mg[f"noise_{key}"]]
+
+
+def margin_text(mg):
+    return (f"PSNR {mg['psnr_db']:+.2f} dB (noise {mg['noise_psnr_db']:.2f}), "
+            f"SSIM {mg['ssim']:+.4f} (noise {mg['noise_ssim']:.4f})")
+
+
+def cheaper(cand, candidates):
+    """The candidates that cost less than `cand`, cheapest first."""
+    return sorted((c for c in candidates if c["ms"] < cand["ms"]), key=lambda c: c["ms"])
+
+
+def margins_over(cand, others, scores):
+    return {c["name"]: margin(scores[cand["name"]], scores[c["name"]]) for c in others}
+
+
+def dominated_by(cand, candidates, scores):
+    """(name, cand's margin over it) of the cheapest candidate that `cand` does not earn its cost over (module doc,
+    "Choice"), or None: cand is not dominated."""
+    for name, mg in margins_over(cand, cheaper(cand, candidates), scores).items():
+        if beyond_noise(mg, -1) or not beyond_noise(mg, +1):
+            return name, mg
+    return None
+
+
+def choose(candidates, scores, budget):
+    """The choice (module doc, "Choice"), pure: candidates [{"name", "ms"}, ...], scores {name: frame_scores} on
+    the calibration frames, budget with max_ms, min_ssim, min_psnr (and cost, for messages). Returns (the chosen
+    candidate, why, its margins over each cheaper candidate); raises PlanError."""
+    ok = [c for c in candidates if meets(c, scores[c["name"]], budget)]
+    eligible = [c for c in ok if dominated_by(c, candidates, scores) is None]
+    if not eligible and ok:
+        c = min(ok, key=lambda c: c["ms"])
+        name, mg = dominated_by(c, candidates, scores)
+        raise PlanError(f"only rungs that a cheaper candidate matches or beats meet the budget ({budget_text(budget)}) "
+                        f"on these calibration frames; the cheapest of them, {c['name']} ({c['ms']:.1f} ms), does "
+                        f"not earn its cost over {name}: {margin_text(mg)}")
+    if not eligible:
+        closest = min(candidates, key=lambda c: shortfall(c, scores[c["name"]], budget))
         s = scores[closest["name"]]
-        raise PlanError(f"no rung meets the budget ({budget_text(args)}) on these calibration frames; the closest "
+        raise PlanError(f"no rung meets the budget ({budget_text(budget)}) on these calibration frames; the closest "
                         f"is {closest['name']}: {closest['ms']:.1f} ms, SSIM {s['ssim']:.4f}, PSNR {s['psnr']:.2f} dB")
-    if args.min_ssim is not None or args.min_psnr is not None:
-        pick = min(ok, key=lambda c: (c["ms"], -scores[c["name"]]["ssim"]))
-        why = (f"the fastest of {len(ok)} candidates that meet {budget_text(args)} on {scores[pick['name']]['frames']} "
-               f"calibration frames")
+
+    def accuracy(c):  # PSNR, then SSIM: orders rungs of equal cost only (module doc)
+        return tuple(scores[c["name"]][m] for m, _, _ in METRICS)
+
+    if budget.min_ssim is not None or budget.min_psnr is not None:
+        least = min(c["ms"] for c in eligible)
+        pick = max((c for c in eligible if c["ms"] == least), key=accuracy)
+        why = (f"the cheapest of {len(eligible)} undominated candidates that meet {budget_text(budget)} on "
+               f"{scores[pick['name']]['frames']} calibration frames")
     else:
-        pick = max(ok, key=lambda c: (scores[c["name"]]["ssim"], scores[c["name"]]["psnr"]))
-        why = f"the most accurate (SSIM) of {len(ok)} candidates within {budget_text(args)}"
-    return pick, why
+        pick = max(eligible, key=lambda c: (c["ms"], accuracy(c)))
+        why = (f"the most accurate of {len(eligible)} undominated candidates within {budget_text(budget)}: within "
+               f"noise of or better than every cheaper candidate in PSNR and SSIM")
+    return pick, why, margins_over(pick, cheaper(pick, candidates), scores)
+
+
+def validate(pick, candidates, scores):
+    """On the validation frames (scores: frame_scores of the pick and every cheaper candidate): the pick's margins
+    over each cheaper candidate, and the names of those it is worse than beyond noise (the choice did not hold)."""
+    margins = margins_over(pick, cheaper(pick, candidates), scores)
+    return margins, [name for name, mg in margins.items() if beyond_noise(mg, -1)]
 
 
 def budget_text(args):
@@ -179,16 +282,20 @@ def budget_text(args):
     return ", ".join(parts)
 
 
+def computes_indirect(rung):
+    """A rung whose output the pipeline adds to the frame's direct light: an indirect-light network or ssgi."""
+    return rung.get("kind") == "ssgi" or (rung.get("kind") == "rung" and rung.get("output_mode") == "indirect")
+
+
 def default_rungs(zoo, all_rungs=False):
     """The rungs the planner offers (module doc, "Candidates")."""
     rungs = zoo["rungs"]
-    if all_rungs or not any(r.get("output_mode") == "indirect" for r in rungs):
+    if all_rungs or not any(computes_indirect(r) for r in rungs):
         return rungs
-    return [r for r in rungs if r["file"] is None or (r.get("output_mode") == "indirect" and r.get("kind") == "rung")]
+    return [r for r in rungs if r["file"] is None or computes_indirect(r)]
 
 
 def candidates_of(zoo, ev, key, args, frames):
-    by_name = {r["name"]: r for r in zoo["rungs"]}
     cands = []
     for r in default_rungs(zoo, getattr(args, "all_rungs", False)):
         if key is not None and key in r["cost"]:
@@ -214,7 +321,8 @@ def rung_json(rung, plan_dir, with_guard=True):
     out = {"rung": rung["name"], "n": rung["n"],
            "model": os.path.relpath(rung["path"], plan_dir) if rung["path"] else None}
     if rung["path"]:
-        out["bn_mode"] = rung["bn_mode"]
+        if rung.get("bn_mode"):  # an ssgi rung has none
+            out["bn_mode"] = rung["bn_mode"]
         if with_guard and (rung.get("guard") or {}).get("max_indirect_share") is not None:
             out["guard"] = {"max_indirect_share": rung["guard"]["max_indirect_share"]}
     return out
@@ -234,7 +342,8 @@ def main(argv=None):
     ap.add_argument("--frames", type=int, default=4, help="calibration frames [default: %(default)s]")
     ap.add_argument("--validate", type=int, default=4, help="validation frames (0: none) [default: %(default)s]")
     ap.add_argument("--spp", type=int, default=1024, help="reference samples per pixel [default: %(default)s]")
-    ap.add_argument("--feature-spp", type=int, default=64, help="direct-light feature spp [default: %(default)s]")
+    ap.add_argument("--feature-spp", type=int, default=_constants.ENGINE_FEATURE_SPP,
+                    help="direct-light feature spp; the default is converged, an engine's input [default: %(default)s]")
     ap.add_argument("--time", type=float, default=None, help="time of day (hours) [default: the scene's]")
     ap.add_argument("--device", default="", help="OpenCL device (ngi.Device spec) [default: ngi's choice]")
     ap.add_argument("--all-rungs", action="store_true",
@@ -271,13 +380,17 @@ def main(argv=None):
             k = scores[c["name"]]["switched"]
             c["ms"] = (c["ms_each"][0] * (len(cal) - k) + c["ms_each"][1] * k) / len(cal)
 
-    print(f"{'rung':40s} {'ms':>9s} {'SSIM':>7s} {'PSNR':>6s}  meets", file=sys.stderr)
+    dominated = {}  # name: {"rung": the cheaper candidate it does not earn its cost over, its margins} or None
+    for c in cands:
+        d = dominated_by(c, cands, scores)
+        dominated[c["name"]] = {"rung": d[0], **d[1]} if d else None
+    print(f"{'rung':40s} {'ms':>9s} {'SSIM':>7s} {'PSNR':>6s}  meets  dominated by", file=sys.stderr)
     for c in sorted(cands, key=lambda c: c["ms"]):
-        s = scores[c["name"]]
+        s, d = scores[c["name"]], dominated[c["name"]]
         print(f"{c['name']:40s} {c['ms']:9.1f} {s['ssim']:7.4f} {s['psnr']:6.2f}  "
-              f"{'yes' if meets(c, s, args) else 'no'}", file=sys.stderr)
+              f"{'yes' if meets(c, s, args) else 'no':5s}  {d['rung'] if d else '-'}", file=sys.stderr)
     try:
-        pick, why = choose(cands, scores, args)
+        pick, why, margins = choose(cands, scores, args)
     except PlanError as e:
         print(f"ngi.plan: {e}; nothing written", file=sys.stderr)
         return 1
@@ -287,15 +400,17 @@ def main(argv=None):
     if args.validate:
         val_idx = [i for i in frame_indices(args.validate, 0.75) if i not in cal_idx]
         val = [render(renderer, ns, i, args) for i in progress(val_idx, "validation frames")]
-        vs, _ = score_all(ev, [pick], val)
+        vs, _ = score_all(ev, [pick, *cheaper(pick, cands)], val)
         v = vs[pick["name"]]
+        val_margins, beaten_by = validate(pick, cands, vs)
         # Only a quality floor is a promise about other frames (a time budget is kept by the zoo's measured ms).
         kept = None
         if args.min_ssim is not None or args.min_psnr is not None:
             kept = ((args.min_ssim is None or v["ssim"] >= args.min_ssim) and
                     (args.min_psnr is None or v["psnr"] >= args.min_psnr))
         validation = {"frames": val_idx, "ssim": v["ssim"], "psnr": v["psnr"], "switched": v["switched"],
-                      "kept_quality_promise": kept}
+                      "kept_quality_promise": kept, "margins": val_margins, "choice_held": not beaten_by,
+                      "beaten_by": beaten_by}
 
     plan_dir = args.out.resolve().parent
     plan = {"format": "ngi-plan", "version": 1, **rung_json(pick["rung"], plan_dir)}
@@ -308,9 +423,11 @@ def main(argv=None):
         "why": f"{pick['name']}: {why}: {pick['ms']:.1f} ms ({pick['cost_basis']}), SSIM {s['ssim']:.4f}, "
                f"PSNR {s['psnr']:.2f} dB",
         "calibration": {"frames": cal_idx, "path_frames": PATH_FRAMES, "spp": args.spp, "feature_spp": args.feature_spp,
-                        "outside_light_share": shares,
+                        "outside_light_share": shares, "noise_floor": NOISE_FLOORS,
                         "rungs": [{"name": c["name"], "ms": c["ms"], **scores[c["name"]],
-                                   "meets": meets(c, scores[c["name"]], args)} for c in cands]},
+                                   "meets": meets(c, scores[c["name"]], args),
+                                   "dominated_by": dominated[c["name"]]} for c in cands],
+                        "margins": margins},
         "validation": validation, "zoo": os.path.relpath(args.zoo.resolve(), plan_dir)})
     if plan["model"] is None:
         plan["note"] = "direct light only: no network runs (ngi lightmap --plan uses the frame's direct light)"
@@ -325,6 +442,9 @@ def main(argv=None):
                    else "quality promise NOT kept")
         print(f"validation on {len(validation['frames'])} other frames: SSIM {validation['ssim']:.4f}, PSNR "
               f"{validation['psnr']:.2f} dB: {verdict}", file=sys.stderr)
+        for name in validation["beaten_by"]:
+            print(f"ngi.plan: warning: the choice did not hold on the validation frames: {pick['name']} is worse "
+                  f"than the cheaper {name} beyond noise: {margin_text(validation['margins'][name])}", file=sys.stderr)
     print(f"wrote {args.out}", file=sys.stderr)
     return 0
 

@@ -5,7 +5,8 @@ Written by ngi_train.generator.ladder_eval from its measurements; read by ngi.pl
     {"format": "ngi-zoo", "version": 1, "comment": ..., "protocol": {how cost and accuracy were measured},
      "devices": {"pocl": {"platform", "name", "driver", ...}, ...},   # the devices the costs were measured on
      "switches": [{"surround", "single_view", "below_outside_light_share", ...}],  # measured per-frame switches
-     "rungs": [{"name", "file" (relative to the manifest's folder; null for the direct-light-only rung), "sha256",
+     "rungs": [{"name", "kind" ("direct" | "rung" | "bn_variant" | "legacy" | "ssgi"), "file" (relative to the
+                manifest's folder; null for the direct-light-only rung), "sha256",
                 "layout" ("surround" | "single_view" | "none"), "n", "ngf", "num_downs", "bn_mode", "weights",
                 "input": [1, C, H, W], "gflop", "memory_mib",
                 "cost": {device key: {"generator_ms", "lightmap_ms"}},
@@ -13,9 +14,13 @@ Written by ngi_train.generator.ladder_eval from its measurements; read by ngi.pl
                              "temporal": {sequence: {ssim, psnr, mabd, mabd_reference, warp_error, ...}}},
                 "training": {...}}, ...]}
 
+A rung of kind "ssgi" is a physics rung: its file (model family "ssgi", no tensors) holds the settings of the light
+gather the pipeline runs on the frame's faces; it has no network, so no "ngf", "num_downs" or "bn_mode" (null
+if given: ngi.Model refuses a batch-norm mode for it).
+
 load() checks the manifest against the files: a missing file, a file whose bytes (sha256) or whose architecture
-metadata (family, input channels, ngf, num_downs) disagree with its entry is a ZooError naming the manifest, the
-rung and what differs. Pure Python (no native module needed).
+metadata (family, input channels, ngf, num_downs; for ssgi the family) disagree with its entry is a ZooError naming
+the manifest, the rung and what differs. Pure Python (no native module needed).
 """
 
 import hashlib
@@ -28,6 +33,7 @@ from . import model_file
 FORMAT, VERSION = "ngi-zoo", 1
 INPUT_NC = {"surround": 12, "single_view": 10}
 RUNG_KEYS = ("name", "file", "layout", "n", "ngf", "num_downs", "bn_mode", "cost", "accuracy")
+NETWORK_KEYS = ("ngf", "num_downs", "bn_mode")  # of RUNG_KEYS, the ones an ssgi rung (no network) goes without
 
 
 class ZooError(ValueError):
@@ -61,13 +67,16 @@ def load(path, check_digests=True):
     names = set()
     for r in rungs:
         where = f"zoo {path}: rung {r.get('name', '?')!r}"
-        missing = [k for k in RUNG_KEYS if k not in r]
+        ssgi = r.get("kind") == "ssgi"
+        missing = [k for k in RUNG_KEYS if k not in r and not (ssgi and k in NETWORK_KEYS)]
         if missing:
             raise ZooError(f"{where}: missing keys {missing}")
         if r["name"] in names:
             raise ZooError(f"{where}: the name appears twice")
         names.add(r["name"])
         if r["file"] is None:
+            if ssgi:
+                raise ZooError(f"{where}: kind 'ssgi' without a file (the file holds the gather's settings)")
             if r["layout"] != "none":
                 raise ZooError(f"{where}: no file, but layout {r['layout']!r} (only the direct-light rung has none)")
             r["path"] = None
@@ -82,13 +91,18 @@ def load(path, check_digests=True):
             cfg = model_file.read_config(str(f))
         except Exception as e:  # a file that is not an ngi model at all
             raise ZooError(f"{where}: file {f}: {e}") from None
-        want = {"family": "pix2pix_unet", "input_nc": INPUT_NC.get(r["layout"]), "ngf": r["ngf"],
-                "num_downs": r["num_downs"]}
+        if ssgi:
+            want = {"family": "ssgi"}
+        else:
+            want = {"family": "pix2pix_unet", "input_nc": INPUT_NC.get(r["layout"]), "ngf": r["ngf"],
+                    "num_downs": r["num_downs"]}
         for k, v in want.items():
             if cfg.get(k) != v:
                 raise ZooError(f"{where}: the file's metadata disagrees with the manifest: {k} {cfg.get(k)!r} in "
                                f"{f.name}, {v!r} in the manifest")
-        if r["bn_mode"] not in ("running", "per_image"):
+        if ssgi and r.get("bn_mode") is not None:
+            raise ZooError(f"{where}: bn_mode {r['bn_mode']!r} for kind 'ssgi' (null: it has no batch norm)")
+        if not ssgi and r["bn_mode"] not in ("running", "per_image"):
             raise ZooError(f"{where}: bn_mode {r['bn_mode']!r} (running | per_image)")
         r["path"] = str(f)
     return zoo
