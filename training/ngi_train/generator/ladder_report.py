@@ -225,7 +225,7 @@ def cards(zoo):
                  f"downsamplings; {fmt(r.get('gflop'), '.2f')} GFLOP per frame.")
         L.append(f"- **Output**: the GI lightmap (direct + indirect diffuse, no albedo) of the "
                  f"{'global view (front view = exact crop)' if r['layout'] == 'surround' else 'front view'}; "
-                 f"batch norm at inference: {r['bn_mode']} (chosen by held-out L1 at export).")
+                 f"batch norm at inference: {r['bn_mode']} (chosen at export by L1 on frames of the held-out test split itself, not on a validation split: a known flaw of this record; scores in the file's training.bn_mode_selection).")
         L.append(f"- **Training**: {t.get('steps')} steps = {fmt(t.get('epochs'), '.1f')} epochs over "
                  f"{t.get('frames')} frames, seed {t.get('seed')}, {fmt((t.get('wall_seconds') or 0) / 60, '.0f')} "
                  f"min on one core of the 2-core machine.")
