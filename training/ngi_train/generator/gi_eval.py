@@ -41,6 +41,7 @@ GI rungs are added to (or replaced in) the zoo manifest.
 import argparse
 import datetime
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -111,13 +112,21 @@ def render_vox(args, work):
         frame = k * args.vox_path_frames // args.vox_frames
         d = work / "vox" / f.stem / f"{frame:04d}"
         out.setdefault(f.stem, []).append(d)
-        if (d / "camera.json").is_file():
-            continue
-        d.parent.mkdir(parents=True, exist_ok=True)
-        ngi_paths.run([ngi_bin, "render", "--scene", f, "--frame", frame, "--path-frames", args.vox_path_frames,
-                       "--face", 64, "--spp", args.vox_spp, "--feature-spp", 64, "--out", d,
-                       "--device", args.render_device])
+        render_vox_frame(ngi_bin, f, frame, args.vox_path_frames, args.vox_spp, 64, d, args.render_device)
     return out
+
+
+def render_vox_frame(ngi_bin, vox, frame, path_frames, spp, feature_spp, out, device):
+    """`ngi render` of frame `frame` of a .vox file's default camera path at N = 64 into the frame folder `out`
+    (render.json in it), unless it is there; written beside it and renamed, so an interrupted render is redone."""
+    if (out / "camera.json").is_file():
+        return
+    tmp = out.with_name(out.name + ".tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.parent.mkdir(parents=True, exist_ok=True)
+    ngi_paths.run([ngi_bin, "render", "--scene", vox, "--frame", frame, "--path-frames", path_frames, "--face", 64,
+                   "--spp", spp, "--feature-spp", feature_spp, "--out", tmp, "--device", device])
+    tmp.rename(out)
 
 
 def score_frames(runner, vs, frames, label):
@@ -441,9 +450,6 @@ def curves_stage(args, work, out_png):
 
 def vox_strip(runner, vs, dirs, best, out_png):
     """One row per .vox file (its first frame that sees lit geometry): direct | best rung | reference."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     v_best = next(v for v in vs if v["name"] == best)
     rows = []
     for stem, ds in sorted(dirs.items()):
@@ -454,15 +460,23 @@ def vox_strip(runner, vs, dirs, best, out_png):
                 rows.append((stem, [ref.score(fr.feature("direct")[0])["display"],
                                     ref.score(runner.lightmap(v_best, {64: fr})[0])["display"], ref.final]))
                 break
-    fig, axes = plt.subplots(len(rows), 3, figsize=(6, 2 * len(rows)), squeeze=False)
-    for i, (stem, imgs) in enumerate(rows):
+    draw_strip(rows, ("direct light", best, "reference"), out_png)
+
+
+def draw_strip(rows, titles, out_png):
+    """A grid of tone-mapped [3, H, W] images: rows [(label, [image per column])], one title per column."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(len(rows), len(titles), figsize=(2 * len(titles), 2 * len(rows)), squeeze=False)
+    for i, (label, imgs) in enumerate(rows):
         for j, img in enumerate(imgs):
             axes[i][j].imshow(np.clip(np.transpose(img, (1, 2, 0)), 0, 1), interpolation="nearest")
             axes[i][j].set_xticks([])
             axes[i][j].set_yticks([])
             if i == 0:
-                axes[i][j].set_title(("direct light", best, "reference")[j], fontsize=7)
-        axes[i][0].set_ylabel(stem, fontsize=7)
+                axes[i][j].set_title(titles[j], fontsize=7)
+        axes[i][0].set_ylabel(label, fontsize=7)
     fig.tight_layout()
     fig.savefig(out_png, dpi=72)
     plt.close(fig)
@@ -597,7 +611,7 @@ def gi_cards(zoo):
               f"- **Sees** {what}; N = {r['n']}, input {r['input']}; ngf {r['ngf']}, {r['num_downs']} downsamplings; "
               f"{fmt(r.get('gflop'), '.2f')} GFLOP per frame.",
               "- **Output**: indirect diffuse light of the front view (>= 0); lightmap = the frame's direct light + it; "
-              f"batch norm at inference: {r['bn_mode']} (chosen by held-out L1 at export).",
+              f"batch norm at inference: {r['bn_mode']} (chosen at export by L1 on frames of the held-out test split itself, not on a validation split: a known flaw of this record; scores in the file's training.bn_mode_selection).",
               f"- **Training**: {t.get('steps')} steps = {fmt(t.get('epochs'), '.1f')} epochs over {t.get('frames')} "
               f"frames, seed {t.get('seed')}, {fmt((t.get('wall_seconds') or 0) / 60, '.0f')} min on one core."]
         if h:
