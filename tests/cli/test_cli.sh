@@ -25,10 +25,18 @@ assert len(r['camera']['position']) == 3 and r['settings']['reference_spp'] == 4
 for f in globalview_albedo.exr globalview_normal.exr coord.exr input.npy; do
   [ -s "$work/merged/$f" ] || fail "ngi merge did not write $f"
 done
-"$ngi" lightmap --frame "$work/frame" --model "$model" --out "$work/lm" > /dev/null
+"$ngi" lightmap --frame "$work/frame" --model "$model" --out "$work/lm" > /dev/null 2> "$work/lm.err"
 for f in lightmap.exr final.png compare.png metrics.json; do
   [ -s "$work/lm/$f" ] || fail "ngi lightmap did not write $f"
 done
+# The frame's direct light was rendered at 1 spp (render.json): noisy, which no engine's is (issue 45).
+grep -q "the direct light was rendered at 1 spp" "$work/lm.err" || fail "lightmap did not warn of noisy light: $(cat "$work/lm.err")"
+# An ssgi rung (no network) by its name: the light the six faces show, added to the direct light.
+"$ngi" lightmap --frame "$work/frame" --model ssgi_surround --out "$work/lm_ssgi" > "$work/lm_ssgi.out" 2> /dev/null
+grep -q "input none (ssgi, surround faces, 1 bounce)" "$work/lm_ssgi.out" || fail "lightmap with ssgi_surround: $(cat "$work/lm_ssgi.out")"
+/usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1]))
+assert m['output_mode'] == 'indirect' and m['scores_valid'] and m['network']['final_ldr']['psnr'] > 0, m
+" "$work/lm_ssgi/metrics.json" || fail "lightmap with ssgi_surround: $(cat "$work/lm_ssgi/metrics.json")"
 
 # A frame whose front albedo is all NaN (issue 31, "a score that lies": it once ran with exit 0, "0 NaN/Inf
 # sanitized" and MSE 0 / SSIM 1): it runs, the count per file is warned on stderr and printed, and every score in
