@@ -247,7 +247,7 @@ TEST_CASE("SSGI: small random case for the simulators", "[ssgi][oclgrind]") {
     CHECK(worst_error(run_ssgi(planes, kFaceCount, n, true, look, up, p), ref, n) < 1e-4);
 }
 
-TEST_CASE("SSGI: the rung as a model file runs through the pipeline; bad files and frames are refused", "[ssgi]") {
+TEST_CASE("SSGI: the rung as a model file runs through the pipeline, and bad files and frames are refused", "[ssgi]") {
     test::TempDir dir("ssgi");
     const int n = 8;
     std::mt19937 rng(5);

@@ -130,9 +130,10 @@ public:
         char b[512];
         std::snprintf(b, sizeof b,
                       "%s  N=%d  %.1f fps\nraster %.1f ms\ntransfer %.1f ms (readback %.1f + gather %.1f)\n"
-                      "merge %.1f  network %.1f  compose %.1f ms\n%s  %.1f h  no area light",
+                      "merge %.1f  %s %.1f  compose %.1f ms\n%s  %.1f h  no area light",
                       rung_.c_str(), o_.n, fps_, last_.raster, last_.transfer(), last_.readback, last_.gather,
-                      last_.input, last_.network, last_.outputs, transfer_.used.c_str(), hours_);
+                      last_.input, model_.config().family == "ssgi" ? "ssgi" : "network", last_.network,
+                      last_.outputs, transfer_.used.c_str(), hours_);
         return b;
     }
 
