@@ -166,10 +166,10 @@ Table expect(std::initializer_list<std::pair<const char*, std::pair<bool, const 
 
 }  // namespace
 
-TEST_CASE("stability table: the surround and single-view generators on extreme frames", "[stability][pipeline]") {
+TEST_CASE("stability table: the surround and single-view generators and the ssgi rung on extreme frames", "[stability][pipeline]") {
     const int n = 32;
     const ngi::Frame clean = clean_frame(n);
-    for (const char* name : {"surround_n32_ngf32", "single_view_n32_ngf32"}) {
+    for (const char* name : {"surround_n32_ngf32", "single_view_n32_ngf32", "ssgi_surround"}) {
         ngi::Model model = ngi::Model::load(ngi::test::device(), ngi::resolve_model(name));
         ngi::SurroundPipeline pipeline(ngi::test::device(), n);
         ngi::PreprocessStats stats;
