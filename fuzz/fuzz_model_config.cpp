@@ -1,6 +1,7 @@
 // Model configs (__metadata__["ngi"], docs/MODEL_FORMAT.md) of every family, and what each family's loader does
 // with an accepted config before it needs an OpenCL device. The first input byte picks the family (modulo 7:
-// pix2pix_unet, deepillumination, mlp, neural_gi, voxel_sh, graph, or 6 = the "family" key as written); the rest is
+// pix2pix_unet, deepillumination, mlp, neural_gi, voxel_sh, graph, or 6 = the "family" key as written, which is how
+// family ssgi is reached: its seeds are the shipped ssgi models' configs); the rest is
 // the config's JSON text. For a family other than "as written", a text that parses as a JSON object gets that
 // family as its "family" key (re-serialized; a text whose "family" already matches is passed unchanged, so the
 // duplicate-key and number-format paths stay reachable), so that mutations explore one family's fields instead of
@@ -30,6 +31,7 @@
 #include "models/mlp_model.hpp"
 #include "models/neural_gi_model.hpp"
 #include "models/safetensors.hpp"
+#include "models/ssgi_config.hpp"
 #include "models/unet.hpp"
 #include "models/voxel_sh_model.hpp"
 
@@ -132,6 +134,17 @@ void check_voxel_sh(const ngi::ModelConfig& cfg) {
             if (x < 1) __builtin_trap();
 }
 
+// Family ssgi: what the pipeline's gather relies on (pipeline/ssgi.cpp): a known view, a cluster level and bounce
+// count within their bounds, finite non-negative distances, 3 output channels of indirect light and no network input.
+void check_ssgi(const ngi::ModelConfig& cfg) {
+    const ngi::ModelConfig::Ssgi& s = cfg.ssgi;
+    if ((s.view != "surround" && s.view != "front") || s.cluster_level < 0 ||
+        s.cluster_level > ngi::detail::kSsgiMaxClusterLevel || s.bounces < 1 || s.bounces > ngi::detail::kSsgiMaxBounces ||
+        !std::isfinite(s.near_factor) || s.near_factor < 0 || !std::isfinite(s.min_distance) || s.min_distance < 0 ||
+        cfg.input_nc != 0 || cfg.output_nc != 3 || cfg.output_mode != "indirect")
+        __builtin_trap();
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -151,6 +164,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     return ngi::fuzz::expect_ngi_errors_only([&] {
         const ngi::ModelConfig cfg = ngi::detail::parse_model_config(text, "fuzz.safetensors");
+        if (cfg.family == "ssgi") {  // no network (reached "as written" only): the gather's settings in range
+            check_ssgi(cfg);
+            return;
+        }
         if (cfg.input_nc < 1 || cfg.input_nc > ngi::detail::kMaxChannels || cfg.output_nc < 1 ||
             cfg.output_nc > ngi::detail::kMaxChannels || !finite_range(cfg.output_range))
             __builtin_trap();

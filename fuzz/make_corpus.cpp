@@ -307,6 +307,7 @@ int main(int argc, char** argv) {
         const std::string cfg = ngi::detail::read_safetensors(f.string()).metadata.at("ngi");
         const std::string family = json::parse(cfg).at("family").get<std::string>();
         if (per_family[family]++ >= 2) continue;
+        // A family the harness does not pick by byte 0 (ssgi) gets 6, "as written", like the second seed.
         const char pick = char(std::find(families.begin(), families.end(), family) - families.begin());
         put("model_config", f.stem().string(), std::string(1, pick) + cfg);
         put("model_config", f.stem().string() + "_as_written", std::string(1, char(6)) + cfg);
