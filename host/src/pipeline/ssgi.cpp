@@ -75,8 +75,9 @@ void Ssgi::enqueue(Context& ctx, cl_mem planes, int faces, int n, bool has_emiss
     const float near2 = p.near_factor * p.near_factor;
     const float min_d2 = std::max(p.min_distance * p.min_distance, FLT_MIN);  // coincident points send nothing
     static const std::size_t local[1] = {kSsgiLocal};
+    // Parent record i = the sum of child records [i k, (i + 1) k); zero records past `count` up to `stride`.
     auto sum_children = [&](const Buffer& child, int child_stride, int k, std::size_t count, std::size_t stride,
-                       const Buffer& parent) {
+                            const Buffer& parent) {
         cluster_.args(child, child_stride, k, int(count), int(stride), parent);
         const std::size_t g[1] = {round_up(stride, std::size_t(kSsgiLocal))};
         ctx.launch(cluster_, 1, g, local);
