@@ -18,6 +18,10 @@
 //   SSGI_MAX_DEPTH                   metres: a texel farther away (the renderer's sky, 1e4) is no surface
 //   SSGI_MIN_COS                     smallest |cos| between a sender's normal and its camera ray in its area
 //   SSGI_MAX_RADIANCE                sender radiance is clamped to this (so sums of area x radiance stay finite)
+//   SSGI_FACE_BASIS                  the six faces' look, right, up in cluster space (9 values a face, Face order:
+//                                    ngi::cluster_face_basis); a pixel's world direction is S^T of its cluster one,
+//                                    with the front camera's basis S = [alpha; beta; gamma] passed per frame as
+//                                    arguments (so a frame uploads nothing)
 //   SSGI_LOCAL                       the work-group size every kernel here is launched with
 //   SSGI_VEC                         sender records a gathering work-item reads as one vector (4, 8 or 16): the
 //                                    far field is summed branch-free in SIMD lanes across senders, which PoCL's
@@ -26,7 +30,7 @@
 #if !defined(F_ALBEDO) || !defined(F_NORMAL) || !defined(F_DEPTH) || !defined(F_DIRECT) || !defined(F_EMISSION) || \
     !defined(F_CHANNELS) || !defined(SSGI_MAX_DEPTH) || !defined(SSGI_MIN_COS) || !defined(SSGI_MAX_RADIANCE) || \
     !defined(SSGI_LOCAL) || \
-    !defined(SSGI_VEC)
+    !defined(SSGI_VEC) || !defined(SSGI_FACE_BASIS)
 #error "ssgi.cl needs the host's constants: build it with ssgi_defines() (host/src/pipeline/ssgi.cpp)"
 #endif
 
@@ -41,6 +45,12 @@
 #define R_POSITION 7  // 3 planes: mean position p
 #define R_VARIANCE 10 // mean of |p - mean|^2
 #define R_PLANES 11
+
+__constant float ssgi_face_basis[54] = {SSGI_FACE_BASIS};
+
+// The front camera's cluster basis (docs/CONVENTIONS.md section 1) as kernel arguments, and as three vectors.
+#define SSGI_CLUSTER_ARGS float ax, float ay, float az, float bx, float by, float bz, float gx, float gy, float gz
+#define SSGI_CLUSTER_PASS (float3)(ax, ay, az), (float3)(bx, by, bz), (float3)(gx, gy, gz)
 
 #define VTYPE NGI_CAT(float, SSGI_VEC)
 #define ITYPE NGI_CAT(int, SSGI_VEC)
@@ -67,9 +77,9 @@ static inline void ssgi_store3(__global float* q, int plane, int stride, float3 
 
 // The surface texel `pix` of face `f` shows: its world position relative to the cluster centre and its unit normal,
 // and the (unnormalized) camera ray through it. False for no surface: sky (zero normal, depth beyond
-// SSGI_MAX_DEPTH), non-finite or non-positive depth or normal. basis: per face look, right, up (9 floats, world).
-static inline int ssgi_surface(__global const float* planes, __global const float* basis, int f, int pix, int n,
-                               float3* p, float3* nrm, float3* ray) {
+// SSGI_MAX_DEPTH), non-finite or non-positive depth or normal. alpha, beta, gamma: the cluster basis (world space).
+static inline int ssgi_surface(__global const float* planes, float3 alpha, float3 beta, float3 gamma, int f, int pix,
+                               int n, float3* p, float3* nrm, float3* ray) {
     const int npix = n * n;
     __global const float* q = planes + (size_t)f * F_CHANNELS * npix + pix;
     float3 m = ssgi_load3(q, F_NORMAL, npix);
@@ -82,8 +92,9 @@ static inline int ssgi_surface(__global const float* planes, __global const floa
     *nrm = normalize(m);
     const int row = pix / n, col = pix - row * n;
     const float u = 2.0f * ((float)col + 0.5f) / (float)n - 1.0f, v = 1.0f - 2.0f * ((float)row + 0.5f) / (float)n;
-    __global const float* b = basis + 9 * f;
-    const float3 d = (float3)(b[0], b[1], b[2]) + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]);
+    __constant const float* b = ssgi_face_basis + 9 * f;
+    const float3 c = (float3)(b[0], b[1], b[2]) + u * (float3)(b[3], b[4], b[5]) + v * (float3)(b[6], b[7], b[8]);
+    const float3 d = c.x * alpha + c.y * beta + c.z * gamma;
     *p = depth * d;
     *ray = d;
     return 1;
@@ -102,8 +113,7 @@ static inline int ssgi_record_index(int f, int row, int col, int n, int b) {
 // One record per texel of `faces` faces (at ssgi_record_index), and zero records up to `stride` (global size stride,
 // the plane stride of rec, >= faces n^2). bounce: when has_bounce, the previous bounce's indirect lighting per texel,
 // [face][3][n][n], added to the direct light before the albedo (a further bounce); else unused.
-__kernel void ssgi_senders(__global const float* planes, int faces, int n, int b, __global const float* basis,
-                           int has_emission, __global const float* bounce, int has_bounce, int stride,
+__kernel void ssgi_senders(__global const float* planes, int faces, int n, int b, SSGI_CLUSTER_ARGS, int has_emission, __global const float* bounce, int has_bounce, int stride,
                            __global float* rec) {
     const int gid = get_global_id(0), npix = n * n;
     if (gid >= stride) return;
@@ -111,7 +121,7 @@ __kernel void ssgi_senders(__global const float* planes, int faces, int n, int b
     float3 p, nrm, ray;
     float area = 0.0f;
     float3 light = (float3)(0.0f);
-    if (gid < faces * npix && ssgi_surface(planes, basis, f, pix, n, &p, &nrm, &ray)) {
+    if (gid < faces * npix && ssgi_surface(planes, SSGI_CLUSTER_PASS, f, pix, n, &p, &nrm, &ray)) {
         __global const float* q = planes + (size_t)f * F_CHANNELS * npix + pix;
         float3 albedo = ssgi_load3(q, F_ALBEDO, npix);
         albedo = clamp(select(albedo, (float3)(0.0f), isnan(albedo)), (float3)(0.0f), (float3)(1.0f));
@@ -221,7 +231,7 @@ static inline float ssgi_hsum(VTYPE v) {
 // sqrt(near2) standard deviations of its positions is replaced by its children. min_d2 > 0. Output,
 // out_lightmap = 0: the indirect lighting E / pi, [face][3][n][n] over the receiving faces; out_lightmap = 1: the
 // lightmap clean(direct) + E / pi of the receiving face (faces_out 1), saturating at FLT_MAX.
-__kernel void ssgi_gather(__global const float* planes, int n, __global const float* basis, __global const float* coarse,
+__kernel void ssgi_gather(__global const float* planes, int n, SSGI_CLUSTER_ARGS, __global const float* coarse,
                           int cstride, __global const float* mid, int mid_stride, __global const float* fine,
                           int fine_stride, int per_mid, int refine_on, float near2, float min_d2, int first_face,
                           int faces_out, int out_lightmap, __global float* out) {
@@ -230,7 +240,7 @@ __kernel void ssgi_gather(__global const float* planes, int n, __global const fl
     const int rf = gid / npix, pix = gid - rf * npix, f = first_face + rf;
     float3 p, np, ray;
     float3 e = (float3)(0.0f);
-    if (ssgi_surface(planes, basis, f, pix, n, &p, &np, &ray)) {
+    if (ssgi_surface(planes, SSGI_CLUSTER_PASS, f, pix, n, &p, &np, &ray)) {
         const float near_top = refine_on ? near2 : 0.0f;
         VTYPE er = (VTYPE)(0.0f), eg = (VTYPE)(0.0f), eb = (VTYPE)(0.0f);
         for (int c = 0; c < cstride; c += SSGI_VEC) {

@@ -279,6 +279,29 @@ TEST_CASE("SSGI: the rung as a model file runs through the pipeline, and bad fil
     CHECK(out.lightmap.data == direct.lightmap);  // the pipeline runs the same gather, bit for bit
     CHECK(out.final_image.data == pipe.compose(out.lightmap, frame).data);
     CHECK(stats.total_nonfinite() == 0);
+    // Transfers as for a network: run() uploads the planes and downloads the outputs once (plus the counters when
+    // stats are asked for); enqueue() on device buffers moves nothing through the host (the camera is a kernel
+    // argument). A NaN in the frame is counted when stats are asked for.
+    HostTransfers t0 = test::device().host_transfers();
+    pipe.run(model, frame, true, true, false);
+    HostTransfers t1 = test::device().host_transfers();
+    CHECK(t1.uploads - t0.uploads == 1);
+    CHECK(t1.downloads - t0.downloads == 1);
+    const std::vector<float> packed = pack_frame_planes(frame, kFaceCount);
+    DeviceBuffer in = DeviceBuffer::allocate(test::device(), packed.size() * sizeof(float));
+    in.upload(packed.data(), packed.size() * sizeof(float));
+    FrameOutputs outs;
+    outs.lightmap = DeviceBuffer::allocate(test::device(), 3 * npix * sizeof(float));
+    t0 = test::device().host_transfers();
+    pipe.enqueue(model, in, FrameDesc::of(frame, kFaceCount), outs);
+    test::device().finish();
+    t1 = test::device().host_transfers();
+    CHECK(t1.uploads == t0.uploads);
+    CHECK(t1.downloads == t0.downloads);
+    Frame nan_frame = frame;
+    nan_frame.get(Feature::Albedo, Face::Back).data[3] = NAN;
+    pipe.run(model, nan_frame, true, false, false, {}, &stats);
+    CHECK(stats.nonfinite[int(Feature::Albedo)] == 1);
 
     CHECK_THROWS_WITH(model.run(Tensor({1, 12, 8, 8})), Contains("family ssgi has no network"));
     // A rung that gathers from six faces refuses a front-only frame.

@@ -320,10 +320,9 @@ int main(int argc, char** argv) {
     try {
         model = ngi::Model::load(*device, o.model);
         const ngi::ModelConfig& c = model->config();
-        if (c.input_nc != 12 && !(c.family == "ssgi" && c.ssgi.view == "surround"))
+        if (c.input_nc != 12 && c.family != "ssgi")  // the viewer renders all six faces: any ssgi rung runs
             throw ngi::InputError("model " + o.model + " has input_nc " + std::to_string(c.input_nc) +
-                                  ": the viewer runs surround models (12 input channels, or an ssgi rung of view "
-                                  "\"surround\")");
+                                  ": the viewer runs surround models (12 input channels) and ssgi rungs");
     } catch (const ngi::ClError& e) {
         std::fprintf(stderr, "ngi_gl_viewer: device failure loading the model: %s\n", one_line(e.what()).c_str());
         return 3;

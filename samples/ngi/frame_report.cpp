@@ -28,25 +28,24 @@ void warn_frame_sanitized(const char* command, const std::string& frame_dir, con
                  command, frame_dir.c_str(), stats.total_sanitized(), sanitized_files_text(stats).c_str());
 }
 
-int warn_noisy_direct_light(const char* command, const std::string& frame_dir) {
+void warn_noisy_direct_light(const char* command, const std::string& frame_dir) {
     const std::string path = (std::filesystem::path(frame_dir) / "render.json").string();
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return 0;
+    if (!std::filesystem::is_regular_file(path, ec)) return;
     int spp = 0;
     try {
         const nlohmann::json j = nlohmann::json::parse(ngi::read_input_file(path, "read", 1 << 20));
         const nlohmann::json& v = j.at("settings").at("feature_spp");
-        if (!v.is_number_integer()) return 0;
+        if (!v.is_number_integer()) return;
         spp = v.get<int>();
     } catch (const std::exception&) {
-        return 0;  // not ngi render's file, or not one it wrote: nothing is known of the noise
+        return;  // not ngi render's file, or not one it wrote: nothing is known of the noise
     }
     if (spp > 0 && spp < ngi::kEngineFeatureSpp / 4)
         std::fprintf(stderr,
                      "ngi %s: warning: %s: the direct light was rendered at %d spp (render.json): noisy, where an "
                      "engine's is converged (ngi render's default is %d spp); scores measure the noise too\n",
                      command, frame_dir.c_str(), spp, ngi::kEngineFeatureSpp);
-    return spp;
 }
 
 namespace {

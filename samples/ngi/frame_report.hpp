@@ -19,8 +19,8 @@ void warn_frame_sanitized(const char* command, const std::string& frame_dir, con
 // A frame rendered by `ngi render` records its direct-light samples per pixel in render.json: below a quarter of an
 // engine's converged input (ngi::kEngineFeatureSpp) the direct light is noisy, which no engine's is, and a rung
 // scored on it is scored on the tracer's noise (issue 45). Warns naming the level; silent without a render.json
-// or with one that does not say (frames of `ngi dataset`, an application's own). Returns the spp, or 0 if unknown.
-int warn_noisy_direct_light(const char* command, const std::string& frame_dir);
+// or with one that does not say (frames of `ngi dataset`, an application's own).
+void warn_noisy_direct_light(const char* command, const std::string& frame_dir);
 
 // When anything was replaced: every score object of `metrics` (an object with "mse", "psnr" and "ssim") gets null
 // scores and a note, and metrics gains "scores_valid": false and "frame_sanitized": [{"file", "nan", "inf"}, ...].

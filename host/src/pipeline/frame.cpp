@@ -63,20 +63,21 @@ void SurroundPipeline::Impl::check_frame_buffers(const DeviceBuffer& planes, int
     if (outputs.display) check_tonemap(outputs.tonemap);
 }
 
-// Family "ssgi": no network. The preprocessing runs for its counters (the same sanitizing report as a network's
-// input), the gather writes the lightmap (direct + its indirect light), then compose and tone map as for a network.
+// Family "ssgi": no network. The gather writes the lightmap (direct + its indirect light), then compose and tone map
+// as for a network. The preprocessing runs only when the counters are asked for (`stats`): it is the same sanitizing
+// report a network's input gives, and the gather needs nothing else from it.
 void SurroundPipeline::Impl::enqueue_ssgi(const ModelConfig& config, const DeviceBuffer& planes, const FrameDesc& desc,
                                           const FrameOutputs& outputs, PreprocessStats* stats, FrameTimings* timings) {
     const int faces_used = detail::frame_faces(config);
-    if (desc.faces != 1 && desc.faces != kFaceCount)
-        throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
     if (desc.faces < faces_used)
         throw InputError("enqueue frame: the ssgi rung (view \"" + config.ssgi.view + "\") gathers from all 6 faces, "
                          "the frame holds " + std::to_string(desc.faces));
     check_frame_buffers(planes, faces_used, outputs);
     if (!ssgi) ssgi = std::make_unique<detail::Ssgi>(ctx);
     StageClock lap(ctx, timings);
-    enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env, desc.look, desc.up, config, false);
+    if (stats)
+        enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env, desc.look, desc.up, config,
+                      false);
     lap(&FrameTimings::input_ms);
     cl_mem light_dst = outputs.lightmap.opencl_mem();
     if (!light_dst) {
@@ -155,13 +156,13 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
     const ModelConfig& config = model.config();
     if (detail::shared_context_of(detail::ModelAccess::device(model)) != detail::shared_context_of(im.device))
         throw InputError("enqueue frame: the model was loaded on another device than the pipeline's");
+    if (desc.faces != 1 && desc.faces != kFaceCount)
+        throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
     if (config.family == "ssgi") {
         im.enqueue_ssgi(config, planes, desc, outputs, stats, timings);
         return;
     }
     const bool surround = detail::check_model_input(config);
-    if (desc.faces != 1 && desc.faces != kFaceCount)
-        throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
     if (surround && desc.faces != kFaceCount)
         throw InputError("enqueue frame: the model is surround-aware (12 input channels) and needs all 6 faces, "
                          "the frame holds " + std::to_string(desc.faces));
@@ -230,10 +231,10 @@ FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t
     im.ctx.write(im.raw, 0, need, planes, "frame planes");
     if (timings) timings->gather_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const FrameOutputs outs = im.scratch_outputs(lightmap, final_image, display, tonemap);
-    enqueue(model, im.raw_handle, desc, outs, nullptr, timings);  // checks the model against the frame
-    FrameImages result = im.download_outputs(outs, timings);
-    if (stats) im.read_stats(*stats);
-    return result;
+    // Checks the model against the frame; with `stats` it downloads the counters too (an ssgi rung preprocesses only
+    // then).
+    enqueue(model, im.raw_handle, desc, outs, stats, timings);
+    return im.download_outputs(outs, timings);
 }
 
 FrameOutputs SurroundPipeline::Impl::scratch_outputs(bool lightmap, bool final_image, bool display,

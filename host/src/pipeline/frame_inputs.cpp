@@ -117,10 +117,8 @@ FrameImages SurroundPipeline::run(Model& model, const FrameInputs& inputs, bool 
                                   FrameTimings* timings) {
     Impl& im = *impl_;
     const FrameOutputs outs = im.scratch_outputs(lightmap, final_image, display, tonemap);
-    enqueue(model, inputs, outs, nullptr, timings);
-    FrameImages result = im.download_outputs(outs, timings);
-    if (stats) im.read_stats(*stats);
-    return result;
+    enqueue(model, inputs, outs, stats, timings);  // with `stats`, the counters' download too
+    return im.download_outputs(outs, timings);
 }
 
 }  // namespace ngi

@@ -20,7 +20,16 @@ const Face kFaces[kFaceCount] = {Face::Front, Face::Back, Face::Left, Face::Righ
 }  // namespace
 
 std::string ssgi_defines() {
-    return join_defines({frame_plane_defines(), define("SSGI_MAX_DEPTH", kSsgiMaxDepth),
+    // The faces' bases in cluster space, defined once (cluster_face_basis): axis vectors, so exact as integers.
+    std::array<int, 9 * kFaceCount> faces{};
+    for (int f = 0; f < kFaceCount; ++f) {
+        const FaceBasis fb = cluster_face_basis(kFaces[f]);
+        const glm::vec3 v[3] = {fb.look, fb.right, fb.up};
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) faces[9 * f + 3 * k + c] = int(v[k][c]);
+    }
+    return join_defines({frame_plane_defines(), define_list("SSGI_FACE_BASIS", faces),
+                         define("SSGI_MAX_DEPTH", kSsgiMaxDepth),
                          define("SSGI_MIN_COS", kSsgiMinCos), define("SSGI_MAX_RADIANCE", kSsgiMaxRadiance),
                          define("SSGI_LOCAL", kSsgiLocal), define("SSGI_VEC", kSsgiVec)});
 }
@@ -56,22 +65,13 @@ void Ssgi::enqueue(Context& ctx, cl_mem planes, int faces, int n, bool has_emiss
     if (double(kRecordPlanes) * double(fine_count) > 2147483647.0)
         throw InputError("ssgi: face size N = " + std::to_string(n) + " gives more than 2^31 - 1 record values");
 
-    // World-space basis of every face: look, right, up.
-    std::array<float, 9 * kFaceCount> basis{};
-    for (int f = 0; f < kFaceCount; ++f) {
-        const FaceBasis fb = cluster.face(kFaces[f]);
-        const glm::vec3 v[3] = {fb.look, fb.right, fb.up};
-        for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c) basis[9 * f + 3 * k + c] = v[k][c];
-    }
-    ensure_buffer(ctx, basis_, sizeof basis, "ssgi face bases");
-    ctx.write(basis_, 0, sizeof basis, basis.data(), "ssgi face bases");
     ensure_buffer(ctx, fine_, kRecordPlanes * fine_count * sizeof(float), "ssgi sender records");
     if (b > 2) ensure_buffer(ctx, mid_, kRecordPlanes * mid_count * sizeof(float), "ssgi quarter-cluster records");
     if (b > 1) ensure_buffer(ctx, coarse_, kRecordPlanes * coarse_count * sizeof(float), "ssgi cluster records");
     const Buffer& mid = b > 2 ? mid_ : fine_;
     const Buffer& coarse = b > 1 ? coarse_ : fine_;
     const int mid_stride = int(b > 2 ? mid_count : fine_count), cstride = int(b > 1 ? coarse_count : fine_count);
+    const glm::vec3 al = cluster.alpha, be = cluster.beta, ga = cluster.gamma;  // the kernels' SSGI_CLUSTER_ARGS
     const float near2 = p.near_factor * p.near_factor;
     const float min_d2 = std::max(p.min_distance * p.min_distance, FLT_MIN);  // coincident points send nothing
     static const std::size_t local[1] = {kSsgiLocal};
@@ -88,14 +88,14 @@ void Ssgi::enqueue(Context& ctx, cl_mem planes, int faces, int n, bool has_emiss
     if (p.bounces > 1) ensure_buffer(ctx, bounce_, 3 * texels * sizeof(float), "ssgi bounce light");
     for (int bounce = 1; bounce <= p.bounces; ++bounce) {
         const bool last = bounce == p.bounces;
-        senders_.args(planes, senders, n, b, basis_, int(has_emission), bounce > 1 ? bounce_.get() : fine_.get(),
+        senders_.args(planes, senders, n, b, al.x, al.y, al.z, be.x, be.y, be.z, ga.x, ga.y, ga.z, int(has_emission), bounce > 1 ? bounce_.get() : fine_.get(),
                       int(bounce > 1), int(fine_count), fine_);
         const std::size_t gs[1] = {round_up(fine_count, std::size_t(kSsgiLocal))};
         ctx.launch(senders_, 1, gs, local);
         if (b > 2) sum_children(fine_, int(fine_count), bm * bm, mid_count, mid_count, mid_);
         if (b > 1) sum_children(mid, mid_stride, 4, texels / (std::size_t(b) * b), coarse_count, coarse_);
         const int faces_out = last ? 1 : senders;
-        gather_.args(planes, n, basis_, coarse, cstride, mid, mid_stride, fine_, int(fine_count), bm * bm, int(b > 1),
+        gather_.args(planes, n, al.x, al.y, al.z, be.x, be.y, be.z, ga.x, ga.y, ga.z, coarse, cstride, mid, mid_stride, fine_, int(fine_count), bm * bm, int(b > 1),
                      near2, min_d2, 0, faces_out, int(last), last ? lightmap : bounce_.get());
         const std::size_t gg[1] = {round_up(std::size_t(faces_out) * npix, std::size_t(kSsgiLocal))};
         ctx.launch(gather_, 1, gg, local);

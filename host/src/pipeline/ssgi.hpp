@@ -38,7 +38,7 @@ public:
 
 private:
     Kernel senders_, cluster_, gather_;
-    Buffer basis_, fine_, mid_, coarse_, bounce_;
+    Buffer fine_, mid_, coarse_, bounce_;
 };
 
 }  // namespace ngi::detail
