@@ -210,11 +210,11 @@ def summarize(rows_by_rung, ssgi):
 
 def strip(ev, rungs, frames, summary, out_png, middle):
     """direct | ssgi_surround | best network | reference: frame `middle` (else the first lit one) of the first file
-    of each scene group."""
+    of each scene group (this project's own scenes are the group "other")."""
     cols = [c for c in ("direct_only", summary["ssgi_baseline"], summary["best_network"]) if c]
     by_name = {r["name"]: r for r in rungs}
     rows = []
-    for group in gi_eval.VOX_GROUPS:
+    for group in list(gi_eval.VOX_GROUPS) + ["other"]:
         lit = [fn for fn, e in frames.items() if not e["unlit"] and gi_eval.vox_group(fn.rsplit("/", 1)[0]) == group]
         if not lit:
             continue
