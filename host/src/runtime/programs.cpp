@@ -27,6 +27,7 @@ const std::vector<ProgramSources>& programs() {
         {"metrics", {"metrics"}},
         {"neural_gi", {"neural_gi"}},
         {"ssgi", {"ssgi"}},
+        {"display", {"display"}},
         {"ao", {"ao"}},
         // Renderer (host/src/render): every tracing program is the scene (geometry, BVH, grid DDA) and its kernels;
         // only those that trace paths add the lighting (with the sunlit-patch weights every lit frame needs), its
