@@ -23,12 +23,13 @@ import argparse
 import inspect
 import os
 import pickle
+import stat
 import sys
 
 import numpy as np
 
-from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, ConversionError, expected_shapes,
-                         make_config, write_model)
+from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, ConversionError, check_input_file,
+                         check_output_file, expected_shapes, make_config, write_model)
 
 # --------------------------------------------------------------------------
 # Checkpoint loading and validation
@@ -36,15 +37,26 @@ from .model_file import (BN_MODES, DROPOUT_MODES, FAMILIES, OUTPUT_MODES, Conver
 
 def _torch_load(pth_path):
     """torch.load on the CPU, refusing arbitrary pickled code wherever torch can."""
+    check_input_file(pth_path)  # before torch opens it: a FIFO would block, /dev/zero fill the memory
     import torch  # noqa: PLC0415 (imported where needed: the ONNX path does not need torch)
+
+    def load(**kwargs):
+        try:
+            return torch.load(pth_path, map_location="cpu", **kwargs)
+        except Exception as error:  # noqa: BLE001 (zipfile's, pickle's and torch's errors on a file that is not one)
+            if isinstance(error, pickle.UnpicklingError) and kwargs.get("weights_only"):
+                raise  # the safe loader's refusal: decided below
+            first_line = (str(error).splitlines() or [type(error).__name__])[0]
+            raise ConversionError(f"{pth_path} is not a readable PyTorch checkpoint (truncated or corrupt?): "
+                                  f"{first_line}") from None
 
     if "weights_only" not in inspect.signature(torch.load).parameters:
         # torch < 1.13 has no safe loader at all.
         print("ngi.convert: warning: this torch cannot load without unpickling arbitrary code; "
               "only convert checkpoints you trust", file=sys.stderr)
-        return torch.load(pth_path, map_location="cpu")
+        return load()
     try:
-        return torch.load(pth_path, map_location="cpu", weights_only=True)
+        return load(weights_only=True)
     except pickle.UnpicklingError as error:
         # torch 1.x's weights_only unpickler rejects plain floats (pytorch
         # issue 94670, fixed in 2.0), and DeepIllumination checkpoints hold
@@ -54,7 +66,7 @@ def _torch_load(pth_path):
             raise ConversionError(f"{pth_path}: refused by torch.load(weights_only=True): {error}") from None
         print(f"ngi.convert: warning: torch {torch.__version__} cannot load {pth_path} with weights_only=True; "
               "loading it with full unpickling - only convert checkpoints you trust", file=sys.stderr)
-        return torch.load(pth_path, map_location="cpu", weights_only=False)
+        return load(weights_only=False)
 
 
 def load_state_dict(pth_path):
@@ -130,6 +142,7 @@ def convert_checkpoint(pth_path, out_path, family, *, half=False, **options):
 
     `options` are make_config's keyword arguments (bn_mode is required).
     """
+    check_output_file(out_path)  # before the work; write_model checks it again
     state_dict, layout = load_state_dict(pth_path)
     options.setdefault("source", f"{os.path.basename(pth_path)} ({layout}), converted by ngi.convert")
     config = make_config(family, **options)
@@ -143,6 +156,10 @@ def _is_onnx(path):
     if path.lower().endswith(".onnx"):
         return True
     try:
+        # Only a regular file is opened here (a FIFO would block); anything else goes on to the checkpoint path,
+        # whose file check names it.
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
         with open(path, "rb") as f:
             head = f.read(2)
     except OSError:

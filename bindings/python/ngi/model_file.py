@@ -13,6 +13,8 @@ is ngi.convert.
 
 import json
 import os
+import secrets
+import stat
 import struct
 
 import numpy as np
@@ -40,7 +42,116 @@ _NUMPY_DTYPES = {"F32": np.dtype("<f4"), "F16": np.dtype("<f2")}
 
 
 class ConversionError(ValueError):
-    """A checkpoint, option or file that cannot become (or is not) a valid ngi model file."""
+    """A checkpoint, option or file that cannot become (or is not) a valid ngi model file, or a file that ngi's
+    tools do not read or write (the file rule below)."""
+
+
+# --------------------------------------------------------------------------
+# The file rule of ngi's Python tools, the C++ side's (host/src/io/file_util.cpp): only regular files are read or
+# written. A FIFO blocks open() until a writer comes, /dev/zero never ends, and renaming a finished file over
+# /dev/null (as root) replaces the device node with a regular file.
+# --------------------------------------------------------------------------
+
+# The most an input is read of: the C++ model loader's own file limit (docs/MODEL_FORMAT.md, "Container limits");
+# generous for checkpoints (a pix2pix ngf 64 generator's is ~220 MB).
+MAX_INPUT_BYTES = 4 << 30
+
+
+def file_kind(mode):
+    """What a file that is not regular is, in the C++ side's words."""
+    return ("a directory" if stat.S_ISDIR(mode) else
+            "a device, not a regular file" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else
+            "a FIFO, not a regular file" if stat.S_ISFIFO(mode) else
+            "a socket, not a regular file" if stat.S_ISSOCK(mode) else "not a regular file")
+
+
+def check_input_file(path, max_bytes=MAX_INPUT_BYTES):
+    """Refuse (ConversionError naming `path`) anything but an existing regular file of at most `max_bytes`.
+
+    Judged by os.stat, which follows symlinks (a link to /dev/zero is a device), before anything opens the file:
+    an open() of a FIFO would block. Returns the stat result."""
+    try:
+        st = os.stat(path)
+    except OSError as error:
+        raise ConversionError(f"cannot read {path}: {error.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise ConversionError(f"cannot read {path}: it is {file_kind(st.st_mode)}")
+    if st.st_size > max_bytes:
+        raise ConversionError(f"cannot read {path}: it is larger ({st.st_size} bytes) than the limit of "
+                              f"{max_bytes} bytes")
+    return st
+
+
+def read_input_file(path, max_bytes=MAX_INPUT_BYTES):
+    """The bytes of `path`, by the file rule (check_input_file); ConversionError naming the file otherwise."""
+    check_input_file(path, max_bytes)
+    try:
+        # O_NONBLOCK: should the path have become a FIFO since the check, open() returns instead of waiting (fstat
+        # below then refuses it); it changes nothing for a regular file.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as error:
+        raise ConversionError(f"cannot read {path}: {error.strerror}") from None
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(fd)  # of the file opened, which the check above may not have seen
+        if not stat.S_ISREG(st.st_mode):
+            raise ConversionError(f"cannot read {path}: it is {file_kind(st.st_mode)}")
+        if st.st_size > max_bytes:
+            raise ConversionError(f"cannot read {path}: it is larger ({st.st_size} bytes) than the limit of "
+                                  f"{max_bytes} bytes")
+        try:
+            data = f.read(st.st_size)
+            grew = f.read(1)
+        except OSError as error:
+            raise ConversionError(f"cannot read {path}: {error.strerror}") from None
+    if grew:
+        raise ConversionError(f"cannot read {path}: it grew while it was read")
+    return data
+
+
+def check_output_file(path):
+    """Refuse (ConversionError) an output path that exists and is not a regular file (a folder, /dev/null, a
+    FIFO): the rename that puts a finished file into place would replace it."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return  # absent (or unreachable: the write says why)
+    if not stat.S_ISREG(st.st_mode):
+        raise ConversionError(f"cannot write {path}: it exists and is {file_kind(st.st_mode)}; refusing to replace it")
+
+
+def write_file_atomic(path, write):
+    """Call write(f) on a new file beside `path`, then rename it to `path`: the file appears complete or not at all.
+
+    An existing `path` that is not a regular file is refused before anything is written (check_output_file). A
+    failure (the folder missing or not writable, a full disk) removes the temporary file and raises ConversionError
+    naming `path`."""
+    path = os.fspath(path)
+    check_output_file(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    try:
+        while True:
+            # A short name of our own (not tempfile.mkstemp: its files are 0600, and os.replace would keep that
+            # mode; here the umask applies, as to any new file). Short, so that it fits where `path`'s name fits.
+            tmp = os.path.join(folder, f".ngi-{secrets.token_hex(6)}.tmp")
+            try:
+                fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+                break
+            except FileExistsError:
+                continue
+    except OSError as error:
+        raise ConversionError(f"cannot write {path}: {error.strerror}") from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException as error:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(error, OSError):
+            raise ConversionError(f"cannot write {path}: {error.strerror or error}") from None
+        raise
 
 
 # --------------------------------------------------------------------------
@@ -53,6 +164,7 @@ def write_model(path, tensors, config, half=False):
     Tensors are stored in the iteration order of `tensors`, contiguously, as
     F32 (or F16 with half=True). The config dict is stored as a JSON string in
     __metadata__["ngi"], because safetensors metadata values must be strings.
+    The file is written beside `path` and renamed into place (write_file_atomic).
     """
     dtype_name = "F16" if half else "F32"
     dtype = _NUMPY_DTYPES[dtype_name]
@@ -84,11 +196,13 @@ def write_model(path, tensors, config, half=False):
     header_bytes = json.dumps(header, separators=(",", ":")).encode("utf-8")
     # Padding keeps the data section 8-byte aligned for readers that mmap it.
     header_bytes += b" " * (-len(header_bytes) % 8)
-    with open(path, "wb") as f:
+
+    def write(f):
         f.write(struct.pack("<Q", len(header_bytes)))
         f.write(header_bytes)
         for data in blobs:
             f.write(data)
+    write_file_atomic(path, write)
 
 
 def _read_header(path, f):
@@ -108,6 +222,7 @@ def _read_header(path, f):
 
 def read_config(path):
     """The ngi config of a model file, read from the header only (the tensor data is not read)."""
+    check_input_file(path)
     with open(path, "rb") as f:
         return _read_header(path, f)[1]
 
@@ -117,6 +232,7 @@ def read_model(path):
 
     Arrays keep their stored dtype (float32 or float16), in file order.
     """
+    check_input_file(path)
     with open(path, "rb") as f:
         header, config = _read_header(path, f)
         data = memoryview(f.read())

@@ -20,21 +20,24 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
 
 Anything else is refused with the node's name and op. So are files that do not parse (truncated, corrupt), graphs
 with a cycle, opsets outside 9..17 or other domains, symbolic, zero or negative input dimensions, initializers whose
-data does not match their shape, and more than one input or output. Nothing is written unless the whole graph maps;
-the file appears at its path only when complete (written beside it, then renamed).
+data does not match their shape, and more than one input or output. Only a regular file of at most 2 GiB is read (a
+FIFO or /dev/zero is refused before it is opened). Nothing is written unless the whole graph maps; the file appears
+at its path only when complete (written beside it, then renamed).
 """
 
 import math
 import os
-import tempfile
 
 import numpy as np
 
-from .model_file import FORMAT_VERSION, ConversionError, write_model
+from .model_file import FORMAT_VERSION, ConversionError, check_output_file, read_input_file, write_model
 
 MIN_OPSET, MAX_OPSET = 9, 17
 EXP_CLAMP = 88.0  # ngi's exp activation: exp(min(x, 88))
 FLT_MAX = float(np.finfo(np.float32).max)
+# An ONNX file is one protobuf message, which cannot exceed 2 GiB (larger models keep their weights in external
+# data, which the importer refuses): the most _load reads.
+ONNX_MAX_BYTES = (2 << 30) - 1
 _ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp"}
 SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
                  "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout", "Identity", "Constant",
@@ -89,11 +92,7 @@ def _tensor_array(onnx, t, what, path):
 
 
 def _load(onnx, path):
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as error:
-        raise ConversionError(f"cannot read {path}: {error.strerror}") from None
+    data = read_input_file(path, ONNX_MAX_BYTES)  # regular files only: a FIFO would block, /dev/zero never end
     if not data:
         raise ConversionError(f"{path} is empty")
     try:
@@ -833,6 +832,7 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
     """Convert the ONNX file `onnx_path` to the ngi model file `out_path` (family "graph"); returns the config.
 
     Raises ConversionError (naming the node and op where there is one); nothing is written then."""
+    check_output_file(out_path)  # before the work; write_model checks it again
     onnx = _onnx()
     model = _load(onnx, onnx_path)
     imp = _Importer(onnx, model, onnx_path)
@@ -856,16 +856,5 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
                  **({"input_hw": list(imp.input_hw)} if imp.input_hw else {})},
         "source": source if source is not None else f"{os.path.basename(onnx_path)}, imported by ngi.convert",
     }
-    directory = os.path.dirname(os.path.abspath(out_path))
-    fd, tmp = tempfile.mkstemp(prefix=".ngi-convert-", suffix=".tmp", dir=directory)
-    os.close(fd)
-    try:
-        write_model(tmp, tensors, config, half=half)
-        os.replace(tmp, out_path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_model(out_path, tensors, config, half=half)  # beside out_path, then renamed into place
     return config

@@ -1,0 +1,193 @@
+"""Issue 51, round three: the Python tools (ngi.convert, ngi.onnx_import, ngi.plan) against hostile files.
+
+ngi's file rule, the C++ side's: only regular files are read (judged by os.stat before anything opens them, with a
+size cap) or replaced; an output is written beside its path and renamed into place. Conversion refuses what the
+model loader would refuse for non-finite numbers. The importer's fusion is linear in the node count. Plans are read
+strictly. Each failure is one line naming the file, exit code 1 (2 for ngi.plan's usage errors).
+
+FIFOs and device nodes are made in pytest's tmp_path only. Run by ctest as part of `python_bindings`.
+"""
+
+import os
+import resource
+import stat
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ngi import model_file
+from ngi.model_file import ConversionError
+
+
+def run_convert(*args, timeout=30):
+    """python3 -m ngi.convert ARGS in a child process -> (returncode, stderr). Its address space is capped (2 GiB) and
+    it is timed out, so that a regression reading /dev/zero or waiting on a FIFO fails the test, not the machine."""
+    def cap():
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+    proc = subprocess.run([sys.executable, "-m", "ngi.convert", *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, preexec_fn=cap)
+    return proc.returncode, proc.stderr
+
+
+def convert(capsys, *args):
+    """ngi.convert's main() in this process (no interpreter start-up; for inputs that cannot block) ->
+    (returncode, stderr). An exception escaping main() is the traceback the CLI would print: the test fails."""
+    from ngi import convert as convert_mod
+    rc = convert_mod.main([str(a) for a in args])
+    return rc, capsys.readouterr().err
+
+
+def one_error_line(err, *needles):
+    # torch 1.x's warning that it falls back to full unpickling may come first (ngi.convert._torch_load).
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("ngi.convert: warning:")]
+    assert len(lines) == 1 and lines[0].startswith("ngi.convert: error: "), err
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    return lines[0]
+
+
+def onnx_module():
+    return pytest.importorskip("onnx", reason="ONNX import needs Debian's python3-onnx")
+
+
+def onnx_bytes(nodes, initializers=(), input_dims=(1, 2, 4, 4)):
+    onnx = onnx_module()
+    h, tp = onnx.helper, onnx.TensorProto
+    graph = h.make_graph(nodes, "g", [h.make_tensor_value_info("x", tp.FLOAT, list(input_dims))],
+                         [h.make_tensor_value_info("y", tp.FLOAT, [1, None, None, None])], list(initializers))
+    return h.make_model(graph, opset_imports=[h.make_opsetid("", 13)]).SerializeToString()
+
+
+def weight(name, array):
+    onnx = onnx_module()
+    array = np.asarray(array, np.float32)
+    return onnx.helper.make_tensor(name, onnx.TensorProto.FLOAT, array.shape, array.tobytes(), raw=True)
+
+
+def node(*args, **kwargs):
+    return onnx_module().helper.make_node(*args, **kwargs)
+
+
+def conv_onnx(w=None):
+    """x [1, 2, 4, 4] -> 1 x 1 Conv 'the_conv' (3 output channels) -> y."""
+    w = np.ones((3, 2, 1, 1), np.float32) if w is None else w
+    return onnx_bytes([node("Conv", ["x", "w"], ["y"], name="the_conv")], [weight("w", w)])
+
+
+def leaves(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+# --------------------------------------------------------------------------
+# Finding 1: an output that is not a regular file is refused, before anything is written
+# --------------------------------------------------------------------------
+
+def test_convert_refuses_an_output_that_is_not_a_regular_file(tmp_path, capsys):
+    src = tmp_path / "model.onnx"
+    src.write_bytes(conv_onnx())
+    fifo, folder = tmp_path / "fifo_out", tmp_path / "folder_out"
+    os.mkfifo(fifo)
+    folder.mkdir()
+    outputs = [(fifo, "a FIFO, not a regular file"), (folder, "a directory")]
+    try:
+        os.mknod(tmp_path / "null_out", 0o666 | stat.S_IFCHR, os.makedev(1, 3))  # /dev/null's device numbers
+        outputs.append((tmp_path / "null_out", "a device, not a regular file"))
+    except PermissionError:
+        pass  # not root (no CAP_MKNOD): the FIFO and the folder still test the rule
+    before = leaves(tmp_path)
+    for out, kind in outputs:
+        rc, err = convert(capsys, src, out)
+        assert rc == 1, err
+        one_error_line(err, f"cannot write {out}: it exists and is {kind}; refusing to replace it")
+    assert leaves(tmp_path) == before  # no temporary file left either
+    assert stat.S_ISFIFO(fifo.stat().st_mode) and folder.is_dir()
+    if len(outputs) == 3:
+        assert stat.S_ISCHR((tmp_path / "null_out").stat().st_mode)
+
+
+def test_written_model_is_renamed_into_place_with_the_umask_mode(tmp_path, capsys):
+    # The control: a regular output is replaced whole (written beside it, renamed), no temporary file stays, and the
+    # mode is the umask's (the staging file was mkstemp's 0600 before).
+    src, out = tmp_path / "model.onnx", tmp_path / "out.safetensors"
+    src.write_bytes(conv_onnx())
+    out.write_bytes(b"old")
+    rc, err = convert(capsys, src, out)
+    assert rc == 0, err
+    assert model_file.read_config(out)["family"] == "graph"
+    assert leaves(tmp_path) == ["model.onnx", "out.safetensors"]
+    umask = os.umask(0o022)
+    os.umask(umask)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o666 & ~umask
+
+
+# --------------------------------------------------------------------------
+# Finding 2: inputs must be regular files of a bounded size, checked before any open() that could block
+# --------------------------------------------------------------------------
+
+def test_convert_refuses_fifo_and_device_inputs_without_blocking(tmp_path):
+    os.mkfifo(tmp_path / "fifo.onnx")
+    os.mkfifo(tmp_path / "fifo.pth")
+    os.symlink("/dev/zero", tmp_path / "zero.onnx")
+    os.symlink("/dev/zero", tmp_path / "zero.pth")
+    os.mkdir(tmp_path / "folder.onnx")
+    checkpoint = ["--family", "pix2pix_unet", "--bn-mode", "running"]
+    for name, kind, extra in [("fifo.onnx", "a FIFO, not a regular file", []),
+                              ("fifo.pth", "a FIFO, not a regular file", checkpoint),
+                              ("zero.onnx", "a device, not a regular file", []),
+                              ("zero.pth", "a device, not a regular file", checkpoint),
+                              ("folder.onnx", "a directory", [])]:
+        rc, err = run_convert(tmp_path / name, tmp_path / "out.safetensors", *extra)
+        assert rc == 1, err
+        one_error_line(err, f"cannot read {tmp_path / name}: it is {kind}")
+    assert not (tmp_path / "out.safetensors").exists()
+
+
+def test_convert_refuses_inputs_beyond_the_size_cap(tmp_path):
+    # Sparse files: their size is what stat says, without a byte on the disk. ONNX: protobuf's 2 GiB; checkpoints:
+    # the model loader's 4 GiB.
+    from ngi.onnx_import import ONNX_MAX_BYTES
+    for name, size, extra in [("big.onnx", ONNX_MAX_BYTES + 1, []),
+                              ("big.pth", model_file.MAX_INPUT_BYTES + 1,
+                               ["--family", "pix2pix_unet", "--bn-mode", "running"])]:
+        with open(tmp_path / name, "wb") as f:
+            f.truncate(size)
+        rc, err = run_convert(tmp_path / name, tmp_path / "out.safetensors", *extra)
+        assert rc == 1, err
+        one_error_line(err, f"cannot read {tmp_path / name}: it is larger ({size} bytes) than the limit")
+
+
+# --------------------------------------------------------------------------
+# Finding 3: write failures and missing or unreadable inputs are one line, exit 1 (they were tracebacks)
+# --------------------------------------------------------------------------
+
+def test_convert_write_failures_and_missing_inputs_are_one_line(tmp_path, capsys):
+    src = tmp_path / "model.onnx"
+    src.write_bytes(conv_onnx())
+    (tmp_path / "a_file").write_bytes(b"")
+    for out, reason in [(tmp_path / "missing" / "out.safetensors", "No such file or directory"),
+                        (tmp_path / "a_file" / "out.safetensors", "Not a directory")]:
+        rc, err = convert(capsys, src, out)
+        assert rc == 1, err
+        one_error_line(err, f"cannot write {out}: {reason}")
+    rc, err = convert(capsys, tmp_path / "missing.pth", tmp_path / "out.safetensors", "--family", "pix2pix_unet",
+                      "--bn-mode", "running")
+    assert rc == 1, err
+    one_error_line(err, f"cannot read {tmp_path / 'missing.pth'}: No such file or directory")
+    assert leaves(tmp_path) == ["a_file", "model.onnx"]
+
+
+def test_convert_refuses_a_corrupt_checkpoint_in_one_line(tmp_path, capsys):
+    pytest.importorskip("torch")
+    bad = tmp_path / "bad.pth"
+    bad.write_bytes(b"garbage\n")
+    rc, err = convert(capsys, bad, tmp_path / "out.safetensors", "--family", "pix2pix_unet", "--bn-mode", "running")
+    assert rc == 1, err
+    one_error_line(err, f"{bad} is not a readable PyTorch checkpoint")
+
+
+def test_write_model_failures_name_the_file(tmp_path):
+    out = tmp_path / "missing" / "m.safetensors"
+    with pytest.raises(ConversionError, match=f"cannot write {out}: No such file or directory"):
+        model_file.write_model(out, {}, {"family": "ssgi"})
