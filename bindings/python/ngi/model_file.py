@@ -12,6 +12,7 @@ is ngi.convert.
 """
 
 import json
+import math
 import os
 import secrets
 import stat
@@ -191,7 +192,12 @@ def write_model(path, tensors, config, half=False):
                         "data_offsets": [offset, offset + len(data)]}
         blobs.append(data)
         offset += len(data)
-    header[METADATA_KEY] = {"ngi": json.dumps(config)}
+    try:
+        # allow_nan=False: Python would write NaN / Infinity, which is not JSON (the loader's "malformed JSON").
+        header[METADATA_KEY] = {"ngi": json.dumps(config, allow_nan=False)}
+    except ValueError:
+        raise ConversionError(f"{path}: config field '{_non_finite_key(config)}' is not a finite number; "
+                              "JSON cannot hold NaN or Infinity") from None
 
     header_bytes = json.dumps(header, separators=(",", ":")).encode("utf-8")
     # Padding keeps the data section 8-byte aligned for readers that mmap it.
@@ -203,6 +209,18 @@ def write_model(path, tensors, config, half=False):
         for data in blobs:
             f.write(data)
     write_file_atomic(path, write)
+
+
+def _non_finite_key(value, key=""):
+    """The dotted path of the first non-finite float in a JSON-like value (for write_model's message), or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return key
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, (list, tuple)) else ()
+    for k, v in items:
+        found = _non_finite_key(v, f"{key}[{k}]" if isinstance(k, int) else f"{key}.{k}" if key else str(k))
+        if found:
+            return found
+    return None
 
 
 def _read_header(path, f):

@@ -20,9 +20,10 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
 
 Anything else is refused with the node's name and op. So are files that do not parse (truncated, corrupt), graphs
 with a cycle, opsets outside 9..17 or other domains, symbolic, zero or negative input dimensions, initializers whose
-data does not match their shape, and more than one input or output. Only a regular file of at most 2 GiB is read (a
-FIFO or /dev/zero is refused before it is opened). Nothing is written unless the whole graph maps; the file appears
-at its path only when complete (written beside it, then renamed).
+data does not match their shape, more than one input or output, attributes that are not finite numbers and weights
+that are not finite as stored (after folding; as F16 with half=True), which the loader would refuse. Only a regular
+file of at most 2 GiB is read (a FIFO or /dev/zero is refused before it is opened). Nothing is written unless the
+whole graph maps; the file appears at its path only when complete (written beside it, then renamed).
 """
 
 import math
@@ -35,6 +36,7 @@ from .model_file import FORMAT_VERSION, ConversionError, check_output_file, read
 MIN_OPSET, MAX_OPSET = 9, 17
 EXP_CLAMP = 88.0  # ngi's exp activation: exp(min(x, 88))
 FLT_MAX = float(np.finfo(np.float32).max)
+FLT_MIN = float(np.finfo(np.float32).tiny)  # the least normal float32
 # An ONNX file is one protobuf message, which cannot exceed 2 GiB (larger models keep their weights in external
 # data, which the importer refuses): the most _load reads.
 ONNX_MAX_BYTES = (2 << 30) - 1
@@ -326,6 +328,11 @@ class _Importer:
     def map_node(self, node):
         op = node.op_type
         attrs = _attrs(self.onnx, node)
+        for name, value in attrs.items():
+            # A NaN would reach the config as a NaN literal, which is not JSON: the loader refuses the file.
+            values = value if isinstance(value, list) else [value]
+            if any(isinstance(v, float) and not math.isfinite(v) for v in values):
+                raise self.fail(node, f"attribute '{name}' is {value}: not a finite number")
         if op == "Constant":
             self.const(node.output[0])
             return
@@ -532,7 +539,12 @@ class _Importer:
         self._activation(node, "relu")
 
     def op_LeakyRelu(self, node, attrs):
-        self._activation(node, "leaky_relu", float(np.float32(attrs.get("alpha", 0.01))))
+        alpha = float(np.float32(attrs.get("alpha", 0.01)))
+        # The loader's rule for a slope (host/src/models/graph_model.cpp): in [-1, 1], and 0 or a normal float32.
+        if not (abs(alpha) <= 1.0 and (alpha == 0.0 or abs(alpha) >= FLT_MIN)):
+            raise self.fail(node, f"alpha {alpha!r}: ngi's leaky_relu slope must lie in [-1, 1] and be 0 or at "
+                                  "least 1.2e-38 in magnitude")
+        self._activation(node, "leaky_relu", alpha)
 
     def op_Tanh(self, node, attrs):
         self._activation(node, "tanh")
@@ -828,6 +840,22 @@ def _fuse(ir, weights, output):
             n["source"] = n["name"] + " + " + " + ".join(n.pop("folded"))
 
 
+def _check_weights(ir, weights, path, half):
+    """Refuse a node whose tensor is not finite as stored (NaN or Inf in the file, or made by folding, or beyond
+    F16's range with --half), naming the .onnx file and the node."""
+    dtype, name = (np.float16, "F16") if half else (np.float32, "F32")
+    for n in ir:
+        for field in ("weight", "bias", "scale", "shift"):
+            if field not in n:
+                continue
+            with np.errstate(over="ignore", invalid="ignore"):
+                bad = int(np.count_nonzero(~np.isfinite(weights[n[field]].astype(dtype))))
+            if bad:
+                raise ConversionError(f"{path}: node '{n['name']}' ({n.get('source', n['op'])}): its {field} has "
+                                      f"{bad} value(s) that are not finite {name} numbers (NaN, Inf, or beyond "
+                                      f"{name}'s range)")
+
+
 def import_onnx(onnx_path, out_path, *, half=False, source=None):
     """Convert the ONNX file `onnx_path` to the ngi model file `out_path` (family "graph"); returns the config.
 
@@ -845,6 +873,7 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
     ir = imp.ir
     weights = imp.weights
     _fuse(ir, weights, output)
+    _check_weights(ir, weights, onnx_path, half)
     used = {n[k] for n in ir for k in ("weight", "bias", "scale", "shift") if k in n}
     tensors = {k: v.astype(np.float32) for k, v in weights.items() if k in used}
     config = {

@@ -191,3 +191,44 @@ def test_write_model_failures_name_the_file(tmp_path):
     out = tmp_path / "missing" / "m.safetensors"
     with pytest.raises(ConversionError, match=f"cannot write {out}: No such file or directory"):
         model_file.write_model(out, {}, {"family": "ssgi"})
+
+
+# --------------------------------------------------------------------------
+# Finding 4: conversion refuses non-finite numbers (and slopes) that the loader refuses
+# --------------------------------------------------------------------------
+
+def test_convert_refuses_non_finite_attributes_and_weights(tmp_path, capsys):
+    src = tmp_path / "bad.onnx"
+    leaky = [node("LeakyRelu", ["x"], ["y"], name="the_leaky", alpha=float("nan"))]
+    big = np.full((3, 2, 1, 1), 1e5, np.float32)
+    cases = [
+        (onnx_bytes(leaky), [], "node 'the_leaky' (LeakyRelu): attribute 'alpha' is nan: not a finite number"),
+        (onnx_bytes([node("LeakyRelu", ["x"], ["y"], name="the_leaky", alpha=2.0)]), [],
+         "node 'the_leaky' (LeakyRelu): alpha 2.0: ngi's leaky_relu slope must lie in [-1, 1]"),
+        (conv_onnx(np.full((3, 2, 1, 1), np.inf, np.float32)), [],
+         "node 'the_conv' (conv2d): its weight has 6 value(s) that are not finite F32 numbers"),
+        (conv_onnx(big), ["--half"], "node 'the_conv' (conv2d): its weight has 6 value(s) that are not finite F16"),
+    ]
+    for data, extra, needle in cases:
+        src.write_bytes(data)
+        rc, err = convert(capsys, src, tmp_path / "out.safetensors", *extra)
+        assert rc == 1, err
+        one_error_line(err, f"{src}: {needle}")
+        assert leaves(tmp_path) == ["bad.onnx"]
+    # Folding can make a non-finite weight out of finite ones (1e5 x 1e34 is beyond float32's 3.4e38): the node is
+    # named with what was folded into it.
+    scale = weight("s", np.full((1, 3, 1, 1), 1e34, np.float32))
+    nodes = [node("Conv", ["x", "w"], ["c"], name="the_conv"), node("Mul", ["c", "s"], ["y"], name="the_mul")]
+    src.write_bytes(onnx_bytes(nodes, [weight("w", big), scale]))
+    rc, err = convert(capsys, src, tmp_path / "out.safetensors")
+    assert rc == 1, err
+    one_error_line(err, "node 'the_conv' (the_conv + the_mul): its weight has 6 value(s)")
+
+
+def test_write_model_refuses_a_non_finite_config_number(tmp_path):
+    # The last line of defence: json.dumps would write NaN, which no JSON reader (the loader's "malformed JSON") takes.
+    out = tmp_path / "m.safetensors"
+    config = {"family": "graph", "graph": {"nodes": [{"name": "a"}, {"name": "b", "slope": float("nan")}]}}
+    with pytest.raises(ConversionError, match=r"field 'graph.nodes\[1\].slope' is not a finite number"):
+        model_file.write_model(out, {}, config)
+    assert leaves(tmp_path) == []
