@@ -50,19 +50,22 @@ records it.
 Nothing meets the budget (or only rungs that a cheaper candidate dominates do): exit code 1, the closest rung (or
 the dominated rung and its margins) named, nothing written. The plan is JSON ("format": "ngi-plan", version 1;
 docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder, bn_mode, face size n, the optional
-switch, and the calibration and validation evidence.
+switch, and the calibration and validation evidence. read_plan() reads one back strictly (`ngi lightmap --plan` is
+the C++ reader, samples/ngi/plan_file.cpp).
 """
 
 import argparse
+import errno
 import json
 import os
+import stat
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from . import _constants, _ngi, scoring, zoo as zoo_mod
+from . import _constants, _ngi, model_file, scoring, zoo as zoo_mod
 
 DEFAULT_ZOO = Path(os.environ.get("NGI_ZOO", "models/zoo.json"))  # the repository's, run from its root
 PATH_FRAMES = 100
@@ -76,6 +79,66 @@ NOISE_FLOORS = {key: floor for _, key, floor in METRICS}
 
 class PlanError(Exception):
     """No rung meets the budget, or only dominated ones do (the message names the closest or dominated one)."""
+
+
+class PlanFileError(ValueError):
+    """A plan file that cannot be used: the message names the file and what is wrong."""
+
+
+MAX_PLAN_BYTES = 64 << 20  # a plan is a few KB; the cap keeps a wrong file from filling the memory
+
+
+def read_plan(path):
+    """The plan at `path` (a dict), read strictly. The model paths are checked (relative to the plan's folder) and
+    left as written.
+
+    Refused with PlanFileError: a file that is not a regular file (model_file's rule), not JSON, a key twice in one
+    object (Python's json, like most JSON readers, would silently keep the last one), not format "ngi-plan" version
+    1, and a rung whose model file is missing or is not a regular file (saying which: a FIFO, a device, a folder)."""
+    path = Path(path)
+    try:
+        text = model_file.read_input_file(path, MAX_PLAN_BYTES).decode("utf-8")
+    except model_file.ConversionError as e:
+        raise PlanFileError(str(e)) from None  # "cannot read PATH: it is a FIFO, ..."
+    except UnicodeDecodeError as e:
+        raise PlanFileError(f"plan {path}: not UTF-8 text: {e}") from None
+
+    def unique_keys(pairs):
+        seen = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise PlanFileError(f"plan {path}: the key {key!r} appears twice in one object")
+            seen.add(key)
+        return dict(pairs)
+
+    try:
+        p = json.loads(text, object_pairs_hook=unique_keys)
+    except PlanFileError:
+        raise
+    except ValueError as e:
+        raise PlanFileError(f"plan {path}: not valid JSON: {e}") from None
+    if not isinstance(p, dict) or p.get("format") != "ngi-plan":
+        raise PlanFileError(f"plan {path}: not a plan (\"format\": \"ngi-plan\")")
+    if p.get("version") != 1:
+        raise PlanFileError(f"plan {path}: version {p.get('version')!r}; this ngi reads version 1")
+    for where, rung in (("the top level", p), ("switch", p.get("switch"))):
+        if rung is None:
+            continue
+        if not isinstance(rung, dict) or "model" not in rung:
+            raise PlanFileError(f"plan {path}: {where} has no 'model'")
+        if rung["model"] is None:  # the direct-light rung: no network
+            continue
+        if not isinstance(rung["model"], str) or not rung["model"]:
+            raise PlanFileError(f"plan {path}: {where}.model must be a non-empty string or null")
+        model = path.parent / rung["model"]  # relative to the plan's folder (an absolute path stays itself)
+        try:
+            mode = os.stat(model).st_mode  # follows links: a link to /dev/zero is a device
+            what = None if stat.S_ISREG(mode) else f"is {model_file.file_kind(mode)}"
+        except OSError as e:
+            what = "does not exist" if e.errno == errno.ENOENT else f"cannot be read: {e.strerror}"
+        if what:
+            raise PlanFileError(f"plan {path}: {where}.model: {model} {what} (rung {rung.get('rung', '?')})")
+    return p
 
 
 def progress(iterable, desc):
@@ -356,8 +419,10 @@ def main(argv=None):
             ap.error(f"--{name.replace('_', '-')} must be at least 1")
     if args.validate < 0:
         ap.error("--validate must be 0 or more")
-    if args.out.is_dir():
-        ap.error(f"--out {args.out} is a folder")
+    try:
+        model_file.check_output_file(args.out)  # a folder, /dev/null, a FIFO: the rename at the end would replace it
+    except model_file.ConversionError as e:
+        ap.error(str(e))
 
     try:
         zoo = zoo_mod.load(args.zoo)
@@ -431,10 +496,12 @@ def main(argv=None):
         "validation": validation, "zoo": os.path.relpath(args.zoo.resolve(), plan_dir)})
     if plan["model"] is None:
         plan["note"] = "direct light only: no network runs (ngi lightmap --plan uses the frame's direct light)"
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_name(f".{args.out.name}.tmp")
-    tmp.write_text(json.dumps(plan, indent=1) + "\n")
-    tmp.replace(args.out)
+    try:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        model_file.write_file_atomic(args.out, lambda f: f.write((json.dumps(plan, indent=1) + "\n").encode()))
+    except (OSError, model_file.ConversionError) as e:
+        print(f"ngi.plan: {e}; nothing written", file=sys.stderr)
+        return 1
     print(f"plan: {plan['why']}", file=sys.stderr)
     if validation:
         kept = validation["kept_quality_promise"]

@@ -8,6 +8,7 @@ strictly. Each failure is one line naming the file, exit code 1 (2 for ngi.plan'
 FIFOs and device nodes are made in pytest's tmp_path only. Run by ctest as part of `python_bindings`.
 """
 
+import json
 import os
 import resource
 import stat
@@ -268,3 +269,58 @@ def test_a_3900_node_graph_converts_in_seconds(tmp_path):
     # last Relu); the other Relus of the head (read by a Relu) and the graph's last Relu (its output) stay nodes.
     assert all(n["activation"] == "tanh" and n["input_activation"] == "relu" for n in convs)
     print(f"3,900-node conversion (whole CLI): {seconds:.2f} s")
+
+
+# --------------------------------------------------------------------------
+# Findings 6 and 7: plans are read strictly (ngi.plan.read_plan; `ngi lightmap --plan` is the C++ reader)
+# --------------------------------------------------------------------------
+
+def write_plan(folder, text):
+    path = folder / "plan.json"
+    path.write_text(text)
+    return path
+
+
+def plan_text(model, **extra):
+    return json.dumps({"format": "ngi-plan", "version": 1, "rung": "r", "model": model, "n": 64,
+                       "bn_mode": "running", **extra})
+
+
+def test_plan_reader_refuses_duplicate_keys(tmp_path):
+    plan = pytest.importorskip("ngi.plan")
+    (tmp_path / "m.safetensors").write_bytes(b"")
+    good = plan_text("m.safetensors")
+    assert plan.read_plan(write_plan(tmp_path, good))["model"] == "m.safetensors"
+    dup = good[:-1] + ', "model": "other.safetensors"}'  # the second "model" silently won
+    with pytest.raises(plan.PlanFileError, match="the key 'model' appears twice in one object"):
+        plan.read_plan(write_plan(tmp_path, dup))
+    nested = good[:-1] + ', "switch": {"below_outside_light_share": 0.1, "rung": "a", "rung": "b", "model": null}}'
+    with pytest.raises(plan.PlanFileError, match="the key 'rung' appears twice"):
+        plan.read_plan(write_plan(tmp_path, nested))
+
+
+def test_plan_reader_says_what_a_model_path_is(tmp_path):
+    plan = pytest.importorskip("ngi.plan")
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "folder").mkdir()
+    for model, what in [("/dev/zero", "is a device, not a regular file"), ("fifo", "is a FIFO, not a regular file"),
+                        ("folder", "is a directory"), ("missing.safetensors", "does not exist")]:
+        path = write_plan(tmp_path, plan_text(model))
+        with pytest.raises(plan.PlanFileError) as info:
+            plan.read_plan(path)
+        shown = model if os.path.isabs(model) else tmp_path / model
+        assert f"plan {path}: the top level.model: {shown} {what} (rung r)" == str(info.value)
+    # The plan itself by the same rule.
+    with pytest.raises(plan.PlanFileError, match="it is a FIFO, not a regular file"):
+        plan.read_plan(tmp_path / "fifo")
+
+
+def test_plan_refuses_an_out_that_is_not_a_regular_file(tmp_path, capsys):
+    plan = pytest.importorskip("ngi.plan")
+    os.mkfifo(tmp_path / "fifo.json")
+    with pytest.raises(SystemExit) as info:  # before the zoo (missing here) or any device work
+        plan.main(["--scene", "room", "--max-ms", "1", "--zoo", str(tmp_path / "nozoo.json"),
+                   "--out", str(tmp_path / "fifo.json")])
+    assert info.value.code == 2
+    assert "it exists and is a FIFO, not a regular file; refusing to replace it" in capsys.readouterr().err
+    assert stat.S_ISFIFO((tmp_path / "fifo.json").stat().st_mode)

@@ -65,7 +65,7 @@ def main(argv=None):
             rows.append({"scene": scene, "budget": " ".join(budget), "chosen": None,
                          "why": last[-1] if last else "ngi.plan failed"})
             continue
-        p = json.loads(out.read_text())
+        p = plan.read_plan(out)  # strict: a plan left by an earlier run may have been edited since
         rows.append({"scene": Path(scene).name if args.vox_dir else scene, "budget": " ".join(budget),
                      "chosen": p["rung"], "why": p["why"], "switch": p.get("switch"), "validation": p["validation"],
                      "calibration": p["calibration"]["rungs"]})
