@@ -3,6 +3,7 @@
 
 #include "common.hpp"
 #include "model_ref.hpp"
+#include "ngi/display.hpp"
 #include "ngi/image_desc.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/pipeline.hpp"
@@ -211,6 +212,19 @@ struct PyPipeline {
     DeviceRef device;
     ngi::SurroundPipeline pipeline;
 };
+
+struct PyDisplayView {
+    DeviceRef device;
+    ngi::DisplayView view;
+};
+
+// A Frame argument: an ngi.Frame or a frame folder path.
+std::shared_ptr<ngi::Frame> frame_arg(const py::object& frame, const char* what) {
+    if (py::isinstance<ngi::Frame>(frame)) return frame.cast<std::shared_ptr<ngi::Frame>>();
+    const std::string path = path_string(frame, what);
+    py::gil_scoped_release release;
+    return std::make_shared<ngi::Frame>(ngi::read_frame(path));
+}
 
 }  // namespace
 
@@ -472,6 +486,89 @@ output_mode "indirect" predicts indirect light only: its lightmap adds the frame
             return from_image(p.pipeline.tonemap(img, tonemap_options(exposure_ev, curve, srgb)));
         }, py::arg("image"), py::arg("exposure_ev") = 0.0f, py::arg("curve") = "aces", py::arg("srgb") = true,
            "A linear image to display values in [0, 1].");
+
+    py::class_<PyDisplayView, std::shared_ptr<PyDisplayView>>(m, "DisplayView", R"doc(
+The front view's GI at display resolution, stable from frame to frame (ngi/display.hpp, docs/CONVENTIONS.md
+section 20): the pipeline's N x N lightmap minus the frame's direct light is upsampled to the display's S x S pixels
+(upsampler "jbu": joint bilateral, guided by the display's normals and positions; "bilinear"), accumulated over
+frames (temporal=True: the previous result reprojected with the camera motion and the display's depth, rejected
+where the point was hidden, clamped to this frame's light, blended with weight `blend`), and composed with the
+display's direct light, albedo and emission. One object per view; reset() after a cut.
+DisplayView(device, size, upsampler="jbu", temporal=True, blend=0.2, clip_margin=0.25, sigma_spatial=0.75,
+normal_power=32, sigma_plane=0.1, radius=2, depth_rel=0.02, depth_abs=0.05).)doc")
+        .def(py::init([](const DeviceRef& device, int size, const std::string& upsampler, bool temporal, float blend,
+                         float clip_margin, float sigma_spatial, float normal_power, float sigma_plane, int radius,
+                         float depth_rel, float depth_abs) {
+                 const ngi::Device& dev = device->get("DisplayView");
+                 ngi::DisplaySettings s;
+                 s.upsampler = ngi::display_upsampler_from_name(upsampler);
+                 s.temporal = temporal;
+                 s.blend = blend;
+                 s.clip_margin = clip_margin;
+                 s.sigma_spatial = sigma_spatial;
+                 s.normal_power = normal_power;
+                 s.sigma_plane = sigma_plane;
+                 s.radius = radius;
+                 s.depth_rel = depth_rel;
+                 s.depth_abs = depth_abs;
+                 py::gil_scoped_release release;
+                 return std::make_shared<PyDisplayView>(PyDisplayView{device, ngi::DisplayView(dev, size, s)});
+             }),
+             py::arg("device"), py::arg("size"), py::arg("upsampler") = "jbu", py::arg("temporal") = true,
+             py::arg("blend") = 0.2f, py::arg("clip_margin") = 0.25f, py::arg("sigma_spatial") = 0.75f,
+             py::arg("normal_power") = 32.0f, py::arg("sigma_plane") = 0.1f, py::arg("radius") = 2,
+             py::arg("depth_rel") = 0.02f, py::arg("depth_abs") = 0.05f)
+        .def_property_readonly("size", [](const PyDisplayView& v) { return v.view.size(); })
+        .def("reset", [](PyDisplayView& v) { v.view.reset(); }, "Forget the history: the next frame stands alone.")
+        .def("run", [](PyDisplayView& v, const py::object& low, const py::object& lightmap, const py::object& display,
+                       const py::object& position, const std::vector<std::string>& outputs, float exposure_ev,
+                       const std::string& curve, bool srgb, bool stats, bool timings) {
+            v.device->get("DisplayView.run");
+            const Wanted w = wanted_outputs(outputs);
+            const ngi::ToneMapOptions tm = tonemap_options(exposure_ev, curve, srgb);
+            const auto lo = frame_arg(low, "DisplayView.run: low (a Frame or a frame folder path)");
+            const auto hi = frame_arg(display, "DisplayView.run: display (a Frame or a frame folder path)");
+            const ngi::Image lm = to_image(lightmap, "DisplayView.run: lightmap");
+            const glm::vec3 pos = vec3(position, "DisplayView.run: position");
+            ngi::DisplayStats st;
+            ngi::DisplayTimings tt;
+            ngi::FrameImages r;
+            {
+                py::gil_scoped_release release;
+                r = v.view.run(*lo, lm, *hi, pos, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr,
+                               timings ? &tt : nullptr);
+            }
+            py::dict out;
+            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
+            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
+            if (w.display) out["display"] = from_image(std::move(r.display));
+            if (stats) {
+                py::dict d;
+                d["jbu_fallbacks"] = st.jbu_fallbacks;
+                d["disoccluded"] = st.disoccluded;
+                d["clipped"] = st.clipped;
+                d["history_used"] = st.history_used;
+                out["stats"] = d;
+            }
+            if (timings) {
+                py::dict t;
+                t["geometry_ms"] = tt.geometry_ms;
+                t["upsample_ms"] = tt.upsample_ms;
+                t["temporal_ms"] = tt.temporal_ms;
+                t["outputs_ms"] = tt.outputs_ms;
+                out["timings"] = t;
+            }
+            return out;
+        }, py::arg("low"), py::arg("lightmap"), py::arg("display"), py::arg("position"),
+           py::arg("outputs") = std::vector<std::string>{"lightmap", "final"}, py::arg("exposure_ev") = 0.0f,
+           py::arg("curve") = "aces", py::arg("srgb") = true, py::arg("stats") = false, py::arg("timings") = false,
+           R"doc(
+One frame at display resolution: `low` the frame the pipeline ran (a Frame or folder; its front normal, depth and
+direct light are read), `lightmap` the pipeline's lightmap of it [3, N, N], `display` a frame of face size S (its
+front albedo, normal, depth, direct; emission and env optional) with the same look and up, `position` the camera
+centre in world metres (render.json's camera.position). Returns the outputs asked for, each [3, S, S] float32
+('lightmap', 'final', 'display' as Pipeline.run); stats=True adds 'stats' (jbu_fallbacks, disoccluded, clipped,
+history_used), timings=True 'timings' (ms: geometry, upsample, temporal, outputs).)doc");
 }
 
 }  // namespace ngi_py

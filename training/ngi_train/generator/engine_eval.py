@@ -83,6 +83,7 @@ def resolve_rungs(names, zoo_path):
         if r["n"] != 64:
             log(f"engine_eval: rung {name!r} runs at N = {r['n']}, the frames are rendered at 64: skipped")
             continue
+        r.setdefault("bn_mode", None)  # an ssgi rung of the zoo has no batch norm and no bn_mode
         r["digest"] = "direct" if r["path"] is None else f"{le.digest(r['path'])[:16]}-{r['bn_mode']}"
         out.append(r)
     return out
