@@ -12,6 +12,7 @@
 
 #include "commands.hpp"
 #include "frame_report.hpp"
+#include "ngi/display.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"
@@ -52,8 +53,27 @@ std::string share_text(double v) {
     return b;
 }
 
+// final = clamp(albedo, 0, 1) x light + emission + env of a frame's front face, on the host at the frame's size
+// (compose_final's rule, kernels/compose.cl: albedo NaN -> 0, light terms NaN / negative -> 0, sums saturating).
+// For the display frame, whose size is not the pipeline's.
+ngi::Image compose_front(const ngi::Image& light, const ngi::Frame& frame) {
+    auto clean = [](float v) { return std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, FLT_MAX); };
+    const ngi::Image& albedo = frame.get(ngi::Feature::Albedo, ngi::Face::Front);
+    const ngi::Image& emission = frame.get(ngi::Feature::Emission, ngi::Face::Front);
+    const ngi::Image& env = frame.get(ngi::Feature::Env, ngi::Face::Front);
+    ngi::Image out(light.width, light.height, 3);
+    for (std::size_t i = 0; i < out.data.size(); ++i) {
+        const float a = std::isnan(albedo.data[i]) ? 0.0f : std::clamp(albedo.data[i], 0.0f, 1.0f);
+        float v = a * clean(light.data[i]);
+        if (!emission.data.empty()) v = std::min(v + clean(emission.data[i]), FLT_MAX);
+        if (!env.data.empty()) v = std::min(v + clean(env.data[i]), FLT_MAX);
+        out.data[i] = v;
+    }
+    return out;
+}
+
 struct Options {
-    std::string frame_dir, model_path, plan_path, bn_mode, out_dir, size, device;
+    std::string frame_dir, model_path, plan_path, bn_mode, out_dir, size, device, display_dir, upsampler = "jbu";
     double guard = 0.0;  // 0: no --guard (the plan's guard, if any, applies)
     bool timings = false;
 };
@@ -72,6 +92,19 @@ int run(const Options& o) {
     const ngi::Frame frame = ngi::read_frame(frame_dir, &read_stats);  // the reference, if any, has the face size
     warn_frame_sanitized("lightmap", frame_dir, read_stats);
     warn_noisy_direct_light("lightmap", frame_dir);
+    // --display: the same camera's front view at the display's resolution (ngi render --face S), whose G-buffer and
+    // direct light the lightmap is brought to (ngi::DisplayView, docs/CONVENTIONS.md section 20).
+    std::optional<ngi::Frame> display;
+    if (!o.display_dir.empty()) {
+        ngi::FrameReadStats display_stats;
+        display = ngi::read_frame(o.display_dir, &display_stats);
+        warn_frame_sanitized("lightmap", o.display_dir, display_stats);
+        if (display->n < frame.n)
+            throw ngi::InputError("--display " + o.display_dir + ": its face size " + std::to_string(display->n) +
+                                  " is smaller than the frame's " + std::to_string(frame.n));
+        read_stats.sanitized.insert(read_stats.sanitized.end(), display_stats.sanitized.begin(),
+                                    display_stats.sanitized.end());
+    }
     timer.mark("read_frame");
     double share = -1.0;
     const PlanRung* chosen = plan ? &plan->choose(frame, share) : nullptr;
@@ -139,6 +172,22 @@ int run(const Options& o) {
             images.final_image = pipeline.compose(images.lightmap, frame);
         }
     }
+    // At display resolution: the indirect part of the lightmap (lightmap - direct) upsampled joint-bilaterally (or
+    // bilinearly) by the display frame's normals and positions and composed with its own direct light. One frame, no
+    // history: both resolutions' positions are taken from the same (arbitrary) camera centre.
+    const ngi::Frame& shown = display ? *display : frame;
+    if (display) {
+        ngi::DisplaySettings ds;
+        ds.temporal = false;
+        ds.upsampler = ngi::display_upsampler_from_name(o.upsampler);
+        ngi::DisplayView view(device, display->n, ds);
+        images = view.run(frame, images.lightmap, *display, glm::vec3(0.0f), true, true, false);
+        width = height = display->n;
+        timer.mark("display");
+    }
+    auto compose = [&](const ngi::Image& light) {
+        return display ? compose_front(light, *display) : pipeline.compose(light, frame);
+    };
     const ngi::Image& lightmap = images.lightmap;
     const ngi::Image& final_image = images.final_image;
     auto present = [&](const ngi::Image& im) {
@@ -148,10 +197,10 @@ int run(const Options& o) {
     // Everything is computed before anything is written.
     std::vector<std::pair<std::string, ngi::Image>> pngs = {{"final.png", pipeline.tonemap(present(final_image))}};
     nlohmann::json metrics;
-    if (frame.reference) {
+    if (shown.reference) {
         // Direct-only baseline: the direct light alone as the lightmap (what a renderer has without GI).
-        const ngi::Image direct_final = pipeline.compose(frame.get(ngi::Feature::Direct, ngi::Face::Front), frame);
-        const ngi::Image reference_final = pipeline.compose(*frame.reference, frame);
+        const ngi::Image& direct = shown.get(ngi::Feature::Direct, ngi::Face::Front);
+        const ngi::Image direct_final = compose(direct), reference_final = compose(*shown.reference);
         const ngi::Image d = pipeline.tonemap(direct_final), n = pipeline.tonemap(final_image),
                          r = pipeline.tonemap(reference_final);
         const ngi::Image dp = pipeline.tonemap(present(direct_final)), np = pipeline.tonemap(present(final_image)),
@@ -161,18 +210,19 @@ int run(const Options& o) {
         // data_range 1), like the thesis's
         // evaluation of 8-bit renders, and on the linear lightmaps (data_range = the reference's maximum).
         double peak = 0;
-        for (float v : frame.reference->data) peak = std::max(peak, double(v));
+        for (float v : shown.reference->data) peak = std::max(peak, double(v));
         metrics = {
             {"convention", "final_ldr: tone-mapped final images, data_range 1; lightmap_linear: HDR lightmaps, "
                            "data_range = max of the reference lightmap"},
             {"network", {{"final_ldr", metrics_json(ngi::compare_images(device, n, r, 1.0))},
-                         {"lightmap_linear", metrics_json(ngi::compare_images(device, lightmap, *frame.reference,
+                         {"lightmap_linear", metrics_json(ngi::compare_images(device, lightmap, *shown.reference,
                                                                              peak))}}},
             {"direct_only", {{"final_ldr", metrics_json(ngi::compare_images(device, d, r, 1.0))},
                              {"lightmap_linear",
-                              metrics_json(ngi::compare_images(device, frame.get(ngi::Feature::Direct, ngi::Face::Front),
-                                                               *frame.reference, peak))}}},
+                              metrics_json(ngi::compare_images(device, direct, *shown.reference, peak))}}},
         };
+        if (display)
+            metrics["display"] = {{"frame", o.display_dir}, {"size", display->n}, {"upsampler", o.upsampler}};
     }
     nlohmann::json plan_json;
     if (plan) {
@@ -212,7 +262,7 @@ int run(const Options& o) {
     std::printf("lightmap   %s/lightmap.exr (%dx%d), final.png%s; input %s; NaN/Inf replaced: %zu in the frame's "
                 "files, %d in the network input\n",
                 out_dir.c_str(), width, height,
-                frame.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
+                shown.reference ? ", compare.png (direct only | network | reference), metrics.json" : "",
                 input_text.c_str(), read_stats.total_sanitized(), stats.total_nonfinite());
     timer.print();
     return 0;
@@ -262,6 +312,15 @@ Run add_lightmap(CLI::App& app) {
                                          : "needs a finite number with 0 < T <= 1, got '" + s + "'";
             },
             ""));
+    CLI::Option* display = add_path(*cmd, "--display", o->display_dir, "DIR",
+                                    "the same camera's frame at the display's resolution (ngi render --face S): "
+                                    "the lightmap's indirect light is upsampled to it, guided by its normals and "
+                                    "depth, and composed with its direct light; outputs and metrics at that size",
+                                    false);
+    display->excludes("--size");
+    add_choice(*cmd, "--upsampler", o->upsampler, {"jbu", "bilinear"},
+               "how --display upsamples the indirect light: joint bilateral (guided) or bilinear", "jbu")
+        ->needs(display);
     add_device(*cmd, o->device);
     cmd->add_flag("--timings", o->timings,
                   "print the wall time of each phase on stderr (read the frame, open the device, load the model, "

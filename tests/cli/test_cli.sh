@@ -37,6 +37,20 @@ grep -q "input none (ssgi, surround faces, 1 bounce)" "$work/lm_ssgi.out" || fai
 /usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1]))
 assert m['output_mode'] == 'indirect' and m['scores_valid'] and m['network']['final_ldr']['psnr'] > 0, m
 " "$work/lm_ssgi/metrics.json" || fail "lightmap with ssgi_surround: $(cat "$work/lm_ssgi/metrics.json")"
+# At display resolution (issue 47): the same camera rendered at face 48 (not a multiple of 32), the lightmap's
+# indirect light upsampled to it and composed with its own direct light; outputs and metrics at 48 x 48.
+"$ngi" render --scene room:seed=1 --face 48 --spp 4 --feature-spp 1 --out "$work/frame48" > /dev/null
+"$ngi" lightmap --frame "$work/frame" --display "$work/frame48" --model ssgi_surround --out "$work/lm_display" \
+    > "$work/lm_display.out" 2> /dev/null
+grep -q "lightmap.exr (48x48)" "$work/lm_display.out" || fail "lightmap --display: $(cat "$work/lm_display.out")"
+/usr/bin/python3 -c "import json, sys; m = json.load(open(sys.argv[1]))
+assert m['display']['size'] == 48 and m['display']['upsampler'] == 'jbu' and m['network']['final_ldr']['psnr'] > 0, m
+" "$work/lm_display/metrics.json" || fail "lightmap --display: $(cat "$work/lm_display/metrics.json")"
+"$ngi" render --scene room:seed=1 --face 48 --frame 7 --spp 4 --feature-spp 1 --no-reference --out "$work/frame48_moved" > /dev/null
+if "$ngi" lightmap --frame "$work/frame" --display "$work/frame48_moved" --model ssgi_surround --out "$work/lm_moved" \
+    > /dev/null 2> "$work/lm_moved.err"; then fail "lightmap --display with another camera ran"; fi
+grep -q "display frame's camera" "$work/lm_moved.err" || fail "lightmap --display, other camera: $(cat "$work/lm_moved.err")"
+[ ! -e "$work/lm_moved" ] || fail "lightmap --display, other camera: left $work/lm_moved behind"
 
 # A frame whose front albedo is all NaN (issue 31, "a score that lies": it once ran with exit 0, "0 NaN/Inf
 # sanitized" and MSE 0 / SSIM 1): it runs, the count per file is warned on stderr and printed, and every score in

@@ -513,3 +513,26 @@ def test_help_reads_well():
     assert ngi.__doc__ and "ngi.Device" in ngi.__doc__
     for name in ngi._ngi.__all__:
         assert getattr(ngi, name).__doc__, f"ngi.{name} has no docstring"
+
+
+def test_display_view_brings_a_lightmap_to_display_resolution(dev, frame):
+    # The same camera at face 96 (not a multiple of 64): the pipeline's 64 x 64 lightmap (here its direct light plus
+    # a constant indirect 0.25) at 96 x 96, composed with the display frame's own direct light.
+    hi = ngi.Renderer(dev, ngi.Scene("room:seed=3")).render(n=96, spp=2, feature_spp=2, frame=5, reference=False)
+    lightmap = frame.feature("direct")[0] + 0.25
+    view = ngi.DisplayView(dev, 96)
+    a = view.run(frame, lightmap, hi, (0, 0, 0), outputs=("lightmap", "final", "display"), stats=True, timings=True)
+    assert a["lightmap"].shape == (3, 96, 96) and a["display"].shape == (3, 96, 96)
+    assert not a["stats"]["history_used"] and set(a["timings"]) == {"geometry_ms", "upsample_ms", "temporal_ms",
+                                                                     "outputs_ms"}
+    surface = np.linalg.norm(hi.feature("normal")[0], axis=0) > 0.5
+    extra = (a["lightmap"] - hi.feature("direct")[0])[:, surface]
+    assert np.allclose(extra, 0.25, atol=1e-5), (extra.min(), extra.max())  # a constant is upsampled exactly
+    b = view.run(frame, lightmap, hi, (0, 0, 0), stats=True)
+    assert b["stats"]["history_used"] and b["stats"]["disoccluded"] == 0
+    view.reset()
+    assert not view.run(frame, lightmap, hi, (0, 0, 0), stats=True)["stats"]["history_used"]
+    with pytest.raises(ngi.InputError, match="display frame is 64x64"):
+        view.run(frame, lightmap, frame, (0, 0, 0))
+    with pytest.raises(ngi.InputError, match="jbu, bilinear"):
+        ngi.DisplayView(dev, 96, upsampler="nearest")
