@@ -1,6 +1,8 @@
 #include "plan_file.hpp"
 
 #include <filesystem>
+#include <set>
+#include <vector>
 #include <nlohmann/json.hpp>
 
 #include "ngi/error.hpp"
@@ -47,8 +49,16 @@ PlanRung read_rung(const json& j, const std::string& where, const std::string& p
     r.n = j["n"].get<int>();
     const fs::path model = fs::path(r.model).is_absolute() ? fs::path(r.model) : fs::path(path).parent_path() / r.model;
     std::error_code ec;
-    if (!fs::is_regular_file(model, ec))
-        fail(path, where + ".model: " + model.string() + " does not exist (rung " + r.name + ")");
+    const fs::file_type type = fs::status(model, ec).type();  // links followed, as the loader opens the file
+    if (type != fs::file_type::regular) {
+        const char* what = type == fs::file_type::not_found || type == fs::file_type::none ? "does not exist"
+                           : type == fs::file_type::directory                                ? "is a directory"
+                           : type == fs::file_type::fifo                                     ? "is a FIFO, not a regular file"
+                           : type == fs::file_type::character || type == fs::file_type::block
+                               ? "is a device, not a regular file"
+                               : "is not a regular file";
+        fail(path, where + ".model: " + model.string() + " " + what + " (rung " + r.name + ")");
+    }
     r.model = model.string();
     return r;
 }
@@ -58,12 +68,25 @@ PlanRung read_rung(const json& j, const std::string& where, const std::string& p
 Plan Plan::load(const std::string& path) { return parse(ngi::read_input_file(path, "plan"), path); }
 
 Plan Plan::parse(const std::string& text, const std::string& path) {
+    // A repeated key is refused: nlohmann keeps the last one silently, so {"model": A, ..., "model": B} ran B.
+    // (The library's detail::parse_json_unique_keys does the same for its own files; the CLI sees public headers only.)
+    std::vector<std::set<std::string>> keys;  // the keys of each object being parsed, innermost last
+    std::string repeated;
+    const json::parser_callback_t unique = [&](int, json::parse_event_t event, json& parsed) {
+        if (event == json::parse_event_t::object_start) keys.emplace_back();
+        else if (event == json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
+        else if (event == json::parse_event_t::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second &&
+                 repeated.empty())
+            repeated = parsed.get<std::string>().substr(0, 80);
+        return true;
+    };
     json j;
     try {
-        j = json::parse(text);
+        j = json::parse(text, unique);
     } catch (const json::exception& e) {
         fail(path, std::string("not valid JSON: ") + e.what());
     }
+    if (!repeated.empty()) fail(path, "the key '" + repeated + "' appears twice in one object; say it once");
     if (!j.is_object() || !j.contains("format") || j["format"] != "ngi-plan")
         fail(path, "not a plan (\"format\": \"ngi-plan\")");
     if (!j.contains("version") || j["version"] != 1) fail(path, "unsupported version (this ngi reads version 1)");

@@ -139,6 +139,17 @@ expect_failure plan_n64 "$ngi" lightmap --frame "$work/frame" --plan "$work/plan
 plan plan_missing '{"format": "ngi-plan", "version": 1, "rung": "gone", "model": "nowhere.safetensors", "n": 32}'
 expect="nowhere.safetensors does not exist (rung gone)"
 expect_failure plan_missing "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_missing.json" --out "$work/out_plan_missing"
+# Issue 51: a repeated key once ran the last "model"; a model path that is a folder, a FIFO or a device was "does not
+# exist".
+plan plan_twice '{"format": "ngi-plan", "version": 1, "rung": "parity", "model": "parity/pix2pix_running.safetensors", "n": 32, "model": "nowhere.safetensors"}'
+expect="the key 'model' appears twice in one object"
+expect_failure plan_twice "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_twice.json" --out "$work/out_plan_twice"
+mkfifo "$work/fifo.safetensors"
+for target in "parity:is a directory" "fifo.safetensors:is a FIFO, not a regular file" "/dev/zero:is a device, not a regular file"; do
+  plan plan_kind "{\"format\": \"ngi-plan\", \"version\": 1, \"rung\": \"odd\", \"model\": \"${target%%:*}\", \"n\": 32}"
+  expect="${target#*:} (rung odd)"
+  expect_failure plan_kind "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_kind.json" --out "$work/out_plan_kind"
+done
 plan plan_format '{"rung": "x", "model": "parity/pix2pix_running.safetensors", "n": 32}'
 expect="plan_format.json: not a plan"
 expect_failure plan_format "$ngi" lightmap --frame "$work/frame" --plan "$work/plan_format.json" --out "$work/out_plan_format"
