@@ -185,6 +185,15 @@ Wanted wanted_outputs(const std::vector<std::string>& names) {
     return w;
 }
 
+// The images asked for, as run() returns them: 'lightmap', 'final', 'display'.
+py::dict outputs_dict(const Wanted& w, ngi::FrameImages&& r) {
+    py::dict out;
+    if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
+    if (w.final_image) out["final"] = from_image(std::move(r.final_image));
+    if (w.display) out["display"] = from_image(std::move(r.display));
+    return out;
+}
+
 py::dict stats_dict(const ngi::PreprocessStats& s) {
     py::dict d, nonfinite;
     for (ngi::Feature f : kFeatures) nonfinite[ngi::feature_name(f)] = s.nonfinite[int(f)];
@@ -336,10 +345,7 @@ Pipeline(device, n, mode="thesis" | "equirect", transfer="reinhard" | "clamp").)
                 py::gil_scoped_release release;
                 r = p.pipeline.run(model.model, *fr, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr);
             }
-            py::dict out;
-            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
-            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
-            if (w.display) out["display"] = from_image(std::move(r.display));
+            py::dict out = outputs_dict(w, std::move(r));
             if (stats) out["stats"] = stats_dict(st);
             return out;
         }, py::arg("model"), py::arg("frame"), py::arg("outputs") = std::vector<std::string>{"lightmap", "final"},
@@ -383,10 +389,7 @@ Frame.from_dict), packed straight into the device layout. Returns a dict with th
                 r = p.pipeline.run(model.model, in, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr,
                                    timings ? &tt : nullptr);
             }
-            py::dict out;
-            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
-            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
-            if (w.display) out["display"] = from_image(std::move(r.display));
+            py::dict out = outputs_dict(w, std::move(r));
             if (stats) out["stats"] = stats_dict(st);
             if (timings) {
                 py::dict t;
@@ -538,10 +541,7 @@ normal_power=32, sigma_plane=0.1, radius=2, depth_rel=0.02, depth_abs=0.05).)doc
                 r = v.view.run(*lo, lm, *hi, pos, w.lightmap, w.final_image, w.display, tm, stats ? &st : nullptr,
                                timings ? &tt : nullptr);
             }
-            py::dict out;
-            if (w.lightmap) out["lightmap"] = from_image(std::move(r.lightmap));
-            if (w.final_image) out["final"] = from_image(std::move(r.final_image));
-            if (w.display) out["display"] = from_image(std::move(r.display));
+            py::dict out = outputs_dict(w, std::move(r));
             if (stats) {
                 py::dict d;
                 d["jbu_fallbacks"] = st.jbu_fallbacks;

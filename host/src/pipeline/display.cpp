@@ -74,23 +74,6 @@ struct CameraArgs {
     }
 };
 
-class Lap {
-public:
-    Lap(detail::Context& ctx, DisplayTimings* t) : ctx_(ctx), t_(t), at_(Clock::now()) {}
-    void operator()(double DisplayTimings::*field) {
-        if (!t_) return;
-        ctx_.finish();
-        const auto now = Clock::now();
-        t_->*field = std::chrono::duration<double, std::milli>(now - at_).count();
-        at_ = now;
-    }
-
-private:
-    detail::Context& ctx_;
-    DisplayTimings* t_;
-    Clock::time_point at_;
-};
-
 }  // namespace
 
 const char* display_upsampler_name(DisplayUpsampler u) { return u == DisplayUpsampler::Jbu ? "jbu" : "bilinear"; }
@@ -180,7 +163,7 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
                    o->opencl_mem() == low_lightmap.opencl_mem()))
             throw InputError(std::string(kOp) + ": an output buffer is also an input");
 
-    Lap lap(im.ctx, timings);
+    detail::StageClock lap(im.ctx, timings);
     // Guides of both resolutions and the N x N indirect light.
     detail::ensure_buffer(im.ctx, im.low_normal, 3 * lo_plane * sizeof(float), "display view: low normal");
     detail::ensure_buffer(im.ctx, im.low_position, 3 * lo_plane * sizeof(float), "display view: low position");

@@ -32,24 +32,6 @@ void check_tonemap(const ToneMapOptions& t) {
         throw InputError("tone map: exposure " + std::to_string(t.exposure_ev) + " EV is not in [-64, 64]");
 }
 
-// Timed stages end with a wait for the device; the gather (descriptor inputs) was timed by the caller.
-class StageClock {
-public:
-    StageClock(detail::Context& ctx, FrameTimings* timings) : ctx_(ctx), timings_(timings), t_(Clock::now()) {}
-    void operator()(double FrameTimings::*field) {
-        if (!timings_) return;
-        ctx_.finish();
-        const auto now = Clock::now();
-        timings_->*field = std::chrono::duration<double, std::milli>(now - t_).count();
-        t_ = now;
-    }
-
-private:
-    detail::Context& ctx_;
-    FrameTimings* timings_;
-    Clock::time_point t_;
-};
-
 }  // namespace
 
 void SurroundPipeline::Impl::check_frame_buffers(const DeviceBuffer& planes, int faces_used,
@@ -74,7 +56,7 @@ void SurroundPipeline::Impl::enqueue_ssgi(const ModelConfig& config, const Devic
                          "the frame holds " + std::to_string(desc.faces));
     check_frame_buffers(planes, faces_used, outputs);
     if (!ssgi) ssgi = std::make_unique<detail::Ssgi>(ctx);
-    StageClock lap(ctx, timings);
+    detail::StageClock lap(ctx, timings);
     if (stats)
         enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env, desc.look, desc.up, config,
                       false);
@@ -184,7 +166,7 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
     // Only the faces the model reads must be present, but they must all be there.
     const int faces_used = surround ? kFaceCount : 1;
     im.check_frame_buffers(planes, faces_used, outputs);
-    StageClock lap(im.ctx, timings);
+    detail::StageClock lap(im.ctx, timings);
     const detail::Buffer& input = im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
                                                    desc.look, desc.up, config, surround);
     lap(&FrameTimings::input_ms);

@@ -2,6 +2,7 @@
 // (exposed here so tests can check them against naive references).
 #pragma once
 #include <array>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -60,6 +61,27 @@ bool indirect_output(const ModelConfig& config, const char* what);
 
 // Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept).
 bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what);
+
+// Wall-clock stage times into a timings struct (FrameTimings, DisplayTimings), when one is given: each lap waits for
+// the device and stores the time since the previous lap into the named field.
+template <class Timings>
+class StageClock {
+public:
+    StageClock(Context& ctx, Timings* timings)
+        : ctx_(ctx), timings_(timings), t_(std::chrono::steady_clock::now()) {}
+    void operator()(double Timings::*field) {
+        if (!timings_) return;
+        ctx_.finish();
+        const auto now = std::chrono::steady_clock::now();
+        timings_->*field = std::chrono::duration<double, std::milli>(now - t_).count();
+        t_ = now;
+    }
+
+private:
+    Context& ctx_;
+    Timings* timings_;
+    std::chrono::steady_clock::time_point t_;
+};
 
 }  // namespace ngi::detail
 
