@@ -26,6 +26,7 @@ void require_param(bool ok, const char* name, float v, const char* range) {
 
 JointBilateralUpsample::JointBilateralUpsample(Context& ctx)
     : kernel_(ctx.kernel("jbu", "jbu_upsample", jbu_defines())),
+      kernel_vec_(ctx.kernel("jbu", "jbu_upsample8", jbu_defines())),
       fallbacks_(ctx.alloc(sizeof(std::uint32_t), "joint bilateral upsampling: fallback counter")) {}
 
 int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const JbuParams& p, cl_mem out,
@@ -70,12 +71,14 @@ int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const Jbu
         if (m == out) throw InputError(std::string(kOp) + ": the output buffer is also an input");
 
     ctx.fill_zero(fallbacks_, 0, fallbacks_.bytes(), "joint bilateral upsampling: fallback counter");
-    kernel_.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal,
-                 in.position, in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio,
-                 out, fallbacks_);
+    const bool vec = in.channels <= kJbuVecMaxChannels;
+    Kernel& k = vec ? kernel_vec_ : kernel_;
+    k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
+           in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);
     static const std::size_t local[2] = {8, 8};
-    const std::size_t global[2] = {std::size_t(in.width), std::size_t(in.height)};
-    ctx.launch(kernel_, 2, global, local);
+    const std::size_t global[2] = {vec ? (std::size_t(in.width) + kJbuVec - 1) / kJbuVec : std::size_t(in.width),
+                                   std::size_t(in.height)};
+    ctx.launch(k, 2, global, local);
     return read_count ? fallback_count(ctx) : -1;
 }
 

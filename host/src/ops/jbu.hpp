@@ -16,8 +16,15 @@ constexpr int kJbuMaxChannels = 64;
 // Image sides accepted (both resolutions).
 constexpr int kJbuMaxSide = 16384;
 
+// Output pixels of one row per work-item of jbu_upsample8, the kernel for 1 to 4 channels (kernels/jbu.cl says why:
+// PoCL puts work-items in SIMD lanes only for kernels without inner loops; this kernel's lanes are explicit).
+constexpr int kJbuVec = 8;
+constexpr int kJbuVecMaxChannels = 4;
+
 // The build options of kernels/jbu.cl.
-inline std::string jbu_defines() { return define("JBU_MAX_RADIUS", kJbuMaxRadius); }
+inline std::string jbu_defines() {
+    return join_defines({define("JBU_MAX_RADIUS", kJbuMaxRadius), define("JBU_VEC", kJbuVec)});
+}
 
 struct JbuParams {
     // Standard deviation of the spatial Gaussian, in low-resolution pixels.
@@ -53,7 +60,7 @@ public:
     int fallback_count(Context& ctx) const;
 
 private:
-    Kernel kernel_;
+    Kernel kernel_, kernel_vec_;  // jbu_upsample (any channel count), jbu_upsample8 (up to kJbuVecMaxChannels)
     Buffer fallbacks_;
 };
 
