@@ -11,8 +11,8 @@
 // Images are planar float32 [channel][row][col]; frame planes use the layout of ngi/pipeline.hpp (face 0 only).
 
 #if !defined(F_ALBEDO) || !defined(F_NORMAL) || !defined(F_DEPTH) || !defined(F_DIRECT) || !defined(F_EMISSION) || \
-    !defined(F_ENV) || !defined(DISPLAY_MAX_DEPTH)
-#error "display.cl needs the frame planes and DISPLAY_MAX_DEPTH: build it with display_defines() (host/src/pipeline/display.cpp)"
+    !defined(F_ENV) || !defined(DISPLAY_MAX_DEPTH) || !defined(DISPLAY_VEC)
+#error "display.cl needs the frame planes, DISPLAY_MAX_DEPTH and DISPLAY_VEC: build it with display_defines() (host/src/pipeline/display.cpp)"
 #endif
 
 // Light terms (direct, emission, env): NaN, negative -> 0, +Inf -> FLT_MAX (compose.cl's rule).
@@ -65,7 +65,46 @@ __kernel void display_low_indirect(__global const float* restrict lightmap, __gl
     indirect[i] = display_signed(display_signed(lightmap[i]) - display_light(planes[F_DIRECT * plane + i]));
 }
 
-// Temporal accumulation of the upsampled indirect light (2-D, one work-item per display pixel):
+// The history clamp's range per low-resolution texel (n x n, one work-item each): per channel [min - m, max + m] of
+// the indirect light over the 3 x 3 texels around it that are surfaces, m = clip_margin x (|mean r| + |mean g| +
+// |mean b|) / 3 of those texels; no surface among them: no clamp (-FLT_MAX, FLT_MAX). box: 6 planes, lo r g b, hi r
+// g b. Computed once per texel rather than per display pixel (64 display pixels share a texel at 8x).
+__kernel void display_clip_box(__global const float* restrict low, __global const float* restrict low_normal,
+                               const int n, const float clip_margin, __global float* restrict box) {
+    const int x = get_global_id(0), y = get_global_id(1), ln = n;
+    const float margin = clip_margin;
+    if (x >= ln || y >= ln) return;
+    const int lplane = ln * ln;
+    float3 lo = (float3)(FLT_MAX), hi = (float3)(-FLT_MAX), sum = (float3)(0.0f);
+    int taps = 0;
+    for (int t = 0; t < 9; ++t) {
+        const int tx = x + t % 3 - 1, ty = y + t / 3 - 1;
+        if (tx < 0 || ty < 0 || tx >= ln || ty >= ln) continue;
+        const int j = ty * ln + tx;
+        const float3 m3 = display_load3(low_normal, j, lplane);
+        if (dot(m3, m3) < 0.25f) continue;
+        const float3 l3 = (float3)(display_signed(low[j]), display_signed(low[lplane + j]),
+                                   display_signed(low[2 * lplane + j]));
+        lo = fmin(lo, l3);
+        hi = fmax(hi, l3);
+        sum += l3 / 9.0f;  // divided first: a sum of values near FLT_MAX must not overflow
+        ++taps;
+    }
+    const int i = y * ln + x;
+    if (taps == 0) {
+        display_store3(box, i, lplane, (float3)(-FLT_MAX));
+        display_store3(box + 3 * lplane, i, lplane, (float3)(FLT_MAX));
+        return;
+    }
+    const float3 mean = sum * (9.0f / (float)taps);
+    const float m = margin * (fabs(mean.x) + fabs(mean.y) + fabs(mean.z)) / 3.0f;
+    display_store3(box, i, lplane, lo - m);
+    display_store3(box + 3 * lplane, i, lplane, hi + m);
+}
+
+// Temporal accumulation of the upsampled indirect light (2-D: DISPLAY_VEC = 8 pixels of a row per work-item, in
+// float8 lanes -- PoCL runs work-items in SIMD lanes only for kernels without inner loops, and the tap loops here are
+// inner loops; the inputs are gathered lane by lane without branches):
 //   history = the previous frame's accumulated indirect light, sampled bilinearly where this pixel's world point lands
 //             in the previous camera; a tap counts when it is inside that view and its stored planar depth agrees with
 //             the point's (|d_prev - z| <= depth_rel z + depth_abs); no valid tap (disocclusion, or the view's edge):
@@ -77,91 +116,123 @@ __kernel void display_low_indirect(__global const float* restrict lightmap, __gl
 //             clip_margin < 0: no clip;
 //   out     = history + blend (current - history), or current without history (also where has_history is 0, and
 //             at pixels without a surface).
-// normal: the display's guide (zero = no surface); low / low_normal: the n x n indirect light and its guide.
+// normal: the display's guide (zero = no surface); box: display_clip_box's ranges of the n x n texels.
+#if DISPLAY_VEC != 8
+#error "display_temporal is written for DISPLAY_VEC 8 (host/src/pipeline/display.cpp kDisplayVec)"
+#endif
+
+// p[idx] in the lanes where ok (a lane mask), 0 elsewhere; the other lanes read p[0] and discard it (no branches).
+// display_row8 reads eight neighbouring values of a row (one vector load when all are inside the row).
+static inline float8 display_gather8(__global const float* p, const int8 idx, const int8 ok) {
+    const int8 k = select((int8)(0), idx, ok);
+    return select((float8)(0.0f), (float8)(p[k.s0], p[k.s1], p[k.s2], p[k.s3], p[k.s4], p[k.s5], p[k.s6], p[k.s7]),
+                  ok);
+}
+
+static inline float8 display_row8(__global const float* p, const int base, const int count, const int8 live) {
+    if (count == 8) return vload8(0, p + base);
+    return display_gather8(p, base + (int8)(0, 1, 2, 3, 4, 5, 6, 7), live);
+}
+
+static inline float8 display_signed8(float8 v) { return select(clamp(v, -FLT_MAX, FLT_MAX), (float8)(0.0f), isnan(v)); }
+
+static inline void display_store8(__global float* p, const int base, const int count, float8 v) {
+    if (count == 8) {
+        vstore8(v, 0, p + base);
+        return;
+    }
+    const float a[8] = {v.s0, v.s1, v.s2, v.s3, v.s4, v.s5, v.s6, v.s7};
+    for (int k = 0; k < count; ++k) p[base + k] = a[k];
+}
+
+static inline uint display_lanes(int8 m) { return (uint)(-(m.s0 + m.s1 + m.s2 + m.s3 + m.s4 + m.s5 + m.s6 + m.s7)); }
+
 __kernel void display_temporal(__global const float* restrict current, __global const float* restrict history,
                                __global const float* restrict prev_depth, __global const float* restrict normal,
-                               __global const float* restrict position, __global const float* restrict low,
-                               __global const float* restrict low_normal, const int n, const int size,
+                               __global const float* restrict position, __global const float* restrict box,
+                               const int n, const int size,
                                const float4 prev_centre, const float4 prev_look, const float4 prev_right,
                                const float4 prev_up, const int has_history, const float blend, const float depth_rel,
                                const float depth_abs, const float clip_margin, __global float* restrict out,
                                volatile __global uint* counters) {
     // Every argument is read before the first branch (rusticl assumes argument loads in control flow are uniform).
-    const int x = get_global_id(0), y = get_global_id(1), s = size, ln = n, hist = has_history;
+    const int gx = get_global_id(0), y = get_global_id(1), s = size, ln = n, hist = has_history;
     const float4 pc = prev_centre, pl = prev_look, pr = prev_right, pu = prev_up;
     const float a = blend, dr = depth_rel, da = depth_abs, margin = clip_margin;
-    if (x >= s || y >= s) return;
-    const int plane = s * s, i = y * s + x;
-    const float3 cur = (float3)(display_signed(current[i]), display_signed(current[plane + i]),
-                                display_signed(current[2 * plane + i]));
-    const float3 nrm = display_load3(normal, i, plane);
-    if (!hist || dot(nrm, nrm) < 0.25f) {
-        display_store3(out, i, plane, cur);
+    const int x0 = gx * DISPLAY_VEC;
+    if (x0 >= s || y >= s) return;
+    const int plane = s * s, base = y * s + x0, count = min(DISPLAY_VEC, s - x0);
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7), x = x0 + lane, live = x < s;
+    const float8 c0 = display_signed8(display_row8(current, base, count, live));
+    const float8 c1 = display_signed8(display_row8(current + plane, base, count, live));
+    const float8 c2 = display_signed8(display_row8(current + 2 * plane, base, count, live));
+    const float8 nx = display_row8(normal, base, count, live), ny = display_row8(normal + plane, base, count, live),
+                 nz = display_row8(normal + 2 * plane, base, count, live);
+    const int8 surface = live & (nx * nx + ny * ny + nz * nz >= 0.25f);
+    if (!hist || !any(surface)) {
+        display_store8(out, base, count, c0);
+        display_store8(out, plane + base, count, c1);
+        display_store8(out, 2 * plane + base, count, c2);
         return;
     }
 
     // Reprojection into the previous camera.
-    const float3 q = display_load3(position, i, plane) - pc.xyz;
-    const float z = dot(q, pl.xyz);
-    const float u = dot(q, pr.xyz) / z, v = dot(q, pu.xyz) / z;
-    float3 acc = (float3)(0.0f);
-    float wsum = 0.0f;
+    const float8 qx = display_row8(position, base, count, live) - pc.x,
+                 qy = display_row8(position + plane, base, count, live) - pc.y,
+                 qz = display_row8(position + 2 * plane, base, count, live) - pc.z;
+    const float8 z = qx * pl.x + qy * pl.y + qz * pl.z;
+    const float8 u = (qx * pr.x + qy * pr.y + qz * pr.z) / z, v = (qx * pu.x + qy * pu.y + qz * pu.z) / z;
     // |u|, |v| <= 2 keeps the pixel coordinates far from int overflow; such points are outside the view anyway.
-    if (z > 1e-6f && fabs(u) <= 2.0f && fabs(v) <= 2.0f) {
-        const float fx = (u + 1.0f) * 0.5f * (float)s - 0.5f, fy = (1.0f - v) * 0.5f * (float)s - 0.5f;
-        const int x0 = (int)floor(fx), y0 = (int)floor(fy);
-        const float ax = fx - (float)x0, ay = fy - (float)y0;
-        const float tol = dr * z + da;
-        for (int t = 0; t < 4; ++t) {
-            const int tx = x0 + (t & 1), ty = y0 + (t >> 1);
-            if (tx < 0 || ty < 0 || tx >= s || ty >= s) continue;
-            const int j = ty * s + tx;
-            const float dp = prev_depth[j];
-            if (!(fabs(dp - z) <= tol)) continue;  // also false for a NaN depth
-            const float w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
-            if (w <= 0.0f) continue;
-            acc += w * (float3)(display_signed(history[j]), display_signed(history[plane + j]),
-                                display_signed(history[2 * plane + j]));
-            wsum += w;
-        }
+    const int8 seen = surface & (z > 1e-6f) & (fabs(u) <= 2.0f) & (fabs(v) <= 2.0f);
+    const float8 fx = select((float8)(0.0f), (u + 1.0f) * 0.5f * (float)s - 0.5f, seen);
+    const float8 fy = select((float8)(0.0f), (1.0f - v) * 0.5f * (float)s - 0.5f, seen);
+    const float8 flx = floor(fx), fly = floor(fy);
+    const int8 tx0 = convert_int8(flx), ty0 = convert_int8(fly);
+    const float8 ax = fx - flx, ay = fy - fly, tol = dr * z + da;
+    float8 h0 = (float8)(0.0f), h1 = h0, h2 = h0, wsum = h0;
+    for (int t = 0; t < 4; ++t) {
+        const int8 tx = tx0 + (t & 1), ty = ty0 + (t >> 1);
+        const int8 inside = seen & (tx >= 0) & (ty >= 0) & (tx < s) & (ty < s);
+        const int8 j = ty * s + tx;
+        const float8 dp = display_gather8(prev_depth, j, inside);
+        const float8 w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
+        const int8 ok = inside & (fabs(dp - z) <= tol) & (w > 0.0f);  // also false for a NaN depth
+        const float8 wk = select((float8)(0.0f), w, ok);
+        h0 += wk * display_signed8(display_gather8(history, j, ok));
+        h1 += wk * display_signed8(display_gather8(history + plane, j, ok));
+        h2 += wk * display_signed8(display_gather8(history + 2 * plane, j, ok));
+        wsum += wk;
     }
-    if (!(wsum > 1e-4f)) {
-        atomic_inc(&counters[0]);
-        display_store3(out, i, plane, cur);
-        return;
-    }
-    float3 h = acc / wsum;
+    const int8 used = surface & (wsum > 1e-4f);
+    const uint lost = display_lanes(surface & ~used);
+    if (lost) atomic_add(&counters[0], lost);
+    const float8 inv = select((float8)(1.0f), 1.0f / wsum, used);
+    h0 *= inv;
+    h1 *= inv;
+    h2 *= inv;
 
     if (margin >= 0.0f) {
-        // The low-resolution texel nearest the pixel's sample position (jbu.cl's mapping, pixel centres at +0.5).
-        const int cx = clamp((int)floor(((float)x + 0.5f) * (float)ln / (float)s), 0, ln - 1);
+        // The clamp range of the low-resolution texel nearest each pixel's sample position (display_clip_box; jbu.cl's
+        // mapping, pixel centres at +0.5).
         const int cy = clamp((int)floor(((float)y + 0.5f) * (float)ln / (float)s), 0, ln - 1);
+        const int8 cx = clamp(convert_int8(floor((convert_float8(x) + 0.5f) * (float)ln / (float)s)), 0, ln - 1);
         const int lplane = ln * ln;
-        float3 lo = (float3)(FLT_MAX), hi = (float3)(-FLT_MAX), sum = (float3)(0.0f);
-        int taps = 0;
-        for (int t = 0; t < 9; ++t) {
-            const int tx = cx + t % 3 - 1, ty = cy + t / 3 - 1;
-            if (tx < 0 || ty < 0 || tx >= ln || ty >= ln) continue;
-            const int j = ty * ln + tx;
-            const float3 ln3 = display_load3(low_normal, j, lplane);
-            if (dot(ln3, ln3) < 0.25f) continue;
-            const float3 l3 = (float3)(display_signed(low[j]), display_signed(low[lplane + j]),
-                                       display_signed(low[2 * lplane + j]));
-            lo = fmin(lo, l3);
-            hi = fmax(hi, l3);
-            sum += l3 / 9.0f;  // divided first: a sum of values near FLT_MAX must not overflow
-            ++taps;
-        }
-        if (taps > 0) {
-            const float3 mean = sum * (9.0f / (float)taps);
-            const float m = margin * (fabs(mean.x) + fabs(mean.y) + fabs(mean.z)) / 3.0f;
-            const float3 c = clamp(h, lo - m, hi + m);
-            if (any(c != h)) atomic_inc(&counters[1]);
-            h = c;
-        }
+        const int8 j = cy * ln + cx;
+        const float8 lo0 = display_gather8(box, j, used), lo1 = display_gather8(box + lplane, j, used),
+                     lo2 = display_gather8(box + 2 * lplane, j, used), hi0 = display_gather8(box + 3 * lplane, j, used),
+                     hi1 = display_gather8(box + 4 * lplane, j, used), hi2 = display_gather8(box + 5 * lplane, j, used);
+        const float8 k0 = clamp(h0, lo0, hi0), k1 = clamp(h1, lo1, hi1), k2 = clamp(h2, lo2, hi2);
+        const int8 moved = used & ((k0 != h0) | (k1 != h1) | (k2 != h2));
+        const uint clipped = display_lanes(moved);
+        if (clipped) atomic_add(&counters[1], clipped);
+        h0 = select(h0, k0, used);
+        h1 = select(h1, k1, used);
+        h2 = select(h2, k2, used);
     }
-    const float3 r = h + a * (cur - h);
-    display_store3(out, i, plane, clamp(r, (float3)(-FLT_MAX), (float3)(FLT_MAX)));
+    const float8 lim = (float8)(FLT_MAX);
+    display_store8(out, base, count, select(c0, clamp(h0 + a * (c0 - h0), -lim, lim), used));
+    display_store8(out, plane + base, count, select(c1, clamp(h1 + a * (c1 - h1), -lim, lim), used));
+    display_store8(out, 2 * plane + base, count, select(c2, clamp(h2 + a * (c2 - h2), -lim, lim), used));
 }
 
 // The display-resolution outputs, per value (count = 3 size^2, one work-item each): lightmap = clean(direct) +

@@ -191,10 +191,14 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
     const int8 x = x0 + lane, live = x < ow;
     const int8 o = y * ow + x;
 
-    const float8 nx = jbu_gather8(normal, o, live), ny = jbu_gather8(normal + hi_plane, o, live),
-                 nz = jbu_gather8(normal + 2 * hi_plane, o, live);
-    const float8 px = jbu_gather8(position, o, live), py = jbu_gather8(position + hi_plane, o, live),
-                 pz = jbu_gather8(position + 2 * hi_plane, o, live);
+    const int whole = x0 + JBU_VEC <= ow;  // all lanes inside the row: one vector load per plane
+    const int row = y * ow + x0;
+    const float8 nx = whole ? vload8(0, normal + row) : jbu_gather8(normal, o, live),
+                 ny = whole ? vload8(0, normal + hi_plane + row) : jbu_gather8(normal + hi_plane, o, live),
+                 nz = whole ? vload8(0, normal + 2 * hi_plane + row) : jbu_gather8(normal + 2 * hi_plane, o, live);
+    const float8 px = whole ? vload8(0, position + row) : jbu_gather8(position, o, live),
+                 py = whole ? vload8(0, position + hi_plane + row) : jbu_gather8(position + hi_plane, o, live),
+                 pz = whole ? vload8(0, position + 2 * hi_plane + row) : jbu_gather8(position + 2 * hi_plane, o, live);
     const int8 surface = live & jbu_finite8(nx) & jbu_finite8(ny) & jbu_finite8(nz) &
                          (nx * nx + ny * ny + nz * nz >= 0.25f) & jbu_finite8(px) & jbu_finite8(py) & jbu_finite8(pz);
 

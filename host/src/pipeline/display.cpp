@@ -25,9 +25,13 @@ const std::size_t kLocal1[1] = {64};
 const std::size_t kLocal2[2] = {8, 8};
 using Clock = std::chrono::steady_clock;
 
+// Display pixels of one row per work-item of display_temporal (its float8 lanes; kernels/display.cl says why).
+constexpr int kDisplayVec = 8;
+
 std::string display_defines() {
     // Beyond the preprocessing's depth range a pixel is sky (the renderer writes 1e4 m there), as for the ssgi gather.
-    return detail::join_defines({detail::frame_plane_defines(), detail::define("DISPLAY_MAX_DEPTH", detail::kSsgiMaxDepth)});
+    return detail::join_defines({detail::frame_plane_defines(), detail::define("DISPLAY_MAX_DEPTH", detail::kSsgiMaxDepth),
+                                 detail::define("DISPLAY_VEC", kDisplayVec)});
 }
 
 void require(bool ok, const std::string& what) {
@@ -89,9 +93,9 @@ struct DisplayView::Impl {
     detail::Context& ctx;
     int size;
     DisplaySettings settings;
-    detail::Kernel geometry, low_indirect, temporal, compose, resize, tonemap;
+    detail::Kernel geometry, low_indirect, clip_box, temporal, compose, resize, tonemap;
     detail::JointBilateralUpsample jbu;
-    detail::Buffer low_normal, low_position, low_light, normal, position, upsampled, history[2], prev_depth, counters;
+    detail::Buffer low_normal, low_position, low_light, low_box, normal, position, upsampled, history[2], prev_depth, counters;
     detail::Buffer scratch_final, result, staging, low_planes_buf, low_light_buf, display_planes_buf;
     DeviceBuffer out_handles[3];
     int latest = 0;             // history[latest] holds the last frame's accumulated indirect light
@@ -102,6 +106,7 @@ struct DisplayView::Impl {
         : device(d), ctx(detail::context_of(d)), size(s), settings(ds),
           geometry(ctx.kernel("display", "display_geometry", display_defines())),
           low_indirect(ctx.kernel("display", "display_low_indirect", display_defines())),
+          clip_box(ctx.kernel("display", "display_clip_box", display_defines())),
           temporal(ctx.kernel("display", "display_temporal", display_defines())),
           compose(ctx.kernel("display", "display_compose", display_defines())),
           resize(ctx.kernel("compose", "resize_bilinear", detail::compose_defines())),
@@ -208,11 +213,19 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
         im.ctx.fill_zero(im.counters, 0, im.counters.bytes(), "display view: counters");
         const int next = 1 - im.latest;
         const CameraArgs& pc = im.prev_camera;
-        im.temporal.args(im.upsampled, im.history[im.latest], im.prev_depth, im.normal, im.position, im.low_light,
-                         im.low_normal, n, s, pc.centre, pc.look, pc.right, pc.up, int(used_history),
+        if (used_history && im.settings.clip_margin >= 0.0f) {
+            detail::ensure_buffer(im.ctx, im.low_box, 6 * lo_plane * sizeof(float), "display view: clamp ranges");
+            im.clip_box.args(im.low_light, im.low_normal, n, im.settings.clip_margin, im.low_box);
+            const std::size_t gb[2] = {std::size_t(n), std::size_t(n)};
+            im.ctx.launch(im.clip_box, 2, gb, kLocal2);
+        }
+        // Without a clamp the kernel never reads the box: any buffer stands in for it.
+        const detail::Buffer& box = im.low_box ? im.low_box : im.low_light;
+        im.temporal.args(im.upsampled, im.history[im.latest], im.prev_depth, im.normal, im.position, box,
+                         n, s, pc.centre, pc.look, pc.right, pc.up, int(used_history),
                          im.settings.blend, im.settings.depth_rel, im.settings.depth_abs, im.settings.clip_margin,
                          im.history[next], im.counters);
-        const std::size_t g[2] = {std::size_t(s), std::size_t(s)};
+        const std::size_t g[2] = {(std::size_t(s) + kDisplayVec - 1) / kDisplayVec, std::size_t(s)};
         im.ctx.launch(im.temporal, 2, g, kLocal2);
         im.ctx.copy(display_planes.opencl_mem(), std::size_t(frame_plane(Feature::Depth)) * hi_plane * sizeof(float),
                     im.prev_depth.get(), 0, hi_plane * sizeof(float), "display view: previous depth");
