@@ -34,24 +34,45 @@ static inline int display_finite3(float3 v) { return isfinite(v.x) && isfinite(v
 
 // The JBU guides of face 0 of frame planes (size x size): the normal and the world position of every pixel that sees a
 // surface (finite normal with |n|^2 >= 0.25, finite depth in (0, DISPLAY_MAX_DEPTH]); zeros elsewhere (jbu.cl: no
-// surface). One work-item per pixel, 2-D (size, size).
-__kernel void display_geometry(__global const float* restrict planes, const int size, const float4 centre,
-                               const float4 look, const float4 right, const float4 up, __global float* restrict normal,
-                               __global float* restrict position) {
-    const int x = get_global_id(0), y = get_global_id(1), s = size;
-    const float4 c = centre, l = look, r = right, u = up;
-    if (x >= s || y >= s) return;
+// surface). 2-D, DISPLAY_VEC = 8 pixels of a row per work-item in float8 lanes (an elementwise kernel with a branch per
+// pixel ran one pixel at a time on PoCL); a row's last, partial group takes the same formulas lane by lane.
+static inline void display_guide(__global const float* restrict planes, const int s, const int x, const int y,
+                                 const float4 c, const float4 l, const float4 r, const float4 u,
+                                 __global float* restrict normal, __global float* restrict position) {
     const int plane = s * s, i = y * s + x;
     const float3 n = display_load3(planes + F_NORMAL * plane, i, plane);
     const float d = planes[F_DEPTH * plane + i];
-    if (!(display_finite3(n) && dot(n, n) >= 0.25f && isfinite(d) && d > 0.0f && d <= DISPLAY_MAX_DEPTH)) {
-        display_store3(normal, i, plane, (float3)(0.0f));
-        display_store3(position, i, plane, (float3)(0.0f));
+    const int ok = display_finite3(n) && dot(n, n) >= 0.25f && isfinite(d) && d > 0.0f && d <= DISPLAY_MAX_DEPTH;
+    const float pu = 2.0f * ((float)x + 0.5f) / (float)s - 1.0f, pv = 1.0f - 2.0f * ((float)y + 0.5f) / (float)s;
+    display_store3(normal, i, plane, ok ? n : (float3)(0.0f));
+    display_store3(position, i, plane, ok ? c.xyz + d * (l.xyz + pu * r.xyz + pv * u.xyz) : (float3)(0.0f));
+}
+
+__kernel void display_geometry(__global const float* restrict planes, const int size, const float4 centre,
+                               const float4 look, const float4 right, const float4 up, __global float* restrict normal,
+                               __global float* restrict position) {
+    const int gx = get_global_id(0), y = get_global_id(1), s = size;
+    const float4 c = centre, l = look, r = right, u = up;
+    const int x0 = gx * DISPLAY_VEC;
+    if (x0 >= s || y >= s) return;
+    if (x0 + DISPLAY_VEC > s) {
+        for (int x = x0; x < s; ++x) display_guide(planes, s, x, y, c, l, r, u, normal, position);
         return;
     }
-    const float pu = 2.0f * ((float)x + 0.5f) / (float)s - 1.0f, pv = 1.0f - 2.0f * ((float)y + 0.5f) / (float)s;
-    display_store3(normal, i, plane, n);
-    display_store3(position, i, plane, c.xyz + d * (l.xyz + pu * r.xyz + pv * u.xyz));
+    const int plane = s * s, i = y * s + x0;
+    const float8 nx = vload8(0, planes + F_NORMAL * plane + i), ny = vload8(0, planes + (F_NORMAL + 1) * plane + i),
+                 nz = vload8(0, planes + (F_NORMAL + 2) * plane + i), d = vload8(0, planes + F_DEPTH * plane + i);
+    const int8 ok = isfinite(nx) & isfinite(ny) & isfinite(nz) & (nx * nx + ny * ny + nz * nz >= 0.25f) & isfinite(d) &
+                    (d > 0.0f) & (d <= DISPLAY_MAX_DEPTH);
+    const float8 pu = 2.0f * (convert_float8(x0 + (int8)(0, 1, 2, 3, 4, 5, 6, 7)) + 0.5f) / (float)s - 1.0f;
+    const float pv = 1.0f - 2.0f * ((float)y + 0.5f) / (float)s;
+    const float8 zero = (float8)(0.0f);
+    vstore8(select(zero, nx, ok), 0, normal + i);
+    vstore8(select(zero, ny, ok), 0, normal + plane + i);
+    vstore8(select(zero, nz, ok), 0, normal + 2 * plane + i);
+    vstore8(select(zero, c.x + d * (l.x + pu * r.x + pv * u.x), ok), 0, position + i);
+    vstore8(select(zero, c.y + d * (l.y + pu * r.y + pv * u.y), ok), 0, position + plane + i);
+    vstore8(select(zero, c.z + d * (l.z + pu * r.z + pv * u.z), ok), 0, position + 2 * plane + i);
 }
 
 // The low-resolution indirect light: the pipeline's lightmap minus face 0's direct light, per value (count = 3 n^2;

@@ -120,7 +120,7 @@ struct DisplayView::Impl {
 
     void guides(cl_mem planes, int side, const CameraArgs& cam, cl_mem nrm, cl_mem pos) {
         geometry.args(planes, side, cam.centre, cam.look, cam.right, cam.up, nrm, pos);
-        const std::size_t g[2] = {std::size_t(side), std::size_t(side)};
+        const std::size_t g[2] = {(std::size_t(side) + kDisplayVec - 1) / kDisplayVec, std::size_t(side)};
         ctx.launch(geometry, 2, g, kLocal2);
     }
 };
