@@ -81,6 +81,7 @@ typedef struct ngi_device ngi_device;
 typedef struct ngi_model ngi_model;
 typedef struct ngi_buffer ngi_buffer;
 typedef struct ngi_pipeline ngi_pipeline;
+typedef struct ngi_display ngi_display;     /* a view's GI at display resolution, with its history */
 typedef struct ngi_frame ngi_frame;         /* a frame's features on the host (one camera cluster) */
 typedef struct ngi_ao ngi_ao;               /* seed 001's ambient-occlusion network */
 typedef struct ngi_voxels ngi_voxels;       /* seed 004: a voxel scene's surface voxels (field, LTF, shading) */
@@ -325,6 +326,30 @@ NGI_API ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* mo
                                            size_t final_bytes, float* display, size_t display_bytes);
 NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
 NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
+
+/* --- display resolution: the pipeline's N x N lightmap at the application's S x S, stable over frames ----------
+ * (ngi/display.hpp, docs/CONVENTIONS.md section 20). The display's camera is the pipeline's front camera (90 degrees,
+ * square, same centre). One handle per view: it keeps the previous frame's result for the temporal pass. */
+typedef NGI_ENUM(ngi_display_upsampler) {
+    NGI_DISPLAY_JBU = 0,      /* joint bilateral: guided by the display's normals and positions */
+    NGI_DISPLAY_BILINEAR = 1, /* for comparison */
+    NGI_DISPLAY_UPSAMPLER_MAX_ENUM = 0x7FFFFFFF
+} ngi_display_upsampler;
+/* size: S, 2..16384; temporal: non-zero accumulates over frames (defaults of DisplaySettings otherwise). */
+NGI_API ngi_status ngi_display_new(ngi_device* device, int size, ngi_display_upsampler upsampler, int temporal,
+                                   ngi_display** out);
+/* The next frame stands alone (after a cut, a teleport, a scene change). */
+NGI_API ngi_status ngi_display_reset(ngi_display* display);
+/* Device in, device out, asynchronous. low_planes: the frame planes the pipeline ran (face 0 read, n x n);
+ * low_lightmap: its lightmap (ngi_pipeline_enqueue's, n * n * 3 floats); display_planes: one face of frame planes at
+ * S x S (albedo, normal, depth, direct; emission and env as `flags` say); position, look, up: the camera (world
+ * space). Each output, when not NULL, receives S * S * 3 planar floats; the tone map is ngi_pipeline's default. */
+NGI_API ngi_status ngi_display_enqueue(ngi_display* display, int n, ngi_buffer* low_planes, ngi_buffer* low_lightmap,
+                                       ngi_buffer* display_planes, unsigned flags, const float position[3],
+                                       const float look[3], const float up[3], ngi_buffer* lightmap,
+                                       ngi_buffer* final_image, ngi_buffer* display_image);
+NGI_API ngi_status ngi_display_retain(ngi_display* display);
+NGI_API ngi_status ngi_display_release(ngi_display* display);
 /* --- files ---------------------------------------------------------------------------------------------------- */
 /* A frame folder (docs/CONVENTIONS.md: <face>_<feature>.exr, camera.json) into frame planes of `faces` (1 or 6) faces.
  * Call with planes = NULL to learn *n and *bytes; then with a buffer of at least *bytes bytes. *flags receives the

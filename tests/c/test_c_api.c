@@ -322,6 +322,67 @@ static void test_pipeline(ngi_device* dev, const char* models) {
 }
 
 /* An application that owns its OpenCL context: its queue, its planes buffer, its lightmap buffer; no host copy. */
+/* The display view: a 4 x 4 frame's lightmap (its direct light + 0.25 everywhere) at 10 x 10 over a wall facing the
+ * camera: the constant indirect light is upsampled exactly, so the display's lightmap is its direct light + 0.25 and the
+ * final image albedo x that; a second frame reuses the history (the same light), a reset forgets it. */
+static void fill_wall(float* planes, int n, float direct) {
+    const size_t plane = (size_t)n * n;
+    size_t i;
+    int k;
+    memset(planes, 0, 16 * plane * sizeof(float));
+    for (i = 0; i < plane; ++i) {
+        for (k = 0; k < 3; ++k) planes[(0 + k) * plane + i] = 0.5f;  /* albedo */
+        planes[(3 + 2) * plane + i] = 1.0f;                            /* normal +z: facing the camera */
+        planes[6 * plane + i] = 2.0f;                                  /* depth */
+        for (k = 0; k < 3; ++k) planes[(7 + k) * plane + i] = direct;  /* direct */
+    }
+}
+
+static void test_display(ngi_device* dev) {
+    const int n = 4, s = 10;
+    const float pos[3] = {0, 0, 0}, look[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    float low[16 * 4 * 4], lm[3 * 4 * 4], hi[16 * 10 * 10], out[3 * 10 * 10], fin[3 * 10 * 10];
+    ngi_display* v = NULL;
+    ngi_buffer *low_b = NULL, *lm_b = NULL, *hi_b = NULL, *out_b = NULL, *fin_b = NULL;
+    int i, exact = 1, round;
+    fill_wall(low, n, 1.0f);
+    fill_wall(hi, s, 2.0f);
+    for (i = 0; i < 3 * n * n; ++i) lm[i] = 1.0f + 0.25f;
+    CHECK_FAILS(ngi_display_new(dev, s, (ngi_display_upsampler)7, 1, &v), NGI_ERROR_INVALID_ARGUMENT, "ngi_display_new",
+                "upsampler");
+    CHECK_FAILS(ngi_display_new(dev, 1, NGI_DISPLAY_JBU, 1, &v), NGI_ERROR_INPUT, "ngi_display_new", "display size 1");
+    CHECK(ngi_display_new(dev, s, NGI_DISPLAY_JBU, 1, &v) == NGI_OK);
+    CHECK(ngi_display_retain(v) == NGI_OK && ngi_display_release(v) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, sizeof low, &low_b) == NGI_OK && ngi_buffer_write(low_b, 0, low, sizeof low) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, sizeof lm, &lm_b) == NGI_OK && ngi_buffer_write(lm_b, 0, lm, sizeof lm) == NGI_OK);
+    /* Albedo, normal, depth and direct only (10 planes): a frame without emission and env needs no more. */
+    CHECK(ngi_buffer_new(dev, 10 * s * s * sizeof(float), &hi_b) == NGI_OK &&
+          ngi_buffer_write(hi_b, 0, hi, 10 * s * s * sizeof(float)) == NGI_OK);
+    CHECK(ngi_buffer_new(dev, sizeof out, &out_b) == NGI_OK && ngi_buffer_new(dev, sizeof fin, &fin_b) == NGI_OK);
+    for (round = 0; round < 3; ++round) {
+        if (round == 2) CHECK(ngi_display_reset(v) == NGI_OK);
+        CHECK(ngi_display_enqueue(v, n, low_b, lm_b, hi_b, 0, pos, look, up, out_b, fin_b, NULL) == NGI_OK);
+        CHECK(ngi_buffer_read(out_b, 0, out, sizeof out) == NGI_OK && ngi_buffer_read(fin_b, 0, fin, sizeof fin) == NGI_OK);
+        for (i = 0; i < 3 * s * s; ++i)
+            if (fabsf(out[i] - 2.25f) > 1e-5f || fabsf(fin[i] - 0.5f * 2.25f) > 1e-5f) exact = 0;
+    }
+    CHECK(exact);
+    CHECK_FAILS(ngi_display_enqueue(v, 16, low_b, lm_b, hi_b, 0, pos, look, up, out_b, NULL, NULL), NGI_ERROR_INPUT,
+                "ngi_display_enqueue", "N = 16");
+    CHECK_FAILS(ngi_display_enqueue(v, n, low_b, lm_b, hi_b, NGI_FRAME_EMISSION, pos, look, up, out_b, NULL, NULL),
+                NGI_ERROR_INPUT, "ngi_display_enqueue", "display planes buffer");
+    CHECK_FAILS(ngi_display_enqueue(v, n, low_b, lm_b, hi_b, 0, pos, look, up, NULL, NULL, NULL),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_display_enqueue", "nothing to make");
+    CHECK_FAILS(ngi_display_enqueue(v, n, low_b, lm_b, hi_b, 0, NULL, look, up, out_b, NULL, NULL),
+                NGI_ERROR_INVALID_ARGUMENT, "ngi_display_enqueue", "NULL");
+    ngi_buffer_release(low_b);
+    ngi_buffer_release(lm_b);
+    ngi_buffer_release(hi_b);
+    ngi_buffer_release(out_b);
+    ngi_buffer_release(fin_b);
+    CHECK(ngi_display_release(v) == NGI_OK);
+}
+
 static void test_interop(ngi_device* ngi_dev, const char* models) {
     char path[4096];
     const int n = 64;
@@ -995,6 +1056,7 @@ int main(int argc, char** argv) {
     SECTION(test_model(dev, models));
     SECTION(test_model_enqueue(dev, models));
     SECTION(test_pipeline(dev, models));
+    SECTION(test_display(dev));
     SECTION(test_interop(dev, models));
     SECTION(test_ao(dev, models));
     SECTION(test_voxels(dev, models));
