@@ -332,7 +332,7 @@ ngi::FrameInputs GBufferPass::inputs(const ngi::CameraPose& pose) const {
     return in;
 }
 
-ngi::Frame GBufferPass::to_frame(const ngi::CameraPose& pose) const {
+ngi::Frame GBufferPass::to_frame(const ngi::CameraPose& pose, int faces) const {
     ngi::Frame frame;
     frame.n = n_;
     frame.look = pose.look;
@@ -340,7 +340,7 @@ ngi::Frame GBufferPass::to_frame(const ngi::CameraPose& pose) const {
     for (int t = 0; t < kTargets; ++t) {
         if (!mapped_[t]) throw GlError("G-buffer not read back");
         const int ch = ngi::feature_channels(ngi::Feature(t));
-        for (int f = 0; f < ngi::kFaceCount; ++f) {
+        for (int f = 0; f < std::clamp(faces, 1, ngi::kFaceCount); ++f) {
             ngi::Image img(n_, n_, ch);
             for (int row = 0; row < n_; ++row) {
                 const int gl_row = f * n_ + (n_ - 1 - row);

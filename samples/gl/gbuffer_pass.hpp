@@ -49,9 +49,10 @@ public:
     // The mapped attachments as ngi image descriptors ([face][feature]); valid until unmap().
     ngi::FrameInputs inputs(const ngi::CameraPose& pose) const;
     void unmap();
-    // The mapped attachments repacked into an ngi::Frame (planar, top row first): for EXR output and the agreement
-    // test only; the per-frame path hands the mappings over as they are.
-    ngi::Frame to_frame(const ngi::CameraPose& pose) const;
+    // The mapped attachments repacked into an ngi::Frame (planar, top row first): for EXR output, the agreement test
+    // and the display view (--display: the front face only, faces = 1); the per-frame path hands the mappings over
+    // as they are.
+    ngi::Frame to_frame(const ngi::CameraPose& pose, int faces = ngi::kFaceCount) const;
 
     static constexpr int kTargets = 6;  // ngi::Feature order
 private:

@@ -13,12 +13,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <ngi/camera_path.hpp>
+#include <ngi/display.hpp>
 #include <ngi/error.hpp>
 #include <ngi/image_io.hpp>
 
@@ -39,13 +41,17 @@ struct Options {
     int n = 64, frames = 30, warmup = 3, shadow = 2048, bake_texels = 0, bake_rays = 256, width = 768, height = 768;
     float time = -1.0f;  // hours; < 0: the scene's default
     unsigned seed = 0;
-    bool headless = false, exr = false;
+    bool headless = false, exr = false, display = false;
 };
 
 struct FrameTiming {
     double raster = 0, readback = 0, gather = 0, input = 0, network = 0, outputs = 0, frame = 0;
+    // --display: the front face rasterized again at the window's size and read back, and ngi's display view on it
+    // (guides, upsample, temporal, outputs), host repacking of both front faces included in display_ngi.
+    double display_raster = 0, display_readback = 0, display_ngi = 0;
+    ngi::DisplayTimings display;
     double transfer() const { return readback + gather; }
-    double ngi() const { return gather + input + network + outputs; }
+    double ngi() const { return gather + input + network + outputs + display_ngi; }
 };
 
 // Error messages stay on one line (ngi's device error lists the devices on further lines).
@@ -74,6 +80,10 @@ public:
         : o_(o), device_(device), scene_(std::move(scene)), model_(model),
           context_(o.width, o.height, !o.headless, "ngi_gl_viewer: " + scene_.name),
           pipeline_(device, o.n), faces_(ngi_gl::exposed_faces(scene_)), shadow_(o.shadow), gbuffer_(o.n) {
+        if (o.display) {  // the front face at the window's size: the display's G-buffer and direct light
+            display_gbuffer_.emplace(o.width);
+            display_view_.emplace(device, o.width);
+        }
         hours_ = o.time >= 0 ? o.time : scene_.default_time;
         transfer_ = ngi_gl::choose_transfer_path(device);
         rung_ = std::filesystem::path(o.model).stem().string();
@@ -108,11 +118,30 @@ public:
         const auto t1 = Clock::now();
         gbuffer_.read_back();
         t.readback = ms_since(t1);
-        ngi_gl::LitFrame lit = ngi_gl::light_frame(pipeline_, model_, gbuffer_, pose, false, true);
+        ngi_gl::LitFrame lit = ngi_gl::light_frame(pipeline_, model_, gbuffer_, pose, display_view_.has_value(),
+                                                   !display_view_.has_value());
         t.gather = lit.timings.gather_ms;
         t.input = lit.timings.input_ms;
         t.network = lit.timings.network_ms;
         t.outputs = lit.timings.outputs_ms;
+        if (display_view_) {
+            // The N x N lightmap at the window's resolution: the front face rasterized at that size gives the guides
+            // and the direct light; the display view upsamples the indirect light and accumulates it over frames.
+            const auto t2 = Clock::now();
+            display_gbuffer_->render(*gpu_, shadow_, pose, lighting_);
+            glFinish();
+            t.display_raster = ms_since(t2);
+            const auto t3 = Clock::now();
+            display_gbuffer_->read_back();
+            t.display_readback = ms_since(t3);
+            const auto t4 = Clock::now();
+            const ngi::FrameImages shown = display_view_->run(gbuffer_.to_frame(pose, 1), lit.lightmap,
+                                                              display_gbuffer_->to_frame(pose, 1), pose.position,
+                                                              false, false, true, {}, nullptr, &t.display);
+            display_gbuffer_->unmap();
+            t.display_ngi = ms_since(t4);
+            lit.display = shown.display;
+        }
         int w = 0, h = 0;
         glfwGetFramebufferSize(context_.window(), &w, &h);
         presenter_.draw(lit.display, w, h);
@@ -128,6 +157,18 @@ public:
 
     std::string overlay_text() const {
         char b[512];
+        if (display_view_) {
+            const ngi::DisplayTimings& d = last_.display;
+            std::snprintf(b, sizeof b,
+                          "%s  N=%d -> %d^2  %.1f fps\nraster %.1f + %.1f ms, readback %.1f + %.1f ms\n"
+                          "ngi %.1f: merge %.1f %s %.1f\ndisplay %.1f: guides %.1f up %.1f temporal %.1f out %.1f\n"
+                          "%.1f h  no area light",
+                          rung_.c_str(), o_.n, o_.width, fps_, last_.raster, last_.display_raster, last_.readback,
+                          last_.display_readback, last_.gather + last_.input + last_.network + last_.outputs,
+                          last_.input, model_.config().family == "ssgi" ? "ssgi" : "network", last_.network,
+                          last_.display_ngi, d.geometry_ms, d.upsample_ms, d.temporal_ms, d.outputs_ms, hours_);
+            return b;
+        }
         std::snprintf(b, sizeof b,
                       "%s  N=%d  %.1f fps\nraster %.1f ms\ntransfer %.1f ms (readback %.1f + gather %.1f)\n"
                       "merge %.1f  %s %.1f  compose %.1f ms\n%s  %.1f h  no area light",
@@ -215,6 +256,12 @@ public:
             frames.push_back({{"frame", k}, {"raster_ms", t.raster}, {"readback_ms", t.readback}, {"gather_ms", t.gather},
                               {"transfer_ms", t.transfer()}, {"input_ms", t.input}, {"network_ms", t.network},
                               {"outputs_ms", t.outputs}, {"ngi_ms", t.ngi()}, {"frame_ms", t.frame}});
+            if (display_view_)
+                frames.back()["display"] = {{"raster_ms", t.display_raster}, {"readback_ms", t.display_readback},
+                                            {"ngi_ms", t.display_ngi}, {"guides_ms", t.display.geometry_ms},
+                                            {"upsample_ms", t.display.upsample_ms},
+                                            {"temporal_ms", t.display.temporal_ms},
+                                            {"outputs_ms", t.display.outputs_ms}};
             gbuffer_.unmap();
         }
         auto med = [&](auto f) {
@@ -225,6 +272,7 @@ public:
         nlohmann::json j;
         j["scene"] = scene_.name;
         j["n"] = o_.n;
+        j["display"] = o_.display ? o_.width : 0;
         j["rung"] = rung_;
         j["model"] = o_.model;
         j["device"] = device_.info().platform_name + " / " + device_.info().name;
@@ -244,6 +292,12 @@ public:
                        {"network_ms", med([](const FrameTiming& t) { return t.network; })},
                        {"outputs_ms", med([](const FrameTiming& t) { return t.outputs; })},
                        {"ngi_ms", med([](const FrameTiming& t) { return t.ngi(); })},
+                       {"display_raster_ms", med([](const FrameTiming& t) { return t.display_raster; })},
+                       {"display_readback_ms", med([](const FrameTiming& t) { return t.display_readback; })},
+                       {"display_ngi_ms", med([](const FrameTiming& t) { return t.display_ngi; })},
+                       {"display_upsample_temporal_ms", med([](const FrameTiming& t) {
+                            return t.display.geometry_ms + t.display.upsample_ms + t.display.temporal_ms;
+                        })},
                        {"frame_ms", frame_med},
                        {"fps", frame_med > 0 ? 1000.0 / frame_med : 0.0}};
         j["not_modelled"] = "area light (lighting_at has none); cl_khr_gl_sharing interop path";
@@ -262,6 +316,8 @@ private:
     std::vector<ngi_gl::ExposedFace> faces_;
     ngi_gl::ShadowMap shadow_;
     ngi_gl::GBufferPass gbuffer_;
+    std::optional<ngi_gl::GBufferPass> display_gbuffer_;  // --display: the front face at the window's size
+    std::optional<ngi::DisplayView> display_view_;
     ngi_gl::Presenter presenter_;
     ngi_gl::Overlay overlay_;
     std::unique_ptr<ngi_gl::GpuScene> gpu_;
@@ -294,6 +350,9 @@ int main(int argc, char** argv) {
     app.add_option("--bake-rays", o.bake_rays, "sky rays per baked texel")->check(CLI::Range(1, 65536))->capture_default_str();
     app.add_option("--seed", o.seed, "camera path seed")->capture_default_str();
     app.add_option("--window", o.width, "window width and height in pixels")->check(CLI::Range(64, 4096))->capture_default_str();
+    app.add_flag("--display", o.display,
+                 "show the GI at the window's resolution: the front face rasterized at that size, the N x N lightmap's "
+                 "indirect light upsampled by its normals and depth and accumulated over frames (ngi::DisplayView)");
     try {
         app.parse(argc, argv);
         if (o.headless && o.out.empty()) throw CLI::RequiredError("--out (with --headless)");

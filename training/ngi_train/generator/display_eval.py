@@ -24,7 +24,7 @@ Stages:
   sun     backlit:seed=201 with a fixed camera, 12.00-16.00 h in 0.25 h steps (ladder_eval's moving-sun sequence),
           S = 256: the per-frame error curve with and without accumulation and the lag of the accumulated light (the
           frame shift k that best matches the unaccumulated sequence shifted by k).
-Results: WORK/display_eval.json (per frame; a rerun redoes only what is missing, renders are kept), OUT/display.json
+Costs: perf/display_cost.py. Results: WORK/display_eval.json (per frame; a rerun redoes only what is missing, renders are kept), OUT/display.json
 (summary), OUT/display_tables.md, OUT/display_strip.png.
 """
 
@@ -215,47 +215,6 @@ def lag_frames(accumulated, plain, max_shift=8):
 
 
 # --------------------------------------------------------------------------
-# Costs
-# --------------------------------------------------------------------------
-
-def costs(runner, work, sizes=(512, 1024, 1440), repeats=15):
-    """Median ms per stage of DisplayView.run at display sizes (a static frame of the moving sequence resized: the
-    cost does not depend on the content); upsampling + temporal = geometry + upsample + temporal."""
-    lo_dir, hi_dir = work / "moving" / f"000_{N}", work / "moving" / f"000_{MOVING['size']}"
-    low = ngi.read_frame(str(lo_dir))
-    hi0 = ngi.read_frame(str(hi_dir))
-    position = camera_of(hi_dir)[0]
-    lm = runner.lightmap(next(r for r in runner.rungs if r["kind"] != "direct"), low)
-    out = {}
-    for s in sizes:
-        d = hi0.to_dict()
-        idx = (np.arange(s) * hi0.n // s)
-        for k, v in list(d.items()):
-            if isinstance(v, np.ndarray) and v.ndim == 4:
-                d[k] = np.ascontiguousarray(v[:1][:, :, idx][:, :, :, idx])
-            elif isinstance(v, np.ndarray) and v.ndim == 3 and k != "reference":
-                d[k] = np.ascontiguousarray(v[:1][:, idx][:, :, idx])
-        d.pop("reference", None)
-        # A one-face frame: Frame.from_dict wants six faces, so the front face is repeated (only face 0 is read).
-        for k, v in list(d.items()):
-            if isinstance(v, np.ndarray):
-                d[k] = np.ascontiguousarray(np.repeat(v, 6, axis=0))
-        hi = ngi.Frame.from_dict(d)
-        view = ngi.DisplayView(runner.device, s)
-        times = []
-        for i in range(repeats + 3):
-            t = view.run(low, lm, hi, position, outputs=("final",), timings=True)["timings"]
-            if i >= 3:
-                times.append(t)
-        med = {k: float(np.median([t[k] for t in times])) for k in times[0]}
-        med["upsample_temporal_ms"] = float(np.median([t["geometry_ms"] + t["upsample_ms"] + t["temporal_ms"]
-                                                       for t in times]))
-        out[str(s)] = med
-        log(f"display_eval: cost at {s}^2: {med}")
-    return out
-
-
-# --------------------------------------------------------------------------
 # Output
 # --------------------------------------------------------------------------
 
@@ -307,13 +266,6 @@ def tables(summary):
                 lines.append(f"| {rung} | {m} | {v['psnr']:.2f} | {v['ssim']:.4f} | {v['warp_error']:.5f} | "
                              f"{v['warp_ratio']:.2f} |{lag}")
         lines.append("")
-    if "costs" in summary:
-        lines += ["## Cost (DisplayView.run timings, median ms, PoCL)", "",
-                  "| display | guides | upsample | temporal | upsampling + temporal | outputs (+ download) |",
-                  "| --- | --- | --- | --- | --- | --- |"]
-        for s, c in summary["costs"].items():
-            lines.append(f"| {s}^2 | {c['geometry_ms']:.2f} | {c['upsample_ms']:.2f} | {c['temporal_ms']:.2f} | "
-                         f"{c['upsample_temporal_ms']:.2f} | {c['outputs_ms']:.2f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -347,7 +299,7 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=Path("docs/results/display"))
     ap.add_argument("--rungs", default=DEFAULT_RUNGS)
     ap.add_argument("--zoo", default="models/zoo.json")
-    ap.add_argument("--stages", default="static,moving,sun,costs")
+    ap.add_argument("--stages", default="static,moving,sun")
     ap.add_argument("--device", default="pocl")
     ap.add_argument("--render-device", default="pocl")
     ap.add_argument("--ngi", default=None)
@@ -388,8 +340,6 @@ def main(argv=None):
                                    f"{SUN['times'][-1]:g} h, display {SUN['size']}^2")
         summary["sun"]["lag"] = {r: {"jbu_temporal": lag_frames(ms["jbu_temporal"]["finals"], ms["jbu"]["finals"])}
                                  for r, ms in seq["runs"].items()}
-    if "costs" in stages:
-        summary["costs"] = costs(runner, args.work)
     summary_path.write_text(json.dumps(summary, indent=1))
     (args.out / "display_tables.md").write_text(tables(summary))
     log(f"display_eval: wrote {summary_path} and {args.out / 'display_tables.md'}")
