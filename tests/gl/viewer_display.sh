@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# ngi_gl_viewer --display, headless under Xvfb (issue 47): the front face rasterized at the window's size, the
+# pipeline's 64 x 64 lightmap brought there by ngi::DisplayView; the frames are written at the window's size and
+# timings.json reports the display view's stages. Exit 77 (skipped) where xvfb-run is missing.
+# Usage: viewer_display.sh VIEWER MODEL WORK_DIR
+set -euo pipefail
+viewer=$1 model=$2 work=$3
+rm -rf "$work"
+status=0
+bash "$(dirname "$0")/run_under_xvfb.sh" "$viewer" --headless --frames 2 --warmup 1 --window 96 --display \
+    --scene sculpture:seed=1 --model "$model" --out "$work" > "$work.log" 2>&1 || status=$?
+[ $status = 77 ] && exit 77
+[ $status = 0 ] || { cat "$work.log" >&2; echo "FAILED: the viewer exited with $status" >&2; exit 1; }
+/usr/bin/python3 - "$work" <<'PY'
+import json, struct, sys
+work = sys.argv[1]
+j = json.load(open(f"{work}/timings.json"))
+assert j["display"] == 96, j["display"]
+d = j["frames"][-1]["display"]
+assert d["upsample_ms"] > 0 and d["temporal_ms"] > 0 and j["median"]["display_upsample_temporal_ms"] > 0, d
+with open(f"{work}/frame_0001.png", "rb") as f:
+    head = f.read(24)
+w, h = struct.unpack(">II", head[16:24])
+assert (w, h) == (96, 96), (w, h)
+PY
+echo "viewer --display: 96 x 96 frames, display stages timed"
