@@ -173,7 +173,12 @@ typedef NGI_ENUM(ngi_dropout) {
     NGI_DROPOUT_MAX_ENUM = 0x7FFFFFFF
 } ngi_dropout;
 
+/* path: a model file, or a shipped model's name ("ssgi_surround", "gi_surround_n64_ngf16": the names of the zoo,
+ * searched in $NGI_MODEL_PATH, then the installed models; an unknown name is NGI_ERROR_INPUT listing the known ones). */
 NGI_API ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_model** out);
+/* The file a model name (or path) stands for, as ngi_model_load resolves it, into buf (ngi_device_list_string's
+ * rules for buf, size and *needed). */
+NGI_API ngi_status ngi_model_resolve(const char* name_or_path, char* buf, size_t size, size_t* needed);
 NGI_API ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi_bn_mode bn_mode,
                                                ngi_dropout dropout, ngi_model** out);
 /* Any pointer may be NULL. */

@@ -505,9 +505,13 @@ ngi_status ngi_buffer_release(ngi_buffer* buffer) { return guarded(__func__, [&]
 
 // --- models ----------------------------------------------------------------------------------------------------
 
-ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi_bn_mode bn_mode, ngi_dropout dropout,
-                                       ngi_model** out) {
-    return guarded(__func__, [&] {
+namespace {
+
+// ngi_model_load and ngi_model_load_with_options, each reporting its own name: `path` is a file or a shipped model's
+// name (ngi::resolve_model: $NGI_MODEL_PATH, the installed models, ...).
+ngi_status load_model(const char* call, ngi_device* device, const char* path, ngi_bn_mode bn_mode, ngi_dropout dropout,
+                      ngi_model** out) {
+    return guarded(call, [&] {
         require(out, "out is NULL");
         *out = nullptr;
         const ngi_device& d = live(device, "device");
@@ -525,12 +529,26 @@ ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi
             case NGI_DROPOUT_SEEDED: options.dropout = "seeded"; break;
             default: fail(NGI_ERROR_INVALID_ARGUMENT, "dropout " + std::to_string(int(dropout)) + " is not an ngi_dropout");
         }
-        *out = track(new ngi_model(ngi::Model::load(d.device, path, options)));
+        *out = track(new ngi_model(ngi::Model::load(d.device, ngi::resolve_model(path), options)));
     });
 }
 
+}  // namespace
+
+ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi_bn_mode bn_mode, ngi_dropout dropout,
+                                       ngi_model** out) {
+    return load_model(__func__, device, path, bn_mode, dropout, out);
+}
+
 ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_model** out) {
-    return ngi_model_load_with_options(device, path, NGI_BN_FROM_FILE, NGI_DROPOUT_FROM_FILE, out);
+    return load_model(__func__, device, path, NGI_BN_FROM_FILE, NGI_DROPOUT_FROM_FILE, out);
+}
+
+ngi_status ngi_model_resolve(const char* name_or_path, char* buf, size_t size, size_t* needed) {
+    return guarded(__func__, [&] {
+        require(name_or_path, "name_or_path is NULL");
+        copy_string(ngi::resolve_model(name_or_path), buf, size, needed);
+    });
 }
 
 ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output_nc, int* num_downs) {

@@ -138,8 +138,20 @@ static void test_model(ngi_device* dev, const char* models) {
     float *x, *y;
     size_t in_bytes, out_bytes, i;
     snprintf(path, sizeof path, "%s/single_view.safetensors", models);
-    CHECK_FAILS(ngi_model_load(dev, "/nonexistent.safetensors", &m), NGI_ERROR_INPUT, "ngi_model_load",
+    CHECK_FAILS(ngi_model_load(dev, "/nonexistent.safetensors", &m), NGI_ERROR_INPUT, "ngi_model_load:",
                 "/nonexistent.safetensors");
+    {   /* Names (issue 48): resolved as the C++ and Python APIs resolve them; the message names the call made. */
+        char file[4096];
+        size_t need = 0;
+        ngi_model* by_name = NULL;
+        CHECK(ngi_model_resolve("ssgi_surround", file, sizeof file, &need) == NGI_OK &&
+              strstr(file, "ssgi_surround.safetensors") != NULL && need == strlen(file) + 1);
+        CHECK(ngi_model_load(dev, "ssgi_surround", &by_name) == NGI_OK);
+        CHECK(ngi_model_release(by_name) == NGI_OK);
+        CHECK_FAILS(ngi_model_load(dev, "no_such_model", &m), NGI_ERROR_INPUT, "ngi_model_load:", "known names");
+        CHECK_FAILS(ngi_model_resolve(NULL, file, sizeof file, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_resolve",
+                    "NULL");
+    }
     CHECK_FAILS(ngi_model_load_with_options(dev, path, (ngi_bn_mode)7, NGI_DROPOUT_OFF, &m), NGI_ERROR_INVALID_ARGUMENT,
                 "ngi_model_load_with_options", "bn_mode");
     CHECK_FAILS(ngi_model_load_with_options(dev, path, NGI_BN_FROM_FILE, (ngi_dropout)-1, &m), NGI_ERROR_INVALID_ARGUMENT,
