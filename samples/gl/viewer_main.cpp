@@ -7,6 +7,7 @@
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -341,7 +342,18 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--n", o.n, "face size N (the model's)")->check(CLI::Range(2, 2048))->capture_default_str();
     app.add_option("--device", o.device, "OpenCL device: cpu, gpu, P:D, pocl, rusticl (default $NGI_DEVICE)");
-    app.add_option("--time", o.time, "time of day in hours (default: the scene's)")->check(CLI::Range(0.0f, 24.0f));
+    // A plain decimal: CLI11 alone read "nan" as NaN (Range passes it) and "0x10" as 16 h (issue 51).
+    app.add_option("--time", o.time, "time of day in hours (default: the scene's)")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                float h = 0;
+                const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h, std::chars_format::fixed);
+                return !v.empty() && ec == std::errc() && end == v.data() + v.size() && std::isfinite(h) && h >= 0.0f &&
+                               h <= 24.0f
+                           ? std::string()
+                           : "must be a decimal number of hours in [0, 24], got '" + v + "'";
+            },
+            "HOURS"));
     app.add_flag("--headless", o.headless, "hidden window: move along the scene's camera path, write PNGs + timings.json");
     app.add_option("--frames", o.frames, "headless: frames to write")->check(CLI::Range(1, 100000))->capture_default_str();
     app.add_option("--warmup", o.warmup, "headless: untimed frames first")->check(CLI::Range(0, 1000))->capture_default_str();

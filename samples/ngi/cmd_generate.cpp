@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -57,6 +58,15 @@ int run(const Options& o) {
         std::fprintf(stderr, "ngi generate: warning: %d of %zu input values were NaN, infinite or outside the model's "
                      "input range [%g, %g] and were replaced (NaN -> 0, others clamped to the range)\n",
                      info.sanitized_inputs, x.data.size(), double(c.input_range[0]), double(c.input_range[1]));
+    // Every non-finite output is counted and reported (issue 51: weights near 3e38 once wrote 256 of 256 Inf with
+    // no word). The file is still written: it is what the model computes.
+    std::size_t nonfinite = 0;
+    for (float v : y.data) nonfinite += !std::isfinite(v);
+    if (nonfinite)
+        std::fprintf(stderr, "ngi generate: warning: %zu of %zu output values are NaN or infinite (the model's weights or "
+                     "its input overflow float; %s holds them as computed)\n",
+                     nonfinite, y.data.size(), output_path.c_str());
+    std::printf("nonfinite  %zu of %zu output values\n", nonfinite, y.data.size());
     if (o.profile) {
         double total = 0;
         for (const auto& l : info.layers) total += l.ms;

@@ -307,6 +307,16 @@ expect="unknown command 'bogus'"; expect_usage help_bogus "$ngi" help bogus
 expect=nonexistent.png
 expect_failure missing_file "$ngi" metrics "$work/nonexistent.png" "$work/lm/final.png"
 
+# ---- Issue 51: a model whose outputs overflow (its first convolution's weights near float's limit: the batch norm
+# after it makes Inf - Inf) once wrote all-NaN with exit 0 and no word; every non-finite output is now counted.
+/usr/bin/python3 -c "import sys, numpy as np, ngi.model_file as mf
+t, c = mf.read_model(sys.argv[1]); t = dict(t); t['model.model.0.weight'] = np.sign(t['model.model.0.weight']) * 3e38
+mf.write_model(sys.argv[2], t, c)" "$model" "$work/huge.safetensors"
+"$ngi" generate --model "$work/huge.safetensors" --input "$work/merged/input.npy" --output "$work/huge.npy" \
+    > "$work/huge.out" 2> "$work/huge.err"
+grep -q "warning: 24576 of 24576 output values are NaN or infinite" "$work/huge.err" || fail "generate, overflowing model: $(cat "$work/huge.err")"
+grep -q "nonfinite  24576 of 24576" "$work/huge.out" || fail "generate, overflowing model: $(cat "$work/huge.out")"
+
 # ---- A reference.exr that is not the face size is refused, naming the file and both sizes.
 "$ngi" render --scene room:seed=1 --face 16 --spp 1 --feature-spp 1 --out "$work/frame16" > /dev/null
 cp -r "$work/frame" "$work/badref" && cp "$work/frame16/reference.exr" "$work/badref/reference.exr"

@@ -6,6 +6,13 @@
 set -euo pipefail
 viewer=$1 model=$2 work=$3
 rm -rf "$work"
+# Issue 51: --time was CLI11's float: "nan" passed the range check and "0x10" read as 16 h. Usage errors (exit 2)
+# before any window opens.
+for bad in nan 0x10 25 -1 ""; do
+  set +e; "$viewer" --time "$bad" --headless --out "$work" > "$work.time.log" 2>&1; rc=$?; set -e
+  [ $rc = 2 ] && grep -q "must be a decimal number of hours" "$work.time.log" || {
+    echo "FAILED: --time '$bad': exit $rc: $(cat "$work.time.log")" >&2; exit 1; }
+done
 status=0
 bash "$(dirname "$0")/run_under_xvfb.sh" "$viewer" --headless --frames 2 --warmup 1 --window 96 --display \
     --scene sculpture:seed=1 --model "$model" --out "$work" > "$work.log" 2>&1 || status=$?
