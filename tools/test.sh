@@ -35,6 +35,7 @@ case $tier in
   quick) stages=${NGI_TEST_STAGES:-pocl}; quick_exclude=(-E '^(training_.*|dataset_mpi|python_bindings|ci_sanitizer_triage)$') ;;
   *) echo "NGI_TEST_TIER must be full or quick, got '$tier'" >&2; exit 2 ;;
 esac
+start_all=$SECONDS
 bash tools/install-deps.sh
 
 results=$(mktemp)   # one line per stage: name status tests seconds (lanes are subshells: they append here)
@@ -67,6 +68,7 @@ missing() {  # stage, reason
 needs_release_build=0
 for s in $stages; do case $s in pocl|install|package|rusticl|oclgrind) needs_release_build=1 ;; esac; done
 [ $needs_release_build = 1 ] && bash tools/build.sh
+setup_seconds=$((SECONDS - start_all))  # install-deps + the release build
 
 run_stage() {
   local stage=$1 start=$SECONDS n
@@ -241,6 +243,28 @@ while read -r name status tests seconds; do
   printf '%-9s %-7s %5s tests %6ss\n' "$name" "$status" "$tests" "$seconds" >&2
   if [ "$status" = ok ]; then passed=$((passed + tests)); else failed=$((failed + 1)); fi
 done < "$results"
+# The stage times as JSON too (issue 51: every published number backed by a record): build/test_stages.json, or
+# $NGI_TEST_RECORD. docs/RELIABILITY.md's tables are copied from such records.
+record=${NGI_TEST_RECORD:-build/test_stages.json}
+mkdir -p "$(dirname "$record")"
+/usr/bin/python3 - "$results" "$record" "$setup_seconds" "$((SECONDS - begin))" "$((SECONDS - start_all))" "$tier" <<'PY' || true
+import datetime, json, os, platform, subprocess, sys
+results, record, setup, lanes, total, tier = sys.argv[1:7]
+stages = []
+for line in open(results):
+    name, status, tests, seconds = line.split()
+    stages.append({"stage": name, "status": status, "tests": int(tests), "seconds": int(seconds),
+                   "lane": "B" if name in ("rusticl", "sanitize") else "A"})
+try:
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+except OSError:
+    commit = ""
+cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "")
+json.dump({"date": datetime.datetime.now().isoformat(timespec="seconds"), "commit": commit, "tier": tier,
+           "cpu": cpu, "cores": os.cpu_count(), "setup_seconds": int(setup), "lanes_seconds": int(lanes),
+           "total_seconds": int(total), "stages": stages}, open(record, "w"), indent=1)
+print(f"stage times: {record}", file=sys.stderr)
+PY
 rm -f "$results" "$pocl_done" "$sanitize_built"
 echo "ngi-ci: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
