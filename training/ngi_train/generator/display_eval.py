@@ -13,7 +13,8 @@ its lightmap is brought to S x S three ways:
                   (ngi.scoring's way, what `--size` gave users),
   bilinear        ngi.DisplayView(upsampler="bilinear", temporal=False): the indirect part (lightmap - direct) resized
                   bilinearly, the display's own direct light added,
-  jbu             ngi.DisplayView(temporal=False): the indirect part joint-bilaterally upsampled,
+  jbu             ngi.DisplayView(temporal=False): the indirect part joint-bilaterally upsampled (radius 2: 4 x 4 taps),
+  jbu_r1          the same with radius 1 (2 x 2 taps, a quarter of the cost; static frames only),
   jbu_temporal    ngi.DisplayView(): the same, accumulated over frames (sequences only).
 Stages:
   static  frame 50 of the orbit path of every .vox file of --vox-dir (evaluation only; read from there, never copied),
@@ -51,7 +52,7 @@ STATIC = {"frame": 50, "path_frames": 100, "size": 512}
 MOVING = {"scene": "room:seed=204", "frames": list(range(39, 63)), "path_frames": 100, "size": 256}
 SUN = {"scene": "backlit:seed=201", "frame": 0, "times": [12.0 + 0.25 * k for k in range(17)], "size": 256}
 SPP = {"low_feature": 1024, "display_feature": 256, "reference": 256}
-METHODS_STATIC = ("upscaled", "bilinear", "jbu")
+METHODS_STATIC = ("upscaled", "bilinear", "jbu", "jbu_r1")
 METHODS_SEQ = ("upscaled", "bilinear", "jbu", "jbu_temporal")
 
 
@@ -103,6 +104,8 @@ class Runner:
     def view(self, size, method):
         if method == "bilinear":
             return ngi.DisplayView(self.device, size, upsampler="bilinear", temporal=False)
+        if method == "jbu_r1":  # the 2 x 2 tap window: a quarter of the default's taps (the speed trade)
+            return ngi.DisplayView(self.device, size, temporal=False, radius=1)
         return ngi.DisplayView(self.device, size, temporal=method == "jbu_temporal")
 
 
