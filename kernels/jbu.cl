@@ -61,6 +61,26 @@ static inline int jbu_finite3(float3 v) { return isfinite(v.x) && isfinite(v.y) 
 // A normal that marks a surface: finite and not (nearly) zero.
 static inline int jbu_is_surface(float3 n) { return jbu_finite3(n) && dot(n, n) >= 0.25f; }
 
+// The bilinear fallback of output pixel o at q = (num_x / den_x, num_y / den_y) (floors fx0, fy0): resize_bilinear's
+// weights from the integer position, every channel.
+static inline void jbu_fallback_pixel(__global const float* restrict low, const int lw, const int lh, const int nc,
+                                      const int num_x, const int den_x, const int fx0, const int num_y, const int den_y,
+                                      const int fy0, __global float* restrict out, const int hi_plane, const int o) {
+    const int lo_plane = lw * lh;
+    int x0, y0;
+    float ax, ay;
+    jbu_bilinear_tap(num_x, den_x, fx0, lw, &x0, &ax);
+    jbu_bilinear_tap(num_y, den_y, fy0, lh, &y0, &ay);
+    const int x1 = min(x0 + 1, lw - 1), y1 = min(y0 + 1, lh - 1);
+    for (int c = 0; c < nc; ++c) {
+        __global const float* s = low + c * lo_plane;
+        // Each row clamped first: rows saturated at opposite signs must not make Inf - Inf = NaN.
+        const float top = jbu_clean((1.0f - ax) * jbu_clean(s[y0 * lw + x0]) + ax * jbu_clean(s[y0 * lw + x1]));
+        const float bottom = jbu_clean((1.0f - ax) * jbu_clean(s[y1 * lw + x0]) + ax * jbu_clean(s[y1 * lw + x1]));
+        out[c * hi_plane + o] = clamp((1.0f - ay) * top + ay * bottom, -FLT_MAX, FLT_MAX);
+    }
+}
+
 // One work-item per output pixel; launch 2-D (W, H). low [channels][h][w], low_normal and low_position [3][h][w],
 // normal and position [3][H][W], out [channels][H][W] (all planar). fallbacks[0] counts bilinear fallbacks and
 // must be zeroed by the host.
@@ -122,20 +142,8 @@ __kernel void jbu_upsample(__global const float* restrict low, __global const fl
         return;
     }
 
-    // Bilinear fallback: resize_bilinear's weights, from the integer position.
     atomic_inc(fallbacks);
-    int x0, y0;
-    float ax, ay;
-    jbu_bilinear_tap(num_x, den_x, fx0, lw, &x0, &ax);
-    jbu_bilinear_tap(num_y, den_y, fy0, lh, &y0, &ay);
-    const int x1 = min(x0 + 1, lw - 1), y1 = min(y0 + 1, lh - 1);
-    for (int c = 0; c < nc; ++c) {
-        __global const float* s = low + c * lo_plane;
-        // Each row clamped first: rows saturated at opposite signs must not make Inf - Inf = NaN.
-        const float top = jbu_clean((1.0f - ax) * jbu_clean(s[y0 * lw + x0]) + ax * jbu_clean(s[y0 * lw + x1]));
-        const float bottom = jbu_clean((1.0f - ax) * jbu_clean(s[y1 * lw + x0]) + ax * jbu_clean(s[y1 * lw + x1]));
-        out[c * hi_plane + o] = clamp((1.0f - ay) * top + ay * bottom, -FLT_MAX, FLT_MAX);
-    }
+    jbu_fallback_pixel(low, lw, lh, nc, num_x, den_x, fx0, num_y, den_y, fy0, out, hi_plane, o);
 }
 
 // ---- jbu_upsample8: the same weights, JBU_VEC = 8 output pixels of one row per work-item (images of 1 to 4 channels) --
@@ -258,17 +266,7 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
         }
         ++falls;
         const int nxi = (2 * ox + 1) * lw - ow;
-        int bx0, by0;
-        float ax, ay;
-        jbu_bilinear_tap(nxi, den_x, jbu_floor_div(nxi, den_x), lw, &bx0, &ax);
-        jbu_bilinear_tap(num_y, den_y, fy0, lh, &by0, &ay);
-        const int bx1 = min(bx0 + 1, lw - 1), by1 = min(by0 + 1, lh - 1);
-        for (int c = 0; c < nc; ++c) {
-            __global const float* s = low + c * lo_plane;
-            const float top = jbu_clean((1.0f - ax) * jbu_clean(s[by0 * lw + bx0]) + ax * jbu_clean(s[by0 * lw + bx1]));
-            const float bottom = jbu_clean((1.0f - ax) * jbu_clean(s[by1 * lw + bx0]) + ax * jbu_clean(s[by1 * lw + bx1]));
-            out[c * hi_plane + oi] = clamp((1.0f - ay) * top + ay * bottom, -FLT_MAX, FLT_MAX);
-        }
+        jbu_fallback_pixel(low, lw, lh, nc, nxi, den_x, jbu_floor_div(nxi, den_x), num_y, den_y, fy0, out, hi_plane, oi);
     }
     if (falls) atomic_add(fallbacks, falls);
 }
