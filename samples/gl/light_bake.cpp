@@ -1,5 +1,7 @@
 #include "light_bake.hpp"
 
+#include <ngi/error.hpp>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -93,6 +95,12 @@ LightBake bake_static_light(const ngi::VoxelScene& scene, const std::vector<Expo
     const auto t0 = std::chrono::steady_clock::now();
     LightBake b;
     b.k = settings.texels > 0 ? settings.texels : (faces.size() <= 20000 ? 4 : faces.size() <= 100000 ? 2 : 1);
+    const double rays = double(faces.size()) * b.k * b.k * std::max(settings.sky_rays, 1);
+    if (rays > double(kMaxBakeRays))
+        throw ngi::InputError("light bake: " + std::to_string(faces.size()) + " faces x " + std::to_string(b.k) + "^2 texels x " +
+                              std::to_string(settings.sky_rays) + " sky rays = " + std::to_string((long long)rays) +
+                              " rays, beyond the " + std::to_string(kMaxBakeRays) +
+                              " one bake may trace (~30 s); lower --bake-rays or --bake-texels");
     const std::size_t count = std::max<std::size_t>(faces.size(), 1);
     b.tiles_per_row = int(std::ceil(std::sqrt(double(count))));
     b.width = b.tiles_per_row * b.k;

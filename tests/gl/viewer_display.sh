@@ -13,6 +13,13 @@ for bad in nan 0x10 25 -1 ""; do
   [ $rc = 2 ] && grep -q "must be a decimal number of hours" "$work.time.log" || {
     echo "FAILED: --time '$bad': exit $rc: $(cat "$work.time.log")" >&2; exit 1; }
 done
+# Issue 51: an in-range bake of 45 G rays (--bake-rays 65536 --bake-texels 16) ran past 60 s; refused at once now.
+status=0
+bash "$(dirname "$0")/run_under_xvfb.sh" "$viewer" --bake-rays 65536 --bake-texels 16 --headless --frames 1 \
+    --window 64 --out "$work.bake" > "$work.bake.log" 2>&1 || status=$?
+[ $status = 77 ] && exit 77
+[ $status = 1 ] && grep -q "beyond the 268435456 one bake may trace" "$work.bake.log" || {
+  echo "FAILED: the 45 G-ray bake: exit $status: $(cat "$work.bake.log")" >&2; exit 1; }
 status=0
 bash "$(dirname "$0")/run_under_xvfb.sh" "$viewer" --headless --frames 2 --warmup 1 --window 96 --display \
     --scene sculpture:seed=1 --model "$model" --out "$work" > "$work.log" 2>&1 || status=$?
