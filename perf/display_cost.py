@@ -4,7 +4,7 @@
     PYTHONPATH=build/python /usr/bin/python3 perf/display_cost.py [--device pocl] [--sizes 512,1024,1440] \\
         [--n 64] [--repeats 20] [--out perf/display_cost_pocl_2core.json]
 
-Per display size S and upsampler (jbu, bilinear): the median over --repeats frames (after 3 untimed ones) of each
+Per display size S and upsampler (jbu with radius 2, the default, and 1; bilinear): the median over --repeats frames (after 3 untimed ones) of each
 stage of DisplayView.run's timings -- guides (both resolutions' normals and positions, and the N x N indirect light),
 upsample, temporal (reprojection, clamp, blend), outputs (compose, tone map and the download of the final image) --
 and "upsampling + temporal" = guides + upsample + temporal, the figure issue 47 budgets (2 ms at 512^2, 8 ms at
@@ -60,8 +60,8 @@ def main(argv=None):
     dev = ngi.Device(args.device)
     rows = []
     for s in [int(x) for x in args.sizes.split(",")]:
-        for up in ("jbu", "bilinear"):
-            view = ngi.DisplayView(dev, s, upsampler=up)
+        for up, radius in (("jbu", 2), ("jbu", 1), ("bilinear", 2)):
+            view = ngi.DisplayView(dev, s, upsampler=up, radius=radius)
             times = []
             for k in range(args.repeats + 3):
                 p = (0.01 * k, 1.5, 2.0)
@@ -73,10 +73,11 @@ def main(argv=None):
             med = {key: float(np.median([t[key] for t in times])) for key in times[0]}
             med["upsample_temporal_ms"] = float(np.median([t["geometry_ms"] + t["upsample_ms"] + t["temporal_ms"]
                                                            for t in times]))
-            row = {"size": s, "n": args.n, "upsampler": up, "temporal": True, "median_ms": med,
+            row = {"size": s, "n": args.n, "upsampler": up, "radius": radius if up == "jbu" else None,
+                   "temporal": True, "median_ms": med,
                    "last_frame_stats": t["stats"]}
             rows.append(row)
-            print(f"{s}^2 {up:8s} " + ", ".join(f"{k} {v:.2f}" for k, v in med.items()), file=sys.stderr, flush=True)
+            print(f"{s}^2 {up:8s} r{radius} " + ", ".join(f"{k} {v:.2f}" for k, v in med.items()), file=sys.stderr, flush=True)
     record = {"benchmark": "display_cost", "date": date.today().isoformat(), "device": dev.info,
               "host": {"machine": platform.machine(), "cpus": os.cpu_count()}, "repeats": args.repeats, "rows": rows}
     text = json.dumps(record, indent=1)
