@@ -26,7 +26,7 @@ void require_param(bool ok, const char* name, float v, const char* range) {
 
 JointBilateralUpsample::JointBilateralUpsample(Context& ctx)
     : kernel_(ctx.kernel("jbu", "jbu_upsample", jbu_defines())),
-      kernel_vec_(ctx.kernel("jbu", "jbu_upsample8", jbu_defines())),
+      vector_device_(jbu_vector_device(ctx.info())),
       fallbacks_(ctx.alloc(sizeof(std::uint32_t), "joint bilateral upsampling: fallback counter")) {}
 
 int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const JbuParams& p, cl_mem out,
@@ -71,7 +71,14 @@ int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const Jbu
         if (m == out) throw InputError(std::string(kOp) + ": the output buffer is also an input");
 
     ctx.fill_zero(fallbacks_, 0, fallbacks_.bytes(), "joint bilateral upsampling: fallback counter");
-    const bool vec = in.channels <= kJbuVecMaxChannels;
+    using K = JbuParams::Kernel;
+    if (p.kernel == K::Rows8 && in.channels > kJbuVecMaxChannels)
+        throw InputError(std::string(kOp) + ": the Rows8 kernel takes 1 to " + std::to_string(kJbuVecMaxChannels) +
+                         " channels, not " + std::to_string(in.channels));
+    const bool vec = p.kernel == K::Rows8 ||
+                     (p.kernel == K::Auto && vector_device_ && in.channels <= kJbuVecMaxChannels);
+    // The vector kernel's program is built only where it runs (llvmpipe took ~65 s to build it).
+    if (vec && !kernel_vec_.get()) kernel_vec_ = ctx.kernel("jbu_vec", "jbu_upsample8", jbu_defines());
     Kernel& k = vec ? kernel_vec_ : kernel_;
     k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
            in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);

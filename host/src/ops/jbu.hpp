@@ -16,10 +16,17 @@ constexpr int kJbuMaxChannels = 64;
 // Image sides accepted (both resolutions).
 constexpr int kJbuMaxSide = 16384;
 
-// Output pixels of one row per work-item of jbu_upsample8, the kernel for 1 to 4 channels (kernels/jbu.cl says why:
-// PoCL puts work-items in SIMD lanes only for kernels without inner loops; this kernel's lanes are explicit).
+// Output pixels of one row per work-item of jbu_upsample8, the kernel for 1 to 4 channels on PoCL's CPU devices
+// (kernels/jbu_vec.cl, its own program; it says why: PoCL puts work-items in SIMD lanes only for kernels without inner loops; this kernel's
+// lanes are explicit). Elsewhere the one-pixel kernel runs: GPUs and Mesa's llvmpipe put work-items in SIMD lanes
+// themselves, and llvmpipe took ~65 s to build the float8 kernel (the Neural GI stability row went from 172 to 544 s
+// in the rusticl stage).
 constexpr int kJbuVec = 8;
 constexpr int kJbuVecMaxChannels = 4;
+// Whether `info` is a device that runs jbu_upsample8 (PoCL on a CPU).
+inline bool jbu_vector_device(const DeviceInfo& info) {
+    return info.is_cpu && info.platform_name == "Portable Computing Language";
+}
 
 // The build options of kernels/jbu.cl.
 inline std::string jbu_defines() {
@@ -39,6 +46,9 @@ struct JbuParams {
     int radius = 2;
     // Bilinear fallback when the geometric weights' sum is below this fraction of the spatial weights' sum.
     float fallback_ratio = 1e-6f;
+    // Which kernel: Auto = jbu_upsample8 on jbu_vector_device()s for up to kJbuVecMaxChannels channels, else
+    // jbu_upsample. Tests force either on any device (the simulators run both); the results agree to rounding.
+    enum class Kernel { Auto, OnePixel, Rows8 } kernel = Kernel::Auto;
 };
 
 struct JbuInputs {
@@ -60,7 +70,8 @@ public:
     int fallback_count(Context& ctx) const;
 
 private:
-    Kernel kernel_, kernel_vec_;  // jbu_upsample (any channel count), jbu_upsample8 (up to kJbuVecMaxChannels)
+    Kernel kernel_, kernel_vec_;  // jbu_upsample (any channel count), jbu_upsample8 (built when first used)
+    bool vector_device_ = false;
     Buffer fallbacks_;
 };
 

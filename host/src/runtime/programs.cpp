@@ -19,6 +19,7 @@ const std::vector<ProgramSources>& programs() {
         {"probe_shade", {"sh_basis", "probe_shade"}},
         {"voxel_ltf", {"luminance", "voxel_ltf"}},
         {"jbu", {"jbu"}},
+        {"jbu_vec", {"jbu", "jbu_vec"}},
         {"gather_image", {"gather_image"}},
         // Pipelines (host/src/pipeline).
         {"globalview", {"globalview"}},
