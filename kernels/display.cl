@@ -6,7 +6,7 @@
 // section 20; C++ reference: tests/reference_display.hpp.
 //
 // Cameras: the front camera of the cluster (ngi/camera.hpp), a 90-degree square view; a camera is its centre and its
-// unit look, right, up (right = look x up), passed as four float4 arguments (w unused). Pixel (x, y) of an S x S view
+// unit look, right, up (right = look x up), passed as twelve float arguments (DISPLAY_CAMERA_ARGS). Pixel (x, y) of an S x S view
 // looks along look + u right + v up, u = 2 (x + 0.5) / S - 1, v = 1 - 2 (y + 0.5) / S; depth is planar (along look).
 // Images are planar float32 [channel][row][col]; frame planes use the layout of ngi/pipeline.hpp (face 0 only).
 
@@ -14,6 +14,16 @@
     !defined(F_ENV) || !defined(DISPLAY_MAX_DEPTH) || !defined(DISPLAY_VEC)
 #error "display.cl needs the frame planes, DISPLAY_MAX_DEPTH and DISPLAY_VEC: build it with display_defines() (host/src/pipeline/display.cpp)"
 #endif
+
+// A camera as twelve float kernel arguments (centre, look, right, up), gathered into float4s (w unused) by
+// DISPLAY_CAMERA. Not float4 arguments: oclgrind ran kernels with vector arguments wrongly when it loaded the program
+// from a cached binary (invalid reads, wrong results; a fresh build ran right), as ssgi.cl's camera arguments avoid.
+#define DISPLAY_CAMERA_ARGS(p) const float p##cx, const float p##cy, const float p##cz, const float p##lx, \
+    const float p##ly, const float p##lz, const float p##rx, const float p##ry, const float p##rz, const float p##ux, \
+    const float p##uy, const float p##uz
+#define DISPLAY_CAMERA(p, c, l, r, u) \
+    const float4 c = (float4)(p##cx, p##cy, p##cz, 0.0f), l = (float4)(p##lx, p##ly, p##lz, 0.0f), \
+                 r = (float4)(p##rx, p##ry, p##rz, 0.0f), u = (float4)(p##ux, p##uy, p##uz, 0.0f)
 
 // Light terms (direct, emission, env): NaN, negative -> 0, +Inf -> FLT_MAX (compose.cl's rule).
 static inline float display_light(float v) { return isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX); }
@@ -48,11 +58,10 @@ static inline void display_guide(__global const float* restrict planes, const in
     display_store3(position, i, plane, ok ? c.xyz + d * (l.xyz + pu * r.xyz + pv * u.xyz) : (float3)(0.0f));
 }
 
-__kernel void display_geometry(__global const float* restrict planes, const int size, const float4 centre,
-                               const float4 look, const float4 right, const float4 up, __global float* restrict normal,
-                               __global float* restrict position) {
+__kernel void display_geometry(__global const float* restrict planes, const int size, DISPLAY_CAMERA_ARGS(cam_),
+                               __global float* restrict normal, __global float* restrict position) {
     const int gx = get_global_id(0), y = get_global_id(1), s = size;
-    const float4 c = centre, l = look, r = right, u = up;
+    DISPLAY_CAMERA(cam_, c, l, r, u);
     const int x0 = gx * DISPLAY_VEC;
     if (x0 >= s || y >= s) return;
     if (x0 + DISPLAY_VEC > s) {
@@ -171,14 +180,13 @@ static inline uint display_lanes(int8 m) { return (uint)(-(m.s0 + m.s1 + m.s2 + 
 __kernel void display_temporal(__global const float* restrict current, __global const float* restrict history,
                                __global const float* restrict prev_depth, __global const float* restrict normal,
                                __global const float* restrict position, __global const float* restrict box,
-                               const int n, const int size,
-                               const float4 prev_centre, const float4 prev_look, const float4 prev_right,
-                               const float4 prev_up, const int has_history, const float blend, const float depth_rel,
+                               const int n, const int size, DISPLAY_CAMERA_ARGS(prev_), const int has_history,
+                               const float blend, const float depth_rel,
                                const float depth_abs, const float clip_margin, __global float* restrict out,
                                volatile __global uint* counters) {
     // Every argument is read before the first branch (rusticl assumes argument loads in control flow are uniform).
     const int gx = get_global_id(0), y = get_global_id(1), s = size, ln = n, hist = has_history;
-    const float4 pc = prev_centre, pl = prev_look, pr = prev_right, pu = prev_up;
+    DISPLAY_CAMERA(prev_, pc, pl, pr, pu);
     const float a = blend, dr = depth_rel, da = depth_abs, margin = clip_margin;
     const int x0 = gx * DISPLAY_VEC;
     if (x0 >= s || y >= s) return;

@@ -67,14 +67,12 @@ void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need,
     if (write && !b.writable()) throw InputError(where + " was created CL_MEM_READ_ONLY");
 }
 
-cl_float4 f4(glm::vec3 v) { return cl_float4{{v.x, v.y, v.z, 0.0f}}; }
-
-// The front camera as kernels/display.cl takes it: centre, look, right, up.
+// The front camera as kernels/display.cl takes it (DISPLAY_CAMERA_ARGS: twelve floats, centre, look, right, up).
 struct CameraArgs {
-    cl_float4 centre, look, right, up;
+    glm::vec3 centre{0.0f}, look{0.0f}, right{0.0f}, up{0.0f};
     static CameraArgs of(glm::vec3 position, glm::vec3 look, glm::vec3 up) {
         const CameraCluster c = CameraCluster::from_look_up(look, up);  // InputError for a look that is no camera
-        return {f4(position), f4(-c.gamma), f4(c.alpha), f4(c.beta)};
+        return {position, -c.gamma, c.alpha, c.beta};
     }
 };
 
@@ -119,7 +117,9 @@ struct DisplayView::Impl {
     }
 
     void guides(cl_mem planes, int side, const CameraArgs& cam, cl_mem nrm, cl_mem pos) {
-        geometry.args(planes, side, cam.centre, cam.look, cam.right, cam.up, nrm, pos);
+        const CameraArgs& k = cam;
+        geometry.args(planes, side, k.centre.x, k.centre.y, k.centre.z, k.look.x, k.look.y, k.look.z, k.right.x,
+                      k.right.y, k.right.z, k.up.x, k.up.y, k.up.z, nrm, pos);
         const std::size_t g[2] = {(std::size_t(side) + kDisplayVec - 1) / kDisplayVec, std::size_t(side)};
         ctx.launch(geometry, 2, g, kLocal2);
     }
@@ -222,7 +222,8 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
         // Without a clamp the kernel never reads the box: any buffer stands in for it.
         const detail::Buffer& box = im.low_box ? im.low_box : im.low_light;
         im.temporal.args(im.upsampled, im.history[im.latest], im.prev_depth, im.normal, im.position, box,
-                         n, s, pc.centre, pc.look, pc.right, pc.up, int(used_history),
+                         n, s, pc.centre.x, pc.centre.y, pc.centre.z, pc.look.x, pc.look.y, pc.look.z, pc.right.x,
+                         pc.right.y, pc.right.z, pc.up.x, pc.up.y, pc.up.z, int(used_history),
                          im.settings.blend, im.settings.depth_rel, im.settings.depth_abs, im.settings.clip_margin,
                          im.history[next], im.counters);
         const std::size_t g[2] = {(std::size_t(s) + kDisplayVec - 1) / kDisplayVec, std::size_t(s)};

@@ -87,8 +87,6 @@ public:
 private:
     void set(cl_uint i, const Buffer& b) { cl_mem m = b.get(); set_raw(i, sizeof(cl_mem), &m); }
     void set(cl_uint i, cl_mem m) { set_raw(i, sizeof(cl_mem), &m); }
-    // A float4 argument (a camera's centre or axis: kernels/display.cl).
-    void set(cl_uint i, const cl_float4& v) { set_raw(i, sizeof(cl_float4), &v); }
     template <class T>
     void set(cl_uint i, const T& v) {
         static_assert(std::is_arithmetic_v<T>, "kernel arguments are buffers or scalars");
