@@ -631,12 +631,6 @@ std::vector<float> subsample(const std::vector<float>& planes, int n, int stride
     return out;
 }
 
-Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what) {
-    Buffer b = ctx.alloc(v.size() * sizeof(float), what);
-    ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
-    return b;
-}
-
 int run_neural_gi(int argc, char** argv) {
     const std::string path = arg(argc, argv, "--model");
     if (path.empty()) throw InputError("neural-gi: --model M.safetensors (a neural_gi model with a scene box) is required");

@@ -12,7 +12,7 @@ namespace ngi::detail {
 
 namespace {
 
-constexpr int kMaxBufferChannels = 4096, kMaxMlpWidth = 4096, kMaxMlpDepth = 64;
+constexpr int kMaxBufferChannels = 4096, kMaxNeuralGiMlpWidth = 4096, kMaxMlpDepth = 64;
 const std::string kBufferPrefix = "buffer.";
 
 // The U-Net part of the config: a pix2pix generator whose output is the neural buffer (dropout never applies).
@@ -77,7 +77,7 @@ void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::
     };
     ModelConfig::NeuralGi& g = c.neural_gi;
     g.buffer_channels = integer("buffer_channels", 1, kMaxBufferChannels);
-    g.mlp_width = integer("mlp_width", 1, kMaxMlpWidth);
+    g.mlp_width = integer("mlp_width", 1, kMaxNeuralGiMlpWidth);
     g.mlp_depth = integer("mlp_depth", 1, kMaxMlpDepth);
     // 0: no re-injection (layer 0 takes the input anyway).
     g.skip_layer = integer("skip_layer", 0, g.mlp_depth - 1);

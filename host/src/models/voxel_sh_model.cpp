@@ -40,12 +40,6 @@ bool grow(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
     return true;
 }
 
-Buffer upload(Context& ctx, const std::vector<float>& v, const char* what) {
-    Buffer b = ctx.alloc(std::max<std::size_t>(v.size(), 1) * sizeof(float), what);
-    if (!v.empty()) ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
-    return b;
-}
-
 }  // namespace
 
 ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::string& path) {
@@ -205,8 +199,8 @@ const std::vector<float>& checked_weight(const std::vector<float>& weight, int i
 VoxelShDense::VoxelShDense(Context& ctx, const GemmParams& p, int in, int out, const std::vector<float>& weight,
                            const std::vector<float>& scale, const std::vector<float>& shift, Act act)
     : act_(act), dense_(ctx, p, in, out, checked_weight(weight, in, out, scale, shift).data()) {
-    scale_ = upload(ctx, scale.empty() ? std::vector<float>(out, 1.0f) : scale, "voxel_sh scale");
-    shift_ = upload(ctx, shift.empty() ? std::vector<float>(out, 0.0f) : shift, "voxel_sh shift");
+    scale_ = upload_floats(ctx, scale.empty() ? std::vector<float>(out, 1.0f) : scale, "voxel_sh scale");
+    shift_ = upload_floats(ctx, shift.empty() ? std::vector<float>(out, 0.0f) : shift, "voxel_sh shift");
     weight_bytes_ = dense_.weight_bytes() + scale_.bytes() + shift_.bytes();
 }
 
@@ -309,8 +303,8 @@ VoxelShRunner::VoxelShRunner(Context& ctx, const ModelConfig& config, const Safe
             t[k] = float(-2.0 * cfg_.input_lo[k] / span - 1.0);
         }
     }
-    in_scale_ = upload(ctx, s, "voxel_sh input scale");
-    in_shift_ = upload(ctx, t, "voxel_sh input shift");
+    in_scale_ = upload_floats(ctx, s, "voxel_sh input scale");
+    in_shift_ = upload_floats(ctx, t, "voxel_sh input shift");
 }
 
 std::size_t VoxelShRunner::weight_bytes() const {

@@ -8,12 +8,6 @@ namespace {
 const std::size_t kIm2colLocal[1] = {64};
 const std::size_t kCol2imLocal[3] = {16, 4, 1};
 
-Buffer upload(Context& ctx, const std::vector<float>& v, const char* what) {
-    Buffer b = ctx.alloc(v.size() * sizeof(float), what);
-    ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
-    return b;
-}
-
 std::vector<float> filled(const std::vector<float>& v, int n, float value, const char* what) {
     if (v.empty()) return std::vector<float>(n, value);
     if (int(v.size()) != n)
@@ -59,10 +53,10 @@ Conv2d::Conv2d(Context& ctx, const GemmParams& p, const ConvSpec& spec, const fl
             pack_.emplace(ctx, p);  // B is the input itself: a straight panel pack
         else
             im2col_ = ctx.kernel("im2col", "im2col_packed", im2col_defines(p.nr()));
-        ap_ = upload(ctx, pack_a(weight, spec.cout, K, K, p), "conv2d packed weights");
+        ap_ = upload_floats(ctx, pack_a(weight, spec.cout, K, K, p), "conv2d packed weights");
     }
-    scale_ = upload(ctx, filled(affine.scale, spec.cout, 1.0f, "conv2d scale"), "conv2d scale");
-    shift_ = upload(ctx, filled(affine.shift, spec.cout, 0.0f, "conv2d shift"), "conv2d shift");
+    scale_ = upload_floats(ctx, filled(affine.scale, spec.cout, 1.0f, "conv2d scale"), "conv2d scale");
+    shift_ = upload_floats(ctx, filled(affine.shift, spec.cout, 0.0f, "conv2d shift"), "conv2d shift");
 }
 
 Shape Conv2d::output_shape(const Shape& in) const {
@@ -124,12 +118,12 @@ ConvTranspose2d::ConvTranspose2d(Context& ctx, const GemmParams& p, const ConvSp
         std::vector<float> at(std::size_t(M) * spec.cin);
         for (int ci = 0; ci < spec.cin; ++ci)
             for (int m = 0; m < M; ++m) at[std::size_t(m) * spec.cin + ci] = weight[std::size_t(ci) * M + m];
-        ap_ = upload(ctx, pack_a(at.data(), M, spec.cin, spec.cin, p), "conv_transpose2d packed weights");
-        ones_ = upload(ctx, std::vector<float>(M, 1.0f), "conv_transpose2d unit scale");
-        zeros_ = upload(ctx, std::vector<float>(M, 0.0f), "conv_transpose2d zero shift");
+        ap_ = upload_floats(ctx, pack_a(at.data(), M, spec.cin, spec.cin, p), "conv_transpose2d packed weights");
+        ones_ = upload_floats(ctx, std::vector<float>(M, 1.0f), "conv_transpose2d unit scale");
+        zeros_ = upload_floats(ctx, std::vector<float>(M, 0.0f), "conv_transpose2d zero shift");
     }
-    scale_ = upload(ctx, filled(affine.scale, spec.cout, 1.0f, "conv_transpose2d scale"), "conv_transpose2d scale");
-    shift_ = upload(ctx, filled(affine.shift, spec.cout, 0.0f, "conv_transpose2d shift"), "conv_transpose2d shift");
+    scale_ = upload_floats(ctx, filled(affine.scale, spec.cout, 1.0f, "conv_transpose2d scale"), "conv_transpose2d scale");
+    shift_ = upload_floats(ctx, filled(affine.shift, spec.cout, 0.0f, "conv_transpose2d shift"), "conv_transpose2d shift");
 }
 
 Shape ConvTranspose2d::output_shape(const Shape& in) const {

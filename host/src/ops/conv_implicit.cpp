@@ -10,7 +10,6 @@ namespace ngi::detail {
 namespace {
 
 // Fixed work-group shape (PoCL compiles one work-group function per local size).
-const std::size_t kPadLocal[2] = {8, 1};
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 

@@ -21,6 +21,9 @@
 
 namespace ngi::detail {
 
+// conv_pad's fixed work-group shape (PoCL compiles one work-group function per local size).
+inline constexpr std::size_t kPadLocal[2] = {8, 1};
+
 struct ConvSpec;
 
 // Which path a layer takes. automatic: $NGI_CONV = "implicit" | "im2col" if set; otherwise implicit on gemm_packed

@@ -1,11 +1,11 @@
 #include "ops/dense.hpp"
 
 #include "ngi/error.hpp"
+#include "ops/conv_implicit.hpp"
 
 namespace ngi::detail {
 
 namespace {
-const std::size_t kPadLocal[2] = {8, 1};  // conv_pad's fixed work-group shape (as ImplicitConv's)
 
 GemmParams one_step(GemmParams p) {
     p.ku = 1;  // gemm_conv walks exactly `in` rows: A is packed with Kpad = in

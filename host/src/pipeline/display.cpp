@@ -21,8 +21,6 @@ namespace {
 
 constexpr const char* kOp = "display view";
 constexpr int kMaxSide = detail::kJbuMaxSide;
-const std::size_t kLocal1[1] = {64};
-const std::size_t kLocal2[2] = {8, 8};
 using Clock = std::chrono::steady_clock;
 
 // Display pixels of one row per work-item of display_temporal (its float8 lanes; kernels/display.cl says why).
@@ -121,7 +119,7 @@ struct DisplayView::Impl {
         geometry.args(planes, side, k.centre.x, k.centre.y, k.centre.z, k.look.x, k.look.y, k.look.z, k.right.x,
                       k.right.y, k.right.z, k.up.x, k.up.y, k.up.z, nrm, pos);
         const std::size_t g[2] = {(std::size_t(side) + kDisplayVec - 1) / kDisplayVec, std::size_t(side)};
-        ctx.launch(geometry, 2, g, kLocal2);
+        ctx.launch(geometry, 2, g, detail::kLocal2);
     }
 };
 
@@ -178,7 +176,7 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
     const int lo_count = int(3 * lo_plane);
     im.low_indirect.args(low_lightmap.opencl_mem(), low_planes.opencl_mem(), lo_count, im.low_light);
     const std::size_t gl[1] = {std::size_t(lo_count)};
-    im.ctx.launch(im.low_indirect, 1, gl, kLocal1);
+    im.ctx.launch(im.low_indirect, 1, gl, detail::kLocal1);
     lap(&DisplayTimings::geometry_ms);
 
     // Upsampling.
@@ -202,7 +200,7 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
     } else {
         im.resize.args(im.low_light, n, n, im.upsampled, s, s, 3);
         const std::size_t g[2] = {std::size_t(s), std::size_t(s)};
-        im.ctx.launch(im.resize, 2, g, kLocal2);
+        im.ctx.launch(im.resize, 2, g, detail::kLocal2);
     }
     lap(&DisplayTimings::upsample_ms);
 
@@ -217,7 +215,7 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
             detail::ensure_buffer(im.ctx, im.low_box, 6 * lo_plane * sizeof(float), "display view: clamp ranges");
             im.clip_box.args(im.low_light, im.low_normal, n, im.settings.clip_margin, im.low_box);
             const std::size_t gb[2] = {std::size_t(n), std::size_t(n)};
-            im.ctx.launch(im.clip_box, 2, gb, kLocal2);
+            im.ctx.launch(im.clip_box, 2, gb, detail::kLocal2);
         }
         // Without a clamp the kernel never reads the box: any buffer stands in for it.
         const detail::Buffer& box = im.low_box ? im.low_box : im.low_light;
@@ -227,7 +225,7 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
                          im.settings.blend, im.settings.depth_rel, im.settings.depth_abs, im.settings.clip_margin,
                          im.history[next], im.counters);
         const std::size_t g[2] = {(std::size_t(s) + kDisplayVec - 1) / kDisplayVec, std::size_t(s)};
-        im.ctx.launch(im.temporal, 2, g, kLocal2);
+        im.ctx.launch(im.temporal, 2, g, detail::kLocal2);
         im.ctx.copy(display_planes.opencl_mem(), std::size_t(frame_plane(Feature::Depth)) * hi_plane * sizeof(float),
                     im.prev_depth.get(), 0, hi_plane * sizeof(float), "display view: previous depth");
         im.latest = next;
@@ -249,13 +247,13 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
         im.compose.args(display_planes.opencl_mem(), indirect, hi_count, int(desc.has_emission), int(desc.has_env),
                         int(bool(outputs.lightmap)), light_dst, final_dst);
         const std::size_t g[1] = {std::size_t(hi_count)};
-        im.ctx.launch(im.compose, 1, g, kLocal1);
+        im.ctx.launch(im.compose, 1, g, detail::kLocal1);
         if (outputs.display) {
             const ToneMapOptions& tm = outputs.tonemap;
             im.tonemap.args(final_dst, outputs.display.opencl_mem(), hi_count, std::exp2(tm.exposure_ev),
                             int(tm.curve), int(tm.srgb));
             const std::size_t gt[1] = {detail::tonemap_items(hi_count)};
-            im.ctx.launch(im.tonemap, 1, gt, kLocal1);
+            im.ctx.launch(im.tonemap, 1, gt, detail::kLocal1);
         }
     }
     lap(&DisplayTimings::outputs_ms);

@@ -20,8 +20,6 @@ namespace ngi {
 namespace {
 
 constexpr int kInputChannels = 18;  // docs/MODEL_FORMAT.md "neural_gi"
-const std::size_t kLocal2[2] = {8, 8};
-const std::size_t kLocal1[1] = {64};
 
 const Image& front(const Frame& frame, Feature f) {
     const Image& im = frame.get(f, Face::Front);
@@ -97,7 +95,7 @@ struct NeuralGiRenderer::Impl {
                     cfg.scene_min[1], cfg.scene_min[2], cfg.scene_max[0], cfg.scene_max[1], cfg.scene_max[2], out,
                     position, nrm);
         const std::size_t g[2] = {std::size_t(side), std::size_t(side)};
-        ctx.launch(inputs, 2, g, kLocal2);
+        ctx.launch(inputs, 2, g, detail::kLocal2);
     }
 };
 
@@ -201,7 +199,7 @@ NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const Neu
     detail::ensure_buffer(ctx, im.lit, 3 * plane * sizeof(float), "neural GI: lighting");
     im.lighting.args(im.direct, indirect, im.normal, n, im.indirect, im.lit);
     const std::size_t g[1] = {plane};
-    ctx.launch(im.lighting, 1, g, kLocal1);
+    ctx.launch(im.lighting, 1, g, detail::kLocal1);
 
     out.indirect = Image(n, n, 3);
     out.lighting = Image(n, n, 3);

@@ -7,11 +7,12 @@
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/mesh.hpp"
+#include "render/finite.hpp"
 
 namespace ngi {
 namespace {
 
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using detail::finite;
 
 std::string vec_text(glm::vec3 v) {
     return "(" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";

@@ -24,6 +24,7 @@
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/mesh.hpp"
+#include "render/finite.hpp"
 #include "render/mesh_precheck.hpp"
 
 namespace ngi {
@@ -129,7 +130,7 @@ float linear_to_srgb(float c) {
     c = std::clamp(c, 0.0f, 1.0f);
     return c <= 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using detail::finite;
 
 // What one assimp material gives a triangle: an albedo of its own (or none: the vertex colours or the default
 // decide), a glTF base colour the vertex colours multiply, and its emission.

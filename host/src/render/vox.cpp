@@ -73,7 +73,7 @@ using L3 = glm::vec<3, std::int64_t>;  // positions while walking the scene grap
     throw InputError("read " + path + ": " + what);
 }
 
-struct Model {
+struct VoxModel {
     glm::ivec3 size{0};
     std::vector<std::array<std::uint8_t, 4>> voxels;  // x, y, z, colour index
 };
@@ -208,7 +208,7 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
 
     const Chunk main = chunk(rd);
     if (main.id != "MAIN") rd.fail("malformed chunk structure: expected MAIN, found '" + main.id + "'");
-    std::vector<Model> models;
+    std::vector<VoxModel> models;
     std::array<std::array<std::uint8_t, 3>, 256> colours = default_palette();
     std::map<int, glm::vec3> emit;  // MATL emission per colour index
     std::map<int, Node> nodes;
@@ -228,7 +228,7 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
             models.push_back({s, {}});
         } else if (c.id == "XYZI") {
             if (models.empty() || !models.back().voxels.empty()) r.fail("malformed chunk structure: XYZI without SIZE");
-            Model& m = models.back();
+            VoxModel& m = models.back();
             const std::int32_t n = r.i32("XYZI");
             if (n < 0 || std::size_t(n) > r.left() / 4) r.fail("truncated XYZI (" + std::to_string(n) + " voxels declared)");
             m.voxels.resize(std::size_t(n));

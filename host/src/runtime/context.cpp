@@ -1,5 +1,6 @@
 #include "runtime/context.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cstdlib>
@@ -329,6 +330,12 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
         check(clEnqueueWriteBuffer(queue_, m, CL_TRUE, 0, bytes, zeros.data(), 0, nullptr, nullptr),
               (std::string("clear ") + what).c_str(), "clEnqueueWriteBuffer");
     }
+    return b;
+}
+
+Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what) {
+    Buffer b = ctx.alloc(std::max<std::size_t>(v.size(), 1) * sizeof(float), what);
+    if (!v.empty()) ctx.write(b, 0, v.size() * sizeof(float), v.data(), what);
     return b;
 }
 

@@ -200,6 +200,9 @@ std::filesystem::path cache_dir();
 // Writes `bytes` to `path` through a unique temporary and a rename; a cache that cannot be written is not an error.
 void write_cache_file(const std::filesystem::path& path, const std::string& bytes);
 
+// A new buffer holding `v` (at least one float, so an empty vector still gives a valid cl_mem).
+Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what);
+
 inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
 
 }  // namespace ngi::detail
