@@ -43,6 +43,35 @@ __kernel void decode_indirect(__global float* restrict x, const int count, const
     x[i] = fmin(decode_light(x[i], lo, hi, transfer) + clean_light(direct[direct_off + i]), FLT_MAX);
 }
 
+// Output mode "ssgi_residual" (docs/CONVENTIONS.md section 8): a network that corrects the SSGI rung's indirect light.
+// Its input holds the SSGI estimate as three more channels, encoded like a training target: v_s = lo + T(s) (hi - lo)
+// with T the lumination transfer and s = the SSGI lightmap minus the front direct light (both cleaned; s >= 0). Its
+// output x is a correction in that encoded domain: the indirect light is decode(v_s + x), so x = 0 gives the SSGI
+// rung's light exactly (up to the transfer's rounding) and a scene with nothing to bounce starts from none.
+//
+// encode_ssgi_input: writes v_s at dst[dst_off + i] from the SSGI lightmap `ssgi` and the direct light at
+// direct[direct_off + i] (the frame planes 7-9 of face 0). The same arithmetic as encode_lightmap.
+__kernel void encode_ssgi_input(__global const float* restrict ssgi, __global const float* restrict direct,
+                                const int direct_off, __global float* restrict dst, const int dst_off, const int count,
+                                const float lo, const float hi, const int transfer) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    const float s = fmax(clean_light(ssgi[i]) - clean_light(direct[direct_off + i]), 0.0f);
+    const float y = transfer == TRANSFER_CLAMP ? fmin(s, 1.0f) : fmin(s / (1.0f + s), 1.0f);
+    dst[dst_off + i] = lo + y * (hi - lo);
+}
+
+// In place: x (the network's correction) -> the lightmap, decode(v_s + x) + the front direct light; v_s is read back
+// from the network input (planes 10-12, at input[input_off + i]), so the decoding adds exactly what the network saw.
+__kernel void decode_ssgi_residual(__global float* restrict x, const int count, const float lo, const float hi,
+                                   const int transfer, __global const float* restrict input, const int input_off,
+                                   __global const float* restrict direct, const int direct_off) {
+    const int i = get_global_id(0);
+    if (i >= count) return;
+    const float v = x[i] + input[input_off + i];
+    x[i] = fmin(decode_light(v, lo, hi, transfer) + clean_light(direct[direct_off + i]), FLT_MAX);
+}
+
 // The inverse of decode_lightmap, for training targets: linear light x -> [0, 1] through the lumination transfer
 // -> lo + y (hi - lo). Light is sanitized like the input's lumination (NaN and negative -> 0, +Inf -> FLT_MAX)
 // and encoded exactly as gbuffer.cl's lum_encode does it, so a lightmap equal to the front face's lumination

@@ -18,6 +18,9 @@
    kernels; a tiny surround generator trained with output_mode indirect, the final-image term and no GAN: its
    loss falls, the export records the mode, and ngi's lightmap of a frame is the frame's direct light plus the
    decoded output of the same network in PyTorch (max relative |diff| < 1e-4);
+6c. layout ssgi_residual (issue 45): a tiny network that corrects the SSGI rung trains (its L1 falls), exports with
+   output_mode ssgi_residual and the rung's gather settings, its training input is the pipeline's bit for bit, and
+   ngi's lightmap is direct + decode(PyTorch output + the input's SSGI channels) (max relative |diff| < 1e-4);
 7. seed 001's AO: `ngi ao-data` (6 + 1 views at 48 px), ngi_train.ao.train for 40 iterations, and `ngi ao` equal to
    the exported network evaluated in PyTorch on ngi_train.ao.sampling's ring inputs (max |diff| < 1e-4, background 1).
 Exit code 77 (ctest: skipped) when torch or numpy is missing.
@@ -219,6 +222,43 @@ def test_indirect_mode(ngi, dataset, work):
     check(err < 1e-4, f"indirect mode: ngi lightmap == direct + decoded PyTorch output, max relative |diff| {err:.2g}")
 
 
+def test_ssgi_residual_mode(ngi, dataset, work):
+    """Layout ssgi_residual (issue 45; docs/CONVENTIONS.md section 8): a network that corrects the SSGI rung."""
+    import ngi as ngi_py
+    dev = ngi_py.Device("")
+    cfg_path = work / "residual.json"
+    cfg_path.write_text(json.dumps(dict(TRAIN, layout="ssgi_residual", steps=20, output_mode="indirect",
+                                        lambda_final=100, lambda_gan=0, eval_every=0)))
+    train(cfg_path, dataset, work / "run_res", ngi)
+    l1 = [e["G_L1"] for e in read_log(work / "run_res")]
+    check(np.mean(l1[-5:]) < np.mean(l1[:5]), f"ssgi_residual: L1 {np.mean(l1[:5]):.4f} -> {np.mean(l1[-5:]):.4f}")
+    model_path = work / "residual.safetensors"
+    run([sys.executable, "-m", EXPORT_MODULE, "--run", work / "run_res", "--out", model_path])
+    _, cfg = model_file.read_model(str(model_path))
+    base = ngi_py.Model(dev, data.SSGI_BASE).config["metadata"]
+    check(cfg["output_mode"] == "ssgi_residual" and cfg["input_layout"] == data.SSGI_RESIDUAL_CHANNELS
+          and all(cfg["ssgi"][k] == base[k] for k in cfg["ssgi"]),
+          f"export: output_mode ssgi_residual, 13 input channels, the gather of {data.SSGI_BASE}: {cfg['ssgi']}")
+    model = ngi_py.Model(dev, str(model_path))
+    worst = 0.0
+    train_frames = data.list_frames(dataset, "train")
+    for rel in train_frames + data.list_frames(dataset, "test"):
+        frame = ngi_py.read_frame(str(dataset / rel))
+        pipe = ngi_py.Pipeline(dev, frame.n)
+        x = pipe.network_input(frame, model)
+        if rel in train_frames:  # what training read (the merge cache) is what the model gets in ngi
+            cached = np.load(data.default_cache_dir(dataset, "ssgi_residual") / rel / "input.npy")
+            check(np.array_equal(x, cached), f"{rel}: the training input is the pipeline's, bit for bit")
+        got = pipe.run(model, frame, outputs=("lightmap",))["lightmap"]
+        out, _ = reference_output(model_path, x)
+        v = torch.from_numpy(out).double() + torch.from_numpy(x[:, data.SSGI_CHANNELS]).double()
+        want = (lightmap_loss.clean_light(torch.from_numpy(frame.feature("direct")[0]).double())
+                + lightmap_loss.decode(v)[0]).numpy()
+        worst = max(worst, float(np.max(np.abs(got - want) / (1e-3 + np.abs(want)))))
+    check(worst < 1e-4, f"ssgi_residual: ngi lightmap == direct + decode(PyTorch output + SSGI channels), max relative "
+                        f"|diff| {worst:.2g}")
+
+
 def scoring_compose(frame, light):
     import ngi.scoring as scoring
     return scoring.compose(frame, light)
@@ -295,6 +335,8 @@ def main():
 
     # 6b. The indirect output mode.
     test_indirect_mode(ngi, dataset, work)
+    # 6c. A network that corrects SSGI.
+    test_ssgi_residual_mode(ngi, dataset, work)
 
     # 6. Single view.
     cfg_sv = work / "single_view.json"

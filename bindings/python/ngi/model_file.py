@@ -28,7 +28,7 @@ BN_MODES = ("running", "per_image")
 DROPOUT_MODES = ("off", "seeded")
 # What a pix2pix_unet generator's decoded output is (docs/MODEL_FORMAT.md, "output_mode"): the front view's whole
 # lightmap (the thesis's; the default) or indirect light only, which the pipeline adds to the frame's direct light.
-OUTPUT_MODES = ("lightmap", "indirect")
+OUTPUT_MODES = ("lightmap", "indirect", "ssgi_residual")
 
 # Hyper-parameters both upstream generators hard-code; they are written into
 # the config anyway so the C++ side never has to assume them (DROPOUT_P, the

@@ -205,7 +205,25 @@ py::dict stats_dict(const ngi::PreprocessStats& s) {
 
 // The config the network input follows: the model's, else the default surround (or single-view) layout, as
 // `ngi merge` does without --model.
-ngi::ModelConfig merge_config(const PyModel* model, bool single_view) {
+ngi::ModelConfig merge_config(const PyModel* model, bool single_view, const PyModel* ssgi) {
+    if (ssgi) {
+        // The input of a network that corrects this SSGI rung (output_mode "ssgi_residual"): what training needs
+        // before any such network exists.
+        if (model || single_view)
+            throw py::value_error("network_input: ssgi excludes model and single_view (it makes the 13-channel input "
+                                  "of a network that corrects that SSGI rung)");
+        ssgi->device->get("network_input: ssgi");
+        const ngi::ModelConfig& s = ssgi->model.config();
+        if (s.family != "ssgi")
+            throw py::value_error("network_input: ssgi must be a model of family ssgi, got family " + s.family);
+        ngi::ModelConfig c;
+        c.family = "pix2pix_unet";
+        c.output_mode = "ssgi_residual";
+        c.ssgi = s.ssgi;
+        c.input_layout = ngi::ssgi_residual_input_channels();
+        c.input_nc = int(c.input_layout.size());
+        return c;
+    }
     if (model) {
         if (single_view) throw py::value_error("network_input: single_view and model exclude each other");
         model->device->get("network_input: model");
@@ -289,6 +307,8 @@ float arrays (depth may be [6, N, N]), 'look' and 'up' as three numbers, 'refere
           "Channel names of the surround-aware network input, in tensor order (12).");
     m.def("single_view_input_channels", &ngi::single_view_input_channels,
           "Channel names of the single-view network input, in tensor order (10).");
+    m.def("ssgi_residual_input_channels", &ngi::ssgi_residual_input_channels,
+          "Channel names of the input of a network that corrects SSGI (output_mode ssgi_residual), in order (13).");
     m.def("outside_light_share", [](const ngi::Frame& frame) { return ngi::outside_light_share(frame); },
           py::arg("frame"), R"doc(
 The share of the frame's lumination (direct + emission + env, sanitized like the network input's; Rec. 709
@@ -434,23 +454,27 @@ run(); timings=True adds 'timings' (ms per stage: gather, input, network, output
 Device in, device out, asynchronous, no host transfer: `planes` (a DeviceBuffer or pyopencl Buffer) holds the
 frame as float32 [faces][16][N][N] (planes: albedo 0-2, normal 3-5, depth 6, direct 7-9, emission 10-12, env
 13-15); each output buffer given receives [3][N][N] float32. Returns once enqueued.)doc")
-        .def("network_input", [](PyPipeline& p, const ngi::Frame& frame, const PyModel* model, bool single_view) {
+        .def("network_input", [](PyPipeline& p, const ngi::Frame& frame, const PyModel* model, bool single_view,
+                                 const PyModel* ssgi) {
             p.device->get("Pipeline.network_input");
-            const ngi::ModelConfig config = merge_config(model, single_view);
+            const ngi::ModelConfig config = merge_config(model, single_view, ssgi);
             ngi::Tensor t = [&] {
                 py::gil_scoped_release release;
                 return p.pipeline.network_input(frame, config);
             }();
             return from_tensor(std::move(t));
-        }, py::arg("frame"), py::arg("model") = py::none(), py::arg("single_view") = false, R"doc(
+        }, py::arg("frame"), py::arg("model") = py::none(), py::arg("single_view") = false,
+           py::arg("ssgi") = py::none(), R"doc(
 The generator's input for a frame (what `ngi merge` writes as input.npy): [1, 12, 2N, 4N] (surround) or
 [1, 10, N, N] (single view), channels as surround_input_channels() / single_view_input_channels(), values in the
 input range. With a model, its config decides; without one, the default surround layout (single_view=True: the
-front view only) and range [-1, 1].)doc")
+front view only) and range [-1, 1]. ssgi=<a family ssgi model>: the [1, 13, N, N] input of a network that corrects
+that rung (output_mode "ssgi_residual"; ssgi_residual_input_channels(); the frame needs the faces the rung gathers
+from).)doc")
         .def("encode_lightmap", [](PyPipeline& p, const py::object& lightmap, const PyModel* model) {
             ngi::Image img = to_image(lightmap, "Pipeline.encode_lightmap: lightmap");
             p.device->get("Pipeline.encode_lightmap");
-            return from_tensor(p.pipeline.encode_lightmap(img, merge_config(model, false)));
+            return from_tensor(p.pipeline.encode_lightmap(img, merge_config(model, false, nullptr)));
         }, py::arg("lightmap"), py::arg("model") = py::none(),
            "A linear lightmap [3, H, W] as a training target [1, 3, H, W] in the output range (the model's, else "
            "[-1, 1]): what `ngi merge` writes as target.npy for the frame's reference.")

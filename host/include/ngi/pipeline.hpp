@@ -54,6 +54,9 @@ LuminationTransfer lumination_transfer_from_name(const std::string& name);      
 // ModelConfig::input_layout, when not empty, must equal one of these.
 const std::vector<std::string>& surround_input_channels();
 const std::vector<std::string>& single_view_input_channels();
+// A network that corrects SSGI (output_mode "ssgi_residual"): the front view's 10 channels, then the SSGI rung's
+// indirect light encoded like a training target ("ssgi.r", "ssgi.g", "ssgi.b"; docs/CONVENTIONS.md section 8).
+const std::vector<std::string>& ssgi_residual_input_channels();
 
 // The share of a frame's lumination (direct + emission + env, each term sanitized as the network input's
 // lumination is) that lies outside the front face: sum over the five other faces / sum over all six, each sum

@@ -8,8 +8,12 @@
 
 namespace ngi::detail {
 
-ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) {
-    const std::string what = "load model " + path + ": metadata 'ngi': ";
+namespace {
+
+const char* const kGatherFields = "view, cluster_level, bounces, near_factor, min_distance";
+
+// Reads the gather's settings present in `j` into `s` (absent ones keep their defaults); `what` starts every error.
+void read_gather_fields(const nlohmann::json& j, const std::string& what, ModelConfig::Ssgi& s) {
     auto fail = [&](const std::string& key, const std::string& rule) {
         const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
         return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
@@ -30,16 +34,6 @@ ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) 
             throw fail(key, rule);
         return float(v.get<double>());
     };
-    ModelConfig c;
-    c.family = "ssgi";
-    if (j.contains("format_version")) {
-        const nlohmann::json& v = j["format_version"];
-        if (v.is_number_integer() && v.get<long long>() > kModelFormatVersion)
-            throw InputError(what + "field 'format_version' is " + v.dump() + ", newer than the newest this reader "
-                             "knows (" + std::to_string(kModelFormatVersion) + "): update ngi");
-        integer("format_version", 1, kModelFormatVersion, 1);
-    }
-    ModelConfig::Ssgi& s = c.ssgi;
     if (j.contains("view")) {
         if (!j["view"].is_string() || (j["view"] != "surround" && j["view"] != "front"))
             throw fail("view", "\"surround\" (senders on all six faces) or \"front\" (the front face only)");
@@ -49,6 +43,42 @@ ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) 
     s.bounces = integer("bounces", 1, kSsgiMaxBounces, s.bounces);
     s.near_factor = number("near_factor", 0.0, 1e3, s.near_factor);
     s.min_distance = number("min_distance", 0.0, 1e3, s.min_distance);
+}
+
+}  // namespace
+
+ModelConfig::Ssgi parse_ssgi_gather(const nlohmann::json& j, const std::string& what) {
+    if (!j.is_object())
+        throw InputError(what + "field 'ssgi' must be an object of the gather's settings (" + kGatherFields + ")");
+    const std::string inner = what + "'ssgi': ";
+    for (const auto& item : j.items()) {
+        const std::string& k = item.key();
+        if (k != "view" && k != "cluster_level" && k != "bounces" && k != "near_factor" && k != "min_distance")
+            throw InputError(inner + "field '" + k.substr(0, 80) + "' is not a setting of the gather (" +
+                             kGatherFields + ")");
+    }
+    ModelConfig::Ssgi s;
+    read_gather_fields(j, inner, s);
+    return s;
+}
+
+ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) {
+    const std::string what = "load model " + path + ": metadata 'ngi': ";
+    auto fail = [&](const std::string& key, const std::string& rule) {
+        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
+        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
+    };
+    ModelConfig c;
+    c.family = "ssgi";
+    if (j.contains("format_version")) {
+        const nlohmann::json& v = j["format_version"];
+        if (v.is_number_integer() && v.get<long long>() > kModelFormatVersion)
+            throw InputError(what + "field 'format_version' is " + v.dump() + ", newer than the newest this reader "
+                             "knows (" + std::to_string(kModelFormatVersion) + "): update ngi");
+        if (!v.is_number_integer() || v.get<long long>() < 1)
+            throw fail("format_version", "an integer in 1.." + std::to_string(kModelFormatVersion));
+    }
+    read_gather_fields(j, what, c.ssgi);
     // No network: nothing is read from or written to a tensor. The pipeline's output is 3 channels of light; an
     // indirect part is added to the frame's direct light, as an "indirect" generator's is.
     c.input_nc = 0;

@@ -242,13 +242,29 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     range("input_range", c.input_range);
     range("output_range", c.output_range);
     c.source = string("source", {}, c.source, false);
-    c.output_mode = string("output_mode", {"lightmap", "indirect"}, c.output_mode, false);
+    c.output_mode = string("output_mode", {"lightmap", "indirect", "ssgi_residual"}, c.output_mode, false);
     // Only the pipeline's pix2pix generators compose their output with the frame's direct light (neural_gi
     // predicts indirect light by construction, through its own renderer; the others are not lightmap generators).
     if (c.output_mode != "lightmap" && c.family != "pix2pix_unet")
         throw InputError(what + "field 'output_mode' is \"" + c.output_mode +
                          "\", which only family pix2pix_unet supports; this is family " + c.family +
                          " (use \"lightmap\" or leave the key out)");
+    if (c.output_mode == "ssgi_residual") {
+        // A network that corrects the SSGI rung (docs/CONVENTIONS.md section 8): the gather's settings travel with
+        // it, its input is the front view plus the SSGI estimate, and its output is added to that estimate in the
+        // encoded domain, so the two ranges must be one.
+        if (!j.contains("ssgi")) throw fail("ssgi", "an object of the gather's settings for output_mode ssgi_residual");
+        c.ssgi = parse_ssgi_gather(j["ssgi"], what);
+        if (c.input_nc != kSsgiResidualInputs)
+            throw fail("input_nc", std::to_string(kSsgiResidualInputs) + " for output_mode ssgi_residual (the front view's 10 channels and the SSGI "
+                                       "estimate's 3)");
+        if (c.input_range[0] != c.output_range[0] || c.input_range[1] != c.output_range[1])
+            throw InputError(what + "output_mode ssgi_residual adds the network's output to its SSGI input "
+                             "channels: input_range and output_range must be equal");
+    } else if (j.contains("ssgi")) {
+        throw InputError(what + "field 'ssgi' is only read with output_mode \"ssgi_residual\"; this model's is \"" +
+                         c.output_mode + "\"");
+    }
     if (c.family == "neural_gi") parse_neural_gi_fields(j, c, what);  // after dropout: it must be off
     if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
     // "required": the fields a writer says no reader may ignore. Unknown optional fields are ignored (a newer writer
@@ -257,7 +273,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
                                          "norm", "bn_mode", "bn_eps", "dropout", "dropout_p", "dropout_seed",
                                          "leaky_slope", "input_layout", "input_range", "output_range", "source",
                                          "training", "required", "layers", "encoding", "ao", "neural_gi",
-                                         "output_mode"};
+                                         "output_mode", "ssgi"};
     if (j.contains("required")) {
         const nlohmann::json& r = j["required"];
         if (!r.is_array()) throw fail("required", "a list of field names");

@@ -19,8 +19,6 @@ std::string detail::compose_defines() {
 
 namespace {
 
-const std::size_t kLocal1[1] = {64};
-const std::size_t kLocal2[2] = {8, 8};
 
 // A usable image: non-empty, values matching its size, small enough for the kernels' int indexing.
 void check_image(const Image& im, const char* what) {
@@ -77,10 +75,10 @@ Image decode_front(SurroundPipeline::Impl& im, const Tensor& y, const ModelConfi
     if (direct) {
         upload_image(im.ctx, im.aux[0], *direct, "front direct light");
         im.decode_indirect.args(im.light, count, lo, hi, int(im.transfer), im.aux[0], 0);
-        im.ctx.launch(im.decode_indirect, 1, g, kLocal1);
+        im.ctx.launch(im.decode_indirect, 1, g, detail::kLocal1);
     } else {
         im.decode.args(im.light, count, lo, hi, int(im.transfer));
-        im.ctx.launch(im.decode, 1, g, kLocal1);
+        im.ctx.launch(im.decode, 1, g, detail::kLocal1);
     }
     im.ctx.read(im.light, 0, bytes, out.data.data(), "front lightmap");
     return out;
@@ -88,7 +86,21 @@ Image decode_front(SurroundPipeline::Impl& im, const Tensor& y, const ModelConfi
 
 }  // namespace
 
+namespace {
+
+// The step-by-step decode has the network's output only; a correction of SSGI also needs the SSGI estimate the
+// network saw, which run / enqueue keep on the device.
+void refuse_ssgi_residual(const ModelConfig& config) {
+    if (config.output_mode == "ssgi_residual")
+        throw InputError("front lightmap: the model's output_mode is \"ssgi_residual\" (it corrects the SSGI rung's "
+                         "light, which its output alone does not hold); run it on frames (SurroundPipeline::run or "
+                         "enqueue)");
+}
+
+}  // namespace
+
 Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& config) {
+    refuse_ssgi_residual(config);
     if (detail::indirect_output(config, "front lightmap"))
         throw InputError("front lightmap: the model's output_mode is \"indirect\" (it predicts indirect light "
                          "only): an indirect-mode model needs the frame's front direct light; call "
@@ -97,6 +109,7 @@ Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& confi
 }
 
 Image SurroundPipeline::front_lightmap(const Tensor& y, const ModelConfig& config, const Frame& frame) {
+    refuse_ssgi_residual(config);
     if (!detail::indirect_output(config, "front lightmap")) return decode_front(*impl_, y, config, nullptr);
     const Image& direct = frame.get(Feature::Direct, Face::Front);
     detail::check_face_image(direct, Feature::Direct, Face::Front, impl_->n,
@@ -121,7 +134,7 @@ Tensor SurroundPipeline::encode_lightmap(const Image& lightmap, const ModelConfi
     const int count = int(out.data.size());
     im.encode.args(im.aux[0], im.out, count, lo, hi, int(im.transfer));
     const std::size_t g[1] = {std::size_t(count)};
-    im.ctx.launch(im.encode, 1, g, kLocal1);
+    im.ctx.launch(im.encode, 1, g, detail::kLocal1);
     im.ctx.read(im.out, 0, bytes, out.data.data(), "encoded lightmap");
     return out;
 }
@@ -151,7 +164,7 @@ Image SurroundPipeline::compose(const Image& lightmap, const Frame& frame) {
     im.compose.args(im.light, im.aux[0], has_emission ? im.aux[1] : im.aux[0], has_env ? im.aux[2] : im.aux[0],
                     int(has_emission), int(has_env), im.out, count);
     const std::size_t g[1] = {std::size_t(count)};
-    im.ctx.launch(im.compose, 1, g, kLocal1);
+    im.ctx.launch(im.compose, 1, g, detail::kLocal1);
     im.ctx.read(im.out, 0, bytes, out.data.data(), "final image");
     return out;
 }
@@ -170,7 +183,7 @@ Image SurroundPipeline::upscale(const Image& image, int width, int height) {
     Image out(width, height, image.channels);
     im.resize.args(im.aux[0], image.width, image.height, im.out, width, height, image.channels);
     const std::size_t g[2] = {std::size_t(width), std::size_t(height)};
-    im.ctx.launch(im.resize, 2, g, kLocal2);
+    im.ctx.launch(im.resize, 2, g, detail::kLocal2);
     im.ctx.read(im.out, 0, bytes, out.data.data(), "upscale output");
     return out;
 }
@@ -187,7 +200,7 @@ Image SurroundPipeline::tonemap(const Image& linear, const ToneMapOptions& optio
     const int count = int(out.data.size());
     im.tonemap.args(im.aux[0], im.out, count, std::exp2(options.exposure_ev), int(options.curve), int(options.srgb));
     const std::size_t g[1] = {detail::tonemap_items(count)};
-    im.ctx.launch(im.tonemap, 1, g, kLocal1);
+    im.ctx.launch(im.tonemap, 1, g, detail::kLocal1);
     im.ctx.read(im.out, 0, bytes, out.data.data(), "tone map output");
     return out;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "models/model_access.hpp"
+#include "models/ssgi_config.hpp"
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
 
@@ -13,7 +14,6 @@ namespace ngi {
 
 namespace {
 
-const std::size_t kLocal1[1] = {64};
 using Clock = std::chrono::steady_clock;
 
 void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
@@ -77,7 +77,7 @@ void SurroundPipeline::Impl::enqueue_ssgi(const ModelConfig& config, const Devic
 
 void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes,
                                              bool has_emission, bool has_env, cl_mem light_dst, cl_mem final_dst,
-                                             cl_mem display_dst, const ToneMapOptions& tm) {
+                                             cl_mem display_dst, const ToneMapOptions& tm, cl_mem residual_input) {
     const std::size_t face_plane = std::size_t(n) * n, bytes = 3 * face_plane * sizeof(float);
     const int count = int(3 * face_plane);
     const std::size_t g[1] = {std::size_t(count)};
@@ -91,15 +91,22 @@ void SurroundPipeline::Impl::enqueue_outputs(cl_mem model_out, bool global, cons
                       int(face_plane));
     else
         ctx.copy(model_out, 0, light_dst, 0, bytes, "front lightmap");
-    if (detail::indirect_output(config, "enqueue frame")) {
+    const int direct_off = int(std::size_t(frame_plane(Feature::Direct)) * face_plane);
+    if (config.output_mode == "ssgi_residual") {
+        // The correction plus the SSGI estimate the network saw (its input planes 10-12), decoded, plus direct light.
+        if (!residual_input) throw Error("enqueue frame: an ssgi_residual model's output needs its input");
+        decode_residual.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer),
+                             residual_input, int((detail::kSsgiResidualInputs - 3) * face_plane), planes, direct_off);
+        ctx.launch(decode_residual, 1, g, detail::kLocal1);
+    } else if (detail::indirect_output(config, "enqueue frame")) {
         // The decoded indirect light plus the front face's direct light, read in place from the planes (planes
         // 7-9 of face 0: contiguous RGB, the lightmap's own layout), so the frame stays on the device.
         decode_indirect.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer), planes,
-                             int(std::size_t(frame_plane(Feature::Direct)) * face_plane));
-        ctx.launch(decode_indirect, 1, g, kLocal1);
+                             direct_off);
+        ctx.launch(decode_indirect, 1, g, detail::kLocal1);
     } else {
         decode.args(light_dst, count, config.output_range[0], config.output_range[1], int(transfer));
-        ctx.launch(decode, 1, g, kLocal1);
+        ctx.launch(decode, 1, g, detail::kLocal1);
     }
     enqueue_final(light_dst, planes, has_emission, has_env, final_dst, display_dst, tm);
 }
@@ -125,11 +132,11 @@ void SurroundPipeline::Impl::enqueue_final(cl_mem light_dst, cl_mem planes, bool
     }
     compose.args(light_dst, aux[0], has_emission ? aux[1] : aux[0], has_env ? aux[2] : aux[0], int(has_emission),
                  int(has_env), final_dst, count);
-    ctx.launch(compose, 1, g, kLocal1);
+    ctx.launch(compose, 1, g, detail::kLocal1);
     if (!display_dst) return;
     tonemap.args(final_dst, display_dst, count, std::exp2(tm.exposure_ev), int(tm.curve), int(tm.srgb));
     const std::size_t gt[1] = {detail::tonemap_items(count)};
-    ctx.launch(tonemap, 1, gt, kLocal1);
+    ctx.launch(tonemap, 1, gt, detail::kLocal1);
 }
 
 void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const FrameDesc& desc,
@@ -145,6 +152,10 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
         return;
     }
     const bool surround = detail::check_model_input(config);
+    const bool residual = config.output_mode == "ssgi_residual";
+    if (residual && desc.faces < detail::frame_faces(config))
+        throw InputError("enqueue frame: the model corrects the SSGI rung (view \"" + config.ssgi.view +
+                         "\"), which gathers from all 6 faces; the frame holds " + std::to_string(desc.faces));
     if (surround && desc.faces != kFaceCount)
         throw InputError("enqueue frame: the model is surround-aware (12 input channels) and needs all 6 faces, "
                          "the frame holds " + std::to_string(desc.faces));
@@ -164,18 +175,21 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
                          "; this pipeline's network input is " + std::to_string(h) + "x" + std::to_string(w) +
                          " (N = " + std::to_string(im.n) + ")");
     // Only the faces the model reads must be present, but they must all be there.
-    const int faces_used = surround ? kFaceCount : 1;
+    const int faces_used = residual ? detail::frame_faces(config) : surround ? kFaceCount : 1;
     im.check_frame_buffers(planes, faces_used, outputs);
     detail::StageClock lap(im.ctx, timings);
-    const detail::Buffer& input = im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
-                                                   desc.look, desc.up, config, surround);
+    const detail::Buffer& input =
+        residual ? im.enqueue_residual_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env,
+                                             desc.look, desc.up, config)
+                 : im.enqueue_input(planes.opencl_mem(), faces_used, desc.has_emission, desc.has_env, desc.look,
+                                    desc.up, config, surround);
     lap(&FrameTimings::input_ms);
     detail::ensure_buffer(im.ctx, im.frame_out, std::size_t(3) * h * w * sizeof(float), "model output");
     detail::ModelAccess::enqueue(model, input.get(), 0, im.frame_out.get(), 0, h, w);
     lap(&FrameTimings::network_ms);
     im.enqueue_outputs(im.frame_out.get(), surround, config, planes.opencl_mem(), desc.has_emission, desc.has_env,
                        outputs.lightmap.opencl_mem(), outputs.final_image.opencl_mem(), outputs.display.opencl_mem(),
-                       outputs.tonemap);
+                       outputs.tonemap, residual ? input.get() : nullptr);
     lap(&FrameTimings::outputs_ms);
     if (stats) im.read_stats(*stats);
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "ngi/error.hpp"
+#include "models/ssgi_config.hpp"
 #include "pipeline/pipeline_impl.hpp"
 
 namespace ngi {
@@ -50,6 +51,15 @@ const std::vector<std::string>& single_view_input_channels() {
     static const std::vector<std::string> names = {"albedo.r", "albedo.g", "albedo.b", "normal.x",
                                                    "normal.y", "normal.z", "depth", "lumination.r",
                                                    "lumination.g", "lumination.b"};
+    return names;
+}
+
+const std::vector<std::string>& ssgi_residual_input_channels() {
+    static const std::vector<std::string> names = [] {
+        auto v = single_view_input_channels();
+        for (const char* c : {"ssgi.r", "ssgi.g", "ssgi.b"}) v.push_back(c);
+        return v;
+    }();
     return names;
 }
 
@@ -107,9 +117,9 @@ bool optional_feature_present(const Frame& frame, Feature feature, const Face* f
 
 bool indirect_output(const ModelConfig& config, const char* what) {
     if (config.output_mode == "lightmap") return false;
-    if (config.output_mode == "indirect") return true;
+    if (config.output_mode == "indirect" || config.output_mode == "ssgi_residual") return true;
     throw InputError(std::string(what) + ": the model's output_mode is \"" + config.output_mode.substr(0, 80) +
-                     "\"; expected \"lightmap\" or \"indirect\"");
+                     "\"; expected \"lightmap\", \"indirect\" or \"ssgi_residual\"");
 }
 
 bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
@@ -130,7 +140,12 @@ SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, Lumi
       encode(ctx.kernel("compose", "encode_lightmap", detail::compose_defines())),
       resize(ctx.kernel("compose", "resize_bilinear", detail::compose_defines())),
       compose(ctx.kernel("compose", "compose_final", detail::compose_defines())),
-      tonemap(ctx.kernel("compose", "tonemap", detail::compose_defines())) {}
+      tonemap(ctx.kernel("compose", "tonemap", detail::compose_defines())),
+      encode_ssgi(ctx.kernel("compose", "encode_ssgi_input", detail::compose_defines())),
+      decode_residual(ctx.kernel("compose", "decode_ssgi_residual", detail::compose_defines())) {
+    if (ssgi_residual_input_channels().size() != std::size_t(detail::kSsgiResidualInputs))
+        throw Error("surround pipeline: ssgi_residual_input_channels() and kSsgiResidualInputs disagree");
+}
 
 void SurroundPipeline::Impl::gather_planes(cl_mem src, int src_plane, const detail::Buffer& idx,
                                            const detail::Buffer& w, int npix, int channels, cl_mem dst,

@@ -83,6 +83,11 @@ private:
     std::chrono::steady_clock::time_point t_;
 };
 
+// Work-group shapes of the pipeline's element-wise (64) and image (8 x 8) kernels: fixed, as PoCL compiles one
+// work-group function per local size.
+inline constexpr std::size_t kLocal1[1] = {64};
+inline constexpr std::size_t kLocal2[2] = {8, 8};
+
 }  // namespace ngi::detail
 
 namespace ngi {
@@ -95,6 +100,7 @@ struct SurroundPipeline::Impl {
     LuminationTransfer transfer;
 
     detail::Kernel gather, preprocess, decode, decode_indirect, encode, resize, compose, tonemap;
+    detail::Kernel encode_ssgi, decode_residual;  // output mode "ssgi_residual"
     detail::Buffer merge_idx, merge_w;      // 8 N^2 entries
     detail::Buffer extract_idx, extract_w;  // N^2 entries
     Image coords;                           // 4N x 2N x 2, phi and theta in [0, 1]
@@ -117,13 +123,20 @@ struct SurroundPipeline::Impl {
     // Returns the buffer that holds the input ([1, 12, 2N, 4N] in view, or [1, 10, N, N] in stack).
     const detail::Buffer& enqueue_input(cl_mem raw, int faces, bool has_emission, bool has_env, glm::vec3 look,
                                         glm::vec3 up, const ModelConfig& config, bool surround);
+    // Output mode "ssgi_residual": the SSGI gather of the raw planes (`faces` faces, config.ssgi) into ssgi_light,
+    // then the network input [1, 13, N, N] in `stack`: the front view's preprocessed planes and the SSGI estimate
+    // encoded into planes 10-12 (compose.cl encode_ssgi_input).
+    const detail::Buffer& enqueue_residual_input(cl_mem raw, int faces, bool has_emission, bool has_env,
+                                                 glm::vec3 look, glm::vec3 up, const ModelConfig& config);
+    detail::Buffer ssgi_light;
     // Downloads the preprocessing counters of the last enqueue_input into `stats`.
     void read_stats(PreprocessStats& stats);
     // Decode (in place), compose and tone map of enqueue(); the destinations are raw buffers of >= 3 N^2 floats.
-    // An indirect-mode model's decoded output is added to the front direct light read from `planes`.
+    // An indirect-mode model's decoded output is added to the front direct light read from `planes`; an
+    // ssgi_residual model's output is first added to the SSGI channels of its input `residual_input`.
     void enqueue_outputs(cl_mem model_out, bool global, const ModelConfig& config, cl_mem planes, bool has_emission,
                          bool has_env, cl_mem light_dst, cl_mem final_dst, cl_mem display_dst,
-                         const ToneMapOptions& tonemap);
+                         const ToneMapOptions& tonemap, cl_mem residual_input = nullptr);
     // Compose and tone map of a lightmap already in light_dst (>= 3 N^2 floats); nothing when neither is asked for.
     void enqueue_final(cl_mem light_dst, cl_mem planes, bool has_emission, bool has_env, cl_mem final_dst,
                        cl_mem display_dst, const ToneMapOptions& tonemap);

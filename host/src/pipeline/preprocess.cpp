@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ngi/error.hpp"
+#include "models/ssgi_config.hpp"
 #include "pipeline/frame_planes.hpp"
 #include "pipeline/pipeline_impl.hpp"
 #include "runtime/kernel_defines.hpp"
@@ -78,7 +79,8 @@ std::string preprocess_defines() {
 }
 
 int frame_faces(const ModelConfig& config) {
-    if (config.family == "ssgi") return config.ssgi.view == "front" ? 1 : kFaceCount;
+    if (config.family == "ssgi" || config.output_mode == "ssgi_residual")
+        return config.ssgi.view == "front" ? 1 : kFaceCount;
     return check_model_input(config) ? kFaceCount : 1;
 }
 
@@ -86,8 +88,15 @@ bool check_model_input(const ModelConfig& config) {
     if (config.family == "ssgi")
         throw InputError("network input: family ssgi has no network and no network input; run it on frames "
                          "(SurroundPipeline::run or enqueue)");
-    const bool surround = config.input_nc == int(surround_input_channels().size());
-    const auto& names = surround ? surround_input_channels() : single_view_input_channels();
+    const bool residual = config.output_mode == "ssgi_residual";
+    const bool surround = !residual && config.input_nc == int(surround_input_channels().size());
+    const auto& names = residual   ? ssgi_residual_input_channels()
+                        : surround ? surround_input_channels()
+                                   : single_view_input_channels();
+    if (residual && config.input_nc != int(names.size()))
+        throw InputError("network input: the model corrects SSGI and takes " + std::to_string(config.input_nc) +
+                         " input channels; the surround pipeline makes " + std::to_string(names.size()) +
+                         " for it (the front view and the SSGI estimate)");
     if (!surround && config.input_nc != int(names.size()))
         throw InputError("network input: the model takes " + std::to_string(config.input_nc) +
                          " input channels; the surround pipeline makes 12 (global view) or 10 (front view only)");
@@ -142,6 +151,27 @@ const detail::Buffer& SurroundPipeline::Impl::enqueue_input(cl_mem raw_planes, i
     return view;
 }
 
+const detail::Buffer& SurroundPipeline::Impl::enqueue_residual_input(cl_mem raw_planes, int faces, bool has_emission,
+                                                                     bool has_env, glm::vec3 look, glm::vec3 up,
+                                                                     const ModelConfig& config) {
+    const std::size_t face_plane = std::size_t(n) * n;
+    if (!ssgi) ssgi = std::make_unique<detail::Ssgi>(ctx);
+    detail::ensure_buffer(ctx, ssgi_light, 3 * face_plane * sizeof(float), "ssgi estimate");
+    ssgi->enqueue(ctx, raw_planes, faces, n, has_emission, CameraCluster::from_look_up(look, up), config.ssgi,
+                  ssgi_light.get());
+    // The front view's planes first (face 0 of the raw planes), in a stack with room for the three SSGI planes.
+    detail::ensure_buffer(ctx, stack, std::size_t(detail::kSsgiResidualInputs) * face_plane * sizeof(float),
+                          "network input");
+    enqueue_input(raw_planes, 1, has_emission, has_env, look, up, config, false);
+    const int count = int(3 * face_plane);
+    encode_ssgi.args(ssgi_light, raw_planes, int(std::size_t(frame_plane(Feature::Direct)) * face_plane), stack,
+                     int(kFeaturePlanes * face_plane), count, config.input_range[0], config.input_range[1],
+                     int(transfer));
+    const std::size_t g[1] = {std::size_t(count)};
+    ctx.launch(encode_ssgi, 1, g, detail::kLocal1);
+    return stack;
+}
+
 void SurroundPipeline::Impl::read_stats(PreprocessStats& stats) {
     int counts[kCounterSlots];
     ctx.read(counters, 0, sizeof counts, counts, "preprocessing counters");
@@ -153,12 +183,13 @@ void SurroundPipeline::Impl::read_stats(PreprocessStats& stats) {
 Tensor SurroundPipeline::network_input(const Frame& frame, const ModelConfig& config, PreprocessStats* stats) {
     Impl& im = *impl_;
     const bool surround = detail::check_model_input(config);
+    const bool residual = config.output_mode == "ssgi_residual";
     const int n = im.n;
     if (frame.n != 0 && frame.n != n)
         throw InputError("network input: the frame has N = " + std::to_string(frame.n) + ", this pipeline N = " +
                          std::to_string(n));
     // The faces the input needs, in stacking order (= Face order, which the merge table indexes).
-    const int faces = surround ? kFaceCount : 1;  // Face::Front is first
+    const int faces = residual ? detail::frame_faces(config) : surround ? kFaceCount : 1;  // Face::Front is first
     for (Feature f : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct})
         for (int i = 0; i < faces; ++i)
             detail::check_face_image(frame.get(f, kAllFaces[i]), f, kAllFaces[i], n, "network input");
@@ -166,10 +197,14 @@ Tensor SurroundPipeline::network_input(const Frame& frame, const ModelConfig& co
     const std::vector<float> planes = pack_frame_planes(frame, faces);  // one upload instead of one per image
     detail::ensure_buffer(im.ctx, im.raw, planes.size() * sizeof(float), "raw features");
     im.ctx.write(im.raw, 0, planes.size() * sizeof(float), planes.data(), "raw features");
-    const detail::Buffer& input = im.enqueue_input(im.raw.get(), faces, desc.has_emission, desc.has_env, frame.look,
-                                                   frame.up, config, surround);
-    Tensor out = surround ? Tensor({1, int(surround_input_channels().size()), 2 * n, 4 * n})
-                          : Tensor({1, kFeaturePlanes, n, n});
+    const detail::Buffer& input =
+        residual ? im.enqueue_residual_input(im.raw.get(), faces, desc.has_emission, desc.has_env, frame.look,
+                                             frame.up, config)
+                 : im.enqueue_input(im.raw.get(), faces, desc.has_emission, desc.has_env, frame.look, frame.up,
+                                    config, surround);
+    Tensor out = surround   ? Tensor({1, int(surround_input_channels().size()), 2 * n, 4 * n})
+                 : residual ? Tensor({1, detail::kSsgiResidualInputs, n, n})
+                            : Tensor({1, kFeaturePlanes, n, n});
     im.ctx.read(input, 0, out.size() * sizeof(float), out.data.data(), "network input");
     if (stats) im.read_stats(*stats);
     return out;

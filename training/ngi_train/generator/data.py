@@ -44,13 +44,19 @@ import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in t
 from ngi_train import checkpoint
 
 CACHE_FORMAT = 2  # 2: front.npy
-LAYOUTS = ("surround", "single_view")
+LAYOUTS = ("surround", "single_view", "ssgi_residual")
+# Layout "ssgi_residual" (issue 45): a network that corrects this SSGI rung. Its input is the front view's channels
+# and the rung's indirect light encoded like a target (ngi.Pipeline.network_input(frame, ssgi=...), [1, 13, N, N]);
+# its output is added to those three channels (SSGI_CHANNELS) before decoding (docs/CONVENTIONS.md section 8).
+SSGI_BASE = "ssgi_surround"
 
 # docs/CONVENTIONS.md section 7 (surround_input_channels / single_view_input_channels in pipeline.hpp). Checked
 # against ngi.surround_input_channels() / single_view_input_channels() for every frame merged.
 SURROUND_CHANNELS = ["albedo.r", "albedo.g", "albedo.b", "normal.x", "normal.y", "normal.z", "depth",
                      "lumination.r", "lumination.g", "lumination.b", "coord.phi", "coord.theta"]
 SINGLE_VIEW_CHANNELS = SURROUND_CHANNELS[:10]
+SSGI_RESIDUAL_CHANNELS = SINGLE_VIEW_CHANNELS + ["ssgi.r", "ssgi.g", "ssgi.b"]
+SSGI_CHANNELS = slice(10, 13)
 # front.npy's planes, each RGB: the slices below index its channel axis.
 FRONT_PLANES = ("reference", "direct", "albedo", "emission", "env")
 FRONT = {name: slice(3 * i, 3 * i + 3) for i, name in enumerate(FRONT_PLANES)}
@@ -63,7 +69,8 @@ def check_layout(layout):
 
 def channels(layout):
     check_layout(layout)
-    return list(SURROUND_CHANNELS if layout == "surround" else SINGLE_VIEW_CHANNELS)
+    return list({"surround": SURROUND_CHANNELS, "single_view": SINGLE_VIEW_CHANNELS,
+                 "ssgi_residual": SSGI_RESIDUAL_CHANNELS}[layout])
 
 
 def input_nc(layout):
@@ -77,7 +84,7 @@ def front_region(n):
 
 def crop_front(t, n, layout):
     """The front view of an NCHW tensor in `layout`'s spatial layout: a crop for surround, all of it otherwise."""
-    if layout == "single_view":
+    if layout != "surround":
         return t
     rows, cols = front_region(n)
     return t[..., rows, cols]
@@ -164,6 +171,16 @@ def _pipeline(device, n):
     return pipes[(device, n)]
 
 
+def _ssgi_model(device):
+    """SSGI_BASE loaded on `device` (one per thread: a Model is used by one thread at a time)."""
+    models = _LOCAL.__dict__.setdefault("ssgi", {})
+    if device not in models:
+        with _DEVICES_LOCK:
+            dev = _DEVICES[device]
+        models[device] = ngi_py.Model(dev, SSGI_BASE)
+    return models[device]
+
+
 def _save_atomic(path, array):
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.tmp-", suffix=".npy", dir=path.parent)
     try:
@@ -180,7 +197,8 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     """input.npy and target.npy of one frame into out_dir (created if needed; target.npy is written last), as
     `ngi merge --npy-only [--single-view]` writes them; returns the input's channel names."""
     single = layout == "single_view"
-    names = list(ngi_py.single_view_input_channels() if single else ngi_py.surround_input_channels())
+    names = list({"surround": ngi_py.surround_input_channels, "single_view": ngi_py.single_view_input_channels,
+                  "ssgi_residual": ngi_py.ssgi_residual_input_channels}[layout]())
     if names != channels(layout):
         raise RuntimeError(f"ngi reports the channels {names}, the training code expects {channels(layout)} "
                            "(docs/CONVENTIONS.md section 7 changed? update training/ngi_train/generator/data.py)")
@@ -190,7 +208,11 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     pipe = _pipeline(device, frame.n)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    _save_atomic(out_dir / "input.npy", pipe.network_input(frame, single_view=single))
+    if layout == "ssgi_residual":
+        x = pipe.network_input(frame, ssgi=_ssgi_model(device))
+    else:
+        x = pipe.network_input(frame, single_view=single)
+    _save_atomic(out_dir / "input.npy", x)
     _save_atomic(out_dir / "front.npy", front_planes(frame))
     _save_atomic(out_dir / "target.npy", pipe.encode_lightmap(frame.reference))
     return names

@@ -36,7 +36,7 @@ import torch
 import ngi.reference_models as reference_models
 
 from ngi_train import distributed, ngi_paths
-from ngi_train.generator import data, lightmap_loss, networks
+from ngi_train.generator import data, gan, lightmap_loss, networks
 
 LIGHT_MAX = 65504.0
 
@@ -61,7 +61,7 @@ def heldout_scores(state_dict, cfg, dataset, n, bn_mode, dropout="off", dropout_
     with torch.no_grad():
         for i in d.shard(range(count)):
             x, y, _ = dataset[i]
-            out = data.crop_front(g(x[None]), n, cfg["layout"])[0]
+            out = data.crop_front(gan.residual_output(g(x[None]), x[None], cfg["layout"]), n, cfg["layout"])[0]
             mode = cfg.get("output_mode", "lightmap")
             if mode != "lightmap":
                 direct = dataset.front(i)[data.FRONT["direct"]].double()

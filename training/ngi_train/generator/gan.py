@@ -42,6 +42,11 @@ from ngi_train import distributed
 from ngi_train.generator import data, lightmap_loss, networks
 
 
+def residual_output(out, x, layout):
+    """out + the SSGI channels of x for layout ssgi_residual; out otherwise."""
+    return out + x[:, data.SSGI_CHANNELS] if layout == "ssgi_residual" else out
+
+
 class Pix2Pix:
     def __init__(self, cfg, n, device="cpu"):
         """cfg: the training config (train.py); n: the face size; device: where the networks live (a distributed
@@ -51,6 +56,8 @@ class Pix2Pix:
         self.layout = cfg["layout"]
         self.mode = cfg.get("output_mode", "lightmap")
         lightmap_loss.check_mode(self.mode)
+        if self.layout == "ssgi_residual" and self.mode != "indirect":
+            raise ValueError("layout ssgi_residual corrects SSGI's indirect light: output_mode must be \"indirect\"")
         self.lambda_gan = float(cfg.get("lambda_gan", 1.0))
         self.lambda_final = float(cfg.get("lambda_final", 0.0))
         nc = data.input_nc(self.layout)
@@ -69,6 +76,11 @@ class Pix2Pix:
 
     def front(self, t):
         return data.crop_front(t, self.n, self.layout)
+
+    def generate(self, net, x):
+        """The generator's output as ngi decodes it: for layout ssgi_residual, the correction plus the SSGI estimate
+        of its input (compose.cl decode_ssgi_residual adds them the same way)."""
+        return residual_output(net(x), x, self.layout)
 
     def lr_at(self, step):
         """pix2pix's 'linear' policy: constant, then linearly to 0 over the last decay_steps steps."""
@@ -143,7 +155,7 @@ class Pix2Pix:
         fakes, lights, x_ds = [], [], []
         for i, x in enumerate(xs):
             with sync(self.G_ddp if d.enabled else None, i), use(slots_g, i):
-                fake, light = self.composed(self.front(g_run(x)), fronts[i])
+                fake, light = self.composed(self.front(self.generate(g_run, x)), fronts[i])
             fakes.append(fake)
             lights.append(light)
             x_ds.append(self.front(x))
