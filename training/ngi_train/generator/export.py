@@ -91,6 +91,7 @@ def main(argv=None):
         base = ngi_py.Model(ngi_py.Device(args.device or ""), data.SSGI_BASE).config["metadata"]
         config["ssgi"] = {k: base[k] for k in ("view", "cluster_level", "bounces", "near_factor", "min_distance")
                           if k in base}
+        config["required"] = sorted(set(config.get("required", [])) | {"ssgi"})
     steps = state["step"]
     samples = state.get("samples", steps)  # checkpoints from before the effective batch: one image per step
     config["training"] = {
