@@ -152,16 +152,19 @@ __kernel void display_clip_box(__global const float* restrict low, __global cons
 #endif
 
 // p[idx] in the lanes where ok (a lane mask), 0 elsewhere; the other lanes read p[0] and discard it (no branches).
+// Every index is also clamped to [0, lim): a lane the masks let through can never read outside the buffer (the
+// open oclgrind finding of docs/RELIABILITY.md is not explained by the index math, which bounds every tap; this
+// makes that bound hold by construction).
 // display_row8 reads eight neighbouring values of a row (one vector load when all are inside the row).
-static inline float8 display_gather8(__global const float* p, const int8 idx, const int8 ok) {
-    const int8 k = select((int8)(0), idx, ok);
+static inline float8 display_gather8(__global const float* p, const int8 idx, const int8 ok, const int lim) {
+    const int8 k = clamp(select((int8)(0), idx, ok), (int8)(0), (int8)(lim - 1));
     return select((float8)(0.0f), (float8)(p[k.s0], p[k.s1], p[k.s2], p[k.s3], p[k.s4], p[k.s5], p[k.s6], p[k.s7]),
                   ok);
 }
 
 static inline float8 display_row8(__global const float* p, const int base, const int count, const int8 live) {
     if (count == 8) return vload8(0, p + base);
-    return display_gather8(p, base + (int8)(0, 1, 2, 3, 4, 5, 6, 7), live);
+    return display_gather8(p, base + (int8)(0, 1, 2, 3, 4, 5, 6, 7), live, base + count);
 }
 
 static inline float8 display_signed8(float8 v) { return select(clamp(v, -FLT_MAX, FLT_MAX), (float8)(0.0f), isnan(v)); }
@@ -223,13 +226,13 @@ __kernel void display_temporal(__global const float* restrict current, __global 
         const int8 tx = tx0 + (t & 1), ty = ty0 + (t >> 1);
         const int8 inside = seen & (tx >= 0) & (ty >= 0) & (tx < s) & (ty < s);
         const int8 j = ty * s + tx;
-        const float8 dp = display_gather8(prev_depth, j, inside);
+        const float8 dp = display_gather8(prev_depth, j, inside, plane);
         const float8 w = ((t & 1) ? ax : 1.0f - ax) * ((t >> 1) ? ay : 1.0f - ay);
         const int8 ok = inside & (fabs(dp - z) <= tol) & (w > 0.0f);  // also false for a NaN depth
         const float8 wk = select((float8)(0.0f), w, ok);
-        h0 += wk * display_signed8(display_gather8(history, j, ok));
-        h1 += wk * display_signed8(display_gather8(history + plane, j, ok));
-        h2 += wk * display_signed8(display_gather8(history + 2 * plane, j, ok));
+        h0 += wk * display_signed8(display_gather8(history, j, ok, plane));
+        h1 += wk * display_signed8(display_gather8(history + plane, j, ok, plane));
+        h2 += wk * display_signed8(display_gather8(history + 2 * plane, j, ok, plane));
         wsum += wk;
     }
     const int8 used = surface & (wsum > 1e-4f);
@@ -247,9 +250,12 @@ __kernel void display_temporal(__global const float* restrict current, __global 
         const int8 cx = clamp(convert_int8(floor((convert_float8(x) + 0.5f) * (float)ln / (float)s)), 0, ln - 1);
         const int lplane = ln * ln;
         const int8 j = cy * ln + cx;
-        const float8 lo0 = display_gather8(box, j, used), lo1 = display_gather8(box + lplane, j, used),
-                     lo2 = display_gather8(box + 2 * lplane, j, used), hi0 = display_gather8(box + 3 * lplane, j, used),
-                     hi1 = display_gather8(box + 4 * lplane, j, used), hi2 = display_gather8(box + 5 * lplane, j, used);
+        const float8 lo0 = display_gather8(box, j, used, lplane),
+                     lo1 = display_gather8(box + lplane, j, used, lplane),
+                     lo2 = display_gather8(box + 2 * lplane, j, used, lplane),
+                     hi0 = display_gather8(box + 3 * lplane, j, used, lplane),
+                     hi1 = display_gather8(box + 4 * lplane, j, used, lplane),
+                     hi2 = display_gather8(box + 5 * lplane, j, used, lplane);
         const float8 k0 = clamp(h0, lo0, hi0), k1 = clamp(h1, lo1, hi1), k2 = clamp(h2, lo2, hi2);
         const int8 moved = used & ((k0 != h0) | (k1 != h1) | (k2 != h2));
         const uint clipped = display_lanes(moved);

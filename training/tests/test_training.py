@@ -236,10 +236,10 @@ def test_ssgi_residual_mode(ngi, dataset, work):
     model_path = work / "residual.safetensors"
     run([sys.executable, "-m", EXPORT_MODULE, "--run", work / "run_res", "--out", model_path])
     _, cfg = model_file.read_model(str(model_path))
-    base = ngi_py.Model(dev, data.SSGI_BASE).config["metadata"]
+    base = ngi_py.Model(dev, data.SSGI_BASES["ssgi_residual"]).config["metadata"]
     check(cfg["output_mode"] == "ssgi_residual" and cfg["input_layout"] == data.SSGI_RESIDUAL_CHANNELS
           and all(cfg["ssgi"][k] == base[k] for k in cfg["ssgi"]),
-          f"export: output_mode ssgi_residual, 13 input channels, the gather of {data.SSGI_BASE}: {cfg['ssgi']}")
+          f"export: output_mode ssgi_residual, 13 input channels, the gather of ssgi_surround: {cfg['ssgi']}")
     model = ngi_py.Model(dev, str(model_path))
     worst = 0.0
     train_frames = data.list_frames(dataset, "train")

@@ -346,8 +346,10 @@ def budget_text(args):
 
 
 def computes_indirect(rung):
-    """A rung whose output the pipeline adds to the frame's direct light: an indirect-light network or ssgi."""
-    return rung.get("kind") == "ssgi" or (rung.get("kind") == "rung" and rung.get("output_mode") == "indirect")
+    """A rung whose output the pipeline adds to the frame's direct light: an indirect-light network, ssgi, or a
+    network that corrects ssgi."""
+    return rung.get("kind") == "ssgi" or (rung.get("kind") == "rung"
+                                          and rung.get("output_mode") in ("indirect", "ssgi_residual"))
 
 
 def default_rungs(zoo, all_rungs=False):

@@ -7,7 +7,7 @@ Written by ngi_train.generator.ladder_eval from its measurements; read by ngi.pl
      "switches": [{"surround", "single_view", "below_outside_light_share", ...}],  # measured per-frame switches
      "rungs": [{"name", "kind" ("direct" | "rung" | "bn_variant" | "legacy" | "ssgi"), "file" (relative to the
                 manifest's folder; null for the direct-light-only rung), "sha256",
-                "layout" ("surround" | "single_view" | "none"), "n", "ngf", "num_downs", "bn_mode", "weights",
+                "layout" ("surround" | "single_view" | "ssgi_residual" | "none"), "n", "ngf", "num_downs", "bn_mode", "weights",
                 "input": [1, C, H, W], "gflop", "memory_mib",
                 "cost": {device key: {"generator_ms", "lightmap_ms"}},
                 "accuracy": {"heldout": {"final": {ssim, psnr, mse}, "lightmap": {...}, "families": {...}},
@@ -31,7 +31,7 @@ from pathlib import Path
 from . import model_file
 
 FORMAT, VERSION = "ngi-zoo", 1
-INPUT_NC = {"surround": 12, "single_view": 10}
+INPUT_NC = {"surround": 12, "single_view": 10, "ssgi_residual": 13}  # ssgi_residual: corrects an ssgi rung
 RUNG_KEYS = ("name", "file", "layout", "n", "ngf", "num_downs", "bn_mode", "cost", "accuracy")
 NETWORK_KEYS = ("ngf", "num_downs", "bn_mode")  # of RUNG_KEYS, the ones an ssgi rung (no network) goes without
 

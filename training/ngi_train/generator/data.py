@@ -44,11 +44,16 @@ import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in t
 from ngi_train import checkpoint
 
 CACHE_FORMAT = 2  # 2: front.npy
-LAYOUTS = ("surround", "single_view", "ssgi_residual")
-# Layout "ssgi_residual" (issue 45): a network that corrects this SSGI rung. Its input is the front view's channels
-# and the rung's indirect light encoded like a target (ngi.Pipeline.network_input(frame, ssgi=...), [1, 13, N, N]);
-# its output is added to those three channels (SSGI_CHANNELS) before decoding (docs/CONVENTIONS.md section 8).
-SSGI_BASE = "ssgi_surround"
+# Layouts "ssgi_residual*" (issue 45): a network that corrects an SSGI rung (SSGI_BASES: layout -> the rung's model
+# name). Its input is the front view's channels and the rung's indirect light encoded like a target
+# (ngi.Pipeline.network_input(frame, ssgi=...), [1, 13, N, N]); its output is added to those three channels
+# (SSGI_CHANNELS) before decoding (docs/CONVENTIONS.md section 8).
+SSGI_BASES = {"ssgi_residual": "ssgi_surround", "ssgi_residual_2bounce": "ssgi_surround_2bounce"}
+LAYOUTS = ("surround", "single_view") + tuple(SSGI_BASES)
+
+
+def is_residual(layout):
+    return layout in SSGI_BASES
 
 # docs/CONVENTIONS.md section 7 (surround_input_channels / single_view_input_channels in pipeline.hpp). Checked
 # against ngi.surround_input_channels() / single_view_input_channels() for every frame merged.
@@ -69,8 +74,9 @@ def check_layout(layout):
 
 def channels(layout):
     check_layout(layout)
-    return list({"surround": SURROUND_CHANNELS, "single_view": SINGLE_VIEW_CHANNELS,
-                 "ssgi_residual": SSGI_RESIDUAL_CHANNELS}[layout])
+    if is_residual(layout):
+        return list(SSGI_RESIDUAL_CHANNELS)
+    return list(SURROUND_CHANNELS if layout == "surround" else SINGLE_VIEW_CHANNELS)
 
 
 def input_nc(layout):
@@ -171,14 +177,14 @@ def _pipeline(device, n):
     return pipes[(device, n)]
 
 
-def _ssgi_model(device):
-    """SSGI_BASE loaded on `device` (one per thread: a Model is used by one thread at a time)."""
+def _ssgi_model(device, name):
+    """The SSGI rung `name` loaded on `device` (one per thread: a Model is used by one thread at a time)."""
     models = _LOCAL.__dict__.setdefault("ssgi", {})
-    if device not in models:
+    if (device, name) not in models:
         with _DEVICES_LOCK:
             dev = _DEVICES[device]
-        models[device] = ngi_py.Model(dev, SSGI_BASE)
-    return models[device]
+        models[(device, name)] = ngi_py.Model(dev, name)
+    return models[(device, name)]
 
 
 def _save_atomic(path, array):
@@ -197,8 +203,8 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     """input.npy and target.npy of one frame into out_dir (created if needed; target.npy is written last), as
     `ngi merge --npy-only [--single-view]` writes them; returns the input's channel names."""
     single = layout == "single_view"
-    names = list({"surround": ngi_py.surround_input_channels, "single_view": ngi_py.single_view_input_channels,
-                  "ssgi_residual": ngi_py.ssgi_residual_input_channels}[layout]())
+    names = list(ngi_py.ssgi_residual_input_channels() if is_residual(layout)
+                 else ngi_py.single_view_input_channels() if single else ngi_py.surround_input_channels())
     if names != channels(layout):
         raise RuntimeError(f"ngi reports the channels {names}, the training code expects {channels(layout)} "
                            "(docs/CONVENTIONS.md section 7 changed? update training/ngi_train/generator/data.py)")
@@ -208,8 +214,8 @@ def run_merge(frame_dir, out_dir, layout, device=None):
     pipe = _pipeline(device, frame.n)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    if layout == "ssgi_residual":
-        x = pipe.network_input(frame, ssgi=_ssgi_model(device))
+    if is_residual(layout):
+        x = pipe.network_input(frame, ssgi=_ssgi_model(device, SSGI_BASES[layout]))
     else:
         x = pipe.network_input(frame, single_view=single)
     _save_atomic(out_dir / "input.npy", x)

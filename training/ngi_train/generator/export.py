@@ -82,13 +82,13 @@ def main(argv=None):
     config = model_file.make_config("pix2pix_unet", bn_mode=bn_mode, input_nc=data.input_nc(cfg["layout"]),
                                     output_nc=3, ngf=cfg["ngf"], num_downs=cfg["num_downs"], dropout=args.dropout,
                                     dropout_seed=args.dropout_seed, input_layout=data.channels(cfg["layout"]),
-                                    output_mode=("ssgi_residual" if cfg["layout"] == "ssgi_residual"
+                                    output_mode=("ssgi_residual" if data.is_residual(cfg["layout"])
                                                  else cfg.get("output_mode", "lightmap")),
                                     source=f"ngi_train.generator.train, run {run.resolve().name}, step {state['step']}")
-    if cfg["layout"] == "ssgi_residual":
+    if data.is_residual(cfg["layout"]):
         # The gather the network corrects travels with it: the settings of the rung its inputs were made with.
         import ngi as ngi_py
-        base = ngi_py.Model(ngi_py.Device(args.device or ""), data.SSGI_BASE).config["metadata"]
+        base = ngi_py.Model(ngi_py.Device(args.device or ""), data.SSGI_BASES[cfg["layout"]]).config["metadata"]
         config["ssgi"] = {k: base[k] for k in ("view", "cluster_level", "bounces", "near_factor", "min_distance")
                           if k in base}
         config["required"] = sorted(set(config.get("required", [])) | {"ssgi"})
@@ -112,7 +112,7 @@ def main(argv=None):
         "target": "reference.exr encoded by SurroundPipeline::encode_lightmap (ngi merge target.npy)"
                   + ("; the output is indirect light, the loss sees direct + indirect encoded the same way"
                      if config["output_mode"] != "lightmap" else "")
-                  + (f"; the output corrects {data.SSGI_BASE}'s indirect light (added to its encoded input channels)"
+                  + (f"; the output corrects {data.SSGI_BASES[cfg['layout']]}'s indirect light (added to its encoded input channels)"
                      if config["output_mode"] == "ssgi_residual" else ""),
         "checkpoint": str(ckpt_path),  # as given (relative to the working directory): no machine paths in shipped files
         "exported": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),

@@ -44,7 +44,7 @@ from ngi_train.generator import data, lightmap_loss, networks
 
 def residual_output(out, x, layout):
     """out + the SSGI channels of x for layout ssgi_residual; out otherwise."""
-    return out + x[:, data.SSGI_CHANNELS] if layout == "ssgi_residual" else out
+    return out + x[:, data.SSGI_CHANNELS] if data.is_residual(layout) else out
 
 
 class Pix2Pix:
@@ -56,7 +56,7 @@ class Pix2Pix:
         self.layout = cfg["layout"]
         self.mode = cfg.get("output_mode", "lightmap")
         lightmap_loss.check_mode(self.mode)
-        if self.layout == "ssgi_residual" and self.mode != "indirect":
+        if data.is_residual(self.layout) and self.mode != "indirect":
             raise ValueError("layout ssgi_residual corrects SSGI's indirect light: output_mode must be \"indirect\"")
         self.lambda_gan = float(cfg.get("lambda_gan", 1.0))
         self.lambda_final = float(cfg.get("lambda_final", 0.0))
