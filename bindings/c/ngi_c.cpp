@@ -9,6 +9,7 @@
 #include <atomic>
 #include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -125,11 +126,20 @@ std::mutex g_callback_mutex;
 ngi_error_callback g_callback = nullptr;
 void* g_callback_user = nullptr;
 
-// The handles alive now, by the address the application holds, with their types. A handle is looked up here before
-// every use (never dereferenced first), so one released and used again is refused, and so is one of another type
-// (as long as a released handle's address has not been reused by a new handle, which no check can tell apart).
+// The handles alive now, by the value the application holds, with their types and objects. That value is not the
+// object's address but a number never given out twice in the process (g_next_handle), so a released handle stays
+// refused even when a new object is allocated at its old address (round three of reliability: with addresses, the
+// first handle made after a release reused it, the stale handle then worked on the new object, and a second release
+// destroyed it). A handle is looked up here before every use, so one released and used again is refused, and so is
+// one of another type.
+struct LiveHandle {
+    HandleKind kind;
+    ngi_handle* object;
+};
 std::mutex g_live_mutex;
-std::unordered_map<const void*, HandleKind> g_live;
+std::unordered_map<const void*, LiveHandle> g_live;
+// Handle values: multiples of 16 from 0x10000 (never NULL, never a small integer a bug might pass); 2^60 of them.
+std::uintptr_t g_next_handle = 0x10000;
 
 // A failure with its status, thrown inside a call and turned into the return value by guarded().
 struct ApiError {
@@ -139,23 +149,28 @@ struct ApiError {
 
 [[noreturn]] void fail(ngi_status status, const std::string& message) { throw ApiError{status, message}; }
 
+// Registers a new object; returns the handle the application gets for it (an opaque value, never dereferenced).
 template <class H>
 H* track(H* h) {
     std::lock_guard<std::mutex> lock(g_live_mutex);
-    g_live[static_cast<const void*>(h)] = H::kKind;
-    return h;
+    const std::uintptr_t value = g_next_handle;
+    g_next_handle += 16;
+    H* handle = reinterpret_cast<H*>(value);
+    g_live[static_cast<const void*>(handle)] = {H::kKind, h};
+    return handle;
 }
 
 // The kind of live handle `h` (argument `arg`), checked to be H's: INVALID_HANDLE when it is NULL or not live,
 // INVALID_ARGUMENT naming both types when it is another type's handle. Must be called with g_live_mutex held.
 template <class H>
-void check_locked(const H* h, const char* arg) {
+H* check_locked(const H* h, const char* arg) {
     const auto it = g_live.find(static_cast<const void*>(h));
     if (it == g_live.end())
         fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is not a live handle (released, or never created)");
-    if (it->second != H::kKind)
-        fail(NGI_ERROR_INVALID_ARGUMENT, std::string(arg) + " is an " + kind_name(it->second) + " handle, not an " +
-                                             kind_name(H::kKind));
+    if (it->second.kind != H::kKind)
+        fail(NGI_ERROR_INVALID_ARGUMENT, std::string(arg) + " is an " + kind_name(it->second.kind) +
+                                             " handle, not an " + kind_name(H::kKind));
+    return static_cast<H*>(it->second.object);
 }
 
 // The handle `h` (argument `arg` of the call) if it is alive and of type H, else an ApiError.
@@ -163,8 +178,7 @@ template <class H>
 H& live(const H* h, const char* arg) {
     if (!h) fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is NULL");
     std::lock_guard<std::mutex> lock(g_live_mutex);
-    check_locked(h, arg);
-    return *const_cast<H*>(h);
+    return *check_locked(h, arg);
 }
 
 void report(const char* call, ngi_status status, const std::string& message) {
@@ -235,13 +249,14 @@ void retain_handle(H* h, const char* arg) {
 template <class H>
 void release_handle(H* h, const char* arg) {
     if (!h) return;  // like free(NULL)
+    H* object = nullptr;
     {
         std::lock_guard<std::mutex> lock(g_live_mutex);
-        check_locked(h, arg);
-        if (h->refs.fetch_sub(1) != 1) return;
+        object = check_locked(h, arg);
+        if (object->refs.fetch_sub(1) != 1) return;
         g_live.erase(static_cast<const void*>(h));
     }
-    delete h;
+    delete object;
 }
 
 void copy_string(const std::string& s, char* buf, std::size_t size, std::size_t* needed) {

@@ -500,6 +500,25 @@ static void test_typed_handles(ngi_device* dev) {
     CHECK(ngi_buffer_release(b) == NGI_OK);
     CHECK(ngi_buffer_size(b, &bytes) == NGI_OK && bytes == 256);
     CHECK(ngi_buffer_release(b) == NGI_OK);
+    /* A released handle stays dead when the next handles are made (reliability round three: handles were the
+       objects' addresses, the next allocation reused the released one's, the stale handle then answered with the new
+       buffer's size and a second release destroyed the new owner's buffer). */
+    {
+        ngi_buffer* next[4] = {NULL, NULL, NULL, NULL};
+        int k;
+        for (k = 0; k < 4; ++k) {
+            CHECK(ngi_buffer_new(dev, 512, &next[k]) == NGI_OK);
+            CHECK(next[k] != b);
+        }
+        bytes = 12345;
+        CHECK_FAILS(ngi_buffer_size(b, &bytes), NGI_ERROR_INVALID_HANDLE, "ngi_buffer_size", "not a live handle");
+        CHECK(bytes == 12345);
+        CHECK_FAILS(ngi_buffer_release(b), NGI_ERROR_INVALID_HANDLE, "ngi_buffer_release", "not a live handle");
+        for (k = 0; k < 4; ++k) {
+            CHECK(ngi_buffer_size(next[k], &bytes) == NGI_OK && bytes == 512);
+            CHECK(ngi_buffer_release(next[k]) == NGI_OK);
+        }
+    }
     CHECK(ngi_device_retain(dev) == NGI_OK);
     CHECK(ngi_device_release(dev) == NGI_OK);
     CHECK(ngi_device_string(dev, NGI_DEVICE_PLATFORM, name, sizeof name, &needed) == NGI_OK && strlen(name) > 0);
