@@ -119,8 +119,8 @@ float decode(float v) {
 
 }  // namespace
 
-TEST_CASE("ssgi_residual: the lightmap is decode(network + its SSGI channels) + direct; a zero network gives the "
-          "SSGI rung's lightmap", "[ssgi][residual]") {
+TEST_CASE("ssgi_residual: the lightmap is decode(network + its SSGI channels) + direct, and a zero network gives "
+          "the SSGI rung's lightmap", "[ssgi][residual]") {
     Device& dev = test::device();
     std::mt19937 rng(45);
     const int n = 32;
