@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -12,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ngi.h"
 #include "ngi/device_buffer.hpp"
 #include "ngi/error.hpp"
 #include "ngi/model.hpp"
@@ -205,6 +207,17 @@ TEST_CASE("ssgi_residual: the file's rules name the field", "[ssgi][residual][mo
         return std::string();
     };
     CHECK(error("ok", {}).empty());
+    // The C ABI names the mode (an application decoding outputs itself must not take it for a lightmap).
+    const char* spec = std::getenv("NGI_TEST_DEVICE");
+    ngi_device* cdev = nullptr;
+    ngi_model* cm = nullptr;
+    REQUIRE(ngi_device_open(spec ? spec : "cpu", &cdev) == NGI_OK);
+    REQUIRE(ngi_model_load(cdev, write_unet("c_abi", 4, false).c_str(), &cm) == NGI_OK);
+    ngi_output_mode mode = NGI_OUTPUT_LIGHTMAP;
+    CHECK(ngi_model_output_mode(cm, &mode) == NGI_OK);
+    CHECK(mode == NGI_OUTPUT_SSGI_RESIDUAL);
+    CHECK(ngi_model_release(cm) == NGI_OK);
+    CHECK(ngi_device_release(cdev) == NGI_OK);
     CHECK_THAT(error("no_ssgi", [](nlohmann::json& c) { c.erase("ssgi"); }),
                Contains("'ssgi'") && Contains("ssgi_residual"));
     CHECK_THAT(error("ssgi_type", [](nlohmann::json& c) { c["ssgi"] = 3; }), Contains("'ssgi' must be an object"));

@@ -189,6 +189,9 @@ typedef NGI_ENUM(ngi_output_mode) {
     NGI_OUTPUT_INDIRECT = 1, /* indirect light only: the pipeline adds the frame's front direct light (planes 7-9
                                 of face 0, NaN and negative -> 0, +Inf -> FLT_MAX, the sum saturating at FLT_MAX)
                                 to make the lightmap; ngi_pipeline_run / _enqueue do it with no extra argument */
+    NGI_OUTPUT_SSGI_RESIDUAL = 2, /* a correction of the SSGI rung named in the file: the pipeline runs that gather,
+                                     feeds it to the network and adds the output to it before decoding (issue 45;
+                                     docs/CONVENTIONS.md section 8); only ngi_pipeline_run / _enqueue can decode it */
     NGI_OUTPUT_MODE_MAX_ENUM = 0x7FFFFFFF
 } ngi_output_mode;
 /* The model's output mode into *mode (not NULL). */

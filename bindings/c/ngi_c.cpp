@@ -138,7 +138,8 @@ struct LiveHandle {
 };
 std::mutex g_live_mutex;
 std::unordered_map<const void*, LiveHandle> g_live;
-// Handle values: multiples of 16 from 0x10000 (never NULL, never a small integer a bug might pass); 2^60 of them.
+// Handle values: multiples of 16 from 0x10000 (never NULL, never a small integer a bug might pass); 2^60 of them with
+// 64-bit pointers (2^28 on a 32-bit build).
 std::uintptr_t g_next_handle = 0x10000;
 
 // A failure with its status, thrown inside a call and turned into the return value by guarded().
@@ -243,7 +244,10 @@ void require(bool ok, const std::string& what) {
 
 template <class H>
 void retain_handle(H* h, const char* arg) {
-    live(h, arg).refs.fetch_add(1);
+    if (!h) fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is NULL");
+    // Under the lock: a concurrent last release cannot delete the object between the lookup and the increment.
+    std::lock_guard<std::mutex> lock(g_live_mutex);
+    check_locked(h, arg)->refs.fetch_add(1);
 }
 
 template <class H>
@@ -579,8 +583,10 @@ ngi_status ngi_model_output_mode(const ngi_model* model, ngi_output_mode* mode) 
     return guarded(__func__, [&] {
         const auto& c = live(model, "model").model.config();
         require(mode, "mode is NULL");
-        // The loader admits exactly these two values (host/src/models/unet.cpp).
-        *mode = c.output_mode == "indirect" ? NGI_OUTPUT_INDIRECT : NGI_OUTPUT_LIGHTMAP;
+        // The loader admits exactly these three values (host/src/models/unet.cpp).
+        *mode = c.output_mode == "indirect"        ? NGI_OUTPUT_INDIRECT
+                : c.output_mode == "ssgi_residual" ? NGI_OUTPUT_SSGI_RESIDUAL
+                                                   : NGI_OUTPUT_LIGHTMAP;
     });
 }
 

@@ -195,7 +195,8 @@ Tensor SurroundPipeline::network_input(const Frame& frame, const ModelConfig& co
             detail::check_face_image(frame.get(f, kAllFaces[i]), f, kAllFaces[i], n, "network input");
     const FrameDesc desc = FrameDesc::of(frame, faces);
     const std::vector<float> planes = pack_frame_planes(frame, faces);  // one upload instead of one per image
-    detail::ensure_buffer(im.ctx, im.raw, planes.size() * sizeof(float), "raw features");
+    // A grown buffer is a new cl_mem: run()'s handle on the old one must go, or run() would enqueue stale planes.
+    if (detail::ensure_buffer(im.ctx, im.raw, planes.size() * sizeof(float), "raw features")) im.raw_handle = {};
     im.ctx.write(im.raw, 0, planes.size() * sizeof(float), planes.data(), "raw features");
     const detail::Buffer& input =
         residual ? im.enqueue_residual_input(im.raw.get(), faces, desc.has_emission, desc.has_env, frame.look,

@@ -40,6 +40,7 @@ import numpy as np
 import torch
 
 import ngi as ngi_py  # the Python bindings; `ngi` is the CLI binary's path in this project's scripts
+import ngi.model_file as model_file
 
 from ngi_train import checkpoint
 
@@ -177,6 +178,12 @@ def _pipeline(device, n):
     return pipes[(device, n)]
 
 
+def ssgi_gather(name):
+    """The gather settings of the SSGI rung `name` (its file's metadata), as a correction of it records them."""
+    cfg = model_file.read_config(ngi_py.resolve_model(name))
+    return {k: cfg[k] for k in ("view", "cluster_level", "bounces", "near_factor", "min_distance") if k in cfg}
+
+
 def _ssgi_model(device, name):
     """The SSGI rung `name` loaded on `device` (one per thread: a Model is used by one thread at a time)."""
     models = _LOCAL.__dict__.setdefault("ssgi", {})
@@ -246,6 +253,8 @@ class MergeCache:
         self.jobs = max(1, int(jobs))
         self.log = log
         info = {"format": CACHE_FORMAT, "layout": layout, "channels": channels(layout)}
+        if is_residual(layout):  # the inputs hold that gather's light: a changed rung is another cache
+            info["ssgi"] = ssgi_gather(SSGI_BASES[layout])
         info_path = self.dir / "cache.json"
         if read_only:
             if not info_path.is_file() or json.loads(info_path.read_text()) != info:

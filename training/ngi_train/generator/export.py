@@ -86,11 +86,16 @@ def main(argv=None):
                                                  else cfg.get("output_mode", "lightmap")),
                                     source=f"ngi_train.generator.train, run {run.resolve().name}, step {state['step']}")
     if data.is_residual(cfg["layout"]):
-        # The gather the network corrects travels with it: the settings of the rung its inputs were made with.
-        import ngi as ngi_py
-        base = ngi_py.Model(ngi_py.Device(args.device or ""), data.SSGI_BASES[cfg["layout"]]).config["metadata"]
-        config["ssgi"] = {k: base[k] for k in ("view", "cluster_level", "bounces", "near_factor", "min_distance")
-                          if k in base}
+        # The gather the network corrects travels with it: the settings its training inputs were made with (the
+        # merge cache records them), not the rung file's settings of today.
+        cache_dir = Path(cfg["cache_dir"]) if cfg["cache_dir"] else data.default_cache_dir(dataset_dir, cfg["layout"])
+        info_path = cache_dir / "cache.json"
+        if not info_path.is_file() or "ssgi" not in json.loads(info_path.read_text()):
+            raise SystemExit(f"{info_path}: no record of the SSGI gather the training inputs were made with")
+        config["ssgi"] = json.loads(info_path.read_text())["ssgi"]
+        if config["ssgi"] != data.ssgi_gather(data.SSGI_BASES[cfg["layout"]]):
+            print(f"warning: {data.SSGI_BASES[cfg['layout']]}'s settings changed since training; the model keeps "
+                  f"the ones it was trained with: {config['ssgi']}", file=sys.stderr)
         config["required"] = sorted(set(config.get("required", [])) | {"ssgi"})
     steps = state["step"]
     samples = state.get("samples", steps)  # checkpoints from before the effective batch: one image per step
