@@ -23,6 +23,13 @@ static inline float decode_light(float v, const float lo, const float hi, const 
     return y;
 }
 
+// Clean light x (>= 0) -> [0, 1] through the lumination transfer -> lo + y (hi - lo): the inverse of decode_light, the
+// training target's encoding and the SSGI channels' (gbuffer.cl's lum_encode gives the same bits for lumination).
+static inline float encode_light(float x, const float lo, const float hi, const int transfer) {
+    const float y = transfer == TRANSFER_CLAMP ? fmin(x, 1.0f) : fmin(x / (1.0f + x), 1.0f);
+    return lo + y * (hi - lo);
+}
+
 // In place: the model output of an output_mode "lightmap" model (the thesis's) -> the linear lightmap.
 __kernel void decode_lightmap(__global float* restrict x, const int count, const float lo, const float hi,
                               const int transfer) {
@@ -56,9 +63,8 @@ __kernel void encode_ssgi_input(__global const float* restrict ssgi, __global co
                                 const float lo, const float hi, const int transfer) {
     const int i = get_global_id(0);
     if (i >= count) return;
-    const float s = fmax(clean_light(ssgi[i]) - clean_light(direct[direct_off + i]), 0.0f);
-    const float y = transfer == TRANSFER_CLAMP ? fmin(s, 1.0f) : fmin(s / (1.0f + s), 1.0f);
-    dst[dst_off + i] = lo + y * (hi - lo);
+    dst[dst_off + i] = encode_light(fmax(clean_light(ssgi[i]) - clean_light(direct[direct_off + i]), 0.0f), lo, hi,
+                                    transfer);
 }
 
 // In place: x (the network's correction) -> the lightmap, decode(v_s + x) + the front direct light; v_s is read back
@@ -80,11 +86,7 @@ __kernel void encode_lightmap(__global const float* restrict src, __global float
                               const float lo, const float hi, const int transfer) {
     const int i = get_global_id(0);
     if (i >= count) return;
-    const float v = src[i];
-    const float x = isnan(v) ? 0.0f : clamp(v, 0.0f, FLT_MAX);
-    const float y = transfer == TRANSFER_CLAMP ? fmin(x, 1.0f) : fmin(x / (1.0f + x), 1.0f);
-    const float scale = hi - lo;
-    dst[i] = lo + y * scale;
+    dst[i] = encode_light(clean_light(src[i]), lo, hi, transfer);
 }
 
 // Bilinear resize of a planar image, pixel centres at +0.5 (PyTorch align_corners=False), edges clamped.
