@@ -32,6 +32,7 @@ struct Options {
     bool no_reference = false;
     int frames = 100, frame = 0;
     int seed = -1;       // -1: the dataset's seed of the frame
+    int path_seed = -1;  // -1: the dataset's path of the scene (seeded by its name)
     double time = -1.0;  // -1: not given, the scene's default time
 };
 
@@ -71,6 +72,7 @@ nlohmann::json render_record(const Options& o, const ngi::VoxelScene& scene, con
         {"scene", {{"spec", o.spec}, {"name", scene.name}, {"size", {scene.size.x, scene.size.y, scene.size.z}}}},
         {"camera", {{"frame", o.frame}, {"path_frames", o.frames}, {"position", vec(pose.position)},
                     {"look", vec(pose.look)}, {"time_h", hours}}},
+        {"path_seed", o.path_seed < 0 ? nlohmann::json(nullptr) : nlohmann::json(o.path_seed)},
         {"settings", {{"face", rs.n}, {"feature_spp", rs.feature_spp}, {"seed", rs.seed}}},
         {"timing", {{"features_ms", st.feature_ms}, {"feature_rays", st.feature_rays}}}};
     if (rs.reference) {
@@ -101,9 +103,13 @@ int run(const Options& o) {
     ngi::Device device = ngi::Device::open(o.device);
     const ngi::VoxelScene scene = ngi::make_scene(spec);
     const float hours = time < 0.0 ? scene.default_time : float(time);
-    // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene.
-    const ngi::CameraPath path = ngi::dataset_camera_path(
-        scene, frames, 25, ngi::parse_camera_path_kind(o.camera_path, "--camera-path"));
+    // The same path and seed as frame `frame` of this scene in a dataset with `frames` frames per scene, or (with
+    // --path-seed) another path of the same kind: views of the scene that no dataset frame shares (ngi_train's
+    // adapt renders its training frames on such paths and is judged on the dataset path).
+    const ngi::CameraPathKind kind = ngi::parse_camera_path_kind(o.camera_path, "--camera-path");
+    const ngi::CameraPath path = o.path_seed < 0
+                                     ? ngi::dataset_camera_path(scene, frames, 25, kind)
+                                     : ngi::make_camera_path(scene, kind, frames, std::uint32_t(o.path_seed), 25);
     const ngi::CameraPose pose = path.at(float(frame));
     rs.seed = o.seed >= 0 ? std::uint32_t(o.seed) : ngi::dataset_frame_seed(scene.name, frame);
 
@@ -187,6 +193,9 @@ Run add_render(CLI::App& app) {
     add_integer(*cmd, "--seed", o->seed, 0, 2147483647, "S",
                 "random seed of the path tracer (a second, independent render of the same frame measures the "
                 "reference's noise)", "the dataset's seed of frame K");
+    add_integer(*cmd, "--path-seed", o->path_seed, 0, 2147483647, "S",
+                "seed of the camera path (another path of the same kind through or around the same scene)",
+                "the dataset's path of the scene");
     add_switch(*cmd, "--no-reference", o->no_reference, "render the features only");
     add_nonempty(*cmd, "--preview", o->preview, "PNG",
                  "also write the front view's final image (reference x albedo + emission + env) as an sRGB PNG");

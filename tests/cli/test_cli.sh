@@ -21,6 +21,22 @@ fail() { echo "FAILED: $*" >&2; exit 1; }
 assert r['scene']['size'] == [20, 8, 24] and r['camera']['frame'] == 0 and r['camera']['path_frames'] == 100, r
 assert len(r['camera']['position']) == 3 and r['settings']['reference_spp'] == 4 and r['timing']['reference_ms'] > 0, r
 " "$work/frame/render.json" || fail "ngi render: render.json lacks the scene, camera or timings"
+# --path-seed: another camera path of the same kind (ngi_train.adapt's training views), recorded in render.json;
+# the same seed twice is the same view, no seed is the dataset's path.
+i=0
+for s in 7101 7101 7102; do
+  i=$((i + 1))
+  "$ngi" render --scene room:seed=1 --face 8 --spp 1 --feature-spp 1 --path-seed $s --frame 3 --out "$work/path_$i" > /dev/null
+done
+"$ngi" render --scene room:seed=1 --face 8 --spp 1 --feature-spp 1 --frame 3 --out "$work/path_dataset" > /dev/null
+/usr/bin/python3 -c "import json, sys
+by = {}
+for name in ('path_1', 'path_2', 'path_3', 'path_dataset'):
+    r = json.load(open(sys.argv[1] + '/' + name + '/render.json'))
+    by.setdefault(r['path_seed'], set()).add(tuple(r['camera']['position']))
+assert set(by) == {7101, 7102, None}, by
+assert len(by[7101]) == 1 and len({frozenset(v) for v in by.values()}) == 3, by
+" "$work" || fail "ngi render --path-seed: not one view per seed, or the dataset's view"
 "$ngi" merge --frame "$work/frame" --out "$work/merged" > /dev/null
 for f in globalview_albedo.exr globalview_normal.exr coord.exr input.npy; do
   [ -s "$work/merged/$f" ] || fail "ngi merge did not write $f"
