@@ -4,6 +4,8 @@
 #include "ngi/dataset.hpp"
 #include "ngi/render.hpp"
 #include "ngi/scene.hpp"
+#include "ngi/voxel_field.hpp"
+#include "ngi/voxel_gi.hpp"
 
 namespace ngi_py {
 
@@ -43,6 +45,15 @@ ngi::RenderSettings settings(const ngi::VoxelScene& scene, int n, int spp, int f
     rs.seed = seed ? *seed : ngi::dataset_frame_seed(scene.name, frame);  // `ngi render --frame K`'s seed
     return rs;
 }
+
+// A baked per-surface-voxel lighting: the scene's surface voxels at one time of day (their probe points), the
+// VoxelGi that shades frames from a per-voxel field, and the renderer that path-traces the field.
+struct PyVoxelProbes {
+    std::shared_ptr<PyRenderer> renderer;
+    ngi::Lighting lighting;
+    ngi::SurfaceVoxels voxels;
+    ngi::VoxelGi gi;
+};
 
 }  // namespace
 
@@ -123,6 +134,69 @@ time, settings and seed: same image). A pose is either frame `frame` of the scen
         }, py::arg("n") = 256, py::arg("sigma") = 1.5f, py::arg("frame") = 0, py::arg("frames") = 100,
            py::arg("position") = py::none(), py::arg("look") = py::none(), py::arg("up") = py::none(),
            "Object-space geometry of the front view [7, N, N]: smooth normal (3), voxel face normal (3), depth (1).");
+
+    py::class_<PyVoxelProbes, std::shared_ptr<PyVoxelProbes>>(m, "VoxelProbes", R"doc(
+A lighting bake at the scene's surface voxels (seed 004's probe points, docs/VOXEL_FIELD.md): VoxelProbes(renderer,
+time=None). bake() path-traces the direct and full lighting at every probe point (irradiance / pi at the voxel's
+normal); shade() lights the visible surfaces of a rendered frame's front view from any per-voxel field [V, 3] (each
+pixel takes the value of the voxel behind it, docs/VOXEL_LTF.md "Probe shading"): what a baked lightmap at block
+resolution gives an engine.)doc")
+        .def(py::init([](std::shared_ptr<PyRenderer> r, std::optional<float> time) {
+                 const ngi::Device& dev = r->device->get("VoxelProbes");
+                 const float hours = time ? *time : r->scene->default_time;
+                 if (!(hours >= 0.0f && hours <= 48.0f)) throw py::value_error("VoxelProbes: time must be in 0 .. 48 hours");
+                 py::gil_scoped_release release;
+                 const ngi::Lighting lighting = ngi::lighting_at(hours, r->scene->sun_azimuth);
+                 ngi::SurfaceVoxels voxels = ngi::surface_voxels(dev, *r->scene, lighting);
+                 ngi::VoxelGi gi(dev, voxels);
+                 return std::make_shared<PyVoxelProbes>(PyVoxelProbes{r, lighting, std::move(voxels), std::move(gi)});
+             }),
+             py::arg("renderer"), py::arg("time") = py::none())
+        .def_property_readonly("count", [](const PyVoxelProbes& p) { return p.voxels.size(); }, "Surface voxels (probes).")
+        .def("bake", [](PyVoxelProbes& p, int samples, int bounces, std::uint32_t seed) {
+            p.renderer->device->get("VoxelProbes.bake");
+            if (samples < 1 || samples > (1 << 20)) throw py::value_error("VoxelProbes.bake: samples must be in 1 .. 2^20");
+            if (bounces < 0 || bounces > 1000) throw py::value_error("VoxelProbes.bake: bounces must be in 0 .. 1000");
+            ngi::VoxelFieldSettings vs;
+            vs.point_samples = samples;
+            vs.max_bounces = bounces;
+            vs.seed = seed;
+            vs.directions = 1;  // the SH projection is not what this bake keeps: one direction, its minimum cost
+            vs.sun_rays = 1;
+            ngi::VoxelField f = [&] {
+                py::gil_scoped_release release;
+                return p.renderer->renderer.render_voxel_field(p.voxels, p.lighting, vs);
+            }();
+            const auto V = py::ssize_t(p.voxels.size());
+            py::dict d;
+            d["direct"] = from_vector(std::move(f.direct), {V, 3});
+            d["lighting"] = from_vector(std::move(f.lighting), {V, 3});
+            d["face_lighting"] = from_vector(std::move(f.face_lighting), {V, 6, 3});
+            d["seconds"] = f.ms * 1e-3;
+            d["rays"] = f.rays;
+            return d;
+        }, py::arg("samples") = 256, py::arg("bounces") = 8, py::arg("seed") = 0u,
+           "Path-trace the lighting at every probe point: {'direct': [V, 3], 'lighting': [V, 3] (direct + `bounces` "
+           "bounces), 'face_lighting': [V, 6, 3] (the lighting averaged over each exposed face, faces +x -x +y -y +z "
+           "-z; 0 for hidden ones), 'seconds', 'rays'}, `samples` paths per voxel (and per exposed face); "
+           "deterministic in `seed`.")
+        .def("shade", [](PyVoxelProbes& p, const ngi::Frame& frame, const py::object& position, const py::handle& field) {
+            p.renderer->device->get("VoxelProbes.shade");
+            const FloatArray a = float_array(field, "VoxelProbes.shade: field");
+            if (a.ndim() != 2 || a.shape(0) != py::ssize_t(p.voxels.size()) || a.shape(1) != 3)
+                throw py::value_error("VoxelProbes.shade: field must be [" + std::to_string(p.voxels.size()) +
+                                      ", 3] (one RGB value per surface voxel)");
+            std::vector<float> values(a.data(), a.data() + a.size());
+            const glm::vec3 at = vec3(position, "VoxelProbes.shade: position");
+            ngi::ShadeStats st;
+            ngi::Image img = [&] {
+                py::gil_scoped_release release;
+                return p.gi.shade(frame, at, ngi::Face::Front, values, ngi::VoxelFieldKind::Lighting, &st);
+            }();
+            return py::make_tuple(from_image(std::move(img)), st.no_voxel);
+        }, py::arg("frame"), py::arg("position"), py::arg("field"),
+           "(lighting [3, N, N], surface pixels without a voxel) of the frame's front view taken from `position` "
+           "(its camera.json position), each pixel lit by the field's value at the voxel behind it.");
 }
 
 }  // namespace ngi_py

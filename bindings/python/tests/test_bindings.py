@@ -198,6 +198,36 @@ def test_renderer_is_deterministic(dev):
     assert r.render_geometry(n=24, frame=3).shape == (7, 24, 24)
 
 
+def test_voxel_probes_bake_and_shade(dev):
+    # A lighting bake at the surface voxels (ngi_train.adapt_eval's probe competitor): the full lighting holds the
+    # direct light plus bounces, the bake is deterministic in its seed, and shading a field lights every surface
+    # pixel with the value of the voxel behind it (a constant field: that constant; sky pixels: 0).
+    r = ngi.Renderer(dev, ngi.Scene("cornell:seed=1"))
+    probes = ngi.VoxelProbes(r)
+    v = probes.count
+    b = probes.bake(samples=8, seed=3)
+    assert b["direct"].shape == (v, 3) and b["lighting"].shape == (v, 3) and b["rays"] > 0 and b["seconds"] >= 0
+    assert np.isfinite(b["lighting"]).all() and b["lighting"].sum() > b["direct"].sum() > 0
+    np.testing.assert_array_equal(b["lighting"], probes.bake(samples=8, seed=3)["lighting"])
+    size = ngi.Scene("cornell:seed=1").size
+    at = (size[0] / 2, size[1] / 2, size[2] / 2)  # inside the box, looking down -z at its back wall
+    fr = r.render(n=24, spp=1, feature_spp=1, position=at, reference=False)
+    depth = fr.feature("depth")[0][0]
+    surface = depth < 5.0e3
+    assert surface.any()
+    for c in (0.25, 2.0):
+        lit, misses = probes.shade(fr, at, np.full((v, 3), c, np.float32))
+        assert lit.shape == (3, 24, 24)
+        hit = surface & (lit[0] > 0)
+        assert hit.sum() + misses == surface.sum()
+        np.testing.assert_allclose(lit[:, hit], c)
+        assert (lit[:, ~surface] == 0).all()
+    with pytest.raises(ValueError, match="field must be"):
+        probes.shade(fr, at, np.zeros((v + 1, 3), np.float32))
+    with pytest.raises(ValueError, match="samples"):
+        probes.bake(samples=0)
+
+
 def test_network_input_and_channels(dev, surround, frame):
     pipe = ngi.Pipeline(dev, 64)
     x = pipe.network_input(frame, surround)
