@@ -31,7 +31,8 @@ batch_size (must be 1), train_split, eval_split, max_frames (0 = all), cache_dir
 (null = DATA/merge_cache/<layout>), merge_jobs, comment; output_mode ("lightmap": the thesis, the output is the
 whole lightmap | "indirect": the output is indirect light added to the frame's direct light), lambda_final (weight
 of the L1 of tone-mapped final images, 0 = off), lambda_gan (weight of the GAN term, 0 = no discriminator);
-gan.py says what each does.
+gan.py says what each does; init_model (an exported ngi model file whose generator weights a new run starts
+from, instead of random ones: fine-tuning, as ngi_train.adapt does; its architecture must be the config's).
 """
 
 import argparse
@@ -53,7 +54,7 @@ DEFAULTS = {
     "steps": 20000, "decay_steps": 0, "seed": 1, "checkpoint_every": 500, "keep_every": 5000,
     "eval_every": 0, "eval_frames": 20, "threads": 0, "train_split": "train", "eval_split": "test",
     "max_frames": 0, "cache_dir": None, "merge_jobs": 1, "comment": "",
-    "output_mode": "lightmap", "lambda_final": 0.0, "lambda_gan": 1.0,
+    "output_mode": "lightmap", "lambda_final": 0.0, "lambda_gan": 1.0, "init_model": None,
 }
 # Keys that may change when a run is resumed (they do not change what a step computes).
 # accumulate may change as long as the effective batch (world size x accumulate) stays (train() checks that).
@@ -116,6 +117,29 @@ class SampleOrder:
                 self.orders.pop(min(self.orders))
             self.orders[epoch] = checkpoint.epoch_order(self.seed, epoch, self.count)
         return int(self.orders[epoch][k])
+
+
+def init_generator(G, cfg):
+    """Loads cfg["init_model"]'s generator weights into G (a new run's start); refuses another architecture."""
+    import ngi.model_file as model_file
+    path = cfg["init_model"]
+    tensors, mc = model_file.read_model(str(path))
+    want = {"family": "pix2pix_unet", "input_nc": data.input_nc(cfg["layout"]), "ngf": cfg["ngf"],
+            "num_downs": cfg["num_downs"]}
+    got = {k: mc.get(k) for k in want}
+    if got != want:
+        raise SystemExit(f"init_model {path}: {got} is not this config's generator {want}")
+    state = G.state_dict()
+    missing = sorted(k for k in state if k not in tensors and not k.endswith("num_batches_tracked"))
+    extra = sorted(k for k in tensors if k not in state)
+    if missing or extra:
+        raise SystemExit(f"init_model {path}: tensor names differ from the generator's (missing {missing[:3]}, "
+                         f"unexpected {extra[:3]})")
+    for k, t in tensors.items():
+        if tuple(t.shape) != tuple(state[k].shape):
+            raise SystemExit(f"init_model {path}: tensor {k} is {tuple(t.shape)}, the generator's {tuple(state[k].shape)}")
+        state[k] = torch.from_numpy(t.astype("float32"))
+    G.load_state_dict(state)
 
 
 def rng_state(device):
@@ -222,6 +246,8 @@ def train(args, cfg, d):
     elif not d.main:
         # Rank r > 0 draws its own dropout masks; rank 0 keeps the run's stream (a single process is unchanged).
         torch.manual_seed(distributed.rank_seed(cfg["seed"], d.rank, 0))
+    elif cfg["init_model"]:
+        init_generator(model.G, cfg)
     model.distribute(d)
 
     log_path = run / "log.jsonl"
