@@ -209,6 +209,10 @@ def test_voxel_probes_bake_and_shade(dev):
     assert b["direct"].shape == (v, 3) and b["lighting"].shape == (v, 3) and b["rays"] > 0 and b["seconds"] >= 0
     assert np.isfinite(b["lighting"]).all() and b["lighting"].sum() > b["direct"].sum() > 0
     np.testing.assert_array_equal(b["lighting"], probes.bake(samples=8, seed=3)["lighting"])
+    # Per exposed face (+x -x +y -y +z -z): hidden faces are 0, every voxel has a lit or at least exposed face.
+    faces = b["face_lighting"]
+    assert faces.shape == (v, 6, 3) and np.isfinite(faces).all() and faces.min() >= 0
+    assert (faces.sum(axis=2) == 0).any() and (faces.sum(axis=2) > 0).any()
     size = ngi.Scene("cornell:seed=1").size
     at = (size[0] / 2, size[1] / 2, size[2] / 2)  # inside the box, looking down -z at its back wall
     fr = r.render(n=24, spp=1, feature_spp=1, position=at, reference=False)

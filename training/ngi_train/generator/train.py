@@ -124,8 +124,9 @@ def init_generator(G, cfg):
     import ngi.model_file as model_file
     path = cfg["init_model"]
     tensors, mc = model_file.read_model(str(path))
-    want = {"family": "pix2pix_unet", "input_nc": data.input_nc(cfg["layout"]), "ngf": cfg["ngf"],
-            "num_downs": cfg["num_downs"]}
+    mode = "ssgi_residual" if data.is_residual(cfg["layout"]) else cfg.get("output_mode", "lightmap")
+    want = {"family": "pix2pix_unet", "input_nc": data.input_nc(cfg["layout"]), "output_nc": 3, "ngf": cfg["ngf"],
+            "num_downs": cfg["num_downs"], "output_mode": mode}
     got = {k: mc.get(k) for k in want}
     if got != want:
         raise SystemExit(f"init_model {path}: {got} is not this config's generator {want}")
