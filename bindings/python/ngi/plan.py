@@ -47,6 +47,10 @@ in the zoo (rung "guard": {"max_indirect_share": t}, ngi_train.generator.gi_eval
 indirect share exceeds t falls back to direct light: ngi.indirect_share, `ngi lightmap --guard`), and the plan
 records it.
 
+Adapted models (--adapted M, written by ngi_train.adapt: a network fitted to one scene, docs/ADAPT.md) join the
+candidates, with their cost measured here, only for the scene they were fitted to: the model's "adapt" record
+names the scene and, for a file, its content digest; another scene is refused (exit code 1, nothing written).
+
 Nothing meets the budget (or only rungs that a cheaper candidate dominates do): exit code 1, the closest rung (or
 the dominated rung and its margins) named, nothing written. The plan is JSON ("format": "ngi-plan", version 1;
 docs/MODEL_FORMAT.md): the rung, its model file relative to the plan's folder, bn_mode, face size n, the optional
@@ -56,6 +60,7 @@ the C++ reader, samples/ngi/plan_file.cpp).
 
 import argparse
 import errno
+import hashlib
 import json
 import os
 import stat
@@ -360,9 +365,33 @@ def default_rungs(zoo, all_rungs=False):
     return [r for r in rungs if r["file"] is None or computes_indirect(r)]
 
 
-def candidates_of(zoo, ev, key, args, frames):
+def adapted_rungs(paths, scene_spec, scene_name):
+    """Rungs of models fitted to one scene by ngi_train.adapt (their "adapt" record): each is offered only for the
+    scene it was adapted to (its name, and for a file its content digest); PlanError names the model otherwise."""
+    rungs = []
+    for path in paths:
+        try:
+            cfg = model_file.read_config(str(path))
+        except (OSError, model_file.ConversionError) as e:
+            raise PlanError(f"--adapted {path}: {e}") from None
+        rec = cfg.get("adapt")
+        if not isinstance(rec, dict) or "scene" not in rec:
+            raise PlanError(f"--adapted {path}: not written by ngi_train.adapt (no adapt record)")
+        spec = Path(scene_spec)
+        digest = hashlib.sha256(spec.read_bytes()).hexdigest()[:16] if spec.is_file() else None
+        if rec["scene"] != scene_name or (digest is not None and rec.get("scene_digest") != digest):
+            raise PlanError(f"--adapted {path}: adapted to {rec['scene']} (sha256 {rec.get('scene_digest')}), not to "
+                            f"{scene_name}" + (f" (sha256 {digest})" if digest else "") +
+                            ": an adapted model is offered only for the scene it was fitted to")
+        rungs.append({"name": f"adapted:{Path(path).stem}", "kind": "rung", "file": str(path),
+                      "path": str(Path(path).resolve()), "n": 64, "bn_mode": None,
+                      "output_mode": cfg.get("output_mode"), "cost": {}})
+    return rungs
+
+
+def candidates_of(zoo, ev, key, args, frames, extra=()):
     cands = []
-    for r in default_rungs(zoo, getattr(args, "all_rungs", False)):
+    for r in [*default_rungs(zoo, getattr(args, "all_rungs", False)), *extra]:
         if key is not None and key in r["cost"]:
             ms = r["cost"][key][f"{args.cost}_ms"]
             basis = f"zoo, {key}, {args.cost}"
@@ -413,6 +442,8 @@ def main(argv=None):
     ap.add_argument("--device", default="", help="OpenCL device (ngi.Device spec) [default: ngi's choice]")
     ap.add_argument("--all-rungs", action="store_true",
                     help="also try the thesis-mode rungs and the other batch-norm modes (measured comparisons)")
+    ap.add_argument("--adapted", action="append", default=[], type=Path, metavar="M.safetensors",
+                    help="also a model fitted to this scene by ngi_train.adapt (repeatable; refused for another scene)")
     args = ap.parse_args(argv)
     if args.max_ms is None and args.min_ssim is None and args.min_psnr is None:
         ap.error("give a budget: --max-ms, --min-ssim and/or --min-psnr")
@@ -435,12 +466,17 @@ def main(argv=None):
     info = dev.info
     key = zoo_mod.device_key(zoo, info)
     scene = _ngi.Scene(args.scene)
+    try:
+        adapted = adapted_rungs(args.adapted, args.scene, scene.name)
+    except PlanError as e:
+        print(f"ngi.plan: {e}; nothing written", file=sys.stderr)
+        return 1
     renderer = _ngi.Renderer(dev, scene)
     ev = Evaluator(dev, zoo)
-    ns = sorted({r["n"] for r in default_rungs(zoo, args.all_rungs)})  # the face sizes of the rungs offered
+    ns = sorted({r["n"] for r in [*default_rungs(zoo, args.all_rungs), *adapted]})  # the face sizes offered
     cal_idx = frame_indices(args.frames, 0.25)
     cal = [render(renderer, ns, i, args) for i in progress(cal_idx, "calibration frames")]
-    cands = candidates_of(zoo, ev, key, args, cal[0])
+    cands = candidates_of(zoo, ev, key, args, cal[0], adapted)
     scores, shares = score_all(ev, cands, cal)
     for c in cands:  # a switch's cost: the mean over the calibration frames of the rung it ran
         if c.get("switch"):

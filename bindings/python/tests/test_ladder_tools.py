@@ -212,6 +212,31 @@ def test_plan_picks_the_cheapest_good_enough_rung_and_ngi_lightmap_runs_it(tmp_p
         assert json.loads((tmp_path / "lm" / "metrics.json").read_text())["plan"]["rung"] == got["rung"]
 
 
+def test_plan_offers_an_adapted_model_only_for_its_scene(tmp_path):
+    # A model with ngi_train.adapt's record (the shipped base, recorded as fitted to room:seed=3): a candidate, cost
+    # measured here, on room:seed=3; refused on room:seed=4 and without a record, nothing written.
+    path = write_zoo(tmp_path, [DIRECT])
+    tensors, config = model_file.read_model(str(MODELS / "adapt" / "adapt_base_ssgi_residual_n64.safetensors"))
+    adapted, plain = tmp_path / "adapted.safetensors", tmp_path / "plain.safetensors"
+    model_file.write_model(str(plain), {k: v.astype(np.float32) for k, v in tensors.items()}, config, half=True)
+    config["adapt"] = {"scene": ngi.Scene("room:seed=3").name, "scene_digest": "room:seed=3"}
+    model_file.write_model(str(adapted), {k: v.astype(np.float32) for k, v in tensors.items()}, config, half=True)
+    out = tmp_path / "plan.json"
+    device = os.environ.get("NGI_TEST_DEVICE", "cpu")
+    common = ["--zoo", path, "--frames", 1, "--validate", 0, "--spp", 16, "--feature-spp", 4, "--device", device,
+              "--max-ms", "1e9", "--out", out]
+    p = run_plan("--scene", "room:seed=3", "--adapted", adapted, *common)
+    assert p.returncode == 0, p.stderr
+    cal = {r["name"]: r for r in json.loads(out.read_text())["calibration"]["rungs"]}
+    assert set(cal) == {"direct_only", "adapted:adapted"} and cal["adapted:adapted"]["ms"] > 0
+    out.unlink()
+    p = run_plan("--scene", "room:seed=4", "--adapted", adapted, *common)
+    assert p.returncode == 1 and "adapted to room:seed=3" in p.stderr and "nothing written" in p.stderr, p.stderr
+    p = run_plan("--scene", "room:seed=3", "--adapted", plain, *common)
+    assert p.returncode == 1 and "no adapt record" in p.stderr, p.stderr
+    assert not out.exists()
+
+
 def test_plan_needs_a_budget(tmp_path):
     p = run_plan("--scene", "room:seed=3", "--out", tmp_path / "p.json")
     assert p.returncode == 2 and "give a budget" in p.stderr
