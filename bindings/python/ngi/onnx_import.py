@@ -32,6 +32,7 @@ import os
 
 import numpy as np
 
+from . import _constants
 from .model_file import FORMAT_VERSION, ConversionError, check_output_file, read_input_file, write_model
 
 MIN_OPSET, MAX_OPSET = 9, 17
@@ -863,6 +864,52 @@ def _check_weights(ir, weights, path, half):
                                       f"{name}'s range)")
 
 
+def _check_loader_limits(config, channels, path):
+    """Refuse what ngi's graph loader (host/src/models/graph_model.cpp) would refuse on reading the file back: more
+    nodes than it loads, names longer than it reads, channel counts, kernels, strides and paddings beyond its
+    limits (ngi/_constants.py, printed from the C++ definitions), naming the .onnx file and the node."""
+    c = _constants
+    g = config["graph"]
+    nodes = g["nodes"]
+    if len(nodes) > c.GRAPH_MAX_NODES:
+        raise ConversionError(f"{path}: {len(nodes)} nodes after fusing; ngi loads at most {c.GRAPH_MAX_NODES}")
+
+    def name_ok(x):
+        return isinstance(x, str) and 1 <= len(x.encode()) <= c.GRAPH_MAX_NAME_BYTES
+
+    rule = f"names of 1..{c.GRAPH_MAX_NAME_BYTES} bytes"
+    for key in ("input", "output"):
+        if not name_ok(g[key]):
+            raise ConversionError(f"{path}: the graph {key} '{str(g[key])[:120]}...' is not one of ngi's {rule}")
+    for key in ("input_nc", "output_nc"):
+        if not 1 <= config[key] <= c.GRAPH_MAX_CHANNELS:
+            raise ConversionError(f"{path}: {key} {config[key]} is beyond ngi's {c.GRAPH_MAX_CHANNELS} channels")
+    worst = max(channels.values(), default=0)
+    if worst > c.GRAPH_MAX_CHANNELS:
+        t = max(channels, key=channels.get)
+        raise ConversionError(f"{path}: tensor '{t[:120]}' has {worst} channels; ngi loads at most "
+                              f"{c.GRAPH_MAX_CHANNELS}")
+    for n in nodes:
+        where = f"{path}: node '{str(n.get('name'))[:120]}' ({n.get('source', n.get('op'))})"
+        names = [n.get("name"), n.get("output"), *n.get("inputs", [])] + [n[k] for k in ("weight", "bias", "scale",
+                                                                                          "shift") if k in n]
+        bad = next((x for x in names if not name_ok(x)), None)
+        if bad is not None:
+            raise ConversionError(f"{where}: '{str(bad)[:120]}...' ({len(str(bad).encode())} bytes) is not one of "
+                                  f"ngi's {rule}")
+        if len(n.get("inputs", [])) > c.GRAPH_MAX_NODE_INPUTS:
+            raise ConversionError(f"{where}: {len(n['inputs'])} inputs; ngi takes at most {c.GRAPH_MAX_NODE_INPUTS}")
+        limits = {"in": (1, c.GRAPH_MAX_CHANNELS), "out": (1, c.GRAPH_MAX_CHANNELS),
+                  "stride": (1, c.GRAPH_MAX_STRIDE), "pad": (0, c.GRAPH_MAX_PAD)}
+        values = [(k, n[k]) for k in limits if k in n] + [("kernel", k) for k in n.get("kernel", [])]
+        for key, v in values:
+            lo, hi = limits.get(key, (1, c.GRAPH_MAX_KERNEL))
+            if not lo <= v <= hi:
+                raise ConversionError(f"{where}: {key} {v} is outside ngi's {lo}..{hi}")
+        if n.get("slope") is not None and not (math.isfinite(n["slope"]) and abs(n["slope"]) <= 1.0):
+            raise ConversionError(f"{where}: a LeakyRelu slope of {n['slope']} (ngi takes finite slopes in [-1, 1])")
+
+
 def import_onnx(onnx_path, out_path, *, half=False, source=None):
     """Convert the ONNX file `onnx_path` to the ngi model file `out_path` (family "graph"); returns the config.
 
@@ -892,5 +939,6 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
                  **({"input_hw": list(imp.input_hw)} if imp.input_hw else {})},
         "source": source if source is not None else f"{os.path.basename(onnx_path)}, imported by ngi.convert",
     }
+    _check_loader_limits(config, imp.channels, onnx_path)
     write_model(out_path, tensors, config, half=half)  # beside out_path, then renamed into place
     return config

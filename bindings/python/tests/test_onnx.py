@@ -233,6 +233,25 @@ def test_matmul_and_gemm_round_trip(tmp_path, dev):
     assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
 
 
+def test_what_the_loader_would_refuse_is_refused_at_conversion(tmp_path):
+    # Issue 51: the converter used to write files the C++ loader then refused; now it applies the loader's limits
+    # (ngi/_constants.py, from host/src/models/graph_model.hpp) and names the .onnx file and the node.
+    long = "n" * 600  # a node name of 600 bytes (the loader reads 1..512)
+    data = small_model([helper.make_node("Conv", ["x", "w"], ["y"], name=long, pads=[1, 1, 1, 1])],
+                       [conv_weight()]).SerializeToString()
+    assert_refused(tmp_path, data, "bad.onnx", "600 bytes", "1..512 bytes")
+    # A tensor name past the limit, on the graph's input.
+    wide = "x" * 513
+    nodes = [helper.make_node("Conv", [wide, "w"], ["y"], name="c", pads=[1, 1, 1, 1])]
+    graph = helper.make_graph(nodes, "g", [helper.make_tensor_value_info(wide, TensorProto.FLOAT, [1, 2, 8, 8])],
+                              [helper.make_tensor_value_info("y", TensorProto.FLOAT, [1, None, None, None])],
+                              [conv_weight()])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)])
+    for f in tmp_path.iterdir():
+        f.unlink()
+    assert_refused(tmp_path, model.SerializeToString(), "bad.onnx", "graph input", "1..512 bytes")
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")

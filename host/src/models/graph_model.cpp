@@ -16,7 +16,8 @@ namespace ngi::detail {
 
 namespace {
 
-constexpr int kMaxKernel = 64, kMaxStride = 64, kMaxPad = 64, kMaxNameLength = 512;
+constexpr int kMaxKernel = kMaxGraphKernel, kMaxStride = kMaxGraphStride, kMaxPad = kMaxGraphPad,
+              kMaxNameLength = kMaxGraphNameLength;
 
 // y = act(x), in place.
 class ActivationNode : public Op {
@@ -196,8 +197,9 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
                 throw bad("unknown field '" + key.substr(0, 80) + "'");
         }
         // Inputs: each one the graph input or an earlier node's output (so no cycle, nothing dangling).
-        if (!n.contains("inputs") || !n["inputs"].is_array() || n["inputs"].empty() || n["inputs"].size() > 1024)
-            throw bad("'inputs' must be a list of 1..1024 tensor names");
+        if (!n.contains("inputs") || !n["inputs"].is_array() || n["inputs"].empty() ||
+            n["inputs"].size() > std::size_t(kMaxGraphNodeInputs))
+            throw bad("'inputs' must be a list of 1.." + std::to_string(kMaxGraphNodeInputs) + " tensor names");
         for (const auto& in : n["inputs"]) {
             if (!is_name(in)) throw bad("'inputs' must be a list of tensor names");
             auto it = tensor.find(in.get<std::string>());

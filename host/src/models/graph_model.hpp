@@ -18,7 +18,12 @@
 
 namespace ngi::detail {
 
+// The loader's limits (shared with the converter, which refuses what the loader would: bindings/python/ngi/
+// onnx_import.py reads them from ngi/_constants.py).
 inline constexpr int kMaxGraphNodes = 4096;
+inline constexpr int kMaxGraphKernel = 64, kMaxGraphStride = 64, kMaxGraphPad = 64;
+inline constexpr int kMaxGraphNameLength = 512;  // node and tensor names, in bytes
+inline constexpr int kMaxGraphNodeInputs = 1024;
 
 // One node of the list, checked: its inputs are tensor indices (0 = the graph input, i + 1 = node i's output), so
 // every input is made before it is read (a list cannot hold a cycle).
