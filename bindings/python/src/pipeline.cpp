@@ -1,5 +1,6 @@
 // ngi.Frame, ngi.read_frame / write_frame, ngi.Pipeline (the surround-aware pipeline around a generator).
 #include <cstring>
+#include <type_traits>
 
 #include "common.hpp"
 #include "model_ref.hpp"
@@ -115,6 +116,22 @@ std::vector<float> planes_from_dict(const py::dict& d, ngi::FrameDesc& desc, int
 // An engine's render target as an image descriptor over a NumPy array (no copy): [H, W] or [H, W, C], float32,
 // float16 or uint8, any positive strides (views, padded pitches, channel slices). `spec` is the array or a dict
 // {"array": a, "srgb": bool, "scale": float, "bias": float, "bottom_up": bool}. `keep` holds the arrays alive.
+// d[key] as T, or a TypeError naming `what`, the key, the type wanted and the type given (pybind11's own cast error
+// names none of them: "Unable to cast Python instance to C++ type").
+template <class T>
+T dict_value(const py::dict& d, const char* key, const std::string& what, const char* wanted) {
+    const py::object v = d[key];
+    if (std::is_same_v<T, bool> && !py::isinstance<py::bool_>(v))  // 1 / "yes" would otherwise pass or fail obscurely
+        throw py::type_error(what + ": '" + key + "' must be " + wanted + ", got " +
+                             py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+    try {
+        return v.cast<T>();
+    } catch (const py::cast_error&) {
+        throw py::type_error(what + ": '" + key + "' must be " + wanted + ", got " +
+                             py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+    }
+}
+
 ngi::ImageDesc image_desc_from(const py::handle& spec, const std::string& what, std::vector<py::array>& keep) {
     py::object obj = py::reinterpret_borrow<py::object>(spec);
     bool srgb = false, bottom_up = false;
@@ -127,10 +144,10 @@ ngi::ImageDesc image_desc_from(const py::handle& spec, const std::string& what, 
                 throw py::value_error(what + ": unknown key '" + key + "' (array, srgb, scale, bias, bottom_up)");
         }
         if (!d.contains("array")) throw py::value_error(what + ": the dict has no 'array'");
-        if (d.contains("srgb")) srgb = d["srgb"].cast<bool>();
-        if (d.contains("bottom_up")) bottom_up = d["bottom_up"].cast<bool>();
-        if (d.contains("scale")) scale = d["scale"].cast<float>();
-        if (d.contains("bias")) bias = d["bias"].cast<float>();
+        if (d.contains("srgb")) srgb = dict_value<bool>(d, "srgb", what, "True or False");
+        if (d.contains("bottom_up")) bottom_up = dict_value<bool>(d, "bottom_up", what, "True or False");
+        if (d.contains("scale")) scale = dict_value<float>(d, "scale", what, "a number");
+        if (d.contains("bias")) bias = dict_value<float>(d, "bias", what, "a number");
         obj = d["array"];
     }
     if (!py::isinstance<py::array>(obj)) throw py::type_error(what + ": expected a NumPy array");

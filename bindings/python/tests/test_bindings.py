@@ -179,6 +179,14 @@ def test_pipeline_run_images_engine_layouts(dev, frame):
         pipe.run_images(model, bad)
     with pytest.raises(TypeError, match="float64"):
         pipe.run_images(model, {("front", "albedo"): np.zeros((64, 64, 3))})
+    # A descriptor field of the wrong type names the image, the key and both types (issue 51: pybind11's
+    # "Unable to cast Python instance to C++ type" named none of them).
+    for key, value, wanted in (("scale", "2", "a number, got str"), ("bottom_up", 1, "True or False, got int"),
+                               ("srgb", None, "True or False, got NoneType")):
+        bad = dict(images)
+        bad[("front", "env")] = dict(images[("front", "env")], **{key: value})
+        with pytest.raises(TypeError, match=rf"images\[\('front', 'env'\)\]: '{key}' must be {wanted}"):
+            pipe.run_images(model, bad)
 
 
 def test_frame_round_trip(frame, frame_dir):
