@@ -189,6 +189,31 @@ def test_pipeline_run_images_engine_layouts(dev, frame):
             pipe.run_images(model, bad)
 
 
+def test_negative_depth_is_refused_from_host_memory(dev, frame):
+    # Issue 51: a frame folder refuses a negative depth (a distance); the in-memory paths took it and clamped it to
+    # 0. Now Pipeline.run(dict) (host planes) and run_images (host descriptors: F32, F16, unorm8 with a bias) refuse
+    # it too, naming the face; -Inf is negative, NaN is not (it is sanitized and counted, as in a frame folder).
+    model = ngi.Model(dev, MODELS / "ladder" / "gi_single_view_n64_ngf16.safetensors")
+    pipe = ngi.Pipeline(dev, 64)
+    d = {k: v[:1] if isinstance(v, np.ndarray) else v for k, v in frame.to_dict().items()}
+    for bad_value in (-0.5, -np.inf):
+        bad = dict(d, depth=d["depth"].copy())
+        bad["depth"][0, 0, 3, 5] = bad_value
+        with pytest.raises(ngi.InputError, match="1 of 4096 depth values of face 'front' are negative"):
+            pipe.run(model, bad)
+    nan = dict(d, depth=d["depth"].copy())
+    nan["depth"][0, 0, 3, 5] = np.nan
+    assert np.isfinite(pipe.run(model, nan, outputs=["lightmap"])["lightmap"]).all()
+    images = {("front", f): np.ascontiguousarray(np.moveaxis(d[f][0], 0, -1)) for f in ("albedo", "normal", "direct")}
+    for depth in (np.full((64, 64), -1.0, np.float32), np.full((64, 64), -1.0, np.float16),
+                  {"array": np.zeros((64, 64), np.uint8), "bias": -0.25}):
+        with pytest.raises(ngi.InputError, match="image 'depth' of face 'front': 4096 of 4096 pixels have a negative"):
+            pipe.run_images(model, {**images, ("front", "depth"): depth}, look=d["look"], up=d["up"])
+    ok = pipe.run_images(model, {**images, ("front", "depth"): np.ascontiguousarray(d["depth"][0, 0])},
+                         look=d["look"], up=d["up"])
+    assert np.isfinite(ok["lightmap"]).all()
+
+
 def test_frame_round_trip(frame, frame_dir):
     back = ngi.read_frame(frame_dir)
     assert back.n == frame.n and back.look == pytest.approx(frame.look)

@@ -218,6 +218,15 @@ FrameImages SurroundPipeline::run(Model& model, const float* planes, std::size_t
                          std::to_string(desc.faces) + " faces of N = " + std::to_string(im.n) + " need " +
                          std::to_string(need));
     if (display) check_tonemap(tonemap);
+    // Negative depth (-Inf included, NaN not) is refused, as a frame folder refuses it (io/frame_io.cpp).
+    const std::size_t plane = std::size_t(im.n) * im.n;
+    for (int f = 0; f < desc.faces; ++f) {
+        const float* depth = planes + (std::size_t(f) * kFramePlanes + frame_plane(Feature::Depth)) * plane;
+        const long k = long(std::count_if(depth, depth + plane, [](float v) { return v < 0.0f; }));
+        if (k)
+            throw InputError("run frame: " + std::to_string(k) + " of " + std::to_string(plane) + " depth values of "
+                             "face '" + face_name(Face(f)) + "' are negative (depth is a distance)");
+    }
 
     // The raw planes live in a pipeline-owned buffer, handed to enqueue() as a DeviceBuffer; their upload is the
     // frame's "gather" stage.

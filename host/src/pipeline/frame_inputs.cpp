@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstring>
 
+#include "base/half.hpp"
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
 
@@ -23,12 +24,42 @@ struct InputPlan {
     bool has_emission = false, has_env = false;
 };
 
+// Negative values of a host depth image (decoded, scaled and biased as the gather kernel does; -Inf counts, NaN
+// does not): a frame folder refuses them (io/frame_io.cpp), and so does every host input. Images in device memory
+// are not read back for this (the preprocessing clamps a negative depth to 0 there).
+long negative_depths(const ImageDesc& raw) {
+    const ImageDesc d = raw.resolved();
+    const auto* base = static_cast<const unsigned char*>(d.host) + d.offset;
+    long count = 0;
+    for (int y = 0; y < d.height; ++y)
+        for (int x = 0; x < d.width; ++x) {
+            const unsigned char* at = base + std::size_t(y) * d.row_stride + std::size_t(x) * d.pixel_stride;
+            float v = 0.0f;
+            if (d.format == PixelFormat::F32) std::memcpy(&v, at, sizeof v);
+            else if (d.format == PixelFormat::F16) {
+                std::uint16_t h = 0;
+                std::memcpy(&h, at, sizeof h);
+                v = detail::half_to_float(h);
+            } else {
+                v = float(*at) / 255.0f;  // U8 (sRGB makes no sense for depth; both decode to >= 0)
+            }
+            count += v * d.scale + d.bias < 0.0f;
+        }
+    return count;
+}
+
 InputPlan plan_inputs(const FrameInputs& in, const ModelConfig& config, int n, const Device& device) {
     InputPlan plan;
     plan.faces = detail::frame_faces(config);
     for (int f = 0; f < plan.faces; ++f)
         for (Feature feat : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct})
             validate_image_desc(in.at(Face(f), feat), Face(f), feat, n, device);
+    for (int f = 0; f < plan.faces; ++f)
+        if (const ImageDesc& d = in.at(Face(f), Feature::Depth); d.host)
+            if (const long k = negative_depths(d))
+                throw InputError("image 'depth' of face '" + std::string(face_name(Face(f))) + "': " +
+                                 std::to_string(k) + " of " + std::to_string(long(d.width) * d.height) +
+                                 " pixels have a negative depth (depth is a distance)");
     for (Feature feat : {Feature::Emission, Feature::Env}) {
         int present = 0;
         for (int f = 0; f < plan.faces; ++f) present += in.at(Face(f), feat).present();
