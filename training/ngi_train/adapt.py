@@ -30,7 +30,6 @@ same command again resumes. The model is written last, atomically: an interrupte
 
 import argparse
 import datetime
-import hashlib
 import json
 import math
 import os
@@ -46,6 +45,7 @@ import torch
 
 import ngi
 import ngi.model_file as model_file
+import ngi.zoo as zoo_mod
 
 from ngi_train import checkpoint, ngi_paths
 from ngi_train.generator import data, evaluate, export
@@ -214,32 +214,24 @@ def steps_done(work):
     return checkpoint.load(latest)["step"] if latest.is_file() else 0
 
 
-def train_seconds(work):
-    """Seconds of training steps the run's log records (0 before the first step)."""
+def read_log(work):
+    """(seconds of training steps so far, {step: validation scores}) from the run's log.jsonl (0, {} before it)."""
     path = work / "run" / "log.jsonl"
-    last = 0.0
-    if path.is_file():
-        for line in path.read_text().splitlines():
-            try:
-                last = json.loads(line).get("seconds", last)
-            except ValueError:
-                pass
-    return last
-
-
-def eval_lines(work):
-    """{step: validation scores} from the run's log."""
-    path = work / "run" / "log.jsonl"
-    out = {}
+    seconds, evals = 0.0, {}
     if path.is_file():
         for line in path.read_text().splitlines():
             try:
                 e = json.loads(line)
-            except ValueError:
+            except ValueError:  # a line cut short by a hard kill
                 continue
+            seconds = e.get("seconds", seconds)
             if "eval" in e:
-                out[e["step"]] = e["eval"]
-    return out
+                evals[e["step"]] = e["eval"]
+    return seconds, evals
+
+
+def train_seconds(work):
+    return read_log(work)[0]
 
 
 def base_scores(base_tensors, cfg, work):
@@ -282,8 +274,8 @@ def check_inputs(args):
 
 
 def file_digest(path):
-    p = Path(path)
-    return hashlib.sha256(p.read_bytes()).hexdigest()[:16] if p.is_file() else str(path)
+    """A file's sha256 (16 hex digits, as ngi.plan --adapted compares it: ngi.zoo.sha256); a procedural spec as is."""
+    return zoo_mod.sha256(path)[:16] if Path(path).is_file() else str(path)
 
 
 def main(argv=None):
@@ -443,7 +435,7 @@ def run_phases(args, scene, base, base_tensors, base_config, ngi_bin, work, iden
 
     # --- 4. early stopping, export, card
     budget.enter("export")
-    scores = eval_lines(work)
+    scores = read_log(work)[1]
     base_val = base_scores(base_tensors, cfg, work)
     ckpts = {s: work / "run" / "checkpoints" / f"step_{s:08d}.pt" for s in scores}
     candidates = {s: v for s, v in scores.items() if ckpts[s].is_file()}

@@ -60,7 +60,6 @@ the C++ reader, samples/ngi/plan_file.cpp).
 
 import argparse
 import errno
-import hashlib
 import json
 import os
 import stat
@@ -378,7 +377,7 @@ def adapted_rungs(paths, scene_spec, scene_name):
         if not isinstance(rec, dict) or "scene" not in rec:
             raise PlanError(f"--adapted {path}: not written by ngi_train.adapt (no adapt record)")
         spec = Path(scene_spec)
-        digest = hashlib.sha256(spec.read_bytes()).hexdigest()[:16] if spec.is_file() else None
+        digest = zoo_mod.sha256(spec)[:16] if spec.is_file() else None  # as ngi_train.adapt records it
         if rec["scene"] != scene_name or (digest is not None and rec.get("scene_digest") != digest):
             raise PlanError(f"--adapted {path}: adapted to {rec['scene']} (sha256 {rec.get('scene_digest')}), not to "
                             f"{scene_name}" + (f" (sha256 {digest})" if digest else "") +
