@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -348,6 +349,59 @@ TEST_CASE("glTF and GLB: node transforms (and a mirror), linear base colour x CO
     spit(dir / "quad.bin", bin);
     spit(dir / "ext.gltf", j.dump());
     CHECK(load_mesh(dir / "ext.gltf").mesh.triangle_count() == 4);  // load_mesh does, beside the file
+}
+
+TEST_CASE("mesh materials: glTF emissive strength applied, negative colours, emission past the bound and a missing "
+          ".mtl refused", "[mesh]") {
+    // Issue 51: KHR_materials_emissive_strength was ignored (assimp 5.2.5 does not read it) and 1e30 accepted;
+    // negative Kd / baseColor / Ke became 0 and a missing .mtl default grey, silently.
+    test::TempDir dir("mesh-materials");
+    auto with_material = [&](bool glb, const std::function<void(nlohmann::json&)>& edit) {
+        auto [j, bin] = gltf_quad(glb);
+        edit(j["materials"][0]);
+        const std::string path = glb ? dir / "m.glb" : dir / "m.gltf";
+        spit(path, glb ? glb_file(j, bin) : j.dump());
+        return path;
+    };
+    auto strength = [](const nlohmann::json& v) {
+        return [v](nlohmann::json& m) { m["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = v; };
+    };
+    for (const bool glb : {false, true}) {
+        INFO((glb ? "glb" : "gltf"));
+        const LoadedMesh l = load_mesh(with_material(glb, strength(4.0)));
+        REQUIRE(l.materials.size() == 1);
+        CHECK(l.materials[0].emission == glm::vec3(4.0f, 2.0f, 0.0f));  // emissiveFactor (1, 0.5, 0) x 4
+        // The extension without a strength is the extension's default, 1.
+        CHECK(load_mesh(with_material(glb, [](nlohmann::json& m) {
+                  m["extensions"]["KHR_materials_emissive_strength"] = nlohmann::json::object();
+              })).materials[0].emission == glm::vec3(1.0f, 0.5f, 0.0f));
+        CHECK_THAT(mesh_error(with_material(glb, strength(1e30))),
+                   Contains("m.gl") && Contains("material 0") && Contains("exceeds the bound of 65504"));
+        CHECK_THAT(mesh_error(with_material(glb, strength(-1.0))),
+                   Contains("glTF material 0 KHR_materials_emissive_strength") && Contains("not a finite number >= 0"));
+        CHECK_THAT(mesh_error(with_material(glb, strength("bright"))), Contains("emissiveStrength is not a number"));
+        CHECK_THAT(mesh_error(with_material(glb, [](nlohmann::json& m) {
+                       m["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, -0.25, 1.0, 1.0};
+                   })),
+                   Contains("material 0 base colour") && Contains("negative component"));
+        CHECK_THAT(mesh_error(with_material(glb, [](nlohmann::json& m) { m["emissiveFactor"] = {-1.0, 0.5, 0.0}; })),
+                   Contains("material 0 emissive colour") && Contains("negative component"));
+    }
+    // An OBJ's .mtl: negative Kd or Ke refused; a library that is not there refused, saying what to do.
+    const std::string tri = "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    spit(dir / "t.obj", tri);
+    for (const char* mtl : {"newmtl a\nKd 0.5 -0.1 0.5\n", "newmtl a\nKd 0.5 0.5 0.5\nKe -2 0 0\n"}) {
+        INFO(mtl);
+        spit(dir / "t.mtl", mtl);
+        CHECK_THAT(mesh_error(dir / "t.obj"), Contains("t.obj") && Contains("negative component"));
+    }
+    std::filesystem::remove(dir / "t.mtl");
+    CHECK_THAT(mesh_error(dir / "t.obj"),
+               Contains("t.obj") && Contains("material library") && Contains("t.mtl does not exist"));
+    // Without the mtllib line it loads in the default colour; parse_mesh reads no library, so it loads too.
+    spit(dir / "plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    CHECK(load_mesh(dir / "plain.obj").mesh.triangle_count() == 1);
+    CHECK(parse_mesh(tri, "t.obj").mesh.triangle_count() == 1);
 }
 
 TEST_CASE("bad mesh files: an InputError naming the file, quickly, for every class", "[mesh]") {

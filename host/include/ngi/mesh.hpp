@@ -66,7 +66,8 @@ constexpr std::uint64_t kMaxMeshFileBytes = std::uint64_t(1) << 30;
 // .mtl, any PLY) the mean of the triangle's vertex colours (sRGB -> linear), else ngi's default (Material{});
 // glTF's COLOR_0 multiplies its base colour (the specification's rule). Albedo is capped at 0.95 like every
 // scene's. Emissive colours (OBJ Ke, glTF emissiveFactor x KHR_materials_emissive_strength) become
-// Material::emission, as linear radiance. Zero-area triangles, points and lines are dropped and counted: they can
+// Material::emission, as linear radiance; negative colour components, emission past kMaxEmission and an OBJ whose
+// mtllib names a missing library are refused. Zero-area triangles, points and lines are dropped and counted: they can
 // never be hit, and real scans contain them; a mesh left with no triangle is an error.
 // Throws InputError naming the file (and the element, where known) for unreadable, malformed or truncated files,
 // NaN/Inf vertices or normals, indices out of range, empty meshes and anything over the limits above. Sizes the

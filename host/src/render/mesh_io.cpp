@@ -12,17 +12,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
+#include "ngi/material.hpp"
 #include "ngi/mesh.hpp"
 #include "render/finite.hpp"
 #include "render/mesh_precheck.hpp"
@@ -81,7 +85,10 @@ public:
         if (file == main_name_) return new BytesStream(main_);
         if (!sidecars_) return nullptr;
         std::error_code ec;
-        if (!std::filesystem::exists(file, ec)) return nullptr;  // assimp decides: an OBJ loads without its .mtl
+        if (!std::filesystem::exists(file, ec)) {  // assimp goes on without it (import() decides)
+            missing_.push_back(file);
+            return nullptr;
+        }
         try {
             const std::string& bytes = read(file);
             if (obj_) detail::precheck_material_library(bytes, main_name_, file);
@@ -106,6 +113,7 @@ public:
     }
     const std::string& error() const { return error_; }
     std::size_t files_read() const { return files_.size(); }
+    const std::vector<std::string>& missing() const { return missing_; }
 
 private:
     std::string main_name_;
@@ -115,6 +123,7 @@ private:
     std::uint64_t used_;
     std::map<std::string, std::string> files_;  // node-based: stable addresses for the streams
     std::string error_;
+    std::vector<std::string> missing_;  // files assimp asked for that do not exist
 };
 
 // ---- colours -----------------------------------------------------------------------------------------------
@@ -131,6 +140,12 @@ float linear_to_srgb(float c) {
     return c <= 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 using detail::finite;
+std::string num(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return b;
+}
+std::string rgb(glm::vec3 c) { return num(c.r) + ", " + num(c.g) + ", " + num(c.b); }
 
 // What one assimp material gives a triangle: an albedo of its own (or none: the vertex colours or the default
 // decide), a glTF base colour the vertex colours multiply, and its emission.
@@ -140,8 +155,11 @@ struct MaterialInfo {
     glm::vec3 emission{0.0f};
 };
 
-MaterialInfo material_info(const aiMaterial* m, Format format, bool no_material_colours, const std::string& where,
-                           const std::function<void(const std::string&)>& fail) {
+// `gltf_strength`: the material's KHR_materials_emissive_strength (read by the precheck: assimp 5.2.5 ignores it).
+// Negative colours and emission above kMaxEmission are refused: a file that states them is broken, and clamping
+// them would light the scene otherwise than it says, silently.
+MaterialInfo material_info(const aiMaterial* m, Format format, bool no_material_colours, float gltf_strength,
+                           const std::string& where, const std::function<void(const std::string&)>& fail) {
     MaterialInfo info;
     aiString name;
     m->Get(AI_MATKEY_NAME, name);
@@ -159,16 +177,27 @@ MaterialInfo material_info(const aiMaterial* m, Format format, bool no_material_
         info.has_colour = true;
         info.albedo = {c.r, c.g, c.b};
         if (!finite(info.albedo)) fail(where + " diffuse colour is not finite");
+        if (glm::any(glm::lessThan(info.albedo, glm::vec3(0.0f))))
+            fail(where + " diffuse colour (Kd " + rgb(info.albedo) + ") has a negative component");
         info.albedo = srgb_to_linear(info.albedo);
     }
     // A PLY's material is always assimp's invention (PLY files colour their vertices): no colour of its own.
     if (!finite(info.albedo)) fail(where + " base colour is not finite");
+    if (glm::any(glm::lessThan(info.albedo, glm::vec3(0.0f))))
+        fail(where + " base colour (" + rgb(info.albedo) + ") has a negative component");
     if (m->Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS) {
         info.emission = {c.r, c.g, c.b};
-        float strength = 1.0f;
-        if (m->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == AI_SUCCESS) info.emission *= strength;
         if (!finite(info.emission)) fail(where + " emissive colour is not finite");
-        info.emission = glm::max(info.emission, glm::vec3(0.0f));
+        if (glm::any(glm::lessThan(info.emission, glm::vec3(0.0f))))
+            fail(where + " emissive colour (" + rgb(info.emission) + ") has a negative component");
+        float strength = 1.0f;
+        if (format == Format::Gltf) strength = gltf_strength;
+        else if (m->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) != AI_SUCCESS) strength = 1.0f;
+        const glm::dvec3 e = glm::dvec3(info.emission) * double(strength);  // 1e30 x 1e30 stays finite here
+        if (!(std::max({e.x, e.y, e.z}) <= double(kMaxEmission)) || !(strength >= 0.0f))
+            fail(where + " emission (" + rgb(info.emission) + ") x strength " + num(strength) +
+                 " exceeds the bound of " + std::to_string(int(kMaxEmission)) + " (ngi/material.hpp)");
+        info.emission = glm::vec3(e);
     }
     return info;
 }
@@ -223,13 +252,15 @@ std::vector<Material> quantize(std::vector<Material>& tri, std::vector<std::uint
 
 // ---- the scene graph -> one TriangleMesh ------------------------------------------------------------------
 
-LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours, const std::string& name) {
+LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours, const std::vector<float>& gltf_strength,
+                   const std::string& name) {
     auto fail = [&](const std::string& what) { throw InputError("load mesh " + name + ": " + what); };
     if (!scene->mRootNode) fail("no scene graph");
     std::vector<MaterialInfo> infos;
-    for (unsigned i = 0; i < scene->mNumMaterials; ++i)
-        infos.push_back(
-            material_info(scene->mMaterials[i], format, no_material_colours, "material " + std::to_string(i), fail));
+    for (unsigned i = 0; i < scene->mNumMaterials; ++i)  // glTF: assimp's material i is the file's (its default last)
+        infos.push_back(material_info(scene->mMaterials[i], format, no_material_colours,
+                                      i < gltf_strength.size() ? gltf_strength[i] : 1.0f,
+                                      "material " + std::to_string(i), fail));
 
     LoadedMesh out;
     TriangleMesh& m = out.mesh;
@@ -370,12 +401,13 @@ LoadedMesh import(const std::string& bytes, const std::string& name, bool sideca
     Assimp::Importer importer;
     auto* io = new GuardedIO(name, bytes, sidecars, ext == ".obj");
     importer.SetIOHandler(io);  // owned by the importer from here
+    detail::MeshPrecheckFacts facts;
     detail::precheck_mesh(bytes, name, ext, [&](const std::string& uri) -> const std::string& {
         if (!sidecars)
             throw InputError("load mesh " + name + ": external buffer '" + uri + "' (only the file's own bytes are "
                              "read here)");
         return io->read((dir / uri).string());
-    });
+    }, &facts);
     const Format format = ext == ".obj" ? Format::Obj : ext == ".ply" ? Format::Ply : Format::Gltf;
     // Two steps: import and validate (indices in range, counts consistent), then post-process. In between, each
     // mesh's primitive-type flags are recomputed from its faces: importers set them themselves, and
@@ -400,8 +432,14 @@ LoadedMesh import(const std::string& bytes, const std::string& name, bool sideca
     if (!io->error().empty()) throw InputError(io->error());
     if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
     if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError("load mesh " + name + ": the file is incomplete");
+    // An OBJ naming a material library that is not there would load in ngi's default grey, silently (assimp only
+    // logs it, after also trying <name>.mtl): refused, saying what to do. parse_mesh reads no material library.
+    if (format == Format::Obj && io->files_read() == 0 && !io->missing().empty())
+        throw InputError("load mesh " + name + ": its material library " + io->missing().front() + " does not "
+                         "exist: its colours would be lost (put the .mtl beside it, or remove the mtllib line to "
+                         "load it in the default colour)");
     // An OBJ's materials have colours of the file's only when its .mtl was read (assimp invents the rest).
-    return convert(scene, format, format == Format::Obj && io->files_read() == 0, name);
+    return convert(scene, format, format == Format::Obj && io->files_read() == 0, facts.gltf_emissive_strength, name);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cfloat>
 #include <charconv>
 #include <cstring>
 #include <deque>
@@ -578,7 +579,31 @@ std::optional<std::string> data_uri(const std::string& uri, bool* decoded) {
     return out;
 }
 
-void check_gltf(const std::string& b, bool binary, const Fail& fail, const SidecarBytes& sidecar) {
+// Every glTF material's KHR_materials_emissive_strength (1 where it has none): assimp 5.2.5 does not read the
+// extension, so mesh_io applies these itself. A strength that is not a finite number >= 0 is refused here.
+std::vector<float> gltf_emissive_strengths(const GltfChecker& g, const json& doc, const Fail& fail) {
+    const json& materials = g.array(doc, "materials", "glTF ");
+    std::vector<float> strengths(materials.size(), 1.0f);
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+        const json& m = materials[i];
+        if (!m.is_object() || !m.contains("extensions") || !m["extensions"].is_object() ||
+            !m["extensions"].contains("KHR_materials_emissive_strength"))
+            continue;
+        const json& e = m["extensions"]["KHR_materials_emissive_strength"];
+        if (!e.is_object() || !e.contains("emissiveStrength")) continue;  // the extension's default: 1
+        const json& v = e["emissiveStrength"];
+        const std::string where = "glTF material " + std::to_string(i) + " KHR_materials_emissive_strength";
+        if (!v.is_number()) fail(where + " emissiveStrength is not a number");
+        const double d = v.get<double>();
+        if (!(d >= 0.0 && d <= double(FLT_MAX)))  // also false for NaN
+            fail(where + " emissiveStrength " + v.dump() + " is not a finite number >= 0");
+        strengths[i] = float(d);
+    }
+    return strengths;
+}
+
+void check_gltf(const std::string& b, bool binary, const Fail& fail, const SidecarBytes& sidecar,
+                MeshPrecheckFacts* facts) {
     std::string_view text;
     std::uint64_t bin_bytes = 0, bin_at = 0;
     bool has_bin = false;
@@ -611,6 +636,8 @@ void check_gltf(const std::string& b, bool binary, const Fail& fail, const Sidec
         !doc["asset"]["version"].is_string() || doc["asset"]["version"].get<std::string>().compare(0, 2, "2.") != 0)
         fail("not glTF 2.0 (asset.version is not \"2.x\")");
     const GltfChecker g{doc, fail, b.size()};
+    const std::vector<float> strengths = gltf_emissive_strengths(g, doc, fail);
+    if (facts) facts->gltf_emissive_strength = strengths;
 
     const json& buffers = g.array(doc, "buffers", "glTF ");
     std::vector<std::uint64_t> buffer_len;
@@ -802,7 +829,7 @@ void precheck_material_library(const std::string& bytes, const std::string& mesh
 }
 
 void precheck_mesh(const std::string& bytes, const std::string& name, const std::string& ext,
-                   const SidecarBytes& sidecar) {
+                   const SidecarBytes& sidecar, MeshPrecheckFacts* facts) {
     const Fail fail{name};
     if (bytes.empty()) fail("the file is empty");
     if (ext == ".ply") check_ply(bytes, fail);
@@ -810,8 +837,8 @@ void precheck_mesh(const std::string& bytes, const std::string& name, const std:
         check_obj(bytes, fail);
         check_mtl_statements(bytes, "OBJ", fail);  // an OBJ may name itself as its mtllib: assimp then reads it as one
     }
-    else if (ext == ".gltf") check_gltf(bytes, false, fail, sidecar);
-    else if (ext == ".glb") check_gltf(bytes, true, fail, sidecar);
+    else if (ext == ".gltf") check_gltf(bytes, false, fail, sidecar, facts);
+    else if (ext == ".glb") check_gltf(bytes, true, fail, sidecar, facts);
     else fail("not a mesh file extension (.obj, .ply, .gltf, .glb)");
 }
 

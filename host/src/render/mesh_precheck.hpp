@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace ngi::detail {
 
@@ -20,8 +21,14 @@ using SidecarBytes = std::function<const std::string&(const std::string& uri)>;
 // ...") naming the element (a PLY element and its index, an OBJ line, a glTF accessor, buffer or node). Besides
 // sizes, vertex indices are checked where assimp would not refuse them itself: OBJ's here in one pass, glTF's by
 // reading the index accessors (assimp drops a glTF face with an index out of range, silently).
+// What the precheck read that assimp does not give: per glTF material, its KHR_materials_emissive_strength (1 where
+// it has none; assimp 5.2.5 ignores the extension).
+struct MeshPrecheckFacts {
+    std::vector<float> gltf_emissive_strength;
+};
+
 void precheck_mesh(const std::string& bytes, const std::string& name, const std::string& ext,
-                   const SidecarBytes& sidecar);
+                   const SidecarBytes& sidecar, MeshPrecheckFacts* facts = nullptr);
 
 // Checks the bytes of a material library an OBJ names (`mtllib`) before assimp reads them: a texture statement
 // before the first `newmtl` is refused (assimp 5.2.5 writes it through a null material). Throws
