@@ -111,9 +111,12 @@ run_stage() {
       # 1,668 s): four frame-path and Neural GI cases whose subject is host logic the other stages cover -- host
       # transfer counts, the indirect decode, the tracer feeding the pipeline, bad-input messages -- each compiling
       # the generators' programs on llvmpipe again (58-128 s each under load). What stays on rusticl: run()/enqueue()
-      # against the step-by-step path, the application's own context, and every model-parity case.
+      # against the step-by-step path, the application's own context, and every model-parity case. The training
+      # tests are left out as one pattern (training_adapt, added after the list, had run here: 62 s). 2026-12-07
+      # fresh clone: the Neural GI stability row took 680 of the stage's 1,539 s (ten runs of its 8 x 256 MLP at
+      # 64^2 on llvmpipe); it now runs at 32^2 (107 s alone).
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(ci_sanitizer_triage|layer_check|training_package|training_smoke|training_voxel_sh|training_neural_gi|training_neural_gi_train|training_distributed|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|gl_agreement|gl_viewer_display|GEMM: every knob set matches the reference at the generators. layer shapes|dense layer: every GPU and CPU knob set at small odd shapes|every GEMM parameter set in the tuning space gives the same convolution|frame path: host in/out costs .*|frame path: an indirect-mode model.s lightmap .*|frame path: the path tracer feeds the pipeline .*|neural GI on a frame: bad input .*)$'); then
+                 -E '^(ci_sanitizer_triage|layer_check|training_.*|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|gl_agreement|gl_viewer_display|GEMM: every knob set matches the reference at the generators. layer shapes|dense layer: every GPU and CPU knob set at small odd shapes|every GEMM parameter set in the tuning space gives the same convolution|frame path: host in/out costs .*|frame path: an indirect-mode model.s lightmap .*|frame path: the path tracer feeds the pipeline .*|neural GI on a frame: bad input .*)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;
