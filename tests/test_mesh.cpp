@@ -21,6 +21,8 @@
 #include "ngi/error.hpp"
 #include "ngi/mesh.hpp"
 #include "ngi/scene.hpp"
+#include "ngi/host_memory.hpp"
+#include "render/bvh.hpp"
 #include "render/mesh_scene.hpp"
 
 using namespace ngi;
@@ -402,6 +404,35 @@ TEST_CASE("mesh materials: glTF emissive strength applied, negative colours, emi
     spit(dir / "plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     CHECK(load_mesh(dir / "plain.obj").mesh.triangle_count() == 1);
     CHECK(parse_mesh(tri, "t.obj").mesh.triangle_count() == 1);
+}
+
+TEST_CASE("mesh: instanced triangles meet the host-memory budget before loading and before the BVH", "[mesh][limits]") {
+    // Issue 51: a 400 KB .glb listing one 20,000-triangle primitive under 838 nodes (16.8 M triangles) reached
+    // 3.7 GB with NGI_HOST_MEMORY_LIMIT=1G. The same shape, small: one quad under 2,000 nodes = 4,000 triangles.
+    struct Limit {
+        explicit Limit(std::uint64_t b) { set_host_memory_limit(b); }
+        ~Limit() { set_host_memory_limit(0); }
+    };
+    test::TempDir dir("mesh-instances");
+    auto [j, bin] = gltf_quad(true);
+    j["nodes"] = nlohmann::json::array();
+    j["scenes"][0]["nodes"] = nlohmann::json::array();
+    for (int k = 0; k < 2000; ++k) {
+        j["nodes"].push_back({{"mesh", 0}, {"translation", {k % 50, k / 50, 0}}});
+        j["scenes"][0]["nodes"].push_back(k);
+    }
+    const std::string path = dir / "many.glb";
+    spit(path, glb_file(j, bin));
+    const LoadedMesh l = load_mesh(path);  // the default budget holds it
+    REQUIRE(l.mesh.triangle_count() == 4000);
+    {
+        const Limit limit(256 << 10);  // the 79 KB file fits; 4,000 triangles need ~0.7 MB at load and in the BVH
+        CHECK_THAT(mesh_error(path), Contains("many.glb") && Contains("4000 triangles") &&
+                                         Contains("every node's instance counted") && Contains("host-memory limit"));
+        CHECK_THROWS_WITH(detail::build_bvh(l.mesh), Contains("build the BVH of 4000 triangles") &&
+                                                         Contains("host-memory limit"));
+    }
+    CHECK(detail::build_bvh(l.mesh).tri_info.size() == 4 * 4000);
 }
 
 TEST_CASE("bad mesh files: an InputError naming the file, quickly, for every class", "[mesh]") {

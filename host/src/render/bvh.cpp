@@ -7,6 +7,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
+
+#include "ngi/host_memory.hpp"
 
 namespace ngi::detail {
 namespace {
@@ -137,6 +140,16 @@ Bvh build_bvh(const TriangleMesh& mesh) {
     Bvh out;
     const std::size_t ntri = mesh.triangles.size();
     if (ntri == 0) return out;
+    // What the build and its result hold at once, checked before any of it is allocated: per triangle the
+    // builder's box, centroid and index, the result's order, vertices (3 x float4) and info (int4), and their device
+    // copies (host memory on a CPU device); the nodes (builder and flat, ~2 per kBvhMaxLeaf triangles); per vertex
+    // its normal (float4) and device copy. A mesh under the mesh limits fits the default budget; a smaller
+    // NGI_HOST_MEMORY_LIMIT is kept (issue 51: a 400 KB .glb of 16.8 M instanced triangles reached 3.7 GB at 1G).
+    const std::uint64_t nodes = 2 * std::uint64_t(ntri) / std::uint64_t(kBvhMaxLeaf) + 1;
+    const std::uint64_t per_triangle = sizeof(Box) + sizeof(glm::vec3) + 4 + 4 + 2 * (12 + 4) * sizeof(float);
+    const std::uint64_t per_node = sizeof(Builder::Node) + 2 * 8 * sizeof(float);
+    check_host_memory("build the BVH of " + std::to_string(ntri) + " triangles",
+                      ntri * per_triangle + nodes * per_node + mesh.positions.size() * 2 * 4 * sizeof(float));
     Builder b;
     b.tri_box.resize(ntri);
     b.centroid.resize(ntri);

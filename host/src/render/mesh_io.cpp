@@ -26,6 +26,7 @@
 
 #include "io/file_util.hpp"
 #include "ngi/error.hpp"
+#include "ngi/host_memory.hpp"
 #include "ngi/material.hpp"
 #include "ngi/mesh.hpp"
 #include "render/finite.hpp"
@@ -252,6 +253,14 @@ std::vector<Material> quantize(std::vector<Material>& tri, std::vector<std::uint
 
 // ---- the scene graph -> one TriangleMesh ------------------------------------------------------------------
 
+// Host bytes per instanced vertex and triangle that loading a mesh into a scene holds at its peak, checked against
+// the host-memory budget before convert() allocates. Per vertex: position, normal, has-normal flag and
+// compute_vertex_normals' double sum (49 B). Per triangle: 84 B, measured rather than counted -- its indices,
+// material before and after quantize() and quantize's group ids come to ~60 B; the peak of load_mesh + make_scene
+// (ngi.Scene) on a .glb of 16.76 M instanced triangles and 8.55 M vertices was 1.82 GB, which these constants give.
+constexpr std::uint64_t kLoadBytesPerVertex = sizeof(glm::vec3) * 2 + 1 + sizeof(glm::dvec3);
+constexpr std::uint64_t kLoadBytesPerTriangle = 84;
+
 LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours, const std::vector<float>& gltf_strength,
                    const std::string& name) {
     auto fail = [&](const std::string& what) { throw InputError("load mesh " + name + ": " + what); };
@@ -262,10 +271,43 @@ LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours
                                       i < gltf_strength.size() ? gltf_strength[i] : 1.0f,
                                       "material " + std::to_string(i), fail));
 
+    // Instances first, allocations after: a small file may place one mesh under many nodes (a 400 KB .glb with one
+    // 20,000-triangle primitive under 838 nodes is 16.8 M triangles). The counts meet the mesh limits and the
+    // host-memory budget before anything grows with them, and the arrays are reserved to size (no doubling).
+    std::uint64_t instanced_vertices = 0, instanced_faces = 0;
+    {
+        std::vector<const aiNode*> nodes{scene->mRootNode};
+        while (!nodes.empty()) {
+            const aiNode* node = nodes.back();
+            nodes.pop_back();
+            for (unsigned c = 0; c < node->mNumChildren; ++c)
+                if (node->mChildren[c]) nodes.push_back(node->mChildren[c]);
+            for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+                if (node->mMeshes[k] >= scene->mNumMeshes) fail("node refers to a mesh that does not exist");
+                instanced_vertices += scene->mMeshes[node->mMeshes[k]]->mNumVertices;
+                instanced_faces += scene->mMeshes[node->mMeshes[k]]->mNumFaces;
+            }
+        }
+    }
+    if (instanced_vertices > kMaxMeshVertices)
+        fail(std::to_string(instanced_vertices) + " vertices, more than the limit of " +
+             std::to_string(kMaxMeshVertices) + " (every node's instance counted)");
+    if (instanced_faces > kMaxMeshTriangles)
+        fail(std::to_string(instanced_faces) + " faces, more than the limit of " + std::to_string(kMaxMeshTriangles) +
+             " triangles (every node's instance counted)");
+    check_host_memory("load mesh " + name + ": " + std::to_string(instanced_faces) + " triangles and " +
+                          std::to_string(instanced_vertices) + " vertices (every node's instance counted)",
+                      instanced_vertices * kLoadBytesPerVertex + instanced_faces * kLoadBytesPerTriangle);
+
     LoadedMesh out;
     TriangleMesh& m = out.mesh;
     std::vector<Material> tri_material;
     std::vector<char> has_normal;
+    m.positions.reserve(std::size_t(instanced_vertices));
+    m.normals.reserve(std::size_t(instanced_vertices));
+    has_normal.reserve(std::size_t(instanced_vertices));
+    m.triangles.reserve(std::size_t(instanced_faces));
+    tri_material.reserve(std::size_t(instanced_faces));
     // Depth-first over the node tree with an explicit stack (assimp's tree came from a checked file, but a walk
     // that cannot overflow the stack needs no argument).
     std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{scene->mRootNode, scene->mRootNode->mTransformation}};
