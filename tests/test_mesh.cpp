@@ -435,6 +435,27 @@ TEST_CASE("mesh: instanced triangles meet the host-memory budget before loading 
     CHECK(detail::build_bvh(l.mesh).tri_info.size() == 4 * 4000);
 }
 
+TEST_CASE("mesh: a mesh too small to render or too far out for float32 is refused", "[mesh][limits]") {
+    // Issue 51: a 0.5 m mesh at 1e7 m collapsed in float32 into an all-sky frame (exit 0); ao-data on a 1e-20 m
+    // mesh wrote empty views.
+    // x at 1e7 m (floats step by 1 m there; y keeps its precision, so the triangle keeps an area).
+    CHECK_THROWS_WITH(parse_mesh("v 1e7 0 0\nv 10000001 0 0\nv 1e7 0.5 0\nf 1 2 3\n", "far.obj"),
+                      Contains("far.obj") && Contains("float32 positions step by 1 m") &&
+                          Contains("move it near the origin"));
+    // The glTF quad (1 m) under one node: translated to 1e7 m, or scaled to 1e-20 m.
+    auto [j, bin] = gltf_quad(true);
+    j["scenes"][0]["nodes"] = {0};
+    j["nodes"][0]["scale"] = {1, 1, 1};
+    j["nodes"][0]["translation"] = {1e7, 0, 0};
+    CHECK_THROWS_WITH(parse_mesh(glb_file(j, bin), "far.glb"), Contains("far.glb") && Contains("float32"));
+    j["nodes"][0]["translation"] = {0, 0, 0};
+    j["nodes"][0]["scale"] = {1e-20, 1e-20, 1e-20};
+    CHECK_THROWS_WITH(parse_mesh(glb_file(j, bin), "tiny.glb"),
+                      Contains("tiny.glb") && Contains("1e-20 m across") && Contains("read as metres"));
+    // Large but resolvable: 1 km from the origin (float steps of 6e-5 m), a 1 m mesh loads.
+    CHECK(parse_mesh("v 1000 0 0\nv 1001 0 0\nv 1000 1 0\nf 1 2 3\n", "km.obj").mesh.triangle_count() == 1);
+}
+
 TEST_CASE("bad mesh files: an InputError naming the file, quickly, for every class", "[mesh]") {
     test::TempDir dir("mesh-bad");
     struct Case {

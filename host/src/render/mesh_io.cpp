@@ -253,6 +253,26 @@ std::vector<Material> quantize(std::vector<Material>& tri, std::vector<std::uint
 
 // ---- the scene graph -> one TriangleMesh ------------------------------------------------------------------
 
+// A mesh the renderer can resolve: at least kMinMeshExtent across (files are read as metres; a 1e-20 m mesh is no
+// block of any grid and rendered as nothing), and not so far from the origin that float32 positions lose its
+// detail (at 1e7 m floats step by 1 m: a 0.5 m mesh there collapsed into an all-sky frame). The rule: the float
+// spacing at its largest coordinate stays under 1/4096 of its size.
+constexpr float kMinMeshExtent = 1e-3f;
+void check_extent(const TriangleMesh& m, const std::string& name) {
+    const auto [lo, hi] = mesh_bounds(m);
+    const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const float reach = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y),
+                                  std::abs(hi.z)});
+    const float spacing = std::nextafter(reach, INFINITY) - reach;
+    if (!(extent >= kMinMeshExtent))
+        throw InputError("load mesh " + name + ": it is " + num(extent) + " m across, smaller than " +
+                         num(kMinMeshExtent) + " m (mesh files are read as metres: is it in kilometres?)");
+    if (spacing > extent / 4096.0f)
+        throw InputError("load mesh " + name + ": it is " + num(extent) + " m across at up to " + num(reach) +
+                         " m from the origin, where float32 positions step by " + num(spacing) +
+                         " m: its detail would be lost (move it near the origin)");
+}
+
 // Host bytes per instanced vertex and triangle that loading a mesh into a scene holds at its peak, checked against
 // the host-memory budget before convert() allocates. Per vertex: position, normal, has-normal flag and
 // compute_vertex_normals' double sum (49 B). Per triangle: 84 B, measured rather than counted -- its indices,
@@ -409,6 +429,7 @@ LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours
                  ? "no triangle with an area (" + std::to_string(out.dropped_degenerate) + " degenerate, " +
                        std::to_string(out.dropped_primitives) + " points or lines)"
                  : "the file has no triangles");
+    check_extent(m, name);
 
     // Only the vertices the kept triangles use, in order of first use (a stable, file-determined numbering).
     std::vector<std::uint32_t> remap(m.positions.size(), UINT32_MAX);
