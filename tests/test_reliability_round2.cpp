@@ -23,6 +23,7 @@
 #include "models/unet.hpp"
 #include "ngi/area_light.hpp"
 #include "ngi/dataset.hpp"
+#include "ngi/device_buffer.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"
@@ -367,6 +368,30 @@ struct HostMemoryLimit {
 };
 
 }  // namespace
+
+// Round three (issue 51): the viewer at --n 2048 reached 15 GB past NGI_HOST_MEMORY_LIMIT -- its network's tensor
+// arena, allocated on PoCL, whose device memory is host memory. ngi's buffers on a CPU device now count against the
+// budget while they live.
+TEST_CASE("round 3: ngi's buffers on a CPU device count against the host-memory budget while they live",
+          "[io][limits][reliability2]") {
+    ngi::Device& dev = ngi::test::device();
+    if (!dev.info().is_cpu) {
+        WARN("not a CPU device: its memory is not host memory, nothing to check");
+        return;
+    }
+    const HostMemoryLimit limit(256u << 20);  // other buffers of this process (a test device's) hold far less
+    CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 257u << 20),
+                      Contains("allocate device buffer of 269484032 bytes on a CPU device") &&
+                          Contains("host-memory limit"));
+    {
+        const ngi::DeviceBuffer a = ngi::DeviceBuffer::allocate(dev, 160u << 20);
+        // 160 MiB held: 160 more would pass the 256 MiB budget.
+        CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 160u << 20), Contains("already hold"));
+        CHECK_NOTHROW(ngi::DeviceBuffer::allocate(dev, 64u << 20));
+    }
+    // Released: the budget is free again.
+    CHECK_NOTHROW(ngi::DeviceBuffer::allocate(dev, 200u << 20));
+}
 
 // Item 6 of round 2: an 805 MB npy into an AO model reached 2.5 GB of host memory unchecked. Every reader now
 // checks what it will hold at once -- the file's bytes plus what they decode to -- against a limit the user can

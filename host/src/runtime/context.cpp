@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "io/file_util.hpp"
+#include "ngi/host_memory.hpp"
 #include "runtime/programs.hpp"
 
 namespace ngi {
@@ -310,16 +311,40 @@ Kernel Context::kernel(const std::string& program_name, const std::string& name,
     return kernel;
 }
 
+namespace {
+// Bytes of ngi's buffers on CPU devices, whose memory is host memory: the host-memory budget (ngi/host_memory.hpp)
+// covers them (issue 51: the viewer at --n 2048 reached 15 GB, its network's tensor arena on PoCL, past
+// NGI_HOST_MEMORY_LIMIT). Counted up in Context::alloc, down by the runtime's destructor callback when the cl_mem
+// is freed (after its last release, kernels done), so views and retained handles keep it counted.
+std::atomic<std::uint64_t> g_cpu_buffer_bytes{0};
+void CL_CALLBACK uncount_cpu_buffer(cl_mem, void* bytes) {
+    g_cpu_buffer_bytes.fetch_sub(reinterpret_cast<std::uintptr_t>(bytes), std::memory_order_relaxed);
+}
+}  // namespace
+
 Buffer Context::alloc(std::size_t bytes, const char* what) {
     cl_int err = CL_SUCCESS;
     if (bytes == 0) bytes = 4;  // OpenCL forbids empty buffers; a 0-element tensor still needs a handle
     if (bytes > info_.max_alloc_bytes)
         throw OutOfMemoryError(std::string("allocate ") + what + ": " + std::to_string(bytes) + " bytes exceeds the device's " +
                     "CL_DEVICE_MAX_MEM_ALLOC_SIZE of " + std::to_string(info_.max_alloc_bytes));
+    if (info_.is_cpu) {
+        const std::uint64_t held = g_cpu_buffer_bytes.load(std::memory_order_relaxed);
+        check_host_memory(std::string("allocate ") + what + " of " + std::to_string(bytes) + " bytes on a CPU device " +
+                              "(its memory is host memory; ngi's buffers there already hold " + std::to_string(held) +
+                              " bytes)",
+                          held + bytes);
+    }
     cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, bytes, nullptr, &err);
     check(err, (std::string("allocate ") + what + " (" + std::to_string(bytes) + " bytes)").c_str(),
           "clCreateBuffer");
     Buffer b(m, bytes);
+    if (info_.is_cpu) {
+        g_cpu_buffer_bytes.fetch_add(bytes, std::memory_order_relaxed);
+        if (clSetMemObjectDestructorCallback(m, uncount_cpu_buffer, reinterpret_cast<void*>(std::uintptr_t(bytes))) !=
+            CL_SUCCESS)
+            g_cpu_buffer_bytes.fetch_sub(bytes, std::memory_order_relaxed);  // not counted rather than never released
+    }
     if (info_.platform_name == "Oclgrind") {
         // Oclgrind 21.10's uninitialized-value checker gives a buffer shadow memory only at its first host store
         // or first kernel use, and keeps a released buffer's stale shadow for the next buffer with the same
