@@ -2,7 +2,7 @@
 """ngi adapt: fit a GI network to one scene within a time budget (issue 46, docs/ADAPT.md).
 
     PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.adapt --scene F.vox --out M.safetensors \\
-        [--budget-minutes 10] [--base adapt_base_ssgi_residual_n64] [--work runs/adapt/NAME]
+        [--budget-minutes 10] [--base adapt_base_ssgi_residual_n64] [--work runs/adapt/NAME] [--times 8,12,16]
 
 What it does, all inside the budget (wall clock, render + train + export; a run resumed after an interruption
 counts the time spent before it):
@@ -15,6 +15,8 @@ counts the time spent before it):
    training views on other paths (orbits around the model from other seeded starts and, where the scene has room,
    fly-throughs), FRAMES_PER_PATH frames each, until RENDER_SHARE of the budget is spent. None of these paths is
    the scene's dataset path (`ngi render` without --path-seed), on which the evaluation (adapt_eval) scores it.
+   With --times, the views take those times of day in turn (`ngi render --time`): the network learns the scene
+   under a moving sun (adapt_sun_eval scores it at other times).
 3. Fine-tunes the base network (ngi_train.generator.train with init_model = the base, the base's own recipe at a
    constant FINE_TUNE_LR): a first chunk of CHUNK_STEPS steps measures the step rate, the second runs the steps
    the remaining budget holds (and is stopped with SIGTERM at the deadline if it overruns). The validation frames
@@ -125,9 +127,10 @@ class Budget:
 # Frames
 # --------------------------------------------------------------------------
 
-def render(ngi_bin, scene, out, frame, path_seed, kind, spp, feature_spp, n, device, timeout=None):
-    """`ngi render` of frame `frame` of the camera path (kind, path_seed) into the frame folder `out` (written beside
-    it and renamed: an interrupted render is redone); returns its wall seconds (0 when it was there)."""
+def render(ngi_bin, scene, out, frame, path_seed, kind, spp, feature_spp, n, device, timeout=None, hours=None):
+    """`ngi render` of frame `frame` of the camera path (kind, path_seed) at time of day `hours` (None: the scene's)
+    into the frame folder `out` (written beside it and renamed: an interrupted render is redone); returns its wall
+    seconds (0 when it was there)."""
     if (out / "camera.json").is_file():
         return 0.0
     tmp = out.with_name(f".{out.name}.tmp-render")  # a name data.list_frames skips
@@ -140,6 +143,8 @@ def render(ngi_bin, scene, out, frame, path_seed, kind, spp, feature_spp, n, dev
            "--seed", (path_seed * 7919 + frame * 104729 + 12345) % 2147483647, "--out", tmp]
     if device:
         cmd += ["--device", device]
+    if hours is not None:
+        cmd += ["--time", f"{hours:g}"]
     try:
         _, seconds = ngi_paths.run(cmd, timeout=timeout)
     except BaseException:
@@ -149,15 +154,32 @@ def render(ngi_bin, scene, out, frame, path_seed, kind, spp, feature_spp, n, dev
     return seconds
 
 
-def train_views():
-    """(kind, path seed, frame) of every training view, in rendering order: per camera path FRAMES_PER_PATH frames
-    spread along it; every third path a fly-through (skipped on scenes without room for one)."""
-    p = 0
+def train_views(times=None):
+    """(kind, path seed, frame, hours) of every training view, in rendering order: per camera path FRAMES_PER_PATH
+    frames spread along it; every third path a fly-through (skipped on scenes without room for one); the time of day
+    of view i is times[i % len(times)] (None: the scene's own)."""
+    p, i = 0, 0
     while True:
         kind = "fly" if p % 3 == 2 else "auto"
         for j in range(FRAMES_PER_PATH):
-            yield kind, TRAIN_PATH_SEED + p, (5 + j * (PATH_FRAMES - 10) // (FRAMES_PER_PATH - 1) + 3 * p) % PATH_FRAMES
+            k = (5 + j * (PATH_FRAMES - 10) // (FRAMES_PER_PATH - 1) + 3 * p) % PATH_FRAMES
+            yield kind, TRAIN_PATH_SEED + p, k, times[i % len(times)] if times else None
+            i += 1
         p += 1
+
+
+def val_views(times=None):
+    """(frame, hours, folder name) of the validation views: VAL_FRAMES of the VAL_PATH_SEED path, the times of day
+    taken in turn (None: the scene's own)."""
+    views = []
+    for i, k in enumerate(VAL_FRAMES):
+        hours = times[i % len(times)] if times else None
+        views.append((k, hours, f"p{VAL_PATH_SEED}_f{k:03d}" + time_suffix(hours)))
+    return views
+
+
+def time_suffix(hours):
+    return "" if hours is None else f"_t{hours:05.2f}"
 
 
 def recorded_frame_seconds(frame_dir):
@@ -288,7 +310,18 @@ def main(argv=None):
     ap.add_argument("--work", help="working folder (frames, checkpoints; default runs/adapt/<scene>)")
     ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
     ap.add_argument("--device", help="OpenCL device of the renders (ngi --device)")
+    ap.add_argument("--times", default="",
+                    help="comma-separated times of day in hours (as ngi render --time, 0-48): the training and "
+                         "validation views take them in turn, so that the network follows the sun (default: the "
+                         "scene's own time only)")
     args = ap.parse_args(argv)
+    try:
+        args.times = [float(h) for h in args.times.split(",") if h.strip()]
+    except ValueError:
+        ap.error(f"--times {args.times!r}: comma-separated hours expected")
+    if not all(math.isfinite(h) and 0 <= h <= 48 for h in args.times) or \
+            len({time_suffix(h) for h in args.times}) != len(args.times):  # frame folders name them to 0.01 h
+        ap.error(f"--times {args.times}: distinct hours in [0, 48] (to 0.01 h) expected")
     if not (math.isfinite(args.budget_minutes) and 0 < args.budget_minutes <= 24 * 60):
         ap.error("--budget-minutes must be in (0, 1440]")
     if not (math.isfinite(args.lr) and 0 < args.lr < 1):
@@ -318,6 +351,8 @@ def adapt(args):
     work.mkdir(parents=True, exist_ok=True)
     identity = {"scene": scene.name, "scene_file": file_digest(args.scene), "base": file_digest(base),
                 "budget_s": args.budget_minutes * 60.0, "lr": args.lr}
+    if args.times:
+        identity["times"] = args.times
     budget = Budget(work, args.budget_minutes * 60.0, identity)
 
     # --- 1. the cost of a frame, and whether the budget holds anything (on a fresh start; a resumed run goes on
@@ -329,7 +364,8 @@ def adapt(args):
     # first validation frame, rendered now, is the measure; it may take at most `allowed` seconds.
     views = len(VAL_FRAMES) + 1
     allowed = min(RENDER_SHARE * budget.seconds, budget.seconds - MIN_TRAIN_SECONDS - EXPORT_RESERVE_S) / views
-    first = data_dir / "val" / f"p{VAL_PATH_SEED}_f{VAL_FRAMES[0]:03d}"
+    first_k, first_hours, first_name = val_views(args.times)[0]
+    first = data_dir / "val" / first_name
     if fresh:
         too_small = (f"--budget-minutes {args.budget_minutes:g}: too small for {scene.name}: its {len(VAL_FRAMES)} "
                      f"validation frames and one training frame must fit in {100 * RENDER_SHARE:.0f} % of the budget "
@@ -338,8 +374,8 @@ def adapt(args):
         if allowed <= 0:
             raise AdaptError(too_small)
         try:
-            frame_s = render(ngi_bin, args.scene, first, VAL_FRAMES[0], VAL_PATH_SEED, "auto", REFERENCE_SPP,
-                             FEATURE_SPP, N, args.device, timeout=allowed)
+            frame_s = render(ngi_bin, args.scene, first, first_k, VAL_PATH_SEED, "auto", REFERENCE_SPP,
+                             FEATURE_SPP, N, args.device, timeout=allowed, hours=first_hours)
         except subprocess.TimeoutExpired:
             shutil.rmtree(data_dir, ignore_errors=True)
             raise AdaptError(f"{too_small}; one took longer") from None
@@ -364,25 +400,26 @@ def run_phases(args, scene, base, base_tensors, base_config, ngi_bin, work, iden
 
     # --- 2. frames
     took = [frame_s]  # seconds of the renders: the loop below plans with their mean
-    for k in VAL_FRAMES:
-        took.append(render(ngi_bin, args.scene, data_dir / "val" / f"p{VAL_PATH_SEED}_f{k:03d}", k, VAL_PATH_SEED,
-                           "auto", REFERENCE_SPP, FEATURE_SPP, N, args.device))
+    for k, hours, name in val_views(args.times):
+        took.append(render(ngi_bin, args.scene, data_dir / "val" / name, k, VAL_PATH_SEED, "auto", REFERENCE_SPP,
+                           FEATURE_SPP, N, args.device, hours=hours))
     took = [t for t in took if t > 0]
     budget.record()
     render_until = budget.seconds * RENDER_SHARE
     fly_ok, rendered = True, 0
-    views = train_views()
+    views = train_views(args.times)
     # A resumed run renders no more once rendering finished (training refuses another frame list) or training began.
     finished = budget.state.get("rendered") or steps_done(work) > 0
     while not finished and rendered < MAX_TRAIN_FRAMES and (
             rendered == 0 or budget.elapsed() + (np.mean(took) if took else frame_s) <= render_until):
-        kind, seed, k = next(views)
+        kind, seed, k, hours = next(views)
         if kind == "fly" and not fly_ok:
             continue
-        name = f"{kind}_p{seed}_f{k:03d}"  # auto: the scene's own kind (orbit for a .vox file, fly for a family)
+        # auto: the scene's own kind (orbit for a .vox file, fly for a family)
+        name = f"{kind}_p{seed}_f{k:03d}" + time_suffix(hours)
         try:
             t = render(ngi_bin, args.scene, data_dir / "train" / name, k, seed, kind, REFERENCE_SPP, FEATURE_SPP, N,
-                       args.device)
+                       args.device, hours=hours)
             if t > 0:
                 took.append(t)
         except RuntimeError as e:
@@ -461,7 +498,8 @@ def run_phases(args, scene, base, base_tensors, base_config, ngi_bin, work, iden
         "spent_s": {k: round(v, 1) for k, v in spent.items()},
         "frames": {"train": len(train_frames), "val": len(VAL_FRAMES), "n": N, "feature_spp": FEATURE_SPP,
                    "reference_spp": REFERENCE_SPP, "val_path_seed": VAL_PATH_SEED,
-                   "train_path_seeds_from": TRAIN_PATH_SEED, "fly_paths": fly_ok},
+                   "train_path_seeds_from": TRAIN_PATH_SEED, "fly_paths": fly_ok,
+                   "times_h": args.times or None},
         "steps": done,
         "lr": args.lr,
         "chosen_step": None if use_base else best,
@@ -482,6 +520,7 @@ def run_phases(args, scene, base, base_tensors, base_config, ngi_bin, work, iden
 def card(config, out):
     a = config["adapt"]
     v = a["validation"]
+    times = ", ".join(f"{h:g} h" for h in a["frames"].get("times_h") or []) or "the scene's own"
     lines = [f"# {out.stem}: {a['base']} adapted to {a['scene']}", "",
              f"Written by `python3 -m ngi_train.adapt` on {a['written']}.", "",
              "| | |", "| --- | --- |",
@@ -490,6 +529,7 @@ def card(config, out):
              f"| budget | {a['budget_s']:.0f} s; spent " + ", ".join(f"{k} {s:.0f} s" for k, s in a['spent_s'].items()) + " |",
              f"| frames | {a['frames']['train']} training, {a['frames']['val']} validation; N = {a['frames']['n']}, "
              f"direct light at {a['frames']['feature_spp']} spp, references at {a['frames']['reference_spp']} spp |",
+             f"| times of day | {times} |",
              f"| steps | {a['steps']} (chosen: {a['chosen_step'] if a['chosen_step'] is not None else 'the base'}) |",
              f"| validation L1 (encoded front lightmap) | base {v['base']['l1']:.5f}, chosen {v['chosen']['l1']:.5f} |",
              "", a["note"] + ".", "",

@@ -64,7 +64,7 @@ def test_budget_too_small_is_refused_before_rendering(tmp_path, capsys, monkeypa
 
 
 def test_bad_options(tmp_path):
-    for extra in (["--lr", "0"], ["--lr", "nan"]):
+    for extra in (["--lr", "0"], ["--lr", "nan"], ["--times", "9,9"], ["--times", "49"], ["--times", "noon"]):
         with pytest.raises(SystemExit) as e:
             run(tmp_path, *extra)
         assert e.value.code == 2
@@ -80,7 +80,8 @@ def test_adapt_end_to_end_and_resume(tmp_path, monkeypatch):
     monkeypatch.setattr(adapt, "EXPORT_RESERVE_S", 5.0)
     monkeypatch.setattr(adapt, "MAX_TRAIN_FRAMES", 4)
     budget_s = 60.0
-    assert run(tmp_path, budget=str(budget_s / 60.0)) == 0
+    times = "9,15"  # the views take the times of day in turn (the sun-adaptation path; without --times: the scene's)
+    assert run(tmp_path, "--times", times, budget=str(budget_s / 60.0)) == 0
     out = tmp_path / "m.safetensors"
     tensors, config = model_file.read_model(str(out))
     assert all(t.dtype == np.float16 for t in tensors.values())
@@ -92,13 +93,16 @@ def test_adapt_end_to_end_and_resume(tmp_path, monkeypatch):
     assert a["steps"] >= 20 and a["validation"]["chosen"]["l1"] <= a["validation"]["base"]["l1"]
     assert (a["chosen_step"] is None) == (a["validation"]["chosen"] == a["validation"]["base"])
     card = (tmp_path / "m.md").read_text()
-    assert "knot:seed=1" in card and "validation L1" in card
+    assert "knot:seed=1" in card and "validation L1" in card and "9 h, 15 h" in card
+    assert a["frames"]["times_h"] == [9.0, 15.0]
     # No adaptation view is on the dataset path the evaluation scores, and the validation path is not a training one.
     data = tmp_path / "work" / "data"
     recs = [json.loads((d / "render.json").read_text()) for d in sorted((data / "train").iterdir())]
     vals = [json.loads((d / "render.json").read_text()) for d in sorted((data / "val").iterdir())]
     assert all(r["path_seed"] is not None and r["path_seed"] != adapt.VAL_PATH_SEED for r in recs)
     assert all(r["path_seed"] == adapt.VAL_PATH_SEED for r in vals)
+    assert [r["camera"]["time_h"] for r in vals] == [9.0, 15.0]
+    assert {r["camera"]["time_h"] for r in recs} == {9.0, 15.0} or len(recs) == 1
     # ngi runs it (the residual output mode through the pipeline) on a frame it was not trained on.
     dev = ngi.Device()
     fr = ngi.read_frame(str(data / "val" / sorted(p.name for p in (data / "val").iterdir())[0]))
@@ -106,10 +110,21 @@ def test_adapt_end_to_end_and_resume(tmp_path, monkeypatch):
     assert lm.shape == (3, 64, 64) and np.isfinite(lm).all() and lm.min() >= 0
     # Rerun: the frames are not rendered again (same files), the model is written again from the finished run.
     stamps = {p: p.stat().st_mtime_ns for p in data.rglob("reference.exr")}
-    assert run(tmp_path, budget=str(budget_s / 60.0)) == 0
+    assert run(tmp_path, "--times", times, budget=str(budget_s / 60.0)) == 0
     assert {p: p.stat().st_mtime_ns for p in data.rglob("reference.exr")} == stamps
-    # Another budget is another adaptation: refused in the same folder.
-    assert run(tmp_path, budget="2") == 2
+    # Another budget or other times of day are another adaptation: refused in the same folder.
+    assert run(tmp_path, "--times", times, budget="2") == 2
+    assert run(tmp_path, budget=str(budget_s / 60.0)) == 2
+
+
+def test_views_without_times_take_the_scene_own_and_with_times_take_them_in_turn():
+    views = adapt.train_views()
+    assert all(next(views)[3] is None for _ in range(20))
+    views = adapt.train_views([8.0, 12.0, 16.0])
+    assert [next(views)[3] for _ in range(7)] == [8.0, 12.0, 16.0, 8.0, 12.0, 16.0, 8.0]
+    assert [h for _, h, _ in adapt.val_views()] == [None] * len(adapt.VAL_FRAMES)
+    names = [name for _, _, name in adapt.val_views([8.0, 12.0])]
+    assert names[0].endswith("_t08.00") and names[1].endswith("_t12.00") and len(set(names)) == len(names)
 
 
 def test_init_model_loads_the_base_and_refuses_another_architecture():
