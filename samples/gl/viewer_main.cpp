@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <regex>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -24,6 +25,7 @@
 #include <ngi/display.hpp>
 #include <ngi/error.hpp>
 #include <ngi/image_io.hpp>
+#include <ngi/output_folder.hpp>
 
 #include "gbuffer_pass.hpp"
 #include "light_bake.hpp"
@@ -234,9 +236,8 @@ public:
         return 0;
     }
 
-    int run_headless() {
-        namespace fs = std::filesystem;
-        fs::create_directories(o_.out);
+    // Writes into `out` (staged: nothing is in --out until commit(), and a failed write leaves --out as it was).
+    int run_headless(ngi::OutputFolder& out) {
         const int total = o_.warmup + o_.frames;
         ngi::CameraPath path = ngi::make_camera_path(scene_, ngi::CameraPathKind::Auto, std::max(o_.frames, 2), o_.seed);
         std::vector<FrameTiming> times;
@@ -252,9 +253,11 @@ public:
             times.push_back(t);
             char name[64];
             std::snprintf(name, sizeof name, "frame_%04d", k);
-            ngi::write_png((fs::path(o_.out) / (std::string(name) + ".png")).string(), lit.display);
-            if (capture) ngi::write_png((fs::path(o_.out) / "capture.png").string(), window);
-            if (o_.exr) ngi::write_frame((fs::path(o_.out) / (std::string(name) + "_raster")).string(), gbuffer_.to_frame(pose));
+            out.write(std::string(name) + ".png", [&](const std::string& f) { ngi::write_png(f, lit.display); });
+            if (capture) out.write("capture.png", [&](const std::string& f) { ngi::write_png(f, window); });
+            if (o_.exr)
+                out.write(std::string(name) + "_raster",
+                          [&](const std::string& f) { ngi::write_frame(f, gbuffer_.to_frame(pose)); });
             frames.push_back({{"frame", k}, {"raster_ms", t.raster}, {"readback_ms", t.readback}, {"gather_ms", t.gather},
                               {"transfer_ms", t.transfer()}, {"input_ms", t.input}, {"network_ms", t.network},
                               {"outputs_ms", t.outputs}, {"ngi_ms", t.ngi()}, {"frame_ms", t.frame}});
@@ -303,7 +306,8 @@ public:
                        {"frame_ms", frame_med},
                        {"fps", frame_med > 0 ? 1000.0 / frame_med : 0.0}};
         j["not_modelled"] = "area light (lighting_at has none); cl_khr_gl_sharing interop path";
-        std::ofstream((std::filesystem::path(o_.out) / "timings.json").string()) << j.dump(2) << "\n";
+        out.write_text("timings.json", j.dump(2) + "\n");
+        out.commit();
         std::printf("%s\n", j["median"].dump().c_str());
         return 0;
     }
@@ -331,6 +335,17 @@ private:
     FrameTiming last_;
     double fps_ = 0;
 };
+
+// What a headless run writes: a re-run may replace an --out holding only these; anything else there is someone
+// else's, and the viewer refuses to touch it (issue 51: it wrote into a folder of foreign files).
+std::string viewer_may_replace(const std::string& dir) {
+    static const std::regex own(R"((frame_[0-9]{4,}(\.png|_raster))|capture\.png|timings\.json)");
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+        if (!std::regex_match(e.path().filename().string(), own))
+            return "it holds '" + e.path().filename().string() + "', which ngi_gl_viewer does not write";
+    return ec ? "cannot list it: " + ec.message() : std::string();
+}
 
 }  // namespace
 
@@ -375,6 +390,15 @@ int main(int argc, char** argv) {
     }
     o.height = o.width;
     // Which stage failed decides the message and the exit code: 1 bad input, 3 device / GL failure.
+    std::optional<ngi::OutputFolder> out;  // checked before any work; nothing on disk until the first frame's write
+    if (o.headless) {
+        try {
+            out.emplace(o.out, "ngi_gl_viewer: write", viewer_may_replace);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "%s\n", one_line(e.what()).c_str());
+            return 1;
+        }
+    }
     ngi::VoxelScene scene;
     try {
         scene = ngi::make_scene(o.scene);
@@ -408,7 +432,7 @@ int main(int argc, char** argv) {
         const ngi_gl::TransferPath t = ngi_gl::choose_transfer_path(*device);
         std::fprintf(stderr, "ngi_gl_viewer: OpenCL %s; transfer path %s (%s)\n", device->info().name.c_str(),
                      t.used.c_str(), t.note.c_str());
-        return o.headless ? viewer.run_headless() : viewer.run_interactive();
+        return o.headless ? viewer.run_headless(*out) : viewer.run_interactive();
     } catch (const ngi_gl::GlError& e) {
         std::fprintf(stderr, "ngi_gl_viewer: %s\n", one_line(e.what()).c_str());
         return 3;

@@ -5,7 +5,7 @@
 # Usage: viewer_display.sh VIEWER MODEL WORK_DIR
 set -euo pipefail
 viewer=$1 model=$2 work=$3
-rm -rf "$work"
+rm -rf "$work" "$work.foreign"
 # Issue 51: --time was CLI11's float: "nan" passed the range check and "0x10" read as 16 h. Usage errors (exit 2)
 # before any window opens.
 for bad in nan 0x10 25 -1 ""; do
@@ -13,6 +13,13 @@ for bad in nan 0x10 25 -1 ""; do
   [ $rc = 2 ] && grep -q "must be a decimal number of hours" "$work.time.log" || {
     echo "FAILED: --time '$bad': exit $rc: $(cat "$work.time.log")" >&2; exit 1; }
 done
+# Issue 51: the viewer wrote into an --out holding foreign files (and left frame_0000.png on a full disk). Now the
+# output is staged and committed at the end, and an --out holding anything it does not write is refused at once.
+mkdir -p "$work.foreign" && echo keep > "$work.foreign/notes.txt"
+set +e; "$viewer" --headless --frames 1 --out "$work.foreign" > "$work.foreign.log" 2>&1; rc=$?; set -e
+[ $rc = 1 ] && grep -q "holds 'notes.txt', which ngi_gl_viewer does not write" "$work.foreign.log" &&
+  [ "$(ls "$work.foreign")" = notes.txt ] || {
+  echo "FAILED: a foreign --out: exit $rc: $(cat "$work.foreign.log"); now holds: $(ls "$work.foreign")" >&2; exit 1; }
 # Issue 51: an in-range bake of 45 G rays (--bake-rays 65536 --bake-texels 16) ran past 60 s; refused at once now.
 status=0
 bash "$(dirname "$0")/run_under_xvfb.sh" "$viewer" --bake-rays 65536 --bake-texels 16 --headless --frames 1 \
