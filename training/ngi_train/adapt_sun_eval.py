@@ -28,7 +28,6 @@ bake_blend | adapted_sun | reference, one unseen time per scene). Scores are cac
 import argparse
 import bisect
 import datetime
-import shutil
 import sys
 from pathlib import Path
 
@@ -56,15 +55,7 @@ def hours_list(text):
 
 def render_at(ngi_bin, spec, k, hours, out):
     """`ngi render` of dataset path frame k at time of day `hours` into `out` (engine inputs), unless it is there."""
-    if (out / "camera.json").is_file():
-        return
-    tmp = out.with_name(out.name + ".tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.parent.mkdir(parents=True, exist_ok=True)
-    ngi_paths.run([ngi_bin, "render", "--scene", spec, "--frame", k, "--path-frames", PATH_FRAMES, "--face", 64,
-                   "--spp", EVAL_SPP, "--feature-spp", EVAL_SPP, "--time", f"{hours:g}", "--out", tmp,
-                   "--device", "pocl"])
-    tmp.rename(out)
+    gi_eval.render_vox_frame(ngi_bin, spec, k, PATH_FRAMES, EVAL_SPP, EVAL_SPP, out, "pocl", hours)
 
 
 def blend_weights(baked, hours):

@@ -116,16 +116,18 @@ def render_vox(args, work):
     return out
 
 
-def render_vox_frame(ngi_bin, vox, frame, path_frames, spp, feature_spp, out, device):
-    """`ngi render` of frame `frame` of a .vox file's default camera path at N = 64 into the frame folder `out`
-    (render.json in it), unless it is there; written beside it and renamed, so an interrupted render is redone."""
+def render_vox_frame(ngi_bin, vox, frame, path_frames, spp, feature_spp, out, device, hours=None):
+    """`ngi render` of frame `frame` of a .vox file's default camera path at N = 64 (at time of day `hours`; None:
+    the scene's) into the frame folder `out` (render.json in it), unless it is there; written beside it and renamed,
+    so an interrupted render is redone."""
     if (out / "camera.json").is_file():
         return
     tmp = out.with_name(out.name + ".tmp")
     shutil.rmtree(tmp, ignore_errors=True)
     tmp.parent.mkdir(parents=True, exist_ok=True)
     ngi_paths.run([ngi_bin, "render", "--scene", vox, "--frame", frame, "--path-frames", path_frames, "--face", 64,
-                   "--spp", spp, "--feature-spp", feature_spp, "--out", tmp, "--device", device])
+                   "--spp", spp, "--feature-spp", feature_spp, "--out", tmp, "--device", device]
+                  + ([] if hours is None else ["--time", f"{hours:g}"]))
     tmp.rename(out)
 
 
