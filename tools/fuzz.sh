@@ -8,6 +8,8 @@
 # Environment: NGI_FUZZ_TARGETS="npy exr ..." runs only those (names without fuzz_); NGI_FUZZ_JOBS=2 runs two
 # targets at a time. New inputs go to build-fuzz/corpus/<target>/ (fuzz/corpus/ is read as seeds only); crash
 # reproducers to build-fuzz/artifacts/. Prints one line per target: execs, exec/s, peak RSS, result.
+# NGI_FUZZ_RECORD_DIR=DIR also writes one JSON record per target run there (target, commit, executions of the one
+# run, exec/s, peak RSS, findings): fuzz/records/ holds the committed campaigns.
 # NGI_FUZZ_BUILD_DIR=DIR uses a tree already configured with -DNGI_FUZZ=ON (the test command's sanitize tree, which
 # builds the fuzz targets beside the tests: one instrumented library instead of two) instead of ./build-fuzz.
 set -uo pipefail
@@ -40,6 +42,10 @@ fi
 
 seconds=${1:-20}
 runs=${2:-}
+# The commit a record names is the one the targets were built from (the tree's source folder, which differs from
+# this checkout's when NGI_FUZZ_BUILD_DIR is another clone's tree).
+built_from=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$out/CMakeCache.txt" 2>/dev/null)
+built_from=${built_from:-$src}
 declare -A max_len=([npy]=4096 [exr]=16384 [png]=8192 [camera_json]=1024 [dataset_config]=4096 [plan_file]=2048
                     [safetensors]=32768 [frame_folder]=16384 [mesh]=8192 [model_config]=8192)
 targets=${NGI_FUZZ_TARGETS:-}
@@ -69,6 +75,25 @@ run_one() {
         result="FAILED (exit $rc): $(grep -m1 -E 'ERROR: |==[0-9]+==ERROR|runtime error|Test unit written' "$log" || tail -1 "$log"); log $log"
     fi
     printf '%-16s execs %10s  exec/s %7s  peak RSS %5s MB  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${rss:-?}" "$result"
+    if [[ -n "${NGI_FUZZ_RECORD_DIR:-}" ]]; then  # one JSON record per campaign (issue 51: every figure on file)
+        mkdir -p "$NGI_FUZZ_RECORD_DIR"
+        /usr/bin/python3 - "$NGI_FUZZ_RECORD_DIR" "$t" "${execs:-0}" "${rate:-0}" "${rss:-0}" "$rc" "$result" \
+            "$seconds" "${runs:-}" "$(git -C "$built_from" rev-parse HEAD 2>/dev/null || echo unknown)" \
+            "$(git -C "$built_from" status --porcelain --untracked-files=no 2>/dev/null | head -c 1)" <<'PY'
+import datetime, json, os, sys
+d, t, execs, rate, rss, rc, result, seconds, runs, commit, dirty = sys.argv[1:]
+now = datetime.datetime.now(datetime.timezone.utc)
+rec = {"target": f"fuzz_{t}", "commit": commit, "tree_modified": bool(dirty), "date": now.isoformat(timespec="seconds"),
+       "one_uninterrupted_run": True, "executions": int(execs), "exec_per_s": int(rate), "peak_rss_mb": int(rss),
+       "runs_asked": int(runs or 0), "seconds_asked": int(seconds), "exit_code": int(rc),
+       "findings": [] if int(rc) == 0 else [result], "cores": os.cpu_count(),
+       "command": f"tools/fuzz.sh {seconds} {runs or ''}".strip() + f" (NGI_FUZZ_TARGETS={t})"}
+path = os.path.join(d, f"{now:%Y-%m-%d}_fuzz_{t}_{commit[:7]}.json")
+with open(path, "w") as f:
+    json.dump(rec, f, indent=1)
+    f.write("\n")
+PY
+    fi
     return $rc
 }
 
