@@ -163,7 +163,7 @@ def train_views(times=None):
         kind = "fly" if p % 3 == 2 else "auto"
         for j in range(FRAMES_PER_PATH):
             k = (5 + j * (PATH_FRAMES - 10) // (FRAMES_PER_PATH - 1) + 3 * p) % PATH_FRAMES
-            yield kind, TRAIN_PATH_SEED + p, k, times[i % len(times)] if times else None
+            yield kind, TRAIN_PATH_SEED + p, k, hour_of(times, i)
             i += 1
         p += 1
 
@@ -173,9 +173,14 @@ def val_views(times=None):
     taken in turn (None: the scene's own)."""
     views = []
     for i, k in enumerate(VAL_FRAMES):
-        hours = times[i % len(times)] if times else None
+        hours = hour_of(times, i)
         views.append((k, hours, f"p{VAL_PATH_SEED}_f{k:03d}" + time_suffix(hours)))
     return views
+
+
+def hour_of(times, i):
+    """The time of day of view i: the times taken in turn (None without times: the scene's own)."""
+    return times[i % len(times)] if times else None
 
 
 def time_suffix(hours):

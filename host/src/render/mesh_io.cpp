@@ -340,14 +340,9 @@ LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours
         const glm::mat3 L(M);
         const glm::mat3 N = glm::inverseTranspose(L);
         const bool mirrored = glm::determinant(L) < 0.0f;
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-            if (node->mMeshes[k] >= scene->mNumMeshes) fail("node refers to a mesh that does not exist");
+        for (unsigned k = 0; k < node->mNumMeshes; ++k) {  // mesh indices and counts: checked by the count above
             const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
             const std::string where = "mesh " + std::to_string(node->mMeshes[k]);
-            if (std::uint64_t(m.positions.size()) + mesh->mNumVertices > kMaxMeshVertices)
-                fail("more than " + std::to_string(kMaxMeshVertices) + " vertices (every node's instance counted)");
-            if (std::uint64_t(m.triangles.size()) + mesh->mNumFaces > kMaxMeshTriangles)
-                fail("more than " + std::to_string(kMaxMeshTriangles) + " triangles (every node's instance counted)");
             const std::uint32_t base = std::uint32_t(m.positions.size());
             for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
                 const aiVector3D& p = mesh->mVertices[v];

@@ -9,6 +9,7 @@
 #include <deque>
 #include <optional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -636,8 +637,8 @@ void check_gltf(const std::string& b, bool binary, const Fail& fail, const Sidec
         !doc["asset"]["version"].is_string() || doc["asset"]["version"].get<std::string>().compare(0, 2, "2.") != 0)
         fail("not glTF 2.0 (asset.version is not \"2.x\")");
     const GltfChecker g{doc, fail, b.size()};
-    const std::vector<float> strengths = gltf_emissive_strengths(g, doc, fail);
-    if (facts) facts->gltf_emissive_strength = strengths;
+    std::vector<float> strengths = gltf_emissive_strengths(g, doc, fail);  // checked with or without `facts`
+    if (facts) facts->gltf_emissive_strength = std::move(strengths);
 
     const json& buffers = g.array(doc, "buffers", "glTF ");
     std::vector<std::uint64_t> buffer_len;
