@@ -1,6 +1,9 @@
 #include "presenter.hpp"
 
 #include <algorithm>
+#include <cmath>
+
+#include <algorithm>
 #include <vector>
 
 namespace ngi_gl {
@@ -52,8 +55,10 @@ void Presenter::draw(const ngi::Image& display, int window_w, int window_h) {
     glViewport(0, 0, window_w, window_h);
     glClearColor(0.05f, 0.05f, 0.05f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    const int side = std::min(window_w, window_h);
-    glViewport((window_w - side) / 2, (window_h - side) / 2, side, side);
+    // The largest rectangle of the image's aspect that fits the window, centred.
+    const double scale = std::min(double(window_w) / display.width, double(window_h) / display.height);
+    const int vw = std::max(1, int(std::lround(display.width * scale))), vh = std::max(1, int(std::lround(display.height * scale)));
+    glViewport((window_w - vw) / 2, (window_h - vh) / 2, vw, vh);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
     glUseProgram(program_);

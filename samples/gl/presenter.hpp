@@ -1,4 +1,4 @@
-// Shows ngi's display image (N x N x 3 planar, tone-mapped, sRGB-encoded) in the window, scaled to fit.
+// Shows ngi's display image (W x H x 3 planar, tone-mapped, sRGB-encoded) in the window, scaled to fit its aspect.
 #pragma once
 #include <ngi/image.hpp>
 

@@ -45,8 +45,24 @@ struct Options {
     int n = 64, frames = 30, warmup = 3, shadow = 2048, bake_texels = 0, bake_rays = 256, width = 768, height = 768;
     float time = -1.0f;  // hours; < 0: the scene's default
     unsigned seed = 0;
-    bool headless = false, exr = false, display = false;
+    bool headless = false, exr = false, display = false, gi = true;
+    // The front camera is a square 90-degree view: a W x H window shows its centre W x H crop of a max(W, H) square
+    // (a 16:9 window: 90 degrees across, 59 degrees high). The display view computes that whole square.
+    int side() const { return std::max(width, height); }
 };
+
+// The centre of a square image cropped to the window's aspect (rows for a wide window, columns for a tall one).
+ngi::Image crop_to_window(const ngi::Image& img, int window_w, int window_h) {
+    const int w = window_w >= window_h ? img.width : std::max(1, int(std::lround(double(img.width) * window_w / window_h)));
+    const int h = window_h >= window_w ? img.height : std::max(1, int(std::lround(double(img.height) * window_h / window_w)));
+    if (w == img.width && h == img.height) return img;
+    const int x0 = (img.width - w) / 2, y0 = (img.height - h) / 2;
+    ngi::Image out(w, h, img.channels);
+    for (int c = 0; c < img.channels; ++c)
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) out.at(c, y, x) = img.at(c, y0 + y, x0 + x);
+    return out;
+}
 
 struct FrameTiming {
     double raster = 0, readback = 0, gather = 0, input = 0, network = 0, outputs = 0, frame = 0;
@@ -85,8 +101,8 @@ public:
           context_(o.width, o.height, !o.headless, "ngi_gl_viewer: " + scene_.name),
           pipeline_(device, o.n), faces_(ngi_gl::exposed_faces(scene_)), shadow_(o.shadow), gbuffer_(o.n) {
         if (o.display) {  // the front face at the window's size: the display's G-buffer and direct light
-            display_gbuffer_.emplace(o.width);
-            display_view_.emplace(device, o.width);
+            display_gbuffer_.emplace(o.side());
+            display_view_.emplace(device, o.side());
         }
         hours_ = o.time >= 0 ? o.time : scene_.default_time;
         transfer_ = ngi_gl::choose_transfer_path(device);
@@ -139,13 +155,16 @@ public:
             display_gbuffer_->read_back();
             t.display_readback = ms_since(t3);
             const auto t4 = Clock::now();
-            const ngi::FrameImages shown = display_view_->run(gbuffer_.to_frame(pose, 1), lit.lightmap,
-                                                              display_gbuffer_->to_frame(pose, 1), pose.position,
-                                                              false, false, true, {}, nullptr, &t.display);
+            // --gi off: the pipeline's own front direct light as the lightmap -- no indirect light, the same path.
+            const ngi::Frame low = gbuffer_.to_frame(pose, 1);
+            const ngi::Image& lightmap = o_.gi ? lit.lightmap : low.get(ngi::Feature::Direct, ngi::Face::Front);
+            const ngi::FrameImages shown = display_view_->run(low, lightmap, display_gbuffer_->to_frame(pose, 1),
+                                                              pose.position, false, false, true, {}, nullptr, &t.display);
             display_gbuffer_->unmap();
             t.display_ngi = ms_since(t4);
             lit.display = shown.display;
         }
+        lit.display = crop_to_window(lit.display, o_.width, o_.height);
         int w = 0, h = 0;
         glfwGetFramebufferSize(context_.window(), &w, &h);
         presenter_.draw(lit.display, w, h);
@@ -164,10 +183,11 @@ public:
         if (display_view_) {
             const ngi::DisplayTimings& d = last_.display;
             std::snprintf(b, sizeof b,
-                          "%s  N=%d -> %d^2  %.1f fps\nraster %.1f + %.1f ms, readback %.1f + %.1f ms\n"
+                          "%s  N=%d -> %dx%d of %d^2  %.1f fps\nraster %.1f + %.1f ms, readback %.1f + %.1f ms\n"
                           "ngi %.1f: merge %.1f %s %.1f\ndisplay %.1f: guides %.1f up %.1f temporal %.1f out %.1f\n"
                           "%.1f h  no area light",
-                          rung_.c_str(), o_.n, o_.width, fps_, last_.raster, last_.display_raster, last_.readback,
+                          o_.gi ? rung_.c_str() : "GI off (direct light only)", o_.n, o_.width, o_.height, o_.side(),
+                          fps_, last_.raster, last_.display_raster, last_.readback,
                           last_.display_readback, last_.gather + last_.input + last_.network + last_.outputs,
                           last_.input, model_.config().family == "ssgi" ? "ssgi" : "network", last_.network,
                           last_.display_ngi, d.geometry_ms, d.upsample_ms, d.temporal_ms, d.outputs_ms, hours_);
@@ -277,7 +297,9 @@ public:
         nlohmann::json j;
         j["scene"] = scene_.name;
         j["n"] = o_.n;
-        j["display"] = o_.display ? o_.width : 0;
+        j["display"] = o_.display ? o_.side() : 0;  // the display view's square side (the window shows its crop)
+        j["window"] = {o_.width, o_.height};
+        j["gi"] = o_.gi;
         j["rung"] = rung_;
         j["model"] = o_.model;
         j["device"] = device_.info().platform_name + " / " + device_.info().name;
@@ -378,17 +400,41 @@ int main(int argc, char** argv) {
     app.add_option("--bake-texels", o.bake_texels, "baked texels per face edge (0 = automatic)")->check(CLI::Range(0, 16))->capture_default_str();
     app.add_option("--bake-rays", o.bake_rays, "sky rays per baked texel")->check(CLI::Range(1, 65536))->capture_default_str();
     app.add_option("--seed", o.seed, "camera path seed")->capture_default_str();
-    app.add_option("--window", o.width, "window width and height in pixels")->check(CLI::Range(64, 4096))->capture_default_str();
+    std::string window = "768";
+    app.add_option("--window", window, "window size in pixels: W (square) or WxH, each in [64, 4096]; a non-square window "
+                                       "shows the centre crop of the square front view")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                static const std::regex size(R"(([0-9]{2,4})(x([0-9]{2,4}))?)");
+                std::smatch m;
+                if (!std::regex_match(v, m, size)) return "must be W or WxH, got '" + v + "'";
+                for (int g : {1, 3})
+                    if (m[g].matched && (std::stoi(m[g]) < 64 || std::stoi(m[g]) > 4096))
+                        return "each side must be in [64, 4096], got '" + v + "'";
+                return std::string();
+            },
+            "W[xH]"))
+        ->capture_default_str();
+    std::string gi = "on";
+    app.add_option("--gi", gi, "on: ngi's GI; off: direct light only through the same display path (needs --display; "
+                               "for before/after comparisons)")
+        ->check(CLI::IsMember({"on", "off"}))->capture_default_str();
     app.add_flag("--display", o.display,
                  "show the GI at the window's resolution: the front face rasterized at that size, the N x N lightmap's "
                  "indirect light upsampled by its normals and depth and accumulated over frames (ngi::DisplayView)");
     try {
         app.parse(argc, argv);
         if (o.headless && o.out.empty()) throw CLI::RequiredError("--out (with --headless)");
+        if (gi == "off" && !o.display) throw CLI::ValidationError("--gi", "off needs --display");
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
     }
-    o.height = o.width;
+    {
+        const auto x = window.find('x');
+        o.width = std::stoi(window.substr(0, x));
+        o.height = x == std::string::npos ? o.width : std::stoi(window.substr(x + 1));
+    }
+    o.gi = gi == "on";
     // Which stage failed decides the message and the exit code: 1 bad input, 3 device / GL failure.
     std::optional<ngi::OutputFolder> out;  // checked before any work; nothing on disk until the first frame's write
     if (o.headless) {
