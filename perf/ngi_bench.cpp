@@ -205,8 +205,13 @@ json device_json(const Device& d, const GemmParams& p) {
 int run_gemm(int argc, char** argv) {
     Device d = Device::open(arg(argc, argv, "--device"));
     const int repeats = std::stoi(arg(argc, argv, "--repeats", "7"));
-    const GemmParams p = gemm_params_for(d.info());
-    json out = {{"device", device_json(d, p)}, {"repeats", repeats}};
+    // The variant the self-check accepted (what models run), not the table's choice: a variant that fails the check
+    // is never timed. Throws, naming every rejection, where no variant computes correct results.
+    const ngi::detail::GemmSelection& selected = ngi::detail::gemm_selection(ngi::detail::context_of(d));
+    const GemmParams p = selected.params;
+    json rejected = json::array();
+    for (const auto& [params, verdict] : selected.rejected) rejected.push_back(params.to_string() + ": " + verdict.reason);
+    json out = {{"device", device_json(d, p)}, {"repeats", repeats}, {"rejected", rejected}};
     std::fprintf(stderr, "gemm 1024^3 ...\n");
     out["gemm_1024"] = bench_gemm(ngi::detail::context_of(d), p, {"1024^3", 1024, 1024, 1024}, repeats);
     json layers = json::array();

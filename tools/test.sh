@@ -97,7 +97,7 @@ run_stage() {
       export RUSTICL_ENABLE=llvmpipe
       if ! build/ngi devices --no-check | grep -q "platform rusticl"; then
         missing rusticl "no rusticl device (mesa-opencl-icd with RUSTICL_ENABLE=llvmpipe)"
-      # The CLI, training, C ABI, C sample, Python, GL viewer and threading tests exercise host code covered on PoCL (and by
+      # The CLI, training, gpu_check, C ABI, C sample, Python, GL viewer and threading tests exercise host code covered on PoCL (and by
       # the sanitize and tsan stages); each of them would recompile the generators' programs in new processes and
       # contexts. The Catch2 kernel and model tests are what runs the device, all of them here since rusticl got its own
       # tiles (2 x 2 per work-item, kernels/gemm_tuning.json; 2026-12-06: the frame-path, image-descriptor, Neural GI
@@ -116,7 +116,7 @@ run_stage() {
       # fresh clone: the Neural GI stability row took 680 of the stage's 1,539 s (ten runs of its 8 x 256 MLP at
       # 64^2 on llvmpipe); it now runs at 32^2 (107 s alone).
       elif n=$(NGI_TEST_DEVICE=rusticl run_ctest build \
-                 -E '^(ci_sanitizer_triage|layer_check|training_.*|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|gl_agreement|gl_viewer_display|GEMM: every knob set matches the reference at the generators. layer shapes|dense layer: every GPU and CPU knob set at small odd shapes|every GEMM parameter set in the tuning space gives the same convolution|frame path: host in/out costs .*|frame path: an indirect-mode model.s lightmap .*|frame path: the path tracer feeds the pipeline .*|neural GI on a frame: bad input .*)$'); then
+                 -E '^(ci_sanitizer_triage|layer_check|perf_gpu_check|training_.*|cli_end_to_end|c_api|c_sample_lightmap|python_bindings|dataset_mpi|threads: .*|gl_agreement|gl_viewer_display|GEMM: every knob set matches the reference at the generators. layer shapes|dense layer: every GPU and CPU knob set at small odd shapes|every GEMM parameter set in the tuning space gives the same convolution|frame path: host in/out costs .*|frame path: an indirect-mode model.s lightmap .*|frame path: the path tracer feeds the pipeline .*|neural GI on a frame: bad input .*)$'); then
         stage_result rusticl ok "$n" $((SECONDS - start))
       else stage_result rusticl failed "$n" $((SECONDS - start)); fi
       unset RUSTICL_ENABLE ;;
