@@ -397,6 +397,13 @@ TEST_CASE("mesh materials: glTF emissive strength applied, negative colours, emi
         spit(dir / "t.mtl", mtl);
         CHECK_THAT(mesh_error(dir / "t.obj"), Contains("t.obj") && Contains("negative component"));
     }
+    // A usemtl of a name the library does not define: assimp went on with its default material (issue 51).
+    spit(dir / "t.mtl", "newmtl b\nKd 0.5 0.5 0.5\nnewmtl c d\nKd 1 1 1\n");
+    CHECK_THAT(mesh_error(dir / "t.obj"), Contains("t.obj") && Contains("OBJ line 5: usemtl 'a'") &&
+                                              Contains("t.mtl defines b, c d") && Contains("lose their colour"));
+    // Names as assimp reads them: the rest of the line, blanks and a CR trimmed; a name may hold a space.
+    spit(dir / "t2.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl  c d \r\nf 1 2 3\n");
+    CHECK(load_mesh(dir / "t2.obj").mesh.triangle_count() == 1);
     std::filesystem::remove(dir / "t.mtl");
     CHECK_THAT(mesh_error(dir / "t.obj"),
                Contains("t.obj") && Contains("material library") && Contains("t.mtl does not exist"));

@@ -17,7 +17,9 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -114,6 +116,8 @@ public:
     }
     const std::string& error() const { return error_; }
     std::size_t files_read() const { return files_.size(); }
+    // The bytes of every file read besides the mesh itself (an OBJ's material libraries), by path.
+    const std::map<std::string, std::string>& files() const { return files_; }
     const std::vector<std::string>& missing() const { return missing_; }
 
 private:
@@ -126,6 +130,53 @@ private:
     std::string error_;
     std::vector<std::string> missing_;  // files assimp asked for that do not exist
 };
+
+// ---- OBJ material names -------------------------------------------------------------------------------------
+// `usemtl NAME` of a name no material library defines: assimp logs "Unsupported material requested" and goes on with
+// its default material, so the faces after it lost their colour silently (issue 51). Refused, naming the line, the
+// name and the names the libraries define. Names as assimp reads them: the rest of the line, blanks trimmed.
+
+std::string_view trimmed(std::string_view v) {
+    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+    while (!v.empty() && (v.back() == ' ' || v.back() == '\t' || v.back() == '\r')) v.remove_suffix(1);
+    return v;
+}
+
+// (line number, rest of the line) of every line that starts with `keyword` and a blank.
+std::vector<std::pair<std::size_t, std::string_view>> statements(const std::string& b, std::string_view keyword) {
+    std::vector<std::pair<std::size_t, std::string_view>> out;
+    std::size_t pos = 0;
+    for (std::size_t line_no = 1; pos < b.size(); ++line_no) {
+        const std::size_t nl = b.find('\n', pos);
+        std::string_view line = trimmed(std::string_view(b).substr(pos, (nl == std::string::npos ? b.size() : nl) - pos));
+        pos = nl == std::string::npos ? b.size() : nl + 1;
+        if (line.size() > keyword.size() && line.substr(0, keyword.size()) == keyword &&
+            (line[keyword.size()] == ' ' || line[keyword.size()] == '\t'))
+            out.emplace_back(line_no, trimmed(line.substr(keyword.size())));
+    }
+    return out;
+}
+
+void check_usemtl_names(const std::string& obj, const std::map<std::string, std::string>& libraries,
+                        const std::string& name) {
+    std::set<std::string_view> defined;
+    std::string files;
+    for (const auto& [path, bytes] : libraries) {
+        files += (files.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
+        for (const auto& [line, material] : statements(bytes, "newmtl")) defined.insert(material);
+    }
+    for (const auto& [line, material] : statements(obj, "usemtl")) {
+        if (defined.count(material)) continue;
+        std::string known;
+        for (std::string_view d : defined) {
+            if (known.size() > 200) { known += ", ..."; break; }
+            known += (known.empty() ? "" : ", ") + std::string(d);
+        }
+        throw InputError("load mesh " + name + ": OBJ line " + std::to_string(line) + ": usemtl '" +
+                         std::string(material).substr(0, 80) + "' names no material of its material library (" + files +
+                         " defines " + (known.empty() ? "none" : known) + "): its faces would lose their colour");
+    }
+}
 
 // ---- colours -----------------------------------------------------------------------------------------------
 
@@ -496,6 +547,7 @@ LoadedMesh import(const std::string& bytes, const std::string& name, bool sideca
         throw InputError("load mesh " + name + ": its material library " + io->missing().front() + " does not "
                          "exist: its colours would be lost (put the .mtl beside it, or remove the mtllib line to "
                          "load it in the default colour)");
+    if (format == Format::Obj && io->files_read() > 0) check_usemtl_names(bytes, io->files(), name);
     // An OBJ's materials have colours of the file's only when its .mtl was read (assimp invents the rest).
     return convert(scene, format, format == Format::Obj && io->files_read() == 0, facts.gltf_emissive_strength, name);
 }
