@@ -17,5 +17,6 @@ Run add_ao(CLI::App& app);
 Run add_voxel_data(CLI::App& app);
 Run add_probe_gi(CLI::App& app);
 Run add_neural_gi(CLI::App& app);
+Run add_warmup(CLI::App& app);
 
 }  // namespace ngi_cli

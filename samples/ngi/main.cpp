@@ -116,7 +116,8 @@ int main(int argc, char** argv) {
     std::vector<std::pair<CLI::App*, ngi_cli::Run>> commands;
     for (auto add : {ngi_cli::add_devices, ngi_cli::add_generate, ngi_cli::add_metrics, ngi_cli::add_merge,
                      ngi_cli::add_lightmap, ngi_cli::add_render, ngi_cli::add_dataset, ngi_cli::add_ao_data,
-                     ngi_cli::add_ao, ngi_cli::add_voxel_data, ngi_cli::add_probe_gi, ngi_cli::add_neural_gi}) {
+                     ngi_cli::add_ao, ngi_cli::add_voxel_data, ngi_cli::add_probe_gi, ngi_cli::add_neural_gi,
+                     ngi_cli::add_warmup}) {
         ngi_cli::Run run = add(app);
         commands.emplace_back(app.get_subcommands({}).back(), std::move(run));
     }

@@ -578,4 +578,22 @@ for name in fifo_render fifo_voxel_data fifo_ao_data device_empty ao_data_foreig
   no_unexpected $name
 done
 
+# ngi warmup (issue 48, cold start): into an empty program cache it builds the programs an ssgi rung's frame and a
+# display view need; a second process finds them all there and builds none. A cache folder that cannot be made, or
+# a model that is no frame rung, is refused (exit 1) before any work.
+NGI_CACHE_DIR="$work/warm_cache" "$ngi" warmup --model ssgi_surround --n 16 --display 24 --json > "$work/warm2.json"
+NGI_CACHE_DIR="$work/warm_cache" "$ngi" warmup --model ssgi_surround --n 16 --display 24 --json > "$work/warm3.json"
+/usr/bin/python3 -c "import json, sys
+a, b = (json.load(open(f))['models'][0] for f in sys.argv[2:4])
+assert json.load(open(sys.argv[2]))['cache_dir'] == sys.argv[1], 'cache_dir is not NGI_CACHE_DIR'
+assert a['programs_built'] > 0 and a['programs_from_cache'] == 0, a
+assert b['programs_built'] == 0 and b['programs_from_cache'] == a['programs_built'], (a, b)
+" "$work/warm_cache" "$work/warm2.json" "$work/warm3.json" || fail "ngi warmup: a second process built programs again"
+echo x > "$work/warm_file"
+expect="program cache folder"
+NGI_CACHE_DIR="$work/warm_file/cache" expect_failure warm_unwritable "$ngi" warmup --model ssgi_surround --n 16
+[ "$(cat "$work/warm_file")" = x ] || fail "ngi warmup: changed the file in the way of its cache"
+expect="not a frame rung"
+expect_failure warm_family "$ngi" warmup --model ao_blob_16x8 --n 16
+
 echo "cli_end_to_end: 3 commands ran; bad inputs, bad options, full disks (${mode}) refused cleanly"

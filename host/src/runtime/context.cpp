@@ -241,6 +241,7 @@ cl_program Context::program(const std::string& name, const std::string& defines)
             if (prog) clReleaseProgram(prog);
             prog = nullptr;  // stale or foreign binary: rebuild from source below
         }
+        if (prog) ++programs_from_cache_;
     }
     // 2. From the embedded source.
     if (!prog) {
@@ -254,6 +255,7 @@ cl_program Context::program(const std::string& name, const std::string& defines)
             clReleaseProgram(prog);
             throw ClError(op, "clBuildProgram", err, "build log:\n" + log);
         }
+        ++programs_built_;
         // Store the binary for the next process; a cache we cannot write is not an error.
         std::size_t bin_size = 0;
         if (clGetProgramInfo(prog, CL_PROGRAM_BINARY_SIZES, sizeof bin_size, &bin_size, nullptr) == CL_SUCCESS &&

@@ -157,6 +157,12 @@ public:
               const char* what);
     // Every host <-> device transfer of this context since it was created (write/read and their wrappers).
     HostTransfers transfers() const;
+    // Programs this context compiled from source (and offered to the disk cache) and loaded from the disk cache since
+    // it was created (ngi::warm_up reports them: a warmed cache builds none).
+    struct ProgramCounts {
+        int built = 0, from_cache = 0;
+    };
+    ProgramCounts program_counts() const { return {programs_built_.load(), programs_from_cache_.load()}; }
 
     // Enqueues an NDRange. global is rounded up to a multiple of local (kernels guard their bounds). A local size
     // beyond the compiled kernel's CL_KERNEL_WORK_GROUP_SIZE (registers, driver limits) is halved until it fits,
@@ -187,6 +193,7 @@ private:
     long loop_limit_ = -1;  // -1 = not probed yet
     bool retained_device_ = false;  // interop: the application's device was retained here
     std::atomic<long long> uploads_{0}, downloads_{0}, upload_bytes_{0}, download_bytes_{0};
+    std::atomic<int> programs_built_{0}, programs_from_cache_{0};
 };
 
 // The context behind a Device (library internals only: the public header keeps it opaque).
