@@ -7,8 +7,10 @@ the tuning database give it? For each device that `ngi devices --json` lists (ru
     tests       the device's Catch2 cases with NGI_TEST_DEVICE=P:D: "quick" = the op harness ([op_harness]: every
                 op against its naive reference, every GEMM knob set), "full" = every case, or any Catch2 filter
     tune        ngi_bench tune: a quick sweep of the device's GEMM knob space (each candidate checked against the
-                host reference before it is timed); the winner goes into OUT/gemm_tuning_proposed.json, a copy of
-                kernels/gemm_tuning.json with this device's entry added or replaced (to propose, never applied here)
+                host reference before it is timed); a winner other than the table's choice is run again beside it
+                with more repeats, and only a confirmed gain (CONFIRM_GAIN) goes into OUT/gemm_tuning_proposed.json,
+                a copy of kernels/gemm_tuning.json with this device's entry added or replaced (to propose, never
+                applied here)
     bench:NAME  the benchmarks of perf/bench_devices.py (GEMM, generators, the whole frame, AO MLP, path tracer)
 
 A device whose self-check fails (no GEMM variant reproduces the host reference) is reported as failed with the
@@ -53,15 +55,25 @@ def git_commit():
 
 
 def tail(text, n=2000):
-    return text.strip()[-n:]
+    return (text or "").strip()[-n:]
 
 
-def run_tests(build, spec, filt, logs, env):
+def run_step(cmd, env, timeout):
+    """subprocess.run with a time limit: a step past it (a hung driver, a device too slow for the step) is killed and
+    reported as failed, and the check goes on with the next step."""
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=timeout)
+    except subprocess.TimeoutExpired as e:
+        return subprocess.CompletedProcess(cmd, -9, e.stdout or "", f"timed out after {timeout} s (--timeout); "
+                                                                   f"{tail(e.stderr if isinstance(e.stderr, str) else '')}")
+
+
+def run_tests(build, spec, filt, logs, env, timeout):
     """The device's Catch2 cases; counts from the JUnit report (Catch2's exit code is the failure count)."""
     xml = logs / f"tests_{spec.replace(':', '_')}.xml"
     cmd = [str(build / "tests" / "ngi_tests")] + ([filt] if filt else []) + ["-r", "junit", "-o", str(xml)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=dict(env, NGI_TEST_DEVICE=spec), cwd=REPO)
-    if not xml.is_file():
+    proc = run_step(cmd, dict(env, NGI_TEST_DEVICE=spec), timeout)
+    if proc.returncode == -9 or not xml.is_file():
         return {"status": "failed", "error": f"exit {proc.returncode}, no report: {tail(proc.stderr)}"}
     root = ElementTree.parse(xml).getroot()
     suites = [root] if root.tag == "testsuite" else root.findall("testsuite")
@@ -81,33 +93,64 @@ def run_tests(build, spec, filt, logs, env):
     return result
 
 
-def run_tune(build, spec, args, proposal, env):
-    """ngi_bench tune's quick sweep; the winner replaces this device's entry in the proposal file."""
-    cmd = [str(build / "perf" / "ngi_bench"), "tune", "--device", spec, "--max", str(args.tune_max),
-           "--shapes", args.tune_shapes, "--repeats", str(args.repeats), "--write-db", str(proposal)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO)
+# A sweep's winner is proposed only when a second, longer run of it side by side with the table's choice confirms a
+# gain of at least this much: with three repeats of millisecond GEMMs, noise alone moved one knob set 73 -> 177
+# GFLOP/s between two runs here.
+CONFIRM_GAIN = 1.05
+
+
+def tune(build, spec, args, env, sets=None, repeats=None, write_db=None):
+    """One ngi_bench tune run: (its JSON, None) or (None, a failed step)."""
+    cmd = [str(build / "perf" / "ngi_bench"), "tune", "--device", spec, "--shapes", args.tune_shapes,
+           "--repeats", str(repeats or args.repeats)]
+    cmd += ["--sets", sets] if sets else ["--max", str(args.tune_max)]
+    cmd += ["--write-db", str(write_db)] if write_db else []
+    proc = run_step(cmd, env, args.timeout)
     if proc.returncode != 0:
-        return {"status": "failed", "error": f"exit {proc.returncode}: {tail(proc.stderr)}"}
-    out = json.loads(proc.stdout)
+        return None, {"status": "failed", "error": f"exit {proc.returncode}: {tail(proc.stderr)}"}
+    return json.loads(proc.stdout), None
+
+
+def run_tune(build, spec, args, proposal, env):
+    """The tuner's quick sweep over the device's knob space, then the winner against the table's choice again with
+    more repeats; a confirmed winner replaces this device's entry in the proposal file."""
+    out, failed = tune(build, spec, args, env)
+    if failed:
+        return failed
     ranked = out["ranked"]
     passed = [r for r in ranked if "geomean_gflops" in r]
-    current = next((r for r in ranked if r["params"] == out["device"]["gemm_params"]), None)
-    entry = None
-    if passed:  # the entry ngi_bench wrote for this device (matched on platform, vendor, device and driver)
-        dev = out["device"]
-        for e in json.loads(proposal.read_text())["entries"]:
-            m = e.get("match", {})
-            if m.get("device") == dev["name"] and m.get("platform") == dev["platform"] and m.get("driver") == dev["driver"]:
-                entry = e
-    return {"status": "ok", "shapes": out["shapes"], "candidates": len(ranked), "passed": len(passed), "entry": entry,
-            "rejected": [{"params": r["params"], "reason": r["rejected"]} for r in ranked if "rejected" in r],
-            "winner": passed[0] if passed else None, "table_choice": current,
-            "proposal": proposal.name if passed else None}
+    table = out["device"]["gemm_params"]
+    current = next((r for r in ranked if r["params"] == table), None)
+    result = {"status": "ok", "shapes": out["shapes"], "candidates": len(ranked), "passed": len(passed),
+              "rejected": [{"params": r["params"], "reason": r["rejected"]} for r in ranked if "rejected" in r],
+              "winner": passed[0] if passed else None, "table_choice": current, "confirmation": None,
+              "entry": None, "proposal": None}
+    if not passed or passed[0]["params"] == table:
+        return result  # nothing to propose: no set passed, or the table's choice won
+    repeats = max(5, 3 * args.repeats)
+    again, failed = tune(build, spec, args, env, sets=f"{passed[0]['params']};{table}", repeats=repeats)
+    if failed:
+        return dict(failed, sweep=result)
+    rows = {r["params"]: r.get("geomean_gflops", 0.0) for r in again["ranked"]}
+    gain = rows.get(passed[0]["params"], 0.0) / max(rows.get(table, 0.0), 1e-12)
+    result["confirmation"] = {"repeats": repeats, "winner_gflops": rows.get(passed[0]["params"]),
+                              "table_choice_gflops": rows.get(table), "gain": gain,
+                              "confirmed": gain >= CONFIRM_GAIN}
+    if gain < CONFIRM_GAIN:
+        return result
+    _, failed = tune(build, spec, args, env, sets=passed[0]["params"], repeats=1, write_db=proposal)
+    if failed:
+        return dict(failed, sweep=result)
+    dev = out["device"]  # the entry ngi_bench wrote (matched on platform, device and driver)
+    for e in json.loads(proposal.read_text())["entries"]:
+        m = e.get("match", {})
+        if m.get("device") == dev["name"] and m.get("platform") == dev["platform"] and m.get("driver") == dev["driver"]:
+            result["entry"], result["proposal"] = e, proposal.name
+    return result
 
 
-def run_bench(argv, spec, env):
-    proc = subprocess.run([str(c) for c in argv] + ["--device", spec], capture_output=True, text=True, env=env,
-                          cwd=REPO)
+def run_bench(argv, spec, env, timeout):
+    proc = run_step([str(c) for c in argv] + ["--device", spec], env, timeout)
     if proc.returncode != 0:
         return {"status": "failed", "error": f"exit {proc.returncode}: {tail(proc.stderr)}"}
     return {"status": "ok", "result": json.loads(proc.stdout)}
@@ -154,9 +197,14 @@ def summary_markdown(report):
             elif step == "tests":
                 figure = f"{r['cases']} cases, {r['checks']} checks, 0 failures, {r['wall_s']} s"
             elif step == "tune" and r.get("winner"):
-                w, t = r["winner"], r.get("table_choice") or {}
-                figure = (f"{w['params']}: {w['geomean_gflops']:.1f} GFLOP/s (table's choice "
-                          f"{t.get('geomean_gflops', 0):.1f})")
+                w, t, c = r["winner"], r.get("table_choice") or {}, r.get("confirmation")
+                figure = (f"sweep: {w['params']} {w['geomean_gflops']:.3g} GFLOP/s, table's choice "
+                          f"{t.get('params', '?')} {t.get('geomean_gflops', 0):.3g}")
+                if c:
+                    figure += (f"; again x{c['repeats']}: gain {c['gain']:.2f} -> "
+                               f"{'proposed' if c['confirmed'] else 'not proposed'}")
+                elif w["params"] == t.get("params"):
+                    figure += " (the table's choice holds)"
             elif step == "bench:gemm":
                 figure = f"{r['result']['gemm_1024']['gflops']:.1f} GFLOP/s at 1024^3"
             elif step.startswith("bench:generator"):
@@ -181,9 +229,11 @@ def main(argv=None):
     ap.add_argument("--tune-max", type=int, default=8, help="knob sets the tuner tries (0: no tuning)")
     ap.add_argument("--tune-shapes", default=QUICK_TUNE_SHAPES, help="the tuner's GEMM shapes, \"M,N,K;...\"")
     ap.add_argument("--repeats", type=int, default=3, help="timed runs per benchmark (median)")
+    ap.add_argument("--timeout", type=float, default=1800, help="seconds one step may take before it is killed and "
+                    "reported as failed (a hung driver; llvmpipe runs the 1024^3 GEMM benchmark for many minutes)")
     args = ap.parse_args(argv)
-    if args.repeats < 1 or args.tune_max < 0:
-        ap.error("--repeats must be >= 1 and --tune-max >= 0")
+    if args.repeats < 1 or args.tune_max < 0 or not args.timeout > 0:
+        ap.error("--repeats must be >= 1, --tune-max >= 0 and --timeout > 0")
 
     build, out = Path(args.build).resolve(), Path(args.out).resolve()
     for exe in ("ngi", "tests/ngi_tests", "perf/ngi_bench"):
@@ -242,11 +292,11 @@ def main(argv=None):
             if isinstance(what, dict):
                 result = dict(what)
             elif what == "tests":
-                result = run_tests(build, spec, tests, logs, env)
+                result = run_tests(build, spec, tests, logs, env, args.timeout)
             elif what == "tune":
                 result = run_tune(build, spec, args, proposal, env)
             else:
-                result = run_bench(runs[name.split(":", 1)[1]], spec, env)
+                result = run_bench(runs[name.split(":", 1)[1]], spec, env, args.timeout)
             result["wall_s"] = round(time.monotonic() - t0, 1)
             report["devices"][spec]["steps"][name] = result
             write_atomic(report_path, report)

@@ -29,6 +29,11 @@ def test_failed_self_check_means_no_timing():
     assert ok == {"bench:gemm": "bench"}
 
 
+def test_a_step_past_its_time_is_killed_and_failed():
+    proc = gpu_check.run_step(["sleep", "30"], dict(os.environ), 0.5)
+    assert proc.returncode == -9 and "timed out after 0.5 s" in proc.stderr
+
+
 def run_check(out, *extra):
     cmd = [sys.executable, str(Path(gpu_check.__file__)), "--build", str(BUILD), "--out", str(out), "--devices",
            pocl_spec(), "--tests", "[op_harness][oclgrind]", "--tune-max", "2", "--bench", "frame_n64",
@@ -53,11 +58,19 @@ def test_real_run_on_pocl_and_resume(tmp_path):
     assert steps["tests"]["status"] == "ok" and steps["tests"]["cases"] >= 2 and steps["tests"]["failures"] == 0
     tune = steps["tune"]
     assert tune["status"] == "ok" and tune["candidates"] == 2 and tune["winner"]["geomean_gflops"] > 0
-    # The proposal is the repository's database plus this device's exact entry with the winner.
+    # The proposal is the repository's database, plus this device's exact entry only when a winner other than the
+    # table's choice kept its gain in the longer run beside it.
     proposal = json.loads((out / "gemm_tuning_proposed.json").read_text())
-    assert tune["entry"] in proposal["entries"] and tune["entry"]["params"] == tune["winner"]["params"]
     repo_db = json.loads((Path(gpu_check.REPO) / "kernels" / "gemm_tuning.json").read_text())
-    assert len(proposal["entries"]) in (len(repo_db["entries"]), len(repo_db["entries"]) + 1)
+    confirmation = tune["confirmation"]
+    if tune["winner"]["params"] == tune["table_choice"]["params"]:
+        assert confirmation is None and tune["entry"] is None and proposal == repo_db
+    elif confirmation["confirmed"]:
+        assert confirmation["gain"] >= gpu_check.CONFIRM_GAIN
+        assert tune["entry"] in proposal["entries"] and tune["entry"]["params"] == tune["winner"]["params"]
+        assert len(proposal["entries"]) in (len(repo_db["entries"]), len(repo_db["entries"]) + 1)
+    else:
+        assert confirmation["gain"] < gpu_check.CONFIRM_GAIN and tune["entry"] is None and proposal == repo_db
     frame = steps["bench:frame_n64"]
     assert frame["status"] == "ok" and frame["result"]["sizes"][0]["device"]["median_ms"] > 0
     assert "| tune | ok |" in (out / "report.md").read_text()
