@@ -7,6 +7,14 @@
 // wall-clock per frame, and the host transfers (count and bytes) of one frame of each path. Prints JSON.
 //
 //   frame_bench [--device D] [--model models/surround.safetensors] [--n 64,128,256] [--runs 9]
+//
+// --display S (issue 50): the whole displayed frame instead, device in and device out: SurroundPipeline::enqueue at
+// each N (preprocess, merge, the rung -- a network or the ssgi gather --, decode, compose) and then ngi::DisplayView
+// at S x S (guides, upsampling, temporal accumulation, compose, tone map; docs/CONVENTIONS.md section 20). Reported
+// per stage (medians of runs with stage timings, where each stage waits for the device) and for the whole frame
+// (medians of runs without: one enqueue of each, one finish). 960^2 has the pixels of 1280 x 720. --frame DIR: a
+// rendered frame folder as the N x N input (the ssgi gather's cost depends on the scene; default: a synthetic frame);
+// the display face is synthetic (the display kernels are branch-free: their cost does not depend on the values).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,7 +29,9 @@
 
 #include "bench_frame.hpp"
 #include "ngi/device_buffer.hpp"
+#include "ngi/display.hpp"
 #include "ngi/error.hpp"
+#include "ngi/image_io.hpp"
 #include "ngi/model.hpp"
 #include "ngi/pipeline.hpp"
 
@@ -41,24 +51,114 @@ nlohmann::json summary(std::vector<double> ms, const ngi::HostTransfers& t) {
             {"download_bytes", t.download_bytes}};
 }
 
+double median_of(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// --display S: the whole displayed frame per stage and in one piece (see the top of the file).
+nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, const ngi::Frame& low, int display,
+                               int runs) {
+    const int n = low.n, faces = model.config().input_nc == 12 || model.config().family == "ssgi" ? ngi::kFaceCount : 1;
+    ngi::SurroundPipeline pl(device, n);
+    const std::vector<float> planes = ngi::pack_frame_planes(low, faces);
+    ngi::DeviceBuffer in = ngi::DeviceBuffer::allocate(device, planes.size() * sizeof(float));
+    in.upload(planes.data(), in.bytes());
+    ngi::FrameOutputs outs;
+    outs.lightmap = ngi::DeviceBuffer::allocate(device, 3 * std::size_t(n) * n * sizeof(float));
+    const ngi::FrameDesc desc = ngi::FrameDesc::of(low, faces);
+
+    std::mt19937 rng(2);
+    ngi::Frame hi = ngi_bench::synthetic_frame(2, rng);  // six tiny faces; face 0 replaced at S x S below
+    hi.n = display;
+    hi.look = low.look;
+    hi.up = low.up;
+    std::mt19937 rng_hi(3);
+    for (int fi = 0; fi < ngi::kFeatureCount; ++fi) {
+        const ngi::Feature f = ngi::Feature(fi);
+        ngi::Image im(display, display, ngi::feature_channels(f));
+        std::uniform_real_distribution<float> u(0.0f, f == ngi::Feature::Depth ? 20.0f : 1.0f);
+        for (float& v : im.data) v = u(rng_hi);
+        hi.get(f, ngi::Face::Front) = std::move(im);
+    }
+    const std::vector<float> hi_planes = ngi::pack_frame_planes(hi, 1);
+    ngi::DeviceBuffer hi_in = ngi::DeviceBuffer::allocate(device, hi_planes.size() * sizeof(float));
+    hi_in.upload(hi_planes.data(), hi_in.bytes());
+    const ngi::FrameDesc hi_desc = ngi::FrameDesc::of(hi, 1);
+    ngi::FrameOutputs shown;
+    shown.display = ngi::DeviceBuffer::allocate(device, 3 * std::size_t(display) * display * sizeof(float));
+    ngi::DisplayView view(device, display);
+    const glm::vec3 position(0.0f);
+
+    auto frame = [&](ngi::FrameTimings* ft, ngi::DisplayTimings* dt) {
+        pl.enqueue(model, in, desc, outs, nullptr, ft);
+        view.enqueue(n, in, outs.lightmap, hi_in, hi_desc, position, shown, nullptr, dt);
+        device.finish();
+    };
+    for (int w = 0; w < 3; ++w) frame(nullptr, nullptr);  // builds, buffers, and the history the temporal pass reads
+    std::vector<double> whole, stage[8];
+    for (int r = 0; r < runs; ++r) {
+        const double t0 = now_ms();
+        frame(nullptr, nullptr);
+        whole.push_back(now_ms() - t0);
+        ngi::FrameTimings ft;
+        ngi::DisplayTimings dt;
+        frame(&ft, &dt);
+        const double v[8] = {ft.gather_ms, ft.input_ms, ft.network_ms, ft.outputs_ms,
+                             dt.geometry_ms, dt.upsample_ms, dt.temporal_ms, dt.outputs_ms};
+        for (int k = 0; k < 8; ++k) stage[k].push_back(v[k]);
+    }
+    const char* names[8] = {"gather", "preprocess_merge", "rung", "decode_compose",
+                            "display_guides", "display_upsample", "display_temporal", "display_compose_tonemap"};
+    nlohmann::json st = nlohmann::json::object();
+    double sum = 0;
+    for (int k = 0; k < 8; ++k) {
+        st[names[k]] = median_of(stage[k]);
+        sum += median_of(stage[k]);
+    }
+    return {{"n", n}, {"display", display}, {"display_pixels", std::size_t(display) * display},
+            {"frame_median_ms", median_of(whole)}, {"frame_min_ms", *std::min_element(whole.begin(), whole.end())},
+            {"stages_median_ms", st}, {"stages_sum_ms", sum},
+            {"display_share_of_stages", (median_of(stage[4]) + median_of(stage[5]) + median_of(stage[6]) +
+                                         median_of(stage[7])) / std::max(sum, 1e-9)}};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string device_spec, sizes = "64,128,256", model_path = "models/surround.safetensors";
-    int runs = 9;
+    std::string device_spec, sizes = "64,128,256", model_path = "models/surround.safetensors", frame_dir;
+    int runs = 9, display = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--device")) device_spec = argv[i + 1];
         else if (!std::strcmp(argv[i], "--n")) sizes = argv[i + 1];
         else if (!std::strcmp(argv[i], "--runs")) runs = std::max(1, std::atoi(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--display")) display = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--frame")) frame_dir = argv[i + 1];
         else {
-            std::fprintf(stderr, "usage: frame_bench [--device D] [--model M] [--n 64,128,256] [--runs 9]\n");
+            std::fprintf(stderr, "usage: frame_bench [--device D] [--model M] [--n 64,128,256] [--runs 9] "
+                                 "[--display S [--frame DIR]]\n");
             return 2;
         }
     }
     try {
         const ngi::Device device = ngi::Device::open(device_spec);
         ngi::Model model = ngi::Model::load(device, model_path);
+        if (display > 0) {
+            nlohmann::json out = {{"device", device.info().name}, {"driver", device.info().driver_version},
+                                  {"model", model_path}, {"runs", runs}, {"frame", frame_dir.empty() ? "synthetic" : frame_dir},
+                                  {"displayed", nlohmann::json::array()}};
+            std::mt19937 rng(1);
+            if (!frame_dir.empty()) {
+                out["displayed"].push_back(displayed_frame(device, model, ngi::read_frame(frame_dir), display, runs));
+            } else {
+                for (int n : ngi_bench::parse_sizes(sizes))
+                    out["displayed"].push_back(displayed_frame(device, model, ngi_bench::synthetic_frame(n, rng),
+                                                               display, runs));
+            }
+            std::printf("%s\n", out.dump(2).c_str());
+            return 0;
+        }
         const bool surround = model.config().input_nc == 12;
         const int faces = surround ? ngi::kFaceCount : 1;
         nlohmann::json out = {{"device", device.info().name}, {"driver", device.info().driver_version},

@@ -2,7 +2,7 @@
 """Issue 47: GI as an application displays it -- at display resolution, stable from frame to frame.
 
     PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.display_eval \\
-        --vox-dir ../shared/scenes/vox --work runs/display --out docs/results/display [--stages static,moving,sun]
+        --vox-dir ../shared/scenes/vox --work runs/display --out docs/results/display [--stages static,heldout,moving,sun]
 
 Every frame is rendered with engine inputs (docs/RESULTS.md, issue 45): the N = 64 cluster with a converged direct
 feature (1024 spp), and the front view again at display resolution S (its own G-buffer: albedo, normals, depth and a
@@ -19,6 +19,7 @@ its lightmap is brought to S x S three ways:
 Stages:
   static  frame 50 of the orbit path of every .vox file of --vox-dir (evaluation only; read from there, never copied),
           S = 512: final PSNR / SSIM (tone-mapped, data range 1) and lightmap PSNR against the 512^2 reference.
+  heldout the same at frame 50 of the eight held-out test scenes of configs/dataset_gi_n64.json (HELDOUT).
   moving  path frames 39-62 of room:seed=204 (this project's own scene; ladder_eval's moving-camera sequence), S = 256:
           quality per frame and the warping error (ngi.temporal, the display's depth and cameras) against the
           reference's own.
@@ -49,6 +50,13 @@ from ngi_train.generator import engine_eval
 DEFAULT_RUNGS = "direct_only,ssgi_surround_n64,gi_surround_n64_ngf16"
 N = 64
 STATIC = {"frame": 50, "path_frames": 100, "size": 512}
+# The held-out test scenes of configs/dataset_gi_n64.json (issue 25's test split; never trained on), one hour each
+# where the split has several: the same static protocol as the .vox files.
+HELDOUT = [("room:seed=101", None), ("room:seed=102", 16.0), ("street:seed=101", 10.0), ("cave:seed=101", None),
+           ("backlit:seed=101", None), ("bleed:seed=101", None), ("sculpture:seed=101", None),
+           ("cornell_pink:seed=101", None)]
+STATIC_SECTIONS = {"static": ("../shared/scenes/vox/ files", "display_strip.png"),
+                   "heldout": ("the held-out test scenes of configs/dataset_gi_n64.json", "display_strip_heldout.png")}
 MOVING = {"scene": "room:seed=204", "frames": list(range(39, 63)), "path_frames": 100, "size": 256}
 SUN = {"scene": "backlit:seed=201", "frame": 0, "times": [12.0 + 0.25 * k for k in range(17)], "size": 256}
 SPP = {"low_feature": 1024, "display_feature": 256, "reference": 256}
@@ -125,16 +133,26 @@ def score(ref, lightmap_s):
 # static: .vox files at 512^2
 # --------------------------------------------------------------------------
 
-def static_stage(args, runner, cache, work, ngi_bin):
-    files = sorted(Path(args.vox_dir).glob("*.vox"))
-    rows = cache.setdefault("static", {})
+def static_jobs(args, section):
+    """(the `ngi render --scene` argument, the frame's key stem, the hour or None) of a static section."""
+    if section == "static":
+        return [(f, f.stem, None) for f in sorted(Path(args.vox_dir).glob("*.vox"))]
+    return [(spec, spec.replace(":", "_").replace("=", ""), hour) for spec, hour in HELDOUT]
+
+
+def static_stage(args, runner, cache, work, ngi_bin, section="static"):
+    rows = cache.setdefault(section, {})
     strip = None
-    for f in tqdm.tqdm(files, desc="static (.vox, 512^2)", unit="file", **ngi_paths.progress_options()):
-        key = f"{f.stem}_f{STATIC['frame']}"
-        lo_dir = render(ngi_bin, f, work / "vox" / f"{key}_{N}", N, SPP["low_feature"], SPP["low_feature"],
-                        STATIC["frame"], STATIC["path_frames"], device=args.render_device)
-        hi_dir = render(ngi_bin, f, work / "vox" / f"{key}_{STATIC['size']}", STATIC["size"], SPP["display_feature"],
-                        SPP["reference"], STATIC["frame"], STATIC["path_frames"], device=args.render_device)
+    folder = "vox" if section == "static" else section
+    strip_file = args.strip_file if section == "static" else args.heldout_strip_file
+    for scene, stem, hour in tqdm.tqdm(static_jobs(args, section), desc=f"{section} (512^2)", unit="scene",
+                                       **ngi_paths.progress_options()):
+        key = f"{stem}_f{STATIC['frame']}"
+        lo_dir = render(ngi_bin, scene, work / folder / f"{key}_{N}", N, SPP["low_feature"], SPP["low_feature"],
+                        STATIC["frame"], STATIC["path_frames"], time=hour, device=args.render_device)
+        hi_dir = render(ngi_bin, scene, work / folder / f"{key}_{STATIC['size']}", STATIC["size"],
+                        SPP["display_feature"], SPP["reference"], STATIC["frame"], STATIC["path_frames"], time=hour,
+                        device=args.render_device)
         need = [r for r in runner.rungs if not all(m in rows.get(key, {}).get(r["name"], {}) for m in METHODS_STATIC)]
         if not need and strip is not None:
             continue
@@ -152,7 +170,7 @@ def static_stage(args, runner, cache, work, ngi_bin):
                 s, disp = score(ref, display_lightmap(runner, views, m, low, hi, lm, position))
                 rows.setdefault(key, {}).setdefault(r["name"], {})[m] = s
                 shown[(r["name"], m)] = disp
-        if strip is None or key.startswith(args.strip_file):
+        if strip is None or key.startswith(strip_file):
             strip = (key, shown, ref.final)
         save(cache, work)
     return strip
@@ -244,11 +262,13 @@ def summarize_static(rows, rungs):
 def tables(summary):
     lines = ["# Display resolution and temporal stability (issue 47)", "",
              f"Generated by `python3 -m ngi_train.generator.display_eval` on {summary['date']}. Engine inputs; N = 64.", ""]
-    if "static" in summary:
-        lines += [f"## Static frames at 512^2: frame 50 of every `../shared/scenes/vox/` file "
-                  f"({next(iter(summary['static'].values()))['jbu']['frames']} frames)", "",
+    for section, (label, _) in STATIC_SECTIONS.items():
+        if section not in summary:
+            continue
+        lines += [f"## Static frames at 512^2: frame 50 of {label} "
+                  f"({next(iter(summary[section].values()))['jbu']['frames']} frames)", "",
                   "| rung | method | final PSNR | SSIM | lightmap PSNR |", "| --- | --- | --- | --- | --- |"]
-        for rung, ms in summary["static"].items():
+        for rung, ms in summary[section].items():
             for m in METHODS_STATIC:
                 v = ms[m]
                 lines.append(f"| {rung} | {m} | {v['psnr']:.2f} | {v['ssim']:.4f} | {v['lightmap_psnr']:.2f} |")
@@ -302,11 +322,12 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=Path("docs/results/display"))
     ap.add_argument("--rungs", default=DEFAULT_RUNGS)
     ap.add_argument("--zoo", default="models/zoo.json")
-    ap.add_argument("--stages", default="static,moving,sun")
+    ap.add_argument("--stages", default="static,heldout,moving,sun")
     ap.add_argument("--device", default="pocl")
     ap.add_argument("--render-device", default="pocl")
     ap.add_argument("--ngi", default=None)
     ap.add_argument("--strip-file", default="monu0")
+    ap.add_argument("--heldout-strip-file", default="bleed_seed101")
     args = ap.parse_args(argv)
     stages = args.stages.split(",")
     args.work.mkdir(parents=True, exist_ok=True)
@@ -324,11 +345,14 @@ def main(argv=None):
                            "sun": {k: v for k, v in SUN.items()}, "rungs": [r["name"] for r in rungs],
                            "display_view_defaults": {"blend": 0.2, "clip_margin": 0.25, "sigma_spatial": 0.75,
                                                      "normal_power": 32, "sigma_plane": 0.1, "radius": 2}}
-    if "static" in stages:
-        strip = static_stage(args, runner, cache, args.work, ngi_bin)
-        summary["static"] = summarize_static(cache["static"], rungs)
+    summary["settings"]["heldout"] = HELDOUT
+    for section, (_, strip_png) in STATIC_SECTIONS.items():
+        if section not in stages:
+            continue
+        strip = static_stage(args, runner, cache, args.work, ngi_bin, section)
+        summary[section] = summarize_static(cache[section], rungs)
         if strip:
-            draw_strip(strip, args.out / "display_strip.png", [r["name"] for r in rungs])
+            draw_strip(strip, args.out / strip_png, [r["name"] for r in rungs])
     if "moving" in stages:
         seq = sequence(args, runner, args.work, ngi_bin, "moving", MOVING,
                        [{"frame": f, "path_frames": MOVING["path_frames"]} for f in MOVING["frames"]])
