@@ -4,6 +4,7 @@
 #include "common.hpp"
 #include "model_ref.hpp"
 #include "ngi/ao.hpp"
+#include "ngi/warmup.hpp"
 
 namespace ngi_py {
 
@@ -86,6 +87,28 @@ source tree's models/ (ngi/model.hpp "Shipped models by name").)doc");
     }, "Every known model name -> its file (see resolve_model).");
     m.def("model_search_path", [] { return ngi::model_search_path(); },
           "The existing folders model names are looked up in, in order (see resolve_model).");
+    m.def("program_cache_dir", [] { return ngi::program_cache_dir().string(); },
+          "ngi's program cache folder: $NGI_CACHE_DIR, else $XDG_CACHE_HOME/ngi, else ~/.cache/ngi (see warm_up).");
+    m.def("warm_up", [](const std::shared_ptr<PyModel>& model, int n, int display) {
+        const ngi::Device& device = model->device->get("warm_up");
+        ngi::WarmUpReport r;
+        {
+            py::gil_scoped_release release;
+            r = ngi::warm_up(device, model->model, n, display);
+        }
+        py::dict d;
+        d["cache_dir"] = r.cache_dir;
+        d["programs_built"] = r.programs_built;
+        d["programs_from_cache"] = r.programs_from_cache;
+        d["first_frame_ms"] = r.first_frame_ms;
+        d["second_frame_ms"] = r.second_frame_ms;
+        return d;
+    }, py::arg("model"), py::arg("n") = 64, py::arg("display") = 0, R"doc(
+Cold start (ngi/warmup.hpp): runs the model (a frame rung: pix2pix_unet, deepillumination or ssgi) twice on a
+synthetic frame at face size n, and through a display view of display x display pixels when display > 0, so that
+every OpenCL program and work-group size its frames need is built into the program caches (program_cache_dir(), and
+$POCL_CACHE_DIR on PoCL): a later process starts fast. Returns {cache_dir, programs_built, programs_from_cache,
+first_frame_ms, second_frame_ms}. Raises ngi.InputError for another family or a cache folder it cannot write.)doc");
     py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
 A model file loaded on a device: a generator (pix2pix_unet, deepillumination), an mlp or a voxel_sh field network
 (docs/MODEL_FORMAT.md).

@@ -92,6 +92,25 @@ def test_models_by_name(dev, surround, monkeypatch, tmp_path):
         ngi.Model(dev, "surroundd")
 
 
+def test_warm_up_fills_the_program_cache(dev, monkeypatch, tmp_path):
+    # A new cache folder: programs this process has not built yet are built and written there; the call again finds
+    # everything in memory (no build, no load); another family and a cache folder it cannot write are refused.
+    monkeypatch.setenv("NGI_CACHE_DIR", str(tmp_path / "cache"))
+    assert ngi.program_cache_dir() == str(tmp_path / "cache")
+    rung = ngi.Model(dev, "ssgi_surround")
+    first = ngi.warm_up(rung, n=8, display=12)
+    assert first["cache_dir"] == str(tmp_path / "cache") and first["first_frame_ms"] > 0
+    assert set(first) == {"cache_dir", "programs_built", "programs_from_cache", "first_frame_ms", "second_frame_ms"}
+    again = ngi.warm_up(rung, n=8, display=12)
+    assert again["programs_built"] == 0 and again["programs_from_cache"] == 0
+    with pytest.raises(ngi.InputError, match="not a frame rung"):
+        ngi.warm_up(ngi.Model(dev, "ao_sculpture_16x8"), n=8)
+    (tmp_path / "file").write_text("x")
+    monkeypatch.setenv("NGI_CACHE_DIR", str(tmp_path / "file" / "cache"))
+    with pytest.raises(ngi.InputError, match="program cache folder"):
+        ngi.warm_up(rung, n=8)
+
+
 def test_model_run_converts_other_layouts(surround):
     x = np.random.default_rng(2).uniform(-1, 1, (1, 12, 128, 256)).astype(np.float32)
     y = surround.run(x)
