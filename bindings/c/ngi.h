@@ -179,6 +179,22 @@ NGI_API ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_mode
 /* The file a model name (or path) stands for, as ngi_model_load resolves it, into buf (ngi_device_list_string's
  * rules for buf, size and *needed). */
 NGI_API ngi_status ngi_model_resolve(const char* name_or_path, char* buf, size_t size, size_t* needed);
+/* Cold start (ngi/warmup.hpp): runs `model` (a frame rung: pix2pix_unet, deepillumination or ssgi) twice on a
+ * synthetic frame at face size n on `device`, and through a display view of display_size^2 pixels when display_size
+ * > 0, so that every OpenCL program and work-group size its frames need is built into the program caches (ngi's
+ * folder, ngi_program_cache_dir, and $POCL_CACHE_DIR on PoCL): later processes start fast. report may be NULL.
+ * NGI_ERROR_INPUT for another family or a cache folder that cannot be written (checked before any work). */
+typedef struct ngi_warmup_report {
+    int programs_built;      /* compiled from source by this call (and written to the cache) */
+    int programs_from_cache; /* loaded from the cache by this call */
+    double first_frame_ms;   /* the warm-up frame, builds included */
+    double second_frame_ms;  /* the same frame again: what a frame costs once warm */
+} ngi_warmup_report;
+NGI_API ngi_status ngi_device_warmup(ngi_device* device, ngi_model* model, int n, int display_size,
+                                     ngi_warmup_report* report);
+/* ngi's program cache folder ($NGI_CACHE_DIR, else $XDG_CACHE_HOME/ngi, else ~/.cache/ngi) into buf
+ * (ngi_device_list_string's rules for buf, size and *needed). */
+NGI_API ngi_status ngi_program_cache_dir(char* buf, size_t size, size_t* needed);
 NGI_API ngi_status ngi_model_load_with_options(ngi_device* device, const char* path, ngi_bn_mode bn_mode,
                                                ngi_dropout dropout, ngi_model** out);
 /* Any pointer may be NULL. */

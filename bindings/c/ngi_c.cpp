@@ -28,6 +28,7 @@
 #include "ngi/model.hpp"
 #include "ngi/neural_gi.hpp"
 #include "ngi/pipeline.hpp"
+#include "ngi/warmup.hpp"
 #include "ngi/render.hpp"
 #include "ngi/scene.hpp"
 #include "ngi/voxel_field.hpp"
@@ -568,6 +569,21 @@ ngi_status ngi_model_resolve(const char* name_or_path, char* buf, size_t size, s
         require(name_or_path, "name_or_path is NULL");
         copy_string(ngi::resolve_model(name_or_path), buf, size, needed);
     });
+}
+
+ngi_status ngi_device_warmup(ngi_device* device, ngi_model* model, int n, int display_size,
+                             ngi_warmup_report* report) {
+    return guarded(__func__, [&] {
+        const ngi_device& d = live(device, "device");
+        ngi_model& m = live(model, "model");
+        const ngi::WarmUpReport r = ngi::warm_up(d.device, m.model, n, display_size);
+        if (report) *report = ngi_warmup_report{r.programs_built, r.programs_from_cache, r.first_frame_ms,
+                                                r.second_frame_ms};
+    });
+}
+
+ngi_status ngi_program_cache_dir(char* buf, size_t size, size_t* needed) {
+    return guarded(__func__, [&] { copy_string(ngi::program_cache_dir().string(), buf, size, needed); });
 }
 
 ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output_nc, int* num_downs) {

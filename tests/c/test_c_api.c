@@ -152,6 +152,24 @@ static void test_model(ngi_device* dev, const char* models) {
         CHECK_FAILS(ngi_model_resolve(NULL, file, sizeof file, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_resolve",
                     "NULL");
     }
+    {   /* Cold start (issue 48): a warm-up of the ssgi rung at N = 8 with a 12^2 display view; again, nothing to build
+         * (the programs are in this process already); an mlp is no frame rung. */
+        char dir[4096];
+        size_t need = 0;
+        ngi_model* rung = NULL;
+        ngi_model* mlp = NULL;
+        ngi_warmup_report r;
+        CHECK(ngi_program_cache_dir(dir, sizeof dir, &need) == NGI_OK && need == strlen(dir) + 1 && need > 1);
+        CHECK(ngi_model_load(dev, "ssgi_surround", &rung) == NGI_OK);
+        CHECK(ngi_device_warmup(dev, rung, 8, 12, &r) == NGI_OK && r.first_frame_ms > 0.0 && r.second_frame_ms > 0.0);
+        CHECK(ngi_device_warmup(dev, rung, 8, 12, &r) == NGI_OK && r.programs_built == 0 && r.programs_from_cache == 0);
+        CHECK(ngi_device_warmup(dev, rung, 8, 0, NULL) == NGI_OK);
+        CHECK(ngi_model_load(dev, "ao_sculpture_16x8", &mlp) == NGI_OK);
+        CHECK_FAILS(ngi_device_warmup(dev, mlp, 8, 0, &r), NGI_ERROR_INPUT, "ngi_device_warmup", "not a frame rung");
+        CHECK_FAILS(ngi_device_warmup(dev, NULL, 8, 0, &r), NGI_ERROR_INVALID_HANDLE, "ngi_device_warmup", "model");
+        CHECK(ngi_model_release(mlp) == NGI_OK);
+        CHECK(ngi_model_release(rung) == NGI_OK);
+    }
     CHECK_FAILS(ngi_model_load_with_options(dev, path, (ngi_bn_mode)7, NGI_DROPOUT_OFF, &m), NGI_ERROR_INVALID_ARGUMENT,
                 "ngi_model_load_with_options", "bn_mode");
     CHECK_FAILS(ngi_model_load_with_options(dev, path, NGI_BN_FROM_FILE, (ngi_dropout)-1, &m), NGI_ERROR_INVALID_ARGUMENT,
