@@ -36,9 +36,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from bench_devices import benchmarks, write_atomic  # perf/ is the script's folder: first on its path
+
 REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_devices import benchmarks, write_atomic  # noqa: E402  (perf/ is not a package)
 
 TEST_FILTERS = {"quick": "[op_harness]", "full": ""}
 QUICK_BENCH = ["gemm", "generator_256x128", "frame_n64"]

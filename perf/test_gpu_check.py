@@ -11,8 +11,7 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import gpu_check  # noqa: E402
+import gpu_check  # pytest puts this file's folder (perf/) on the path
 
 BUILD = Path(os.environ.get("NGI_BUILD", Path(__file__).resolve().parent.parent / "build"))
 
