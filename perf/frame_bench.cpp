@@ -59,7 +59,8 @@ double median_of(std::vector<double> v) {
 // --display S: the whole displayed frame per stage and in one piece (see the top of the file).
 nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, const ngi::Frame& low, int display,
                                int runs) {
-    const int n = low.n, faces = model.config().input_nc == 12 || model.config().family == "ssgi" ? ngi::kFaceCount : 1;
+    // All six faces, as an engine hands them over: every rung reads what it needs of them (a front-only rung face 0).
+    const int n = low.n, faces = ngi::kFaceCount;
     ngi::SurroundPipeline pl(device, n);
     const std::vector<float> planes = ngi::pack_frame_planes(low, faces);
     ngi::DeviceBuffer in = ngi::DeviceBuffer::allocate(device, planes.size() * sizeof(float));
