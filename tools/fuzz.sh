@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of fuzz/ into ./build-fuzz (clang-15, ASan + UBSan) and runs each for a bounded
-# time. Fails if any target crashes, leaks, times out (> 10 s on one input) or runs out of memory (> 2 GiB RSS).
+# time, with the ONNX converter's Python fuzzer (fuzz/fuzz_onnx_convert.py, target onnx_convert) among them. Fails if any target crashes, leaks, times out (> 10 s on one input) or runs out of memory (> 2 GiB RSS).
 #
 #   tools/fuzz.sh [seconds_per_target] [runs]     defaults: 20 s each, no run limit (0 s = no time limit)
 #   tools/fuzz.sh --corpus                        rebuild and rewrite the seed corpora fuzz/corpus/<target>/
@@ -31,7 +31,9 @@ elif ! grep -q '^NGI_FUZZ:BOOL=ON' "$out/CMakeCache.txt" 2>/dev/null; then
     echo "fuzz.sh: NGI_FUZZ_BUILD_DIR=$out is not a tree configured with -DNGI_FUZZ=ON" >&2
     exit 2
 fi
-cmake --build "$out" -j "$(nproc)" --target fuzz_all >"$out/fuzz-build.log" 2>&1 ||
+# ngi_python_files: the pure-Python package (with the generated ngi/_constants.py) that the ONNX converter's fuzzer
+# imports from the tree.
+cmake --build "$out" -j "$(nproc)" --target fuzz_all ngi_python_files >"$out/fuzz-build.log" 2>&1 ||
     { tail -50 "$out/fuzz-build.log" >&2; exit 2; }
 
 if [[ "${1:-}" == "--corpus" ]]; then
@@ -50,7 +52,7 @@ declare -A max_len=([npy]=4096 [exr]=16384 [png]=8192 [camera_json]=1024 [datase
                     [safetensors]=32768 [frame_folder]=16384 [mesh]=8192 [model_config]=8192)
 targets=${NGI_FUZZ_TARGETS:-}
 if [[ -z "$targets" ]]; then
-    for f in "$src"/fuzz/fuzz_*.cpp; do n=$(basename "$f" .cpp); targets+=" ${n#fuzz_}"; done
+    for f in "$src"/fuzz/fuzz_*.cpp "$src"/fuzz/fuzz_*.py; do n=$(basename "${f%.*}"); targets+=" ${n#fuzz_}"; done
 fi
 jobs=${NGI_FUZZ_JOBS:-1}
 mkdir -p "$out/logs" "$out/artifacts"
@@ -64,7 +66,19 @@ run_one() {
     local seeds=()
     [[ -d "$src/fuzz/corpus/$t" ]] && seeds=("$src/fuzz/corpus/$t")
     [[ -f "$src/fuzz/$t.dict" ]] && args+=(-dict="$src/fuzz/$t.dict")
-    "$out/fuzz/fuzz_$t" "${args[@]}" "$out/corpus/$t" "${seeds[@]}" >"$log" 2>&1
+    if [[ -f "$src/fuzz/fuzz_$t.py" ]]; then
+        # A Python target (the ONNX converter): libFuzzer's loop written in Python (fuzz/fuzz_onnx_convert.py), with
+        # the same limits, corpus and artifact folders and stat:: lines. It imports ngi's pure-Python modules from
+        # the tree; NGI_FUZZ_PYTHONPATH=build/python (a tree with the native module) and NGI_FUZZ_LOAD_CHECK=K also
+        # load up to K converted models with the C++ loader.
+        local py=(-max_total_time="$seconds" -artifact_prefix="$out/artifacts/$t-" --timeout 10 --rss-limit-mb 2048)
+        [[ -n "$runs" ]] && py+=(-runs="$runs")
+        [[ -n "${NGI_FUZZ_LOAD_CHECK:-}" ]] && py+=(--load-check "$NGI_FUZZ_LOAD_CHECK")
+        PYTHONPATH=${NGI_FUZZ_PYTHONPATH:-$out/python} /usr/bin/python3 "$src/fuzz/fuzz_$t.py" "${py[@]}" \
+            "$out/corpus/$t" "${seeds[@]}" >"$log" 2>&1
+    else
+        "$out/fuzz/fuzz_$t" "${args[@]}" "$out/corpus/$t" "${seeds[@]}" >"$log" 2>&1
+    fi
     local rc=$?
     local execs rate rss
     execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
@@ -72,7 +86,7 @@ run_one() {
     rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$log" | tail -1)
     local result=ok
     if [[ $rc -ne 0 ]]; then
-        result="FAILED (exit $rc): $(grep -m1 -E 'ERROR: |==[0-9]+==ERROR|runtime error|Test unit written' "$log" || tail -1 "$log"); log $log"
+        result="FAILED (exit $rc): $(grep -m1 -E 'ERROR: |==[0-9]+==ERROR|runtime error|Test unit written|==FINDING==' "$log" || tail -1 "$log"); log $log"
     fi
     printf '%-16s execs %10s  exec/s %7s  peak RSS %5s MB  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${rss:-?}" "$result"
     if [[ -n "${NGI_FUZZ_RECORD_DIR:-}" ]]; then  # one JSON record per campaign (issue 51: every figure on file)
@@ -101,7 +115,9 @@ fail=0
 running=0
 pids=()
 for t in $targets; do
-    if [[ ! -x "$out/fuzz/fuzz_$t" ]]; then echo "fuzz.sh: no target fuzz_$t" >&2; fail=1; continue; fi
+    if [[ ! -x "$out/fuzz/fuzz_$t" && ! -f "$src/fuzz/fuzz_$t.py" ]]; then
+        echo "fuzz.sh: no target fuzz_$t" >&2; fail=1; continue
+    fi
     run_one "$t" &
     pids+=($!)
     running=$((running + 1))

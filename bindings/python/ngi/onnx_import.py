@@ -75,9 +75,10 @@ def _tensor_array(onnx, t, what, path):
     if any(d < 0 for d in dims):
         raise ConversionError(f"{what} '{t.name}' has a negative dimension {dims}")
     if t.data_type not in _DTYPES:
+        known = {v: k for k, v in onnx.TensorProto.DataType.items()}
         raise ConversionError(f"{what} '{t.name}' has data type {t.data_type} "
-                              f"({onnx.TensorProto.DataType.Name(t.data_type)}); float, double, float16, int and "
-                              "bool tensors are supported")
+                              f"({known.get(t.data_type, 'not an ONNX data type')}); float, double, float16, int "
+                              "and bool tensors are supported")
     count = int(np.prod(dims, dtype=np.int64))
     itemsize = np.dtype(_DTYPES[t.data_type]).itemsize
     if t.HasField("raw_data"):
@@ -105,7 +106,32 @@ def _load(onnx, path):
         raise ConversionError(f"{path} is not a readable ONNX model (truncated or corrupt?): {error}") from None
     if not model.HasField("graph") or not model.graph.node:
         raise ConversionError(f"{path}: the ONNX model has no graph nodes (truncated or not an ONNX model?)")
+    _check_names(model.graph, path)
     return model
+
+
+def _printable(name):
+    """A name ngi can put in a one-line message and a JSON model file: valid UTF-8 without control characters."""
+    if isinstance(name, bytes):  # protobuf hands over a string field that is not valid UTF-8 as bytes
+        return False
+    return all(c.isprintable() or c == " " for c in name)
+
+
+def _check_names(graph, path):
+    """Every name and op type in the graph printable, before any message quotes one (a name holding a newline or
+    invalid UTF-8 would break the one-line error, and protobuf refuses to store the latter again)."""
+    def check(name, where):
+        if not _printable(name):
+            raise ConversionError(f"{path}: {where} is not printable UTF-8 text: {name!r}")
+    for i, node in enumerate(graph.node):
+        check(node.op_type, f"the op type of node {i}")
+        check(node.name, f"the name of node {i} ({node.op_type})")
+        for k, name in enumerate(list(node.input) + list(node.output)):
+            check(name, f"tensor name {k} of node {i} ({node.op_type})")
+    for kind, items in (("initializer", graph.initializer), ("graph input", graph.input),
+                        ("graph output", graph.output)):
+        for i, item in enumerate(items):
+            check(item.name, f"the name of {kind} {i}")
 
 
 def _check_opsets(model, path):
@@ -665,11 +691,13 @@ class _Importer:
         if not scales:
             return None
         s0 = scales[0]
+        if not (math.isfinite(s0) and s0 > 0):  # the bands of encode_frequencies are positive powers of two
+            return None
         pi = False
         exponent = None
         for with_pi in (True, False):
-            e = math.log2(s0 / math.pi) if with_pi else math.log2(s0) if s0 > 0 else None
-            if e is not None and abs(e - round(e)) < 1e-5 and -32 <= round(e) <= 31:
+            e = math.log2(s0 / math.pi) if with_pi else math.log2(s0)
+            if abs(e - round(e)) < 1e-5 and -32 <= round(e) <= 31:
                 pi, exponent = with_pi, int(round(e))
                 break
         if exponent is None or exponent + len(scales) > 32:
@@ -921,7 +949,8 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
     try:
         onnx.checker.check_model(model)
     except Exception as error:  # noqa: BLE001 (onnx.checker.ValidationError and protobuf errors)
-        raise ConversionError(f"{onnx_path}: the ONNX checker refuses the model: {str(error).splitlines()[0]}") \
+        first = (str(error).strip().splitlines() or [type(error).__name__])[0]
+        raise ConversionError(f"{onnx_path}: the ONNX checker refuses the model: {first}") \
             from None
     output = imp.run()
     ir = imp.ir

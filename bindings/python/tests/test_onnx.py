@@ -252,6 +252,38 @@ def test_what_the_loader_would_refuse_is_refused_at_conversion(tmp_path):
     assert_refused(tmp_path, model.SerializeToString(), "bad.onnx", "graph input", "1..512 bytes")
 
 
+def test_the_converter_fuzzer_findings_are_one_line_refusals(tmp_path):
+    # Issue 51: the first minutes of fuzz/fuzz_onnx_convert.py found five inputs that made the converter raise
+    # something other than its one-line ConversionError (a Python traceback) or print a multi-line error.
+    def fresh():
+        for f in tmp_path.iterdir():
+            f.unlink()
+
+    # An initializer of data type 99 (no ONNX type): ValueError from protobuf's enum Name().
+    m = conv_model()
+    m.graph.initializer[0].data_type = 99
+    assert_refused(tmp_path, m.SerializeToString(), "bad.onnx", "'w' has data type 99 (not an ONNX data type)")
+    # A node name that is not valid UTF-8 (protobuf hands it over as bytes, and refused to store it again), and one
+    # holding a newline (which split the error message over lines).
+    fresh()
+    data = conv_model().SerializeToString().replace(b"the_conv", b"the\x80conv")
+    assert_refused(tmp_path, data, "bad.onnx", "the name of node 0 (Conv) is not printable UTF-8 text")
+    fresh()
+    data = conv_model().SerializeToString().replace(b"the_conv", b"the\nconv")
+    assert_refused(tmp_path, data, "bad.onnx", "the name of node 0 (Conv) is not printable UTF-8 text")
+    # A frequency-encoding pattern (Mul by s, Sin, Cos, Concat) whose scale is negative or infinite: math.log2 raised
+    # ValueError / OverflowError while matching the pattern; now the pattern simply does not match.
+    for scale in (-1.0, float("inf")):
+        fresh()
+        nodes = [helper.make_node("Mul", ["x", "s"], ["xs"], name="mul"),
+                 helper.make_node("Sin", ["xs"], ["sin"], name="sin"),
+                 helper.make_node("Cos", ["xs"], ["cos"], name="cos"),
+                 helper.make_node("Concat", ["sin", "cos"], ["y"], name="cat", axis=1)]
+        inits = [helper.make_tensor("s", TensorProto.FLOAT, [], [scale])]
+        assert_refused(tmp_path, small_model(nodes, inits).SerializeToString(), "bad.onnx",
+                       "supported only as part of a frequency encoding")
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
