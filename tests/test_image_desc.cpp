@@ -23,7 +23,11 @@ using test::byte_of;
 using test::decode;
 using test::Layout;
 using test::store;
+using test::octahedral_decode;
+using test::octahedral_encode;
+using test::perspective_depth;
 using test::to_half;
+using test::window_depth;
 
 ImageDesc host_desc(const Layout& l, int n, const std::vector<unsigned char>& mem) {
     ImageDesc d;
@@ -39,17 +43,29 @@ ImageDesc host_desc(const Layout& l, int n, const std::vector<unsigned char>& me
     d.bottom_up = l.bottom_up;
     d.scale = l.scale;
     d.bias = l.bias;
+    d.normal_encoding = l.normal_encoding;
+    d.normal_to_world = l.normal_to_world;
+    d.depth_encoding = l.depth_encoding;
+    d.near_m = l.near_m;
+    d.far_m = l.far_m;
+    d.reversed_z = l.reversed_z;
     return d;
 }
 
-// A random layout: interleaved (tightly packed or padded pixels and rows) or planar, any format, offset aligned.
+// A random layout: interleaved (tightly packed or padded pixels and rows) or planar, any format (packed formats: one
+// word per pixel, padded or not), offset aligned.
 Layout random_layout(int n, int need, std::mt19937& rng) {
     Layout l;
-    l.format = PixelFormat(std::uniform_int_distribution<int>(0, 3)(rng));
+    l.format = PixelFormat(std::uniform_int_distribution<int>(0, 7)(rng));
     const std::size_t elem = pixel_format_bytes(l.format);
-    l.channels = std::uniform_int_distribution<int>(need, 4)(rng);
+    const int packed = pixel_format_packed_channels(l.format);
+    l.channels = packed ? packed : std::uniform_int_distribution<int>(need, 4)(rng);
     l.offset = elem * std::uniform_int_distribution<std::size_t>(0, 37)(rng);
-    if (rng() % 4 == 0) {  // planar: each channel a whole (padded) image after the previous one
+    if (packed) {  // the channels share the pixel's word
+        l.channel_stride = 0;
+        l.pixel_stride = elem * (1 + rng() % 2);
+        l.row_stride = l.pixel_stride * std::size_t(n) + elem * (rng() % 5);
+    } else if (rng() % 4 == 0) {  // planar: each channel a whole (padded) image after the previous one
         l.pixel_stride = elem * (1 + rng() % 2);
         l.row_stride = l.pixel_stride * std::size_t(n) + elem * (rng() % 5);
         l.channel_stride = l.row_stride * std::size_t(n) + elem * (rng() % 3);
@@ -135,7 +151,7 @@ TEST_CASE("gather_image: every format, stride, offset and row order against a na
     detail::Context& ctx = test::ctx();
     detail::GatherImage op(ctx);
     std::mt19937 rng(41);
-    for (int trial = 0; trial < 24; ++trial) {
+    for (int trial = 0; trial < 40; ++trial) {
         const int n = std::vector<int>{1, 2, 3, 7, 13, 17, 33}[std::size_t(trial) % 7];
         const int need = trial % 3 == 0 ? 1 : 3;
         const Layout l = random_layout(n, need, rng);
@@ -159,10 +175,130 @@ TEST_CASE("gather_image: every format, stride, offset and row order against a na
             for (int row = 0; row < n; ++row)
                 for (int col = 0; col < n; ++col)
                     want[std::size_t(dst_offset + c * plane + row * n + col)] =
-                        decode(mem, byte_of(l, n, row, col, c), l.format) * l.scale + l.bias;
+                        decode(mem, byte_of(l, n, row, col, c), l.format, c) * l.scale + l.bias;
         // Exact but for a possibly fused multiply-add (scale, bias); sRGB codes decode through a table rounded once
         // from double, as the reference does.
         CHECK(test::worst_ratio(got, want, 1e-7, 2e-7) <= 1.0);
+    }
+}
+
+TEST_CASE("gather_image: octahedral and view-space normals, perspective depth against a naive reference",
+          "[image_desc][oclgrind]") {
+    detail::Context& ctx = test::ctx();
+    detail::GatherImage op(ctx);
+    std::mt19937 rng(43);
+    const double eps = std::numeric_limits<float>::epsilon();
+    // Normals: the octahedral map stored as float, half, snorm16 or unorm16 (scale 2, bias -1), two channels or four
+    // (padding), with a random rotation (view -> world) or none.
+    const PixelFormat normal_formats[] = {PixelFormat::F32, PixelFormat::F16, PixelFormat::S16Snorm,
+                                          PixelFormat::U16Unorm, PixelFormat::U8Unorm};
+    for (int trial = 0; trial < 10; ++trial) {
+        const int n = std::vector<int>{1, 3, 7, 13, 17}[std::size_t(trial) % 5];
+        Layout l;
+        l.format = normal_formats[trial % 5];
+        const std::size_t elem = pixel_format_bytes(l.format);
+        l.channels = trial % 2 ? 4 : 2;
+        l.offset = elem * std::size_t(trial);
+        l.channel_stride = elem;
+        l.pixel_stride = elem * std::size_t(l.channels);
+        l.row_stride = l.pixel_stride * std::size_t(n) + elem * std::size_t(trial % 3);
+        l.bottom_up = trial % 3 == 0;
+        const bool unorm = l.format == PixelFormat::U16Unorm || l.format == PixelFormat::U8Unorm;
+        l.scale = unorm ? 2.0f : 1.0f;
+        l.bias = unorm ? -1.0f : 0.0f;
+        l.normal_encoding = NormalEncoding::Octahedral;
+        glm::dmat3 rot(1.0);
+        if (trial >= 4) {  // a random rotation: an orthonormal basis from Gram-Schmidt
+            glm::dvec3 a(test::random_vector(3, rng, -1, 1)[0], 0.3, 0.8), b(0.1, test::random_vector(1, rng, -1, 1)[0], -0.4);
+            a = glm::normalize(a);
+            b = glm::normalize(b - glm::dot(a, b) * a);
+            rot = glm::dmat3(a, b, glm::cross(a, b));
+            l.normal_to_world = glm::mat3(rot);
+        }
+        CAPTURE(trial, n, pixel_format_name(l.format), l.channels);
+        Image src(n, n, l.channels);
+        for (int p = 0; p < n * n; ++p) {
+            const std::vector<float> r = test::random_vector(3, rng, -1, 1);
+            glm::dvec3 v(r[0], r[1], r[2]);
+            if (p % 5 == 0) v = glm::dvec3(0, 0, p % 2 ? 1 : -1);  // the poles and the fold
+            if (glm::length(v) < 1e-3) v = {1, 0, 0};
+            const glm::dvec2 e = octahedral_encode(glm::normalize(v));
+            src.data[std::size_t(p)] = float(unorm ? e.x * 0.5 + 0.5 : e.x);
+            src.data[std::size_t(n * n + p)] = float(unorm ? e.y * 0.5 + 0.5 : e.y);
+        }
+        const std::vector<unsigned char> mem = store(l, n, src, rng);
+        detail::Buffer buf = ctx.alloc(mem.size(), "test normals");
+        ctx.write(buf, 0, mem.size(), mem.data(), "test normals");
+        const int plane = n * n;
+        const std::vector<float> sentinel(std::size_t(plane) * 3 + 4, -7.0f);
+        detail::Buffer dst = test::upload(sentinel);
+        op.enqueue(ctx, test::gather_source(l, buf.get()), 3, n, dst.get(), 2, plane);
+        const std::vector<float> got = test::download(dst, sentinel.size());
+        std::vector<float> want = sentinel;
+        for (int row = 0; row < n; ++row)
+            for (int col = 0; col < n; ++col) {
+                const double x = double(decode(mem, byte_of(l, n, row, col, 0), l.format)) * l.scale + l.bias;
+                const double y = double(decode(mem, byte_of(l, n, row, col, 1), l.format)) * l.scale + l.bias;
+                const glm::dvec3 w = rot * octahedral_decode({x, y});  // world = R v (glm's product)
+                for (int c = 0; c < 3; ++c) want[std::size_t(2 + c * plane + row * n + col)] = float(w[c]);
+            }
+        // float32 decode, normalize and rotation: a few ulp of a unit vector's components.
+        CHECK(test::worst_ratio(got, want, 8 * eps, 0.0) <= 1.0);
+    }
+    // Depth: window depth of a perspective projection, standard or reversed, finite or infinite far plane, stored as
+    // float32 (a D32F attachment) or unorm16 (D16), with cleared pixels (no surface).
+    for (int trial = 0; trial < 12; ++trial) {
+        const int n = std::vector<int>{2, 5, 9, 16}[std::size_t(trial) % 4];
+        const bool reversed = trial % 2, infinite = trial % 3 == 2;
+        const double near_m = trial % 4 < 2 ? 0.1 : 0.5, far_m = infinite ? INFINITY : (trial % 4 == 1 ? 100.0 : 1000.0);
+        Layout l;
+        l.format = trial >= 8 ? PixelFormat::U16Unorm : PixelFormat::F32;
+        const std::size_t elem = pixel_format_bytes(l.format);
+        l.channels = 1;
+        l.offset = elem * 3;
+        l.channel_stride = elem;
+        l.pixel_stride = elem;
+        l.row_stride = elem * std::size_t(n + trial % 3);
+        l.bottom_up = trial % 2 == 0;
+        l.scale = 1.0f;
+        l.bias = 0.0f;
+        l.depth_encoding = DepthEncoding::Perspective;
+        l.near_m = float(near_m);
+        l.far_m = float(far_m);
+        l.reversed_z = reversed;
+        CAPTURE(trial, n, pixel_format_name(l.format), reversed, near_m, far_m);
+        Image src(n, n, 1);
+        for (int p = 0; p < n * n; ++p) {
+            const double z = near_m * std::exp(test::random_vector(1, rng, 0.0f, 7.0f)[0]);  // 1x .. 1100x near
+            const bool cleared = p % 7 == 3 || (!infinite && z >= far_m);
+            src.data[std::size_t(p)] = float(cleared ? (reversed ? 0.0 : 1.0) : window_depth(z, near_m, far_m, reversed));
+        }
+        const std::vector<unsigned char> mem = store(l, n, src, rng);
+        detail::Buffer buf = ctx.alloc(mem.size(), "test depth");
+        ctx.write(buf, 0, mem.size(), mem.data(), "test depth");
+        detail::Buffer dst = test::upload(std::vector<float>(std::size_t(n) * n, -7.0f));
+        op.enqueue(ctx, test::gather_source(l, buf.get()), 1, n, dst.get(), 0, n * n);
+        const std::vector<float> got = test::download(dst, std::size_t(n) * n);
+        int cleared = 0;
+        for (int row = 0; row < n; ++row)
+            for (int col = 0; col < n; ++col) {
+                const double d = decode(mem, byte_of(l, n, row, col, 0), l.format);
+                const double want = perspective_depth(d, near_m, far_m, reversed);
+                const float g = got[std::size_t(row * n + col)];
+                INFO("row " << row << " col " << col << " window depth " << d << ": got " << g << ", want " << want);
+                if (want == detail::kNoSurfaceDepth) {
+                    CHECK(g == detail::kNoSurfaceDepth);
+                    ++cleared;
+                    continue;
+                }
+                // The kernel's float32 z = near / (1 - d k), k = 1 - near / far: a few roundings, amplified by the
+                // cancellation in 1 - d k (its condition number d k / (1 - d k), at most z / near). Reversed Z,
+                // z = near / (d k + near / far), has no cancellation: a few roundings.
+                const double k = std::isinf(far_m) ? 1.0 : 1 - near_m / far_m;
+                const double bound = 4 * eps * (reversed ? 1.0 : 1 + d * k / (1 - d * k)) * want;
+                CHECK(std::abs(double(g) - want) <= bound);
+            }
+        CHECK(cleared > 0);
     }
 }
 
@@ -278,6 +414,92 @@ TEST_CASE("image descriptors: device buffers are gathered with no host transfer,
     CHECK(test::worst_ratio(got, want.lightmap.data, 1e-5, 1e-4) <= 1.0);
 }
 
+TEST_CASE("image descriptors: a GL engine's attachments as rendered (perspective depth, octahedral view-space "
+          "normals, RGB10A2, R11G11B10F) light a frame as their decoded planes", "[image_desc][frame]") {
+    Device& dev = test::device();
+    std::mt19937 rng(17);
+    const int n = 64;
+    SurroundPipeline pl(dev, n);
+    Model model = Model::load(dev, kSingle);
+    Frame fr = random_frame(n, rng, false);
+    const double near_m = 0.05;
+    const glm::dmat3 view_to_world(glm::dvec3(0.6, 0, -0.8), glm::dvec3(0, 1, 0), glm::dvec3(0.8, 0, 0.6));
+    FrameInputs in;
+    in.look = fr.look;
+    std::vector<std::vector<unsigned char>> memory;
+    memory.reserve(4);
+    for (Feature k : {Feature::Albedo, Feature::Normal, Feature::Depth, Feature::Direct}) {
+        Layout l;
+        l.format = k == Feature::Albedo   ? PixelFormat::RGB10A2Unorm
+                   : k == Feature::Normal ? PixelFormat::S16Snorm
+                   : k == Feature::Depth  ? PixelFormat::F32
+                                          : PixelFormat::R11G11B10F;
+        const std::size_t elem = pixel_format_bytes(l.format);
+        const int packed = pixel_format_packed_channels(l.format);
+        l.channels = packed ? packed : k == Feature::Normal ? 2 : 1;
+        l.offset = 0;
+        l.channel_stride = packed ? 0 : elem;
+        l.pixel_stride = packed ? elem : elem * std::size_t(l.channels);
+        l.row_stride = l.pixel_stride * std::size_t(n) + 16;
+        l.bottom_up = true;
+        l.scale = 1.0f;
+        l.bias = 0.0f;
+        Image& im = fr.get(k, Face::Front);
+        Image stored(n, n, l.channels);
+        for (int p = 0; p < n * n; ++p) {
+            if (k == Feature::Normal) {  // view space: v = R^-1 n, octahedral
+                const glm::dvec3 nw(im.data[std::size_t(p)], im.data[std::size_t(n * n + p)], im.data[std::size_t(2 * n * n + p)]);
+                const glm::dvec2 e = octahedral_encode(glm::transpose(view_to_world) * glm::normalize(nw));
+                stored.data[std::size_t(p)] = float(e.x);
+                stored.data[std::size_t(n * n + p)] = float(e.y);
+            } else if (k == Feature::Depth) {  // reversed Z, infinite far plane; one pixel in 9 cleared (sky)
+                stored.data[std::size_t(p)] = p % 9 == 4 ? 0.0f : float(window_depth(im.data[std::size_t(p)], near_m, INFINITY, true));
+            } else {
+                for (int c = 0; c < l.channels; ++c)
+                    stored.data[std::size_t(c * n * n + p)] = c < 3 ? im.data[std::size_t(c * n * n + p)] : 1.0f;
+            }
+        }
+        if (k == Feature::Normal) {
+            l.normal_encoding = NormalEncoding::Octahedral;
+            l.normal_to_world = glm::mat3(view_to_world);  // world = M v (glm's product, M[column][row])
+        }
+        if (k == Feature::Depth) {
+            l.depth_encoding = DepthEncoding::Perspective;
+            l.near_m = float(near_m);
+            l.far_m = INFINITY;
+            l.reversed_z = true;
+        }
+        memory.push_back(store(l, n, stored, rng));
+        const std::vector<unsigned char>& mem = memory.back();
+        // What the frame holds is what the reference decodes from those bytes.
+        for (int p = 0; p < n * n; ++p) {
+            const int row = p / n, col = p % n;
+            if (k == Feature::Normal) {
+                const glm::dvec3 w = view_to_world * octahedral_decode({decode(mem, byte_of(l, n, row, col, 0), l.format),
+                                                                        decode(mem, byte_of(l, n, row, col, 1), l.format)});
+                for (int c = 0; c < 3; ++c) im.data[std::size_t(c * n * n + p)] = float(w[c]);
+            } else if (k == Feature::Depth) {
+                im.data[std::size_t(p)] =
+                    float(perspective_depth(decode(mem, byte_of(l, n, row, col, 0), l.format), near_m, INFINITY, true));
+            } else {
+                for (int c = 0; c < 3; ++c)
+                    im.data[std::size_t(c * n * n + p)] = decode(mem, byte_of(l, n, row, col, c), l.format, c);
+            }
+        }
+        in.at(Face::Front, k) = host_desc(l, n, mem);
+    }
+    CHECK(fr.get(Feature::Depth, Face::Front).data[4] == detail::kNoSurfaceDepth);
+    // The octahedral map has no "no surface": where the depth attachment was cleared the normal is the zero vector.
+    for (int p = 0; p < n * n; ++p)
+        if (fr.get(Feature::Depth, Face::Front).data[std::size_t(p)] == detail::kNoSurfaceDepth)
+            for (int c = 0; c < 3; ++c) fr.get(Feature::Normal, Face::Front).data[std::size_t(c * n * n + p)] = 0.0f;
+    const FrameImages want = pl.run(model, fr, true, false, false);
+    const FrameImages got = pl.run(model, in, true, false, false);
+    // The same bytes decoded in double on the host and in float32 on the device (normalize, a rotation, a
+    // division): a few ulp in the network's input, about as much in its lightmap.
+    CHECK(test::worst_ratio(got.lightmap.data, want.lightmap.data, 1e-5, 1e-4) <= 1.0);
+}
+
 TEST_CASE("image descriptors: bad descriptors are refused naming the face and feature, and nothing runs",
           "[image_desc]") {
     Device& dev = test::device();
@@ -326,15 +548,47 @@ TEST_CASE("image descriptors: bad descriptors are refused naming the face and fe
             "image 'depth' of face 'front' is missing");
     refused([](FrameInputs& in) { in.at(Face::Up, Feature::Env) = ImageDesc{}; },
             "image 'env' of face 'up' is missing while other faces have one");
-    refused([](FrameInputs& in) { in.at(Face::Left, Feature::Albedo).format = PixelFormat(7); },
-            "pixel format code 7 is unknown");
+    refused([](FrameInputs& in) { in.at(Face::Left, Feature::Albedo).format = PixelFormat(8); },
+            "pixel format code 8 is unknown");
     refused([](FrameInputs& in) { in.at(Face::Left, Feature::Albedo).scale = std::numeric_limits<float>::infinity(); },
             "scale and bias must be finite");
     refused([&](FrameInputs& in) { in.at(Face::Left, Feature::Albedo).buffer = light; }, "both a buffer and a host pointer");
+    // Engine formats and encodings the feature cannot take (issue 48).
+    refused([](FrameInputs& in) {
+        ImageDesc& d = in.at(Face::Back, Feature::Depth);
+        d.format = PixelFormat::U16Unorm;
+        d.pixel_stride = d.row_stride = 0;
+    }, "image 'depth' of face 'back': format u16 cannot hold linear depth in metres; a depth attachment in it needs "
+       "the perspective encoding");
+    refused([](FrameInputs& in) {
+        ImageDesc& d = in.at(Face::Back, Feature::Depth);
+        d.depth_encoding = DepthEncoding::Perspective;
+        d.near_m = 0.0f;
+        d.far_m = 100.0f;
+    }, "image 'depth' of face 'back': the perspective depth encoding needs 0 < near_m < far_m");
+    refused([](FrameInputs& in) { in.at(Face::Back, Feature::Normal).depth_encoding = DepthEncoding::Perspective; },
+            "image 'normal' of face 'back': the perspective depth encoding applies to depth only");
+    refused([](FrameInputs& in) { in.at(Face::Back, Feature::Albedo).normal_encoding = NormalEncoding::Octahedral; },
+            "image 'albedo' of face 'back': the octahedral encoding applies to normals only");
+    refused([](FrameInputs& in) { in.at(Face::Back, Feature::Direct).normal_to_world[0][0] = 2.0f; },
+            "a normal rotation (normal_to_world) applies to normals only");
+    refused([](FrameInputs& in) { in.at(Face::Back, Feature::Normal).normal_to_world[1][2] = NAN; },
+            "image 'normal' of face 'back': normal_to_world has a non-finite entry");
+    refused([](FrameInputs& in) {
+        ImageDesc& d = in.at(Face::Back, Feature::Direct);
+        d.format = PixelFormat::R11G11B10F;
+        d.channel_stride = d.pixel_stride = 0;
+    }, "format r11g11b10f packs 3 channels in each pixel's word, but the descriptor says 4");
+    refused([](FrameInputs& in) {
+        ImageDesc& d = in.at(Face::Back, Feature::Direct);
+        d.format = PixelFormat::RGB10A2Unorm;
+        d.channel_stride = 4;
+    }, "format rgb10a2 packs its channels in one word per pixel: channel_stride must be 0");
+    refused([](FrameInputs& in) { in.at(Face::Back, Feature::Normal).normal_encoding = NormalEncoding(5); },
+            "normal encoding code 5 is unknown");
     std::vector<float> after(sentinel.size());
     light.download(after.data(), light.bytes());
     CHECK(after == sentinel);
     CHECK_THROWS_WITH(pixel_format_from_name("rgba"), Catch::Contains("unknown pixel format 'rgba'"));
-    for (PixelFormat f : {PixelFormat::F32, PixelFormat::F16, PixelFormat::U8Unorm, PixelFormat::U8Srgb})
-        CHECK(pixel_format_from_name(pixel_format_name(f)) == f);
+    for (int f = 0; f < 8; ++f) CHECK(pixel_format_from_name(pixel_format_name(PixelFormat(f))) == PixelFormat(f));
 }

@@ -380,17 +380,46 @@ TEST_CASE("round 3: ngi's buffers on a CPU device count against the host-memory 
         return;
     }
     const HostMemoryLimit limit(256u << 20);  // other buffers of this process (a test device's) hold far less
+    const std::uint64_t before = ngi::host_memory_held();
     CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 257u << 20),
-                      Contains("allocate device buffer of 269484032 bytes on a CPU device") &&
+                      Contains("allocate device buffer on a CPU device") && Contains("needs 269484032 bytes") &&
                           Contains("host-memory limit"));
+    CHECK(ngi::host_memory_held() == before);  // a refusal holds nothing
     {
         const ngi::DeviceBuffer a = ngi::DeviceBuffer::allocate(dev, 160u << 20);
+        CHECK(ngi::host_memory_held() == before + (160u << 20));
         // 160 MiB held: 160 more would pass the 256 MiB budget.
-        CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 160u << 20), Contains("already hold"));
+        CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 160u << 20), Contains("already held"));
         CHECK_NOTHROW(ngi::DeviceBuffer::allocate(dev, 64u << 20));
     }
     // Released: the budget is free again.
+    CHECK(ngi::host_memory_held() == before);
     CHECK_NOTHROW(ngi::DeviceBuffer::allocate(dev, 200u << 20));
+}
+
+// The same ledger holds what an application or the pipeline keeps on the host (the GL viewer's G-buffer on a
+// software renderer, the global view's tables): a HostMemoryHold and a CPU device's buffers are judged together.
+TEST_CASE("round 3: host-memory holds and CPU device buffers share one ledger", "[io][limits][reliability2]") {
+    ngi::Device& dev = ngi::test::device();  // opened first: what it holds is part of `before`
+    const std::uint64_t before = ngi::host_memory_held();  // whatever this process already holds, plus 256 MiB
+    const HostMemoryLimit limit(before + (256u << 20));
+    CHECK_THROWS_WITH(ngi::HostMemoryHold("the test's frames", 300u << 20),
+                      Contains("the test's frames: needs 314572800 bytes") && Contains("host-memory limit"));
+    CHECK(ngi::host_memory_held() == before);
+    {
+        ngi::HostMemoryHold frames("the test's frames", 160u << 20);
+        CHECK(ngi::host_memory_held() == before + (160u << 20));
+        CHECK_THROWS_WITH(ngi::HostMemoryHold("more frames", 160u << 20), Contains("already held"));
+        if (dev.info().is_cpu)
+            CHECK_THROWS_WITH(ngi::DeviceBuffer::allocate(dev, 160u << 20), Contains("already held"));
+        ngi::HostMemoryHold moved = std::move(frames);  // the hold moves; it is released once
+        CHECK(frames.bytes() == 0);
+        CHECK(moved.bytes() == (160u << 20));
+        CHECK(ngi::host_memory_held() == before + (160u << 20));
+        moved = ngi::HostMemoryHold("smaller frames", 32u << 20);  // assignment releases the old hold
+        CHECK(ngi::host_memory_held() == before + (32u << 20));
+    }
+    CHECK(ngi::host_memory_held() == before);
 }
 
 // Item 6 of round 2: an 805 MB npy into an AO model reached 2.5 GB of host memory unchecked. Every reader now

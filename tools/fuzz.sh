@@ -91,9 +91,12 @@ run_one() {
     printf '%-16s execs %10s  exec/s %7s  peak RSS %5s MB  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${rss:-?}" "$result"
     if [[ -n "${NGI_FUZZ_RECORD_DIR:-}" ]]; then  # one JSON record per campaign (issue 51: every figure on file)
         mkdir -p "$NGI_FUZZ_RECORD_DIR"
+        # A Python target runs this checkout's script and (with NGI_FUZZ_PYTHONPATH) its code: its commit is this one's.
+        local from=$built_from
+        [[ -f "$src/fuzz/fuzz_$t.py" ]] && from=$src
         /usr/bin/python3 - "$NGI_FUZZ_RECORD_DIR" "$t" "${execs:-0}" "${rate:-0}" "${rss:-0}" "$rc" "$result" \
-            "$seconds" "${runs:-}" "$(git -C "$built_from" rev-parse HEAD 2>/dev/null || echo unknown)" \
-            "$(git -C "$built_from" status --porcelain --untracked-files=no 2>/dev/null | head -c 1)" <<'PY'
+            "$seconds" "${runs:-}" "$(git -C "$from" rev-parse HEAD 2>/dev/null || echo unknown)" \
+            "$(git -C "$from" status --porcelain --untracked-files=no 2>/dev/null | head -c 1)" <<'PY'
 import datetime, json, os, sys
 d, t, execs, rate, rss, rc, result, seconds, runs, commit, dirty = sys.argv[1:]
 now = datetime.datetime.now(datetime.timezone.utc)

@@ -317,8 +317,25 @@ typedef NGI_ENUM(ngi_pixel_format) {
     NGI_FORMAT_F16 = 1,       /* IEEE half (no cl_khr_fp16 needed) */
     NGI_FORMAT_U8_UNORM = 2,  /* uint8 / 255 */
     NGI_FORMAT_U8_SRGB = 3,   /* uint8 / 255 through the sRGB EOTF (e.g. albedo in an RGBA8_SRGB target) */
+    NGI_FORMAT_U16_UNORM = 4, /* uint16 / 65535 (RGBA16, D16) */
+    NGI_FORMAT_S16_SNORM = 5, /* int16 / 32767, -32768 read as -1 (e.g. RG16_SNORM octahedral normals) */
+    NGI_FORMAT_R11G11B10F = 6,    /* packed, one 32-bit word per pixel: R bits 0-10, G 11-21, B 22-31 (unsigned small
+                                     floats: GL_R11F_G11F_B10F, DXGI R11G11B10_FLOAT); channels 3, channel_stride 0 */
+    NGI_FORMAT_RGB10A2_UNORM = 7, /* packed, one 32-bit word per pixel: R bits 0-9, G 10-19, B 20-29, A 30-31 (unorm:
+                                     GL_RGB10_A2, DXGI R10G10B10A2_UNORM); channels 4, channel_stride 0 */
     NGI_PIXEL_FORMAT_MAX_ENUM = 0x7FFFFFFF
 } ngi_pixel_format;
+typedef NGI_ENUM(ngi_normal_encoding) {
+    NGI_NORMAL_XYZ = 0,         /* three channels x, y, z */
+    NGI_NORMAL_OCTAHEDRAL = 1,  /* two channels (x, y) in [-1, 1] after scale and bias: the octahedral map */
+    NGI_NORMAL_ENCODING_MAX_ENUM = 0x7FFFFFFF
+} ngi_normal_encoding;
+typedef NGI_ENUM(ngi_depth_encoding) {
+    NGI_DEPTH_LINEAR = 0,       /* planar depth in metres (ngi's own) */
+    NGI_DEPTH_PERSPECTIVE = 1,  /* window depth in [0, 1] of a perspective projection (near_m, far_m, reversed_z): a
+                                   depth attachment as rendered; the cleared far value means "no surface" */
+    NGI_DEPTH_ENCODING_MAX_ENUM = 0x7FFFFFFF
+} ngi_depth_encoding;
 typedef NGI_ENUM(ngi_feature) {
     NGI_FEATURE_ALBEDO = 0, NGI_FEATURE_NORMAL = 1, NGI_FEATURE_DEPTH = 2, NGI_FEATURE_DIRECT = 3,
     NGI_FEATURE_EMISSION = 4, NGI_FEATURE_ENV = 5, NGI_FEATURE_COUNT = 6,
@@ -339,6 +356,17 @@ typedef struct ngi_image_desc {
     float scale, bias;       /* value = decoded x scale + bias; a scale of 0 is taken as 1 (a zeroed descriptor reads
                                 values as stored) */
 } ngi_image_desc;
+/* How an image encodes its normals or depth, beside its descriptor (a separate struct: ngi_image_desc's layout is
+ * part of the ABI). Zeroed = ngi's own: xyz world-space normals, linear depth in metres. */
+typedef struct ngi_image_encoding {
+    ngi_normal_encoding normal_encoding;  /* normals only */
+    float normal_to_world[9];  /* normals only: row-major 3 x 3 taking a stored (e.g. view-space) normal to world
+                                  space; all zero = the identity */
+    ngi_depth_encoding depth_encoding;    /* depth only; unorm / snorm / packed depth needs NGI_DEPTH_PERSPECTIVE */
+    float near_m, far_m;     /* NGI_DEPTH_PERSPECTIVE: 0 < near_m < far_m in metres, far_m = INFINITY for an
+                                infinite far plane */
+    int reversed_z;          /* NGI_DEPTH_PERSPECTIVE: 1 = reversed Z (window depth 1 at near, 0 at far) */
+} ngi_image_encoding;
 /* images: 36 descriptors, images[face * 6 + feature] (faces front, back, left, right, up, down; ngi_feature order).
  * A surround model reads all six faces, a single-view model the front face. Emission and env are optional: given for
  * every face read, or for none. The camera is ngi_pipeline_set_camera's. A descriptor that does not fit is an
@@ -348,6 +376,16 @@ NGI_API ngi_status ngi_pipeline_enqueue_images(ngi_pipeline* pipeline, ngi_model
 NGI_API ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
                                            float* lightmap, size_t lightmap_bytes, float* final_image,
                                            size_t final_bytes, float* display, size_t display_bytes);
+/* The same with each image's encoding: encodings[i] goes with images[i] (36 entries, or NULL for ngi's own), e.g. a
+ * GL depth attachment as rendered (NGI_DEPTH_PERSPECTIVE) and octahedral view-space normals. */
+NGI_API ngi_status ngi_pipeline_enqueue_images_encoded(ngi_pipeline* pipeline, ngi_model* model,
+                                                       const ngi_image_desc* images,
+                                                       const ngi_image_encoding* encodings, ngi_buffer* lightmap,
+                                                       ngi_buffer* final_image, ngi_buffer* display);
+NGI_API ngi_status ngi_pipeline_run_images_encoded(ngi_pipeline* pipeline, ngi_model* model,
+                                                   const ngi_image_desc* images, const ngi_image_encoding* encodings,
+                                                   float* lightmap, size_t lightmap_bytes, float* final_image,
+                                                   size_t final_bytes, float* display, size_t display_bytes);
 NGI_API ngi_status ngi_pipeline_retain(ngi_pipeline* pipeline);
 NGI_API ngi_status ngi_pipeline_release(ngi_pipeline* pipeline);
 

@@ -783,15 +783,23 @@ ngi::FrameDesc frame_desc(const ngi_pipeline& p, int faces, unsigned flags) {
 
 static_assert(int(NGI_FORMAT_F32) == int(ngi::PixelFormat::F32) && int(NGI_FORMAT_F16) == int(ngi::PixelFormat::F16) &&
                   int(NGI_FORMAT_U8_UNORM) == int(ngi::PixelFormat::U8Unorm) &&
-                  int(NGI_FORMAT_U8_SRGB) == int(ngi::PixelFormat::U8Srgb),
+                  int(NGI_FORMAT_U8_SRGB) == int(ngi::PixelFormat::U8Srgb) &&
+                  int(NGI_FORMAT_U16_UNORM) == int(ngi::PixelFormat::U16Unorm) &&
+                  int(NGI_FORMAT_S16_SNORM) == int(ngi::PixelFormat::S16Snorm) &&
+                  int(NGI_FORMAT_R11G11B10F) == int(ngi::PixelFormat::R11G11B10F) &&
+                  int(NGI_FORMAT_RGB10A2_UNORM) == int(ngi::PixelFormat::RGB10A2Unorm),
               "ngi_pixel_format mirrors ngi::PixelFormat");
+static_assert(int(NGI_NORMAL_OCTAHEDRAL) == int(ngi::NormalEncoding::Octahedral) &&
+                  int(NGI_DEPTH_PERSPECTIVE) == int(ngi::DepthEncoding::Perspective),
+              "ngi_normal_encoding / ngi_depth_encoding mirror ngi::NormalEncoding / ngi::DepthEncoding");
 static_assert(int(NGI_FEATURE_ENV) == int(ngi::Feature::Env) && int(NGI_FEATURE_DEPTH) == int(ngi::Feature::Depth) &&
                   NGI_FEATURE_COUNT == ngi::kFeatureCount,
               "ngi_feature mirrors ngi::Feature");
 
 namespace {
 
-ngi::FrameInputs frame_inputs(const ngi_pipeline& p, const ngi_image_desc* images) {
+ngi::FrameInputs frame_inputs(const ngi_pipeline& p, const ngi_image_desc* images,
+                              const ngi_image_encoding* encodings = nullptr) {
     require(images, "images is NULL (36 descriptors expected)");
     ngi::FrameInputs in;
     in.look = p.look;
@@ -814,6 +822,18 @@ ngi::FrameInputs frame_inputs(const ngi_pipeline& p, const ngi_image_desc* image
             d.bottom_up = c.bottom_up != 0;
             d.scale = c.scale == 0.0f ? 1.0f : c.scale;
             d.bias = c.bias;
+            if (!encodings) continue;
+            const ngi_image_encoding& e = encodings[f * ngi::kFeatureCount + k];
+            d.normal_encoding = ngi::NormalEncoding(int(e.normal_encoding));
+            bool any = false;
+            for (float v : e.normal_to_world) any = any || v != 0.0f;
+            if (any)  // row-major in C; glm is column-major: m[column][row]
+                for (int r = 0; r < 3; ++r)
+                    for (int col = 0; col < 3; ++col) d.normal_to_world[col][r] = e.normal_to_world[r * 3 + col];
+            d.depth_encoding = ngi::DepthEncoding(int(e.depth_encoding));
+            d.near_m = e.near_m;
+            d.far_m = e.far_m;
+            d.reversed_z = e.reversed_z != 0;
         }
     return in;
 }
@@ -868,28 +888,59 @@ ngi_status ngi_pipeline_enqueue(ngi_pipeline* pipeline, ngi_model* model, ngi_bu
     });
 }
 
-ngi_status ngi_pipeline_enqueue_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
-                                       ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display) {
-    return guarded(__func__, [&] {
+namespace {
+// The image-descriptor calls with and without encodings share these; `call` is the public name the caller used
+// (what an error names).
+ngi_status enqueue_images(const char* call, ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                          const ngi_image_encoding* encodings, ngi_buffer* lightmap, ngi_buffer* final_image,
+                          ngi_buffer* display) {
+    return guarded(call, [&] {
         ngi_pipeline& p = live(pipeline, "pipeline");
         ngi_model& m = live(model, "model");
-        p.pipeline.enqueue(m.model, frame_inputs(p, images), device_outputs(p, lightmap, final_image, display));
+        p.pipeline.enqueue(m.model, frame_inputs(p, images, encodings), device_outputs(p, lightmap, final_image, display));
         m.last_was_enqueue = true;
     });
+}
+
+ngi_status run_images(const char* call, ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                      const ngi_image_encoding* encodings, float* lightmap, size_t lightmap_bytes, float* final_image,
+                      size_t final_bytes, float* display, size_t display_bytes) {
+    return guarded(call, [&] {
+        ngi_pipeline& p = live(pipeline, "pipeline");
+        ngi_model& m = live(model, "model");
+        check_output_sizes(p, lightmap, lightmap_bytes, final_image, final_bytes, display, display_bytes);
+        copy_outputs(p.pipeline.run(m.model, frame_inputs(p, images, encodings), lightmap != nullptr,
+                                    final_image != nullptr, display != nullptr, p.tonemap),
+                     lightmap, final_image, display);
+        m.last_was_enqueue = true;
+    });
+}
+}  // namespace
+
+ngi_status ngi_pipeline_enqueue_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                       ngi_buffer* lightmap, ngi_buffer* final_image, ngi_buffer* display) {
+    return enqueue_images(__func__, pipeline, model, images, nullptr, lightmap, final_image, display);
+}
+
+ngi_status ngi_pipeline_enqueue_images_encoded(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                               const ngi_image_encoding* encodings, ngi_buffer* lightmap,
+                                               ngi_buffer* final_image, ngi_buffer* display) {
+    return enqueue_images(__func__, pipeline, model, images, encodings, lightmap, final_image, display);
 }
 
 ngi_status ngi_pipeline_run_images(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
                                    float* lightmap, size_t lightmap_bytes, float* final_image, size_t final_bytes,
                                    float* display, size_t display_bytes) {
-    return guarded(__func__, [&] {
-        ngi_pipeline& p = live(pipeline, "pipeline");
-        ngi_model& m = live(model, "model");
-        check_output_sizes(p, lightmap, lightmap_bytes, final_image, final_bytes, display, display_bytes);
-        copy_outputs(p.pipeline.run(m.model, frame_inputs(p, images), lightmap != nullptr, final_image != nullptr,
-                                    display != nullptr, p.tonemap),
-                     lightmap, final_image, display);
-        m.last_was_enqueue = true;
-    });
+    return run_images(__func__, pipeline, model, images, nullptr, lightmap, lightmap_bytes, final_image, final_bytes,
+                      display, display_bytes);
+}
+
+ngi_status ngi_pipeline_run_images_encoded(ngi_pipeline* pipeline, ngi_model* model, const ngi_image_desc* images,
+                                           const ngi_image_encoding* encodings, float* lightmap, size_t lightmap_bytes,
+                                           float* final_image, size_t final_bytes, float* display,
+                                           size_t display_bytes) {
+    return run_images(__func__, pipeline, model, images, encodings, lightmap, lightmap_bytes, final_image, final_bytes,
+                      display, display_bytes);
 }
 
 ngi_status ngi_pipeline_run(ngi_pipeline* pipeline, ngi_model* model, const float* planes, size_t planes_bytes,

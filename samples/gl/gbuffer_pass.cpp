@@ -1,6 +1,9 @@
 #include "gbuffer_pass.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -50,12 +53,16 @@ uniform sampler2D u_bake_static, u_bake_lamp;
 uniform float u_bake_k;
 uniform vec2 u_atlas_size;
 layout(location = 0) out vec4 o_albedo;
-layout(location = 1) out vec4 o_normal;
-layout(location = 2) out float o_depth;
-layout(location = 3) out vec4 o_direct;
+layout(location = 1) out vec2 o_normal;   // octahedral
+layout(location = 3) out vec3 o_direct;   // R11G11B10F
 layout(location = 4) out vec4 o_emission;
 layout(location = 5) out vec4 o_env;
 const float kInvPi = 0.318309886;
+// The octahedral map of a unit vector (Cigolle et al. 2014): what ngi::NormalEncoding::Octahedral decodes.
+vec2 octahedral(vec3 n) {
+    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    return n.z >= 0.0 ? p : (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
+}
 void main() {
     vec3 n = v_normal;
     vec3 sun = vec3(0.0);
@@ -74,16 +81,16 @@ void main() {
     vec2 tc = t / u_atlas_size;
     vec3 baked = texture(u_bake_static, tc).rgb + u_lamp_level * texture(u_bake_lamp, tc).rgb;
     o_albedo = vec4(v_albedo, 1.0);
-    o_normal = vec4(n, 0.0);
-    o_depth = dot(v_world - u_centre, u_look);
-    o_direct = vec4(sun + baked, 1.0);
+    o_normal = octahedral(n);
+    o_direct = sun + baked;
     o_emission = vec4(v_emission * (v_lamp > 0.5 ? u_lamp_level : 1.0), 1.0);
     o_env = vec4(0.0);
 }
 )";
 
 // Background: a full-screen triangle at the far plane, drawn where no surface was (depth test LEQUAL against the
-// cleared 1.0), writing what the tracer writes where a primary ray escapes.
+// cleared 1.0, depth not written: the cleared 1 is ngi's "no surface"), writing what the tracer writes where a
+// primary ray escapes.
 const char* kSkyVs = R"(#version 330 core
 void main() {
     vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2) * 2.0 - 1.0;
@@ -96,9 +103,8 @@ uniform vec3 u_look, u_right, u_up;
 uniform float u_n, u_row0;
 uniform vec3 u_zenith, u_horizon, u_ground, u_glow, u_sun_dir;
 layout(location = 0) out vec4 o_albedo;
-layout(location = 1) out vec4 o_normal;
-layout(location = 2) out float o_depth;
-layout(location = 3) out vec4 o_direct;
+layout(location = 1) out vec2 o_normal;
+layout(location = 3) out vec3 o_direct;
 layout(location = 4) out vec4 o_emission;
 layout(location = 5) out vec4 o_env;
 vec3 sky_radiance(vec3 d) {   // ngi::sky_radiance / pathtrace.cl sky_radiance
@@ -113,7 +119,7 @@ void main() {
     float u = 2.0 * gl_FragCoord.x / u_n - 1.0;
     float v = 2.0 * (gl_FragCoord.y - u_row0) / u_n - 1.0;
     vec3 d = normalize(u_look + u * u_right + v * u_up);
-    o_albedo = vec4(0.0); o_normal = vec4(0.0); o_depth = 1.0e4; o_direct = vec4(0.0); o_emission = vec4(0.0);
+    o_albedo = vec4(0.0); o_normal = vec2(0.0); o_direct = vec3(0.0); o_emission = vec4(0.0);
     o_env = vec4(sky_radiance(d), 1.0);
 }
 )";
@@ -124,13 +130,14 @@ struct TargetFormat {
     int channels;
     std::size_t pixel_bytes;
 };
+constexpr int kDepth = int(ngi::Feature::Depth);  // read from the depth attachment, no colour target
 const TargetFormat kFormats[GBufferPass::kTargets] = {
-    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},  // albedo
-    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},  // normal
-    {GL_R32F, GL_RED, GL_FLOAT, ngi::PixelFormat::F32, 1, 4},           // depth
-    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},  // direct
-    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},  // emission
-    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},  // env
+    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},                              // albedo
+    {GL_RG16F, GL_RG, GL_HALF_FLOAT, ngi::PixelFormat::F16, 2, 4},                                  // normal
+    {GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, GL_FLOAT, ngi::PixelFormat::F32, 1, 4},             // depth
+    {GL_R11F_G11F_B10F, GL_RGB, GL_UNSIGNED_INT_10F_11F_11F_REV, ngi::PixelFormat::R11G11B10F, 3, 4},  // direct
+    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},                              // emission
+    {GL_RGBA16F, GL_RGBA, GL_HALF_FLOAT, ngi::PixelFormat::F16, 4, 8},                              // env
 };
 
 GLint loc(GLuint p, const char* name) { return glGetUniformLocation(p, name); }
@@ -152,6 +159,20 @@ float half_to_float(std::uint16_t h) {
     return f;
 }
 
+// An unsigned small float of a packed R11G11B10F word: 5 exponent bits (bias 15) above `man` mantissa bits.
+float ufloat(std::uint32_t bits, int man) {
+    const std::uint32_t e = bits >> man, m = bits & ((1u << man) - 1u);
+    if (e == 31) return m ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+    return e == 0 ? std::ldexp(float(m), -14 - man) : std::ldexp(float((1u << man) + m), int(e) - 15 - man);
+}
+
+// The unit vector of an octahedral map value (Cigolle et al. 2014).
+glm::vec3 from_octahedral(float x, float y) {
+    glm::vec3 v(x, y, 1.0f - std::abs(x) - std::abs(y));
+    if (v.z < 0.0f) v = {(1.0f - std::abs(y)) * (x >= 0.0f ? 1.0f : -1.0f), (1.0f - std::abs(x)) * (y >= 0.0f ? 1.0f : -1.0f), v.z};
+    return glm::normalize(v);
+}
+
 }  // namespace
 
 GBufferPass::GBufferPass(int n) : n_(n) {
@@ -159,6 +180,10 @@ GBufferPass::GBufferPass(int n) : n_(n) {
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     GLenum draw[kTargets];
     for (int i = 0; i < kTargets; ++i) {
+        if (i == kDepth) {  // the depth attachment below: no colour output at this location
+            draw[i] = GL_NONE;
+            continue;
+        }
         glGenTextures(1, &tex_[i]);
         glBindTexture(GL_TEXTURE_2D, tex_[i]);
         glTexImage2D(GL_TEXTURE_2D, 0, kFormats[i].internal, n_, 6 * n_, 0, kFormats[i].format, kFormats[i].type, nullptr);
@@ -201,6 +226,13 @@ GBufferPass::~GBufferPass() {
     glDeleteFramebuffers(1, &fbo_);
 }
 
+std::uint64_t GBufferPass::gl_bytes(int n) {
+    std::uint64_t per_pixel = 0;
+    for (int i = 0; i < kTargets; ++i)  // texture (the depth renderbuffer for depth) + read-back PBO
+        per_pixel += 2 * std::uint64_t(kFormats[i].pixel_bytes);
+    return per_pixel * 6 * std::uint64_t(n) * std::uint64_t(n);
+}
+
 std::size_t GBufferPass::bytes(int target) const {
     return std::size_t(n_) * 6 * n_ * kFormats[target].pixel_bytes;
 }
@@ -208,7 +240,6 @@ std::size_t GBufferPass::bytes(int target) const {
 void GBufferPass::render(const GpuScene& scene, const ShadowMap& shadow, const ngi::CameraPose& pose,
                          const ngi::Lighting& lighting) {
     const ngi::CameraCluster cluster = ngi::CameraCluster::from_look_up(pose.look, pose.up);
-    const float far_plane = 1.0e4f;
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glViewport(0, 0, n_, 6 * n_);
     glDisable(GL_SCISSOR_TEST);
@@ -246,7 +277,7 @@ void GBufferPass::render(const GpuScene& scene, const ShadowMap& shadow, const n
         // 90-degree square frustum: x_ndc = p.right / p.look, y_ndc = p.up / p.look, so pixel centres sample
         // exactly camera.hpp's rays d = look + u right + v up.
         const glm::mat4 view = glm::lookAt(pose.position, pose.position + b.look, b.up);
-        const glm::mat4 proj = glm::perspective(glm::half_pi<float>(), 1.0f, 0.01f, far_plane);
+        const glm::mat4 proj = glm::perspective(glm::half_pi<float>(), 1.0f, kNear, kFar);
         const glm::mat4 vp = proj * view;
         glViewport(0, f * n_, n_, n_);
         glUniformMatrix4fv(loc(p, "u_vp"), 1, GL_FALSE, glm::value_ptr(vp));
@@ -286,7 +317,7 @@ void GBufferPass::read_back() {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     for (int i = 0; i < kTargets; ++i) {
-        glReadBuffer(GL_COLOR_ATTACHMENT0 + i);
+        if (i != kDepth) glReadBuffer(GL_COLOR_ATTACHMENT0 + i);  // GL_DEPTH_COMPONENT reads the depth attachment
         glBindBuffer(GL_PIXEL_PACK_BUFFER, pbo_[i]);
         glReadPixels(0, 0, n_, 6 * n_, kFormats[i].format, kFormats[i].type, nullptr);
     }
@@ -327,6 +358,12 @@ ngi::FrameInputs GBufferPass::inputs(const ngi::CameraPose& pose) const {
             d.pixel_stride = kFormats[t].pixel_bytes;
             d.row_stride = row;
             d.bottom_up = true;  // GL's first row is the image's bottom
+            if (t == int(ngi::Feature::Normal)) d.normal_encoding = ngi::NormalEncoding::Octahedral;
+            if (t == kDepth) {
+                d.depth_encoding = ngi::DepthEncoding::Perspective;
+                d.near_m = kNear;
+                d.far_m = kFar;
+            }
         }
     }
     return in;
@@ -337,28 +374,43 @@ ngi::Frame GBufferPass::to_frame(const ngi::CameraPose& pose, int faces) const {
     frame.n = n_;
     frame.look = pose.look;
     frame.up = pose.up;
-    for (int t = 0; t < kTargets; ++t) {
+    for (int t = 0; t < kTargets; ++t)
         if (!mapped_[t]) throw GlError("G-buffer not read back");
-        const int ch = ngi::feature_channels(ngi::Feature(t));
-        for (int f = 0; f < std::clamp(faces, 1, ngi::kFaceCount); ++f) {
-            ngi::Image img(n_, n_, ch);
+    // Decoded as ngi's gather kernel decodes these formats (kernels/gather_image.cl): half floats, R11G11B10F,
+    // octahedral normals (the zero vector where the depth is cleared), perspective window depth.
+    const auto* depth = static_cast<const float*>(mapped_[kDepth]);
+    for (int f = 0; f < std::clamp(faces, 1, ngi::kFaceCount); ++f)
+        for (int t = 0; t < kTargets; ++t) {
+            ngi::Image img(n_, n_, ngi::feature_channels(ngi::Feature(t)));
             for (int row = 0; row < n_; ++row) {
                 const int gl_row = f * n_ + (n_ - 1 - row);
                 for (int col = 0; col < n_; ++col) {
                     const std::size_t px = std::size_t(gl_row) * n_ + col;
-                    for (int c = 0; c < ch; ++c) {
-                        float v;
-                        if (kFormats[t].type == GL_FLOAT)
-                            v = static_cast<const float*>(mapped_[t])[px * kFormats[t].channels + c];
-                        else
-                            v = half_to_float(static_cast<const std::uint16_t*>(mapped_[t])[px * 4 + c]);
-                        img.at(c, row, col) = v;
+                    const float d = depth[px];
+                    const bool sky = !(d < 1.0f);  // the cleared far plane
+                    if (t == kDepth) {
+                        img.at(0, row, col) = sky ? 1.0e4f : kNear / (1.0f - d * (1.0f - kNear / kFar));  // the
+                        continue;  // tracer's no-surface depth, docs/CONVENTIONS.md section 3
                     }
+                    if (kFormats[t].ngi_format == ngi::PixelFormat::R11G11B10F) {
+                        std::uint32_t w;
+                        std::memcpy(&w, static_cast<const unsigned char*>(mapped_[t]) + px * 4, 4);
+                        img.at(0, row, col) = ufloat(w & 2047u, 6);
+                        img.at(1, row, col) = ufloat((w >> 11) & 2047u, 6);
+                        img.at(2, row, col) = ufloat(w >> 22, 5);
+                        continue;
+                    }
+                    const auto* h = static_cast<const std::uint16_t*>(mapped_[t]) + px * std::size_t(kFormats[t].channels);
+                    if (t == int(ngi::Feature::Normal)) {
+                        const glm::vec3 nv = sky ? glm::vec3(0.0f) : from_octahedral(half_to_float(h[0]), half_to_float(h[1]));
+                        for (int c = 0; c < 3; ++c) img.at(c, row, col) = nv[c];
+                        continue;
+                    }
+                    for (int c = 0; c < img.channels; ++c) img.at(c, row, col) = half_to_float(h[c]);
                 }
             }
             frame.get(ngi::Feature(t), ngi::Face(f)) = std::move(img);
         }
-    }
     return frame;
 }
 

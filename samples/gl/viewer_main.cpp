@@ -24,6 +24,7 @@
 #include <ngi/camera_path.hpp>
 #include <ngi/display.hpp>
 #include <ngi/error.hpp>
+#include <ngi/host_memory.hpp>
 #include <ngi/image_io.hpp>
 #include <ngi/output_folder.hpp>
 
@@ -88,6 +89,20 @@ double median(std::vector<double> v) {
     return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+// A software GL renderer (Mesa's llvmpipe or softpipe, SwiftShader) keeps textures and buffers in host memory: the
+// G-buffers' storage is held in ngi's host-memory ledger before GL allocates it, so that with the pipeline's buffers
+// on a CPU device it meets NGI_HOST_MEMORY_LIMIT (issue 51: --n 2048 peaked at 7.6 GB under a 4 GiB limit).
+ngi::HostMemoryHold hold_gl_memory(const ngi_gl::GlContext& context, const Options& o) {
+    const std::string renderer = context.renderer();
+    if (renderer.find("llvmpipe") == std::string::npos && renderer.find("softpipe") == std::string::npos &&
+        renderer.find("SwiftShader") == std::string::npos)
+        return {};
+    const std::uint64_t bytes = ngi_gl::GBufferPass::gl_bytes(o.n) + (o.display ? ngi_gl::GBufferPass::gl_bytes(o.side()) : 0);
+    return ngi::HostMemoryHold("G-buffers of a software GL renderer (" + renderer + ") for --n " + std::to_string(o.n) +
+                                   (o.display ? " and --display" : ""),
+                               bytes);
+}
+
 // The scene's static light for one time of day: bake, upload, shadow map.
 struct Lit {
     ngi::Lighting lighting;
@@ -99,7 +114,8 @@ public:
     Viewer(const Options& o, ngi::Device& device, ngi::VoxelScene scene, ngi::Model& model)
         : o_(o), device_(device), scene_(std::move(scene)), model_(model),
           context_(o.width, o.height, !o.headless, "ngi_gl_viewer: " + scene_.name),
-          pipeline_(device, o.n), faces_(ngi_gl::exposed_faces(scene_)), shadow_(o.shadow), gbuffer_(o.n) {
+          pipeline_(device, o.n), faces_(ngi_gl::exposed_faces(scene_)), shadow_(o.shadow),
+          gl_hold_(hold_gl_memory(context_, o)), gbuffer_(o.n) {
         if (o.display) {  // the front face at the window's size: the display's G-buffer and direct light
             display_gbuffer_.emplace(o.side());
             display_view_.emplace(device, o.side());
@@ -343,6 +359,7 @@ private:
     ngi::SurroundPipeline pipeline_;
     std::vector<ngi_gl::ExposedFace> faces_;
     ngi_gl::ShadowMap shadow_;
+    ngi::HostMemoryHold gl_hold_;  // the G-buffers' GL storage, when GL is a software renderer (host memory)
     ngi_gl::GBufferPass gbuffer_;
     std::optional<ngi_gl::GBufferPass> display_gbuffer_;  // --display: the front face at the window's size
     std::optional<ngi::DisplayView> display_view_;

@@ -328,6 +328,48 @@ static void test_pipeline(ngi_device* dev, const char* models) {
                     "ngi_pipeline_enqueue_images", "image 'normal' of face 'left' has 2 channels");
         CHECK_FAILS(ngi_pipeline_run_images(p, m, NULL, light2, out_bytes, NULL, 0, NULL, 0), NGI_ERROR_INVALID_ARGUMENT,
                     "ngi_pipeline_run_images", "images is NULL");
+        images[2 * 6 + NGI_FEATURE_NORMAL].channels = 3;
+
+        /* Engine encodings (ngi_image_encoding beside the descriptors): view-space normals with the row-major
+           rotation that takes them to world space (here 90 degrees about z: world = (-y, x, z), exact in float)
+           light the frame to the same bits; a perspective depth without its planes is refused. */
+        {
+            static const float view_to_world[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+            const size_t plane = (size_t)n * n;
+            float* view_normals = (float*)malloc(6 * 3 * plane * sizeof(float));
+            ngi_image_encoding encodings[36];
+            size_t i;
+            memset(encodings, 0, sizeof encodings);
+            CHECK(view_normals != NULL);
+            for (f = 0; f < 6; ++f) {
+                const float* world = planes + ((size_t)f * 16 + 3) * plane;
+                float* v = view_normals + (size_t)f * 3 * plane;
+                for (i = 0; i < plane; ++i) {  /* view = R^T world = (y, -x, z) */
+                    v[i] = world[plane + i];
+                    v[plane + i] = -world[i];
+                    v[2 * plane + i] = world[2 * plane + i];
+                }
+                images[f * 6 + NGI_FEATURE_NORMAL].buffer = NULL;
+                images[f * 6 + NGI_FEATURE_NORMAL].host = v;
+                images[f * 6 + NGI_FEATURE_NORMAL].host_bytes = 3 * plane * sizeof(float);
+                images[f * 6 + NGI_FEATURE_NORMAL].offset = 0;
+                memcpy(encodings[f * 6 + NGI_FEATURE_NORMAL].normal_to_world, view_to_world, sizeof view_to_world);
+            }
+            memset(light2, 0, out_bytes);
+            CHECK(ngi_pipeline_run_images_encoded(p, m, images, encodings, light2, out_bytes, NULL, 0, NULL, 0) ==
+                  NGI_OK);
+            CHECK(memcmp(light, light2, out_bytes) == 0);
+            memset(light2, 0, out_bytes);
+            CHECK(ngi_pipeline_enqueue_images_encoded(p, m, images, encodings, light_b, NULL, NULL) == NGI_OK);
+            CHECK(ngi_buffer_read(light_b, 0, light2, out_bytes) == NGI_OK);
+            CHECK(memcmp(light, light2, out_bytes) == 0);
+            encodings[NGI_FEATURE_DEPTH].depth_encoding = NGI_DEPTH_PERSPECTIVE;
+            encodings[NGI_FEATURE_DEPTH].far_m = 100.0f;
+            CHECK_FAILS(ngi_pipeline_run_images_encoded(p, m, images, encodings, light2, out_bytes, NULL, 0, NULL, 0),
+                        NGI_ERROR_INPUT, "ngi_pipeline_run_images_encoded",
+                        "image 'depth' of face 'front': the perspective depth encoding needs");
+            free(view_normals);
+        }
     }
 
     /* Out of memory is its own status. */

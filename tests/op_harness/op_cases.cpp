@@ -669,7 +669,11 @@ test::Layout gather_layout(PixelFormat format, int channels, int n, bool planar,
     l.channels = channels;
     const std::size_t elem = pixel_format_bytes(format);
     l.offset = elem * 5;
-    if (planar) {
+    if (pixel_format_packed_channels(format)) {  // one word per pixel (padded to two), its channels in it
+        l.channel_stride = 0;
+        l.pixel_stride = elem * 2;
+        l.row_stride = l.pixel_stride * std::size_t(n) + 2 * elem;
+    } else if (planar) {
         l.pixel_stride = elem;
         l.row_stride = elem * (std::size_t(n) + 3);
         l.channel_stride = l.row_stride * std::size_t(n) + elem;
@@ -686,7 +690,9 @@ test::Layout gather_layout(PixelFormat format, int channels, int n, bool planar,
 
 Prepared gather_case(Context& ctx, const test::Layout& l, int need, int n, std::mt19937& rng) {
     Prepared r;
-    r.shape = dims({{"n", n}, {"C", need}, {"of ", l.channels}}) + (l.channel_stride == pixel_format_bytes(l.format) ? " interleaved" : " planar") +
+    r.shape = dims({{"n", n}, {"C", need}, {"of ", l.channels}}) +
+              (pixel_format_packed_channels(l.format) ? " packed"
+               : l.channel_stride == pixel_format_bytes(l.format) ? " interleaved" : " planar") +
               (l.bottom_up ? " bottom-up" : "");
     auto op = std::make_shared<GatherImage>(ctx);
     Image src(n, n, l.channels);
@@ -710,7 +716,7 @@ Prepared gather_case(Context& ctx, const test::Layout& l, int need, int n, std::
             for (int row = 0; row < n; ++row)
                 for (int col = 0; col < n; ++col)
                     cmp.want[std::size_t(c) * plane + std::size_t(row) * n + col] =
-                        double(test::decode(mem, test::byte_of(l, n, row, col, c), l.format)) * l.scale + l.bias;
+                        double(test::decode(mem, test::byte_of(l, n, row, col, c), l.format, c)) * l.scale + l.bias;
         return cmp;
     };
     return r;
@@ -1167,6 +1173,10 @@ std::vector<OpCase> build_table() {
         {"U8 sRGB planar, scale and bias", PixelFormat::U8Srgb, 3, 3, 13, 1024, true, true, true, false},
         {"U8 unorm interleaved", PixelFormat::U8Unorm, 4, 3, 29, 1024, false, false, false, false},
         {"tiny F16 interleaved", PixelFormat::F16, 4, 3, 3, 0, false, true, false, true},
+        {"U16 unorm interleaved", PixelFormat::U16Unorm, 4, 3, 19, 1024, false, true, false, false},
+        {"S16 snorm planar", PixelFormat::S16Snorm, 2, 2, 15, 1024, true, false, false, false},
+        {"R11G11B10F packed, bottom-up", PixelFormat::R11G11B10F, 3, 3, 21, 1024, false, true, false, false},
+        {"RGB10A2 packed, scale and bias", PixelFormat::RGB10A2Unorm, 4, 3, 11, 1024, false, false, true, false},
     };
     for (const auto& g : gathers)
         row("GatherImage::enqueue", g.name, g.tiny, kTolGather, [g](Context& c, Size z, std::mt19937& rng) {

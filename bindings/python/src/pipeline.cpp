@@ -1,5 +1,7 @@
 // ngi.Frame, ngi.read_frame / write_frame, ngi.Pipeline (the surround-aware pipeline around a generator).
 #include <cstring>
+#include <optional>
+#include <set>
 #include <type_traits>
 
 #include "common.hpp"
@@ -134,20 +136,36 @@ T dict_value(const py::dict& d, const char* key, const std::string& what, const 
 
 ngi::ImageDesc image_desc_from(const py::handle& spec, const std::string& what, std::vector<py::array>& keep) {
     py::object obj = py::reinterpret_borrow<py::object>(spec);
-    bool srgb = false, bottom_up = false;
-    float scale = 1.0f, bias = 0.0f;
+    bool srgb = false, bottom_up = false, reversed_z = false;
+    float scale = 1.0f, bias = 0.0f, near_m = 0.0f, far_m = 0.0f;
+    std::string format, normal = "xyz", depth = "linear";
+    std::optional<py::array> to_world;
+    static const std::set<std::string> kKeys = {"array", "srgb", "scale", "bias", "bottom_up", "format", "normal",
+                                                "normal_to_world", "depth", "near", "far", "reversed_z"};
     if (py::isinstance<py::dict>(obj)) {
         py::dict d = obj.cast<py::dict>();
         for (auto item : d) {
             const std::string key = py::str(item.first);
-            if (key != "array" && key != "srgb" && key != "scale" && key != "bias" && key != "bottom_up")
-                throw py::value_error(what + ": unknown key '" + key + "' (array, srgb, scale, bias, bottom_up)");
+            if (!kKeys.count(key))
+                throw py::value_error(what + ": unknown key '" + key + "' (array, srgb, scale, bias, bottom_up, format, "
+                                      "normal, normal_to_world, depth, near, far, reversed_z)");
         }
         if (!d.contains("array")) throw py::value_error(what + ": the dict has no 'array'");
         if (d.contains("srgb")) srgb = dict_value<bool>(d, "srgb", what, "True or False");
         if (d.contains("bottom_up")) bottom_up = dict_value<bool>(d, "bottom_up", what, "True or False");
         if (d.contains("scale")) scale = dict_value<float>(d, "scale", what, "a number");
         if (d.contains("bias")) bias = dict_value<float>(d, "bias", what, "a number");
+        if (d.contains("format")) format = dict_value<std::string>(d, "format", what, "a format name");
+        if (d.contains("normal")) normal = dict_value<std::string>(d, "normal", what, "'xyz' or 'octahedral'");
+        if (d.contains("depth")) depth = dict_value<std::string>(d, "depth", what, "'linear' or 'perspective'");
+        if (d.contains("near")) near_m = dict_value<float>(d, "near", what, "a number");
+        if (d.contains("far")) far_m = dict_value<float>(d, "far", what, "a number");
+        if (d.contains("reversed_z")) reversed_z = dict_value<bool>(d, "reversed_z", what, "True or False");
+        if (d.contains("normal_to_world")) {
+            to_world = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(d["normal_to_world"]);
+            if (!*to_world || to_world->ndim() != 2 || to_world->shape(0) != 3 || to_world->shape(1) != 3)
+                throw py::value_error(what + ": 'normal_to_world' must be a 3 x 3 array");
+        }
         obj = d["array"];
     }
     if (!py::isinstance<py::array>(obj)) throw py::type_error(what + ": expected a NumPy array");
@@ -155,26 +173,51 @@ ngi::ImageDesc image_desc_from(const py::handle& spec, const std::string& what, 
     if (a.ndim() != 2 && a.ndim() != 3) throw py::value_error(what + ": expected [H, W] or [H, W, C]");
     const py::dtype dt = a.dtype();
     ngi::ImageDesc d;
-    if (dt.is(py::dtype::of<float>())) d.format = ngi::PixelFormat::F32;
+    if (!format.empty()) {
+        d.format = ngi::pixel_format_from_name(format);  // InputError (a ValueError) for an unknown name
+        const std::size_t bytes = ngi::pixel_format_bytes(d.format);
+        if (std::size_t(dt.itemsize()) != bytes || (dt.kind() != 'u' && dt.kind() != 'i' && dt.kind() != 'f'))
+            throw py::type_error(what + ": format " + format + " stores " + std::to_string(bytes) +
+                                 "-byte values, the array's dtype is " + dt.attr("name").cast<std::string>());
+    } else if (dt.is(py::dtype::of<float>())) d.format = ngi::PixelFormat::F32;
     else if (dt.kind() == 'f' && dt.itemsize() == 2) d.format = ngi::PixelFormat::F16;
     else if (dt.is(py::dtype::of<std::uint8_t>())) d.format = srgb ? ngi::PixelFormat::U8Srgb : ngi::PixelFormat::U8Unorm;
-    else throw py::type_error(what + ": dtype " + dt.attr("name").cast<std::string>() + " is not float32, float16 or uint8");
+    else if (dt.is(py::dtype::of<std::uint16_t>())) d.format = ngi::PixelFormat::U16Unorm;
+    else if (dt.is(py::dtype::of<std::int16_t>())) d.format = ngi::PixelFormat::S16Snorm;
+    else throw py::type_error(what + ": dtype " + dt.attr("name").cast<std::string>() +
+                              " is not float32, float16, uint8, uint16 or int16 (uint32 words of a packed format: give "
+                              "'format')");
     if (srgb && d.format != ngi::PixelFormat::U8Srgb) throw py::value_error(what + ": srgb needs a uint8 array");
     for (int i = 0; i < a.ndim(); ++i)
         if (a.strides(i) <= 0)
             throw py::value_error(what + ": stride " + std::to_string(a.strides(i)) + " of axis " + std::to_string(i) +
                                   " is not positive (flipped rows: pass the unflipped array with bottom_up=True)");
+    const int packed = ngi::pixel_format_packed_channels(d.format);
+    if (packed && a.ndim() != 2)
+        throw py::value_error(what + ": a packed format's array is [H, W] (one word per pixel)");
     d.height = int(a.shape(0));
     d.width = int(a.shape(1));
-    d.channels = a.ndim() == 3 ? int(a.shape(2)) : 1;
+    d.channels = packed ? packed : a.ndim() == 3 ? int(a.shape(2)) : 1;
     d.row_stride = std::size_t(a.strides(0));
     d.pixel_stride = std::size_t(a.strides(1));
-    d.channel_stride = a.ndim() == 3 ? std::size_t(a.strides(2)) : std::size_t(dt.itemsize());
+    d.channel_stride = packed ? 0 : a.ndim() == 3 ? std::size_t(a.strides(2)) : std::size_t(dt.itemsize());
     d.host = a.data();
     d.host_bytes = d.span_bytes();
     d.bottom_up = bottom_up;
     d.scale = scale;
     d.bias = bias;
+    if (normal == "octahedral") d.normal_encoding = ngi::NormalEncoding::Octahedral;
+    else if (normal != "xyz") throw py::value_error(what + ": 'normal' must be 'xyz' or 'octahedral', got '" + normal + "'");
+    if (depth == "perspective") d.depth_encoding = ngi::DepthEncoding::Perspective;
+    else if (depth != "linear") throw py::value_error(what + ": 'depth' must be 'linear' or 'perspective', got '" + depth + "'");
+    d.near_m = near_m;
+    d.far_m = far_m;
+    d.reversed_z = reversed_z;
+    if (to_world) {
+        auto m = to_world->unchecked<float, 2>();
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) d.normal_to_world[c][r] = m(r, c);  // row-major in, glm column-major
+    }
     keep.push_back(a);
     return d;
 }
@@ -443,10 +486,13 @@ Frame.from_dict), packed straight into the device layout. Returns a dict with th
            py::arg("curve") = "aces", py::arg("srgb") = true, py::arg("stats") = false, py::arg("timings") = false,
            R"doc(
 One frame from render targets as an engine holds them (image descriptors, ngi/image_desc.hpp), without repacking:
-`images` maps (face, feature) -> a NumPy array [N, N] or [N, N, C] (float32, float16 or uint8; C up to 4, the first
-3 read, 1 for depth; any positive strides, e.g. a channel slice or a padded pitch) or a dict {"array": a, "srgb":
-bool (uint8 sRGB albedo), "scale": s, "bias": b (value = stored x s + b, e.g. 2, -1 for unorm normals), "bottom_up":
-bool (OpenGL row order)}. Faces 'front', 'back', 'left', 'right', 'up', 'down' (a single-view model reads 'front');
+`images` maps (face, feature) -> a NumPy array [N, N] or [N, N, C] (float32, float16, uint8 (unorm), uint16
+(unorm) or int16 (snorm); C up to 4, the first 3 read, 1 for depth; any positive strides, e.g. a channel slice or a
+padded pitch) or a dict {"array": a, "srgb": bool (uint8 sRGB albedo), "scale": s, "bias": b (value = stored x s + b,
+e.g. 2, -1 for unorm normals), "bottom_up": bool (OpenGL row order), "format": "r11g11b10f" or "rgb10a2" (a uint32
+[N, N] array of packed words; or any format name for an array of its value size), "normal": "octahedral" (2 channels
+in [-1, 1]), "normal_to_world": a 3 x 3 row-major rotation (view-space normals), "depth": "perspective" with "near",
+"far" (metres; far=inf for an infinite far plane) and "reversed_z": bool (a depth attachment as rendered)}. Faces 'front', 'back', 'left', 'right', 'up', 'down' (a single-view model reads 'front');
 features 'albedo', 'normal', 'depth', 'direct' and optionally 'emission', 'env' on every face or none. Outputs as
 run(); timings=True adds 'timings' (ms per stage: gather, input, network, outputs).)doc")
         .def("enqueue", [](PyPipeline& p, PyModel& model, const py::object& planes, const py::object& look,

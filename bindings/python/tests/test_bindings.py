@@ -208,6 +208,74 @@ def test_pipeline_run_images_engine_layouts(dev, frame):
             pipe.run_images(model, bad)
 
 
+def octahedral(n):
+    """Unit vectors [..., 3] -> their octahedral map [..., 2] (Cigolle et al. 2014)."""
+    p = n[..., :2] / np.abs(n).sum(-1, keepdims=True)
+    fold = (1 - np.abs(p[..., ::-1])) * np.where(p >= 0, 1.0, -1.0)
+    return np.where(n[..., 2:3] >= 0, p, fold)
+
+
+def from_octahedral(e):
+    v = np.concatenate([e, 1 - np.abs(e).sum(-1, keepdims=True)], -1)
+    fold = (1 - np.abs(e[..., ::-1])) * np.where(e >= 0, 1.0, -1.0)
+    v[..., :2] = np.where(v[..., 2:3] < 0, fold, v[..., :2])
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def test_pipeline_run_images_gl_attachments(dev, frame):
+    """Issue 48: what a GL engine renders, handed over as it is -- a reversed-Z depth attachment with an infinite far
+    plane, octahedral view-space normals in RG16_SNORM, RGB10A2 albedo, R11G11B10F direct light, RGBA16 unorm
+    emission -- gives what its decoded values give as a frame dict."""
+    model = ngi.Model(dev, MODELS / "ladder" / "gi_single_view_n64_ngf16.safetensors")
+    pipe = ngi.Pipeline(dev, 64)
+    d = frame.to_dict()
+    hwc = {f: np.moveaxis(d[f][0], 0, -1).astype(np.float64) for f in ("albedo", "normal", "depth", "direct",
+                                                                       "emission", "env")}
+    near = 0.05
+    view_to_world = np.array([[0.6, 0, 0.8], [0, 1, 0], [-0.8, 0, 0.6]])      # row-major: world = R v
+    n = hwc["normal"] / np.maximum(np.linalg.norm(hwc["normal"], axis=-1, keepdims=True), 1e-6)
+    n[np.linalg.norm(hwc["normal"], axis=-1) < 0.5] = [0, 0, 1]               # the tracer's sky: any unit vector
+    oct16 = np.round(np.clip(octahedral(n @ view_to_world), -1, 1) * 32767).astype(np.int16)   # (R^T n) in rows
+    window = near / hwc["depth"][..., 0]                                       # reversed Z, infinite far: d = near / z
+    window[hwc["depth"][..., 0] >= 1000] = 0.0                                 # sky: the cleared value
+    albedo10 = np.round(np.clip(hwc["albedo"], 0, 1) * 1023).astype(np.uint32)
+    rgb10a2 = albedo10[..., 0] | albedo10[..., 1] << 10 | albedo10[..., 2] << 20 | np.uint32(3) << 30
+    halves = np.clip(hwc["direct"], 0, 60000).astype(np.float16).view(np.uint16).astype(np.uint32)
+    r11 = (halves[..., 0] >> 4) | (halves[..., 1] >> 4) << 11 | (halves[..., 2] >> 5) << 22  # truncated halves
+    emission16 = np.round(np.clip(hwc["emission"], 0, 1) * 65535).astype(np.uint16)
+    images = {
+        ("front", "normal"): {"array": oct16, "normal": "octahedral", "normal_to_world": view_to_world},
+        ("front", "depth"): {"array": window.astype(np.float32), "depth": "perspective", "near": near,
+                             "far": float("inf"), "reversed_z": True},
+        ("front", "albedo"): {"array": rgb10a2, "format": "rgb10a2"},
+        ("front", "direct"): {"array": r11, "format": "r11g11b10f"},
+        ("front", "emission"): emission16,
+        ("front", "env"): hwc["env"].astype(np.float32),
+    }
+    # What those bytes hold, decoded by NumPy in float64.
+    normal = from_octahedral(np.maximum(oct16 / 32767.0, -1)) @ view_to_world.T
+    w32 = window.astype(np.float32).astype(np.float64)
+    depth = np.where(w32 <= 0, 1e4, near / np.where(w32 > 0, w32, 1))
+    albedo = np.stack([(rgb10a2 >> (10 * c)) & 1023 for c in range(3)], -1) / 1023.0
+    direct = np.stack([((r11 & 2047) << 4).astype(np.uint16), (((r11 >> 11) & 2047) << 4).astype(np.uint16),
+                       ((r11 >> 22) << 5).astype(np.uint16)], -1).view(np.float16).astype(np.float64)
+    normal[depth >= 1e4] = 0                  # an octahedral normal where the depth says "no surface": none
+    decoded = {"albedo": albedo, "normal": normal, "depth": depth[..., None], "direct": direct,
+               "emission": emission16 / 65535.0, "env": hwc["env"]}
+    as_dict = {"look": d["look"], "up": d["up"]}
+    for f, v in decoded.items():
+        as_dict[f] = np.ascontiguousarray(np.moveaxis(v.astype(np.float32), -1, 0)[None])
+    want = pipe.run(model, as_dict, outputs=["lightmap"])
+    got = pipe.run_images(model, images, look=d["look"], up=d["up"], outputs=["lightmap"])
+    np.testing.assert_allclose(got["lightmap"], want["lightmap"], rtol=1e-4, atol=1e-5)
+    with pytest.raises(ValueError, match="'normal' must be 'xyz' or 'octahedral'"):
+        pipe.run_images(model, {**images, ("front", "normal"): dict(images[("front", "normal")], normal="oct")})
+    with pytest.raises(ngi.InputError, match="the perspective depth encoding needs 0 < near_m < far_m"):
+        pipe.run_images(model, {**images, ("front", "depth"): dict(images[("front", "depth")], near=0.0)})
+    with pytest.raises(TypeError, match="format r11g11b10f stores 4-byte values"):
+        pipe.run_images(model, {**images, ("front", "direct"): {"array": oct16, "format": "r11g11b10f"}})
+
+
 def test_negative_depth_is_refused_from_host_memory(dev, frame):
     # Issue 51: a frame folder refuses a negative depth (a distance); the in-memory paths took it and clamped it to
     # 0. Now Pipeline.run(dict) (host planes) and run_images (host descriptors: F32, F16, unorm8 with a bias) refuse
@@ -225,9 +293,12 @@ def test_negative_depth_is_refused_from_host_memory(dev, frame):
     assert np.isfinite(pipe.run(model, nan, outputs=["lightmap"])["lightmap"]).all()
     images = {("front", f): np.ascontiguousarray(np.moveaxis(d[f][0], 0, -1)) for f in ("albedo", "normal", "direct")}
     for depth in (np.full((64, 64), -1.0, np.float32), np.full((64, 64), -1.0, np.float16),
-                  {"array": np.zeros((64, 64), np.uint8), "bias": -0.25}):
+                  {"array": np.zeros((64, 64), np.float32), "bias": -0.25}):
         with pytest.raises(ngi.InputError, match="image 'depth' of face 'front': 4096 of 4096 pixels have a negative"):
             pipe.run_images(model, {**images, ("front", "depth"): depth}, look=d["look"], up=d["up"])
+    # unorm depth is a depth attachment: without the perspective encoding's planes it cannot hold metres (issue 48)
+    with pytest.raises(ngi.InputError, match="format u8 cannot hold linear depth in metres"):
+        pipe.run_images(model, {**images, ("front", "depth"): np.zeros((64, 64), np.uint8)}, look=d["look"], up=d["up"])
     ok = pipe.run_images(model, {**images, ("front", "depth"): np.ascontiguousarray(d["depth"][0, 0])},
                          look=d["look"], up=d["up"])
     assert np.isfinite(ok["lightmap"]).all()

@@ -15,6 +15,7 @@ namespace ngi {
 namespace {
 
 std::atomic<std::uint64_t> g_limit{0};  // 0 = not set by the application
+std::atomic<std::uint64_t> g_held{0};   // the ledger: HostMemoryHold and ngi's buffers on CPU devices
 
 // "8G", "512M", "123456": bytes with an optional binary suffix. Returns 0 for anything else (0 itself included:
 // a limit of nothing is a typo, not a request).
@@ -80,6 +81,43 @@ void check_host_memory(const std::string& what, std::uint64_t bytes) {
         throw InputError(what + ": needs " + describe_bytes(bytes) + " of host memory at once, more than the " +
                          "host-memory limit of " + describe_bytes(limit) +
                          " (raise it with NGI_HOST_MEMORY_LIMIT, e.g. NGI_HOST_MEMORY_LIMIT=16G)");
+}
+
+std::uint64_t host_memory_held() { return g_held.load(std::memory_order_relaxed); }
+
+namespace detail {
+
+void check_and_hold_host_memory(const std::string& what, std::uint64_t bytes) {
+    const std::uint64_t limit = host_memory_limit();
+    // Compare-and-swap: two threads holding at once cannot both pass on the same headroom.
+    std::uint64_t held = g_held.load(std::memory_order_relaxed);
+    do {
+        if (bytes > limit || held > limit - bytes)
+            throw InputError(what + ": needs " + describe_bytes(bytes) + " of host memory while " +
+                             describe_bytes(held) + " are already held (ngi's buffers on a CPU device, tables, " +
+                             "an application's frames), more than the host-memory limit of " + describe_bytes(limit) +
+                             " (raise it with NGI_HOST_MEMORY_LIMIT, e.g. NGI_HOST_MEMORY_LIMIT=16G)");
+    } while (!g_held.compare_exchange_weak(held, held + bytes, std::memory_order_relaxed));
+}
+
+void release_host_memory(std::uint64_t bytes) noexcept { g_held.fetch_sub(bytes, std::memory_order_relaxed); }
+
+}  // namespace detail
+
+HostMemoryHold::HostMemoryHold(const std::string& what, std::uint64_t bytes) {
+    detail::check_and_hold_host_memory(what, bytes);
+    bytes_ = bytes;
+}
+
+HostMemoryHold::~HostMemoryHold() { detail::release_host_memory(bytes_); }
+
+HostMemoryHold& HostMemoryHold::operator=(HostMemoryHold&& other) noexcept {
+    if (this != &other) {
+        detail::release_host_memory(bytes_);
+        bytes_ = other.bytes_;
+        other.bytes_ = 0;
+    }
+    return *this;
 }
 
 }  // namespace ngi

@@ -2,6 +2,7 @@
 // faces into it and extract the front view from it, and the coordinate map. Layout: docs/CONVENTIONS.md.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "ngi/error.hpp"
 #include "pipeline/pipeline_impl.hpp"
@@ -157,10 +158,19 @@ void upload_lut(detail::Context& ctx, const detail::GatherLut& lut, detail::Buff
 SurroundPipeline::SurroundPipeline(const Device& device, int n, GlobalViewMode mode, LuminationTransfer transfer) {
     check_n(n);
     impl_ = std::make_unique<Impl>(device, n, mode, transfer);
-    upload_lut(impl_->ctx, detail::build_merge_lut(n, mode), impl_->merge_idx, impl_->merge_w, "global view merge table");
+    {
+        // The tables are built on the host (an int4 and a float4 per pixel of the 4N x 2N view: 256 N^2 bytes, 1 GiB
+        // at N = 2048), then copied to the device: held in the ledger while they exist.
+        const std::uint64_t table = 32ull * 8 * std::uint64_t(n) * std::uint64_t(n);
+        const HostMemoryHold building("build the global view merge table for N = " + std::to_string(n), table);
+        upload_lut(impl_->ctx, detail::build_merge_lut(n, mode), impl_->merge_idx, impl_->merge_w,
+                   "global view merge table");
+    }
     upload_lut(impl_->ctx, detail::build_extract_lut(n, mode), impl_->extract_idx, impl_->extract_w,
                "front view extraction table");
     Image& c = impl_->coords;
+    impl_->coords_hold = HostMemoryHold("the global view's coordinates for N = " + std::to_string(n),
+                                        4ull * 2 * 2 * sizeof(float) * std::uint64_t(n) * std::uint64_t(n));
     c = Image(4 * n, 2 * n, 2);
     for (int y = 0; y < c.height; ++y)
         for (int x = 0; x < c.width; ++x) {

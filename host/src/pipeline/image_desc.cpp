@@ -10,30 +10,67 @@
 
 namespace ngi {
 
+namespace {
+constexpr PixelFormat kFormats[] = {PixelFormat::F32,      PixelFormat::F16,        PixelFormat::U8Unorm,
+                                    PixelFormat::U8Srgb,   PixelFormat::U16Unorm,   PixelFormat::S16Snorm,
+                                    PixelFormat::R11G11B10F, PixelFormat::RGB10A2Unorm};
+}  // namespace
+
 const char* pixel_format_name(PixelFormat f) {
     switch (f) {
         case PixelFormat::F32: return "f32";
         case PixelFormat::F16: return "f16";
         case PixelFormat::U8Unorm: return "u8";
         case PixelFormat::U8Srgb: return "u8_srgb";
+        case PixelFormat::U16Unorm: return "u16";
+        case PixelFormat::S16Snorm: return "s16";
+        case PixelFormat::R11G11B10F: return "r11g11b10f";
+        case PixelFormat::RGB10A2Unorm: return "rgb10a2";
     }
     return "invalid";
 }
 
 PixelFormat pixel_format_from_name(const std::string& name) {
-    for (PixelFormat f : {PixelFormat::F32, PixelFormat::F16, PixelFormat::U8Unorm, PixelFormat::U8Srgb})
+    std::string all;
+    for (PixelFormat f : kFormats) {
         if (name == pixel_format_name(f)) return f;
-    throw InputError("unknown pixel format '" + name + "' (f32, f16, u8, u8_srgb)");
+        all += std::string(all.empty() ? "" : ", ") + pixel_format_name(f);
+    }
+    throw InputError("unknown pixel format '" + name + "' (" + all + ")");
 }
 
 std::size_t pixel_format_bytes(PixelFormat f) {
     switch (f) {
-        case PixelFormat::F32: return 4;
-        case PixelFormat::F16: return 2;
+        case PixelFormat::F32:
+        case PixelFormat::R11G11B10F:
+        case PixelFormat::RGB10A2Unorm: return 4;
+        case PixelFormat::F16:
+        case PixelFormat::U16Unorm:
+        case PixelFormat::S16Snorm: return 2;
         case PixelFormat::U8Unorm:
         case PixelFormat::U8Srgb: return 1;
     }
     return 0;
+}
+
+int pixel_format_packed_channels(PixelFormat f) {
+    return f == PixelFormat::R11G11B10F ? 3 : f == PixelFormat::RGB10A2Unorm ? 4 : 0;
+}
+
+const char* normal_encoding_name(NormalEncoding e) {
+    switch (e) {
+        case NormalEncoding::Xyz: return "xyz";
+        case NormalEncoding::Octahedral: return "octahedral";
+    }
+    return "invalid";
+}
+
+const char* depth_encoding_name(DepthEncoding e) {
+    switch (e) {
+        case DepthEncoding::Linear: return "linear";
+        case DepthEncoding::Perspective: return "perspective";
+    }
+    return "invalid";
 }
 
 namespace {
@@ -53,10 +90,12 @@ bool mul_add(std::size_t a, std::size_t b, std::size_t c, std::size_t& out) {
     return !__builtin_mul_overflow(a, b, &m) && !__builtin_add_overflow(m, c, &out);
 }
 
-// The bytes from `offset` to the end of the last stored channel of the last pixel; false on overflow.
+// The bytes from `offset` to the end of the last stored channel of the last pixel; false on overflow. A packed
+// format's channels share the pixel's one word (channel stride 0).
 bool span(const ImageDesc& d, const Strides& s, std::size_t& out) {
     std::size_t t = s.elem;
-    return mul_add(std::size_t(d.channels - 1), s.channel, t, t) && mul_add(std::size_t(d.width - 1), s.pixel, t, t) &&
+    const std::size_t channel_steps = pixel_format_packed_channels(d.format) ? 0 : std::size_t(d.channels - 1);
+    return mul_add(channel_steps, s.channel, t, t) && mul_add(std::size_t(d.width - 1), s.pixel, t, t) &&
            mul_add(std::size_t(d.height - 1), s.row, t, t) && ((out = t), true);
 }
 
@@ -65,8 +104,9 @@ bool span(const ImageDesc& d, const Strides& s, std::size_t& out) {
 ImageDesc ImageDesc::resolved() const {
     ImageDesc r = *this;
     const std::size_t elem = pixel_format_bytes(format);
-    if (!r.channel_stride) r.channel_stride = elem;
-    if (!r.pixel_stride) r.pixel_stride = std::size_t(channels > 0 ? channels : 0) * elem;
+    const bool packed = pixel_format_packed_channels(format) != 0;
+    if (!r.channel_stride && !packed) r.channel_stride = elem;  // packed: the channels share one word (stride 0)
+    if (!r.pixel_stride) r.pixel_stride = packed ? elem : std::size_t(channels > 0 ? channels : 0) * elem;
     if (!r.row_stride) r.row_stride = std::size_t(width > 0 ? width : 0) * r.pixel_stride;
     return r;
 }
@@ -84,11 +124,44 @@ void validate_image_desc(const ImageDesc& d, Face face, Feature feature, int n, 
     if (d.buffer && d.host) throw InputError(where + " names both a buffer and a host pointer; give one");
     const std::size_t elem = pixel_format_bytes(d.format);
     if (elem == 0) throw InputError(where + ": pixel format code " + std::to_string(int(d.format)) + " is unknown");
-    const int need = feature_channels(feature);
+    const bool octahedral = d.normal_encoding == NormalEncoding::Octahedral;
+    const bool perspective = d.depth_encoding == DepthEncoding::Perspective;
+    if (int(d.normal_encoding) < 0 || int(d.normal_encoding) > int(NormalEncoding::Octahedral))
+        throw InputError(where + ": normal encoding code " + std::to_string(int(d.normal_encoding)) + " is unknown");
+    if (int(d.depth_encoding) < 0 || int(d.depth_encoding) > int(DepthEncoding::Perspective))
+        throw InputError(where + ": depth encoding code " + std::to_string(int(d.depth_encoding)) + " is unknown");
+    const bool rotated = d.normal_to_world != glm::mat3(1.0f);
+    if ((octahedral || rotated) && feature != Feature::Normal)
+        throw InputError(where + ": " + (octahedral ? "the octahedral encoding" : "a normal rotation (normal_to_world)") +
+                         " applies to normals only");
+    if (perspective && feature != Feature::Depth)
+        throw InputError(where + ": the perspective depth encoding applies to depth only");
+    const int need = octahedral ? 2 : feature_channels(feature);
+    const int packed = pixel_format_packed_channels(d.format);
+    if (packed && d.channels != packed)
+        throw InputError(where + ": format " + pixel_format_name(d.format) + " packs " + std::to_string(packed) +
+                         " channels in each pixel's word, but the descriptor says " + std::to_string(d.channels));
     if (d.channels < need || d.channels > 4)
-        throw InputError(where + " has " + std::to_string(d.channels) + " channels; " + feature_name(feature) +
-                         " needs " + std::to_string(need) + " to 4 (the first " + std::to_string(need) +
+        throw InputError(where + " has " + std::to_string(d.channels) + " channels; " +
+                         (octahedral ? "an octahedral normal" : feature_name(feature)) + " needs " +
+                         std::to_string(need) + " to 4 (the first " + std::to_string(need) +
                          (need == 1 ? " is" : " are") + " read)");
+    if (packed && d.channel_stride)
+        throw InputError(where + ": format " + pixel_format_name(d.format) +
+                         " packs its channels in one word per pixel: channel_stride must be 0");
+    if (feature == Feature::Depth && !perspective && d.format != PixelFormat::F32 && d.format != PixelFormat::F16)
+        throw InputError(where + ": format " + pixel_format_name(d.format) +
+                         " cannot hold linear depth in metres; a depth attachment in it needs the perspective "
+                         "encoding with the projection's near and far planes (depth_encoding, near_m, far_m)");
+    if (perspective && !(std::isfinite(d.near_m) && d.near_m > 0.0f && d.far_m > d.near_m))
+        throw InputError(where + ": the perspective depth encoding needs 0 < near_m < far_m (far_m = +Inf for an "
+                         "infinite far plane), got near_m " + std::to_string(d.near_m) + ", far_m " +
+                         std::to_string(d.far_m));
+    if (rotated)
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r)
+                if (!std::isfinite(d.normal_to_world[c][r]))
+                    throw InputError(where + ": normal_to_world has a non-finite entry");
     if (d.width != n || d.height != n)
         throw InputError(where + " is " + std::to_string(d.width) + "x" + std::to_string(d.height) +
                          ", but this pipeline's faces are " + std::to_string(n) + "x" + std::to_string(n));
@@ -105,7 +178,8 @@ void validate_image_desc(const ImageDesc& d, Face face, Feature feature, int n, 
     aligned(s.channel, "channel stride");
     aligned(s.pixel, "pixel stride");
     aligned(s.row, "row stride");
-    if (s.channel < elem) throw InputError(where + ": channel stride " + std::to_string(s.channel) + " is below one value");
+    if (s.channel < elem && !packed)
+        throw InputError(where + ": channel stride " + std::to_string(s.channel) + " is below one value");
     if (s.pixel < elem) throw InputError(where + ": pixel stride " + std::to_string(s.pixel) + " is below one value");
     std::size_t row_bytes = 0, image_bytes = 0;
     if (__builtin_mul_overflow(std::size_t(n), s.pixel, &row_bytes) || s.row < row_bytes)
@@ -113,7 +187,7 @@ void validate_image_desc(const ImageDesc& d, Face face, Feature feature, int n, 
                          std::to_string(n) + " pixels of " + std::to_string(s.pixel) + " bytes");
     // A pixel's channels lie inside its pixel stride (interleaved) or one whole image apart (planar); anything else
     // makes neighbouring pixels share bytes.
-    const bool interleaved = std::size_t(d.channels - 1) * s.channel + elem <= s.pixel;
+    const bool interleaved = packed || std::size_t(d.channels - 1) * s.channel + elem <= s.pixel;
     const bool planar = !__builtin_mul_overflow(s.row, std::size_t(n), &image_bytes) && s.channel >= image_bytes;
     if (!interleaved && !planar)
         throw InputError(where + ": pixel stride " + std::to_string(s.pixel) + " bytes is smaller than the pixel (" +

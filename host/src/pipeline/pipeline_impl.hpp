@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "ngi/host_memory.hpp"
 #include "ngi/pipeline.hpp"
 #include "ops/gather_image.hpp"
 #include "pipeline/ssgi.hpp"
@@ -103,6 +104,7 @@ struct SurroundPipeline::Impl {
     detail::Kernel encode_ssgi, decode_residual;  // output mode "ssgi_residual"
     detail::Buffer merge_idx, merge_w;      // 8 N^2 entries
     detail::Buffer extract_idx, extract_w;  // N^2 entries
+    HostMemoryHold coords_hold;             // coords' bytes in the host-memory ledger (64 N^2: 256 MiB at 2048)
     Image coords;                           // 4N x 2N x 2, phi and theta in [0, 1]
 
     // Scratch reused between frames, grown on demand.
@@ -154,7 +156,6 @@ struct SurroundPipeline::Impl {
     // Image descriptors (frame_inputs.cpp): the gather op, built on first use, and the staging buffer of host images.
     std::unique_ptr<detail::GatherImage> gather_image;
     detail::Buffer staging;
-    std::vector<unsigned char> staging_host;
 };
 
 }  // namespace ngi

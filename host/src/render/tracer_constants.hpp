@@ -2,6 +2,7 @@
 // they reach the kernels as build options (renderer.cpp's pathtrace_defines(), voxel_field.cpp's compaction).
 // Library-internal.
 #pragma once
+#include "ops/gather_image.hpp"
 #include "ops/probe_shade.hpp"
 
 namespace ngi::detail {
@@ -9,8 +10,9 @@ namespace ngi::detail {
 // Secondary rays start this far (metres) off a surface, along its normal; a surface voxel's probe point sits this
 // far off its face (kernels/voxel_compact.cl). Build option RAY_OFFSET.
 constexpr float kRayOffset = 1.0e-3f;
-// Depth (metres) the tracer writes where the primary ray escapes: finite on purpose. Build option SKY_DEPTH.
-constexpr float kSkyDepth = 1.0e4f;
+// Depth (metres) the tracer writes where the primary ray escapes: finite on purpose, the frame's no-surface depth
+// that image descriptors' perspective depth also writes (ops/gather_image.hpp). Build option SKY_DEPTH.
+constexpr float kSkyDepth = kNoSurfaceDepth;
 // Probe shading reads depths at or beyond kProbeSkyDepth as sky: the tracer's sky must be among them.
 static_assert(kSkyDepth >= kProbeSkyDepth, "probe shading would take the tracer's sky for a surface");
 

@@ -314,13 +314,12 @@ Kernel Context::kernel(const std::string& program_name, const std::string& name,
 }
 
 namespace {
-// Bytes of ngi's buffers on CPU devices, whose memory is host memory: the host-memory budget (ngi/host_memory.hpp)
-// covers them (issue 51: the viewer at --n 2048 reached 15 GB, its network's tensor arena on PoCL, past
-// NGI_HOST_MEMORY_LIMIT). Counted up in Context::alloc, down by the runtime's destructor callback when the cl_mem
-// is freed (after its last release, kernels done), so views and retained handles keep it counted.
-std::atomic<std::uint64_t> g_cpu_buffer_bytes{0};
-void CL_CALLBACK uncount_cpu_buffer(cl_mem, void* bytes) {
-    g_cpu_buffer_bytes.fetch_sub(reinterpret_cast<std::uintptr_t>(bytes), std::memory_order_relaxed);
+// ngi's buffers on CPU devices, whose memory is host memory, are held in the host-memory ledger (ngi/host_memory.hpp;
+// issue 51: the viewer at --n 2048 reached 15 GB, its network's tensor arena on PoCL, past NGI_HOST_MEMORY_LIMIT):
+// held in Context::alloc, released by the runtime's destructor callback when the cl_mem is freed (after its last
+// release, kernels done), so views and retained handles keep it held.
+void CL_CALLBACK release_cpu_buffer(cl_mem, void* bytes) {
+    detail::release_host_memory(reinterpret_cast<std::uintptr_t>(bytes));
 }
 }  // namespace
 
@@ -330,23 +329,18 @@ Buffer Context::alloc(std::size_t bytes, const char* what) {
     if (bytes > info_.max_alloc_bytes)
         throw OutOfMemoryError(std::string("allocate ") + what + ": " + std::to_string(bytes) + " bytes exceeds the device's " +
                     "CL_DEVICE_MAX_MEM_ALLOC_SIZE of " + std::to_string(info_.max_alloc_bytes));
-    if (info_.is_cpu) {
-        const std::uint64_t held = g_cpu_buffer_bytes.load(std::memory_order_relaxed);
-        check_host_memory(std::string("allocate ") + what + " of " + std::to_string(bytes) + " bytes on a CPU device " +
-                              "(its memory is host memory; ngi's buffers there already hold " + std::to_string(held) +
-                              " bytes)",
-                          held + bytes);
-    }
+    if (info_.is_cpu)
+        detail::check_and_hold_host_memory(std::string("allocate ") + what + " on a CPU device (its memory is host memory)",
+                                           bytes);
     cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, bytes, nullptr, &err);
+    if (err != CL_SUCCESS && info_.is_cpu) detail::release_host_memory(bytes);
     check(err, (std::string("allocate ") + what + " (" + std::to_string(bytes) + " bytes)").c_str(),
           "clCreateBuffer");
     Buffer b(m, bytes);
-    if (info_.is_cpu) {
-        g_cpu_buffer_bytes.fetch_add(bytes, std::memory_order_relaxed);
-        if (clSetMemObjectDestructorCallback(m, uncount_cpu_buffer, reinterpret_cast<void*>(std::uintptr_t(bytes))) !=
+    if (info_.is_cpu &&
+        clSetMemObjectDestructorCallback(m, release_cpu_buffer, reinterpret_cast<void*>(std::uintptr_t(bytes))) !=
             CL_SUCCESS)
-            g_cpu_buffer_bytes.fetch_sub(bytes, std::memory_order_relaxed);  // not counted rather than never released
-    }
+        detail::release_host_memory(bytes);  // not held rather than never released
     if (info_.platform_name == "Oclgrind") {
         // Oclgrind 21.10's uninitialized-value checker gives a buffer shadow memory only at its first host store
         // or first kernel use, and keeps a released buffer's stale shadow for the next buffer with the same
@@ -368,12 +362,21 @@ Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what
 
 Buffer Context::upload_in_place(std::size_t bytes, const char* what, const std::function<void(void* dst)>& fill) {
     Buffer b = alloc(bytes, what);
-    if (bytes == 0) return b;
+    write_in_place(b, bytes, what, fill);
+    return b;
+}
+
+void Context::write_in_place(const Buffer& b, std::size_t bytes, const char* what,
+                             const std::function<void(void* dst)>& fill) {
+    if (bytes == 0) return;
+    if (bytes > b.bytes())
+        throw Error(std::string("write ") + what + ": " + std::to_string(bytes) + " bytes into a buffer of " +
+                    std::to_string(b.bytes()));
     if (info_.platform_name == "Oclgrind") {  // its checker tracks host stores by write (see alloc): one whole store
         std::vector<unsigned char> host(bytes);
         fill(host.data());
         write(b, 0, bytes, host.data(), what);
-        return b;
+        return;
     }
     cl_int err = CL_SUCCESS;
     void* dst = clEnqueueMapBuffer(queue_, b.get(), CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes, 0, nullptr,
@@ -382,7 +385,7 @@ Buffer Context::upload_in_place(std::size_t bytes, const char* what, const std::
     try {
         fill(dst);
     } catch (...) {
-        clEnqueueUnmapMemObject(queue_, b.get(), dst, 0, nullptr, nullptr);  // the buffer is released with b
+        clEnqueueUnmapMemObject(queue_, b.get(), dst, 0, nullptr, nullptr);
         clFinish(queue_);
         throw;
     }
@@ -391,7 +394,6 @@ Buffer Context::upload_in_place(std::size_t bytes, const char* what, const std::
           (std::string("unmap ") + what + " after upload").c_str(), "clEnqueueUnmapMemObject");
     uploads_.fetch_add(1, std::memory_order_relaxed);
     upload_bytes_.fetch_add((long long)bytes, std::memory_order_relaxed);
-    return b;
 }
 
 std::string Context::build_options(const std::string& defines) const {

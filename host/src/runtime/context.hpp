@@ -149,6 +149,9 @@ public:
     // vector, then clEnqueueWriteBuffer, touched 80 MB of fresh pages for the ngf 32 rung's 40 MB (page faults
     // were a third of `ngi lightmap`'s samples). Counted as one upload. fill must write every byte it needs.
     Buffer upload_in_place(std::size_t bytes, const char* what, const std::function<void(void* dst)>& fill);
+    // The same into the first `bytes` of an existing buffer (its old contents there are lost): no host copy, e.g.
+    // for host images packed into a staging buffer each frame.
+    void write_in_place(const Buffer& b, std::size_t bytes, const char* what, const std::function<void(void* dst)>& fill);
     // Host <-> device transfers (blocking, counted in transfers()); copy() stays on the device (not counted).
     void write(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, const void* src, const char* what);
     void read(const Buffer& b, std::size_t offset_bytes, std::size_t bytes, void* dst, const char* what);
