@@ -149,7 +149,11 @@ NGI_API ngi_status ngi_device_release(ngi_device* device);  /* NULL is accepted 
 /* A new device buffer of `bytes` (> 0) owned by ngi. */
 NGI_API ngi_status ngi_buffer_new(ngi_device* device, size_t bytes, ngi_buffer** out);
 /* Borrows bytes [offset, offset + bytes) of the application's `mem` (of the device's context; retained until the
- * buffer's last release, never freed by ngi). A non-zero offset must be a multiple of CL_DEVICE_MEM_BASE_ADDR_ALIGN. */
+ * buffer's last release, never freed by ngi). A non-zero offset must be a multiple of CL_DEVICE_MEM_BASE_ADDR_ALIGN.
+ * Known limit: `mem` must be a cl_mem. ngi hands it to the ICD loader, which dispatches through the object's first
+ * pointer before any driver can say CL_INVALID_MEM_OBJECT: a pointer to anything else is undefined behaviour there
+ * (a crash in the loader on Debian's ocl-icd), the one argument ngi cannot check (docs/RELIABILITY.md). NULL and
+ * handles of another context are refused. */
 NGI_API ngi_status ngi_buffer_wrap(ngi_device* device, struct _cl_mem* mem, size_t offset, size_t bytes,
                                    ngi_buffer** out);
 NGI_API ngi_status ngi_buffer_size(const ngi_buffer* buffer, size_t* bytes);

@@ -21,6 +21,7 @@ Usage (with <build>/python on PYTHONPATH):
 
 import argparse
 import inspect
+import math
 import os
 import pickle
 import stat
@@ -167,6 +168,19 @@ def _is_onnx(path):
     return head[:1] == b"\x08" and head != b"PK"  # field 1 (ir_version), varint: every ONNX ModelProto's start
 
 
+def _float_pair(text):
+    """'LO,HI' -> (lo, hi): two finite float32 numbers with lo < hi (argparse type)."""
+    parts = text.split(",")
+    try:
+        lo, hi = (float(v) for v in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        lo = hi = None
+    if lo is None or not (math.isfinite(lo) and math.isfinite(hi) and abs(lo) <= 3.4e38 and abs(hi) <= 3.4e38
+                          and lo < hi):
+        raise argparse.ArgumentTypeError(f"'{text}' is not LO,HI with finite LO < HI")
+    return lo, hi
+
+
 def onnx_main(argv):
     parser = argparse.ArgumentParser(prog="python3 -m ngi.convert",
                                      description="Import an ONNX model as an ngi model file (family \"graph\"; "
@@ -175,10 +189,14 @@ def onnx_main(argv):
     parser.add_argument("output", help="ngi model file to write (.safetensors)")
     parser.add_argument("--source", help="free text stored in the config (default: input file name)")
     parser.add_argument("--half", action="store_true", help="store tensors as F16 instead of F32")
+    parser.add_argument("--input-range", metavar="LO,HI", type=_float_pair,
+                        help="the value range the network's inputs were trained in (the surround pipeline scales its "
+                             "features into it; without one the model runs on tensors only: Model.run, ngi generate)")
     args = parser.parse_args(argv)
     from .onnx_import import import_onnx  # noqa: PLC0415 (the onnx package is needed on this path only)
     try:
-        config = import_onnx(args.input, args.output, half=args.half, source=args.source)
+        config = import_onnx(args.input, args.output, half=args.half, source=args.source,
+                             input_range=args.input_range)
     except ConversionError as error:
         print(f"ngi.convert: error: {error}", file=sys.stderr)
         return 1

@@ -938,8 +938,10 @@ def _check_loader_limits(config, channels, path):
             raise ConversionError(f"{where}: a LeakyRelu slope of {n['slope']} (ngi takes finite slopes in [-1, 1])")
 
 
-def import_onnx(onnx_path, out_path, *, half=False, source=None):
+def import_onnx(onnx_path, out_path, *, half=False, source=None, input_range=None):
     """Convert the ONNX file `onnx_path` to the ngi model file `out_path` (family "graph"); returns the config.
+    input_range: (lo, hi), the range the network's inputs were trained in (the surround pipeline scales its features
+    into it; without one the model runs on tensors only).
 
     Raises ConversionError (naming the node and op where there is one); nothing is written then."""
     check_output_file(out_path)  # before the work; write_model checks it again
@@ -967,6 +969,7 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None):
                  "nodes": len(model.graph.node),
                  **({"input_hw": list(imp.input_hw)} if imp.input_hw else {})},
         "source": source if source is not None else f"{os.path.basename(onnx_path)}, imported by ngi.convert",
+        **({"input_range": [float(input_range[0]), float(input_range[1])]} if input_range is not None else {}),
     }
     _check_loader_limits(config, imp.channels, onnx_path)
     write_model(out_path, tensors, config, half=half)  # beside out_path, then renamed into place

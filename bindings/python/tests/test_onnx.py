@@ -284,6 +284,42 @@ def test_the_converter_fuzzer_findings_are_one_line_refusals(tmp_path):
                        "supported only as part of a frequency encoding")
 
 
+def test_an_imported_model_without_an_input_range_is_refused_by_the_pipeline(tmp_path, dev):
+    # Issue 51: a 12-channel ONNX model through the surround pipeline had the default input range [-FLT_MAX,
+    # FLT_MAX]; scaling the features into it overflowed (hi - lo = Inf), every network input was NaN, the input guard
+    # zeroed them and the lightmap was scored as valid. Now the pipeline refuses such a model, naming the fix, and
+    # `ngi.convert --input-range` gives it one.
+    w = np.random.default_rng(3).uniform(-0.1, 0.1, (3, 12, 3, 3)).astype(np.float32)
+    model = small_model([helper.make_node("Conv", ["x", "w"], ["c"], name="conv", pads=[1, 1, 1, 1]),
+                         helper.make_node("Tanh", ["c"], ["y"], name="tanh")],
+                        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.tobytes(), raw=True)],
+                        input_dims=(1, 12, 32, 64)).SerializeToString()
+    rc, err, out = convert(tmp_path, model, "twelve")
+    assert rc == 0, err
+    n = 16
+    rng = np.random.default_rng(4)
+    frame = {"look": [0.0, 0.0, -1.0], "up": [0.0, 1.0, 0.0],
+             "albedo": rng.uniform(0, 1, (6, 3, n, n)).astype(np.float32),
+             "normal": np.tile(np.array([0, 1, 0], np.float32)[None, :, None, None], (6, 1, n, n)),
+             "depth": rng.uniform(1, 20, (6, 1, n, n)).astype(np.float32),
+             "direct": rng.uniform(0, 2, (6, 3, n, n)).astype(np.float32)}
+    pipe = ngi.Pipeline(dev, n)
+    with pytest.raises(ngi.InputError, match=r"input_range .* is no range the pipeline can scale its features into.*"
+                                             r"--input-range=-1,1"):
+        pipe.run(ngi.Model(dev, out), frame, outputs=["lightmap"])
+    src = tmp_path / "twelve.onnx"
+    ranged = tmp_path / "ranged.safetensors"
+    proc = subprocess.run([sys.executable, "-m", "ngi.convert", str(src), str(ranged), "--input-range=-1,1"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    lightmap = pipe.run(ngi.Model(dev, ranged), frame, outputs=["lightmap"])["lightmap"]
+    assert np.isfinite(lightmap).all() and lightmap.std() > 0
+    for bad in ("1,-1", "0,nan", "1", "a,b"):
+        proc = subprocess.run([sys.executable, "-m", "ngi.convert", str(src), str(tmp_path / "x.safetensors"),
+                               f"--input-range={bad}"], capture_output=True, text=True)
+        assert proc.returncode == 2 and "is not LO,HI with finite LO < HI" in proc.stderr, (bad, proc.stderr)
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")

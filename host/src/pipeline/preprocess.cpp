@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "ngi/error.hpp"
@@ -112,6 +113,15 @@ bool check_model_input(const ModelConfig& config) {
     if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi))
         throw InputError("network input: the model's input_range [" + std::to_string(lo) + ", " +
                          std::to_string(hi) + "] is not a finite increasing range");
+    // The features are scaled into [lo, hi] (lo + f x (hi - lo)): an unbounded range -- what an imported (graph)
+    // model gets when its file names none -- overflows to Inf and every input to NaN (issue 51).
+    if (!std::isfinite(hi - lo)) {
+        char range[64];
+        std::snprintf(range, sizeof range, "[%g, %g]", double(lo), double(hi));
+        throw InputError("network input: the model's input_range " + std::string(range) + " is no range the pipeline can scale its features into (they are mapped from [0, 1] to "
+                         "[lo, hi]); a model imported from ONNX has none unless given: the range its network was "
+                         "trained on, e.g. python3 -m ngi.convert model.onnx out.safetensors --input-range=-1,1");
+    }
     return surround;
 }
 
