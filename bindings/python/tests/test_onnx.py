@@ -320,6 +320,28 @@ def test_an_imported_model_without_an_input_range_is_refused_by_the_pipeline(tmp
         assert proc.returncode == 2 and "is not LO,HI with finite LO < HI" in proc.stderr, (bad, proc.stderr)
 
 
+def test_a_model_whose_tensors_outgrow_the_host_memory_limit_is_refused(tmp_path, dev, monkeypatch):
+    # Issue 51: two stride-64 ConvTranspose layers on a 4 x 4 input (a 295 KB file) make a 3 GiB output; with
+    # NGI_HOST_MEMORY_LIMIT=1G the run reached 9.5 GB. Now the graph's arena on a CPU device (host memory there) and
+    # the host output are judged against the limit before they are allocated. Here the same at a smaller scale: two
+    # stride-16 layers, a 12 MiB output, an 8 MiB limit.
+    w = np.full((3, 3, 16, 16), 0.01, np.float32)
+    nodes = [helper.make_node("ConvTranspose", ["x", "w"], ["a"], name="up1", strides=[16, 16], kernel_shape=[16, 16]),
+             helper.make_node("ConvTranspose", ["a", "w"], ["y"], name="up2", strides=[16, 16], kernel_shape=[16, 16])]
+    data = small_model(nodes, [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.tobytes(), raw=True)],
+                       input_dims=(1, 3, 4, 4)).SerializeToString()
+    rc, err, out = convert(tmp_path, data, "upsample")
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    x = np.ones((1, 3, 4, 4), np.float32)
+    monkeypatch.setenv("NGI_HOST_MEMORY_LIMIT", "8M")
+    with pytest.raises(ngi.InputError, match="host-memory limit of 8388608 bytes"):
+        model.run(x)
+    monkeypatch.setenv("NGI_HOST_MEMORY_LIMIT", "64M")
+    y = model.run(x)
+    assert y.shape == (1, 3, 1024, 1024) and np.isfinite(y).all()
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
