@@ -796,6 +796,7 @@ class _Importer:
 # --------------------------------------------------------------------------
 
 _LAYERS = ("conv2d", "conv_transpose2d", "dense")
+_GATHERING_LAYERS = ("conv2d", "conv_transpose2d")  # the layers whose loader entry takes an input_activation
 
 
 def _fuse(ir, weights, output):
@@ -844,7 +845,9 @@ def _fuse(ir, weights, output):
     ir[:] = [n for n in ir if id(n) not in removed]
 
     # ReLU / LeakyReLU read only by convolutions without an input activation: applied while they gather. Folding one
-    # changes only its readers, which read nothing else (one input each), so no fold makes or unmakes another.
+    # changes only its readers, which read nothing else (one input each), so no fold makes or unmakes another. Not
+    # into dense nodes: the loader takes input_activation on convolutions only (the fuzz target's load check found
+    # a dense node written with one, which the loader then refused).
     users = {}  # tensor -> the nodes that read it, in order (a dict as an ordered set)
     for m in ir:
         for i in m["inputs"]:
@@ -854,7 +857,7 @@ def _fuse(ir, weights, output):
         if n["op"] != "activation" or n["activation"] not in ("relu", "leaky_relu") or n["output"] == output:
             continue
         readers_of_n = list(users.get(n["output"], {}).values())
-        if not readers_of_n or any(m["op"] not in _LAYERS or "input_activation" in m
+        if not readers_of_n or any(m["op"] not in _GATHERING_LAYERS or "input_activation" in m
                                    or ("slope" in m and "slope" in n and m["slope"] != n["slope"])
                                    or ("slope" in m and n["activation"] == "leaky_relu")
                                    for m in readers_of_n):

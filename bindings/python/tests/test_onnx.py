@@ -342,6 +342,33 @@ def test_a_model_whose_tensors_outgrow_the_host_memory_limit_is_refused(tmp_path
     assert y.shape == (1, 3, 1024, 1024) and np.isfinite(y).all()
 
 
+def test_a_relu_shared_by_two_readers_before_a_gemm_converts_to_what_the_loader_takes(tmp_path, dev):
+    # Issue 51, found by the fuzz target's load check: MatMul + Add, then two Relu nodes reading that sum (so neither
+    # folds into the dense layer as its output activation), one of them read by a Gemm. The converter folded that Relu
+    # into the Gemm's dense node as an input_activation, a field the loader takes on convolutions only: the file
+    # converted with exit 0 and `ngi.Model` refused it. Now it stays an activation node, and the model runs.
+    rng = np.random.default_rng(12)
+    w1, b1, w2 = (rng.normal(size=s).astype(np.float32) for s in ((6, 5), (5,), (5, 3)))
+    inits = [helper.make_tensor(n, TensorProto.FLOAT, v.shape, v.tobytes(), raw=True)
+             for n, v in (("w1", w1), ("b1", b1), ("w2", w2))]
+    nodes = [helper.make_node("MatMul", ["x", "w1"], ["h"], name="matmul"),
+             helper.make_node("Add", ["h", "b1"], ["hb"], name="bias"),
+             helper.make_node("Relu", ["hb"], ["r"], name="relu"),
+             helper.make_node("Relu", ["hb"], ["r2"], name="relu_again"),
+             helper.make_node("Gemm", ["r", "w2"], ["g"], name="gemm"),
+             helper.make_node("MatMul", ["r2", "w2"], ["g2"], name="matmul2"),
+             helper.make_node("Add", ["g", "g2"], ["y"], name="sum")]
+    graph = helper.make_graph(nodes, "g", [helper.make_tensor_value_info("x", TensorProto.FLOAT, [4, 6])],
+                              [helper.make_tensor_value_info("y", TensorProto.FLOAT, [4, 3])], inits)
+    rc, err, out = convert(tmp_path, helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)])
+                           .SerializeToString())
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    x = rng.normal(size=(9, 6)).astype(np.float32)
+    want = 2 * np.maximum(x.astype(np.float64) @ w1 + b1, 0) @ w2
+    assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
