@@ -343,10 +343,27 @@ class _Importer:
                     runs.append((i, run))
                     i = run[-1]
                 self.freq_runs[node.name] = runs
+        # Every node that cannot be mapped is reported in one pass (issue 48): a failed node's outputs are marked, and
+        # the nodes reading them are skipped (they fail only because of it).
+        failures, failed = [], set()
         for node in self.nodes:
             if node.name in self.done:
                 continue
-            self.map_node(node)
+            if any(name in failed for name in node.input):
+                failed.update(o for o in node.output if o)
+                continue
+            try:
+                self.map_node(node)
+            except ConversionError as error:
+                failures.append(str(error).removeprefix(f"{self.path}: "))
+                failed.update(o for o in node.output if o)
+        if len(failures) == 1:
+            raise ConversionError(f"{self.path}: {failures[0]}")
+        if failures:
+            unsupported = any("is not supported; supported:" in f for f in failures)
+            listed = "; ".join(f.split("; supported:")[0] for f in failures)
+            raise ConversionError(f"{self.path}: {len(failures)} nodes cannot be converted: {listed}"
+                                  + (f" (supported ops: {', '.join(SUPPORTED_OPS)})" if unsupported else ""))
         out = self.alias.get(self.output_name, self.output_name)
         if out not in self.channels or out == self.input.name:
             raise ConversionError(f"{self.path}: the graph output '{self.output_name}' is not computed by the mapped "

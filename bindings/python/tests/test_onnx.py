@@ -369,6 +369,23 @@ def test_a_relu_shared_by_two_readers_before_a_gemm_converts_to_what_the_loader_
     assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
 
 
+def test_every_node_that_cannot_be_converted_is_named_in_one_error(tmp_path):
+    # Issue 48: only the first unsupported node was reported. Now one error names each node that cannot be mapped
+    # (op, name, why); nodes that read a failed node's output are not listed (they fail only because of it), and
+    # nothing is written.
+    nodes = [helper.make_node("MaxPool", ["x"], ["p"], name="pool", kernel_shape=[2, 2], strides=[2, 2]),
+             helper.make_node("Conv", ["p", "w"], ["c"], name="after_pool", pads=[1, 1, 1, 1]),
+             helper.make_node("Softplus", ["x"], ["s"], name="soft"),
+             helper.make_node("Conv", ["x", "w"], ["g"], name="grouped", pads=[1, 1, 1, 1], group=2),
+             helper.make_node("Concat", ["c", "s", "g"], ["y"], name="cat", axis=1)]
+    data = small_model(nodes, [conv_weight()]).SerializeToString()
+    assert_refused(tmp_path, data, "bad.onnx: 3 nodes cannot be converted:", "node 'pool' (MaxPool): op MaxPool is not "
+                   "supported", "node 'soft' (Softplus): op Softplus is not supported", "node 'grouped' (Conv)",
+                   "(supported ops: Conv,")
+    rc, err, _ = convert(tmp_path, data, "again")
+    assert "after_pool" not in err and "'cat'" not in err
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
