@@ -5,7 +5,13 @@
 Needs Debian's python3-onnx (the `onnx` package, 1.12 on Debian 12). The ONNX graph is checked, sorted
 topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md, family "graph"):
 
-  Conv, ConvTranspose            -> conv2d, conv_transpose2d (2-D, group 1, dilation 1, symmetric padding)
+  Conv, ConvTranspose            -> conv2d, conv_transpose2d (2-D, symmetric padding); grouped / depthwise and
+                                    dilated kernels expanded to the dense kernel they equal (zeros outside the groups
+                                    and between the taps: exact, at group x the multiply-adds)
+  Pad (zeros, H and W) read only by Conv -> the convolutions' padding
+  DepthToSpace (DCR, CRD: PixelShuffle), Resize (nearest, one integer factor), AveragePool (square kernel; padding
+                                    only with count_include_pad) -> conv2d / conv_transpose2d whose kernel copies or
+                                    averages each channel (exact up to float summation order)
   Gemm, MatMul (weights constant) -> dense (a 1 x 1 convolution over the items)
   BatchNormalization (inference) -> folded into the convolution before it, else a per-channel affine
   Add, Sub, Mul, Div by a constant that varies along channels only (or not at all) -> affine (folded likewise)
@@ -18,7 +24,7 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Mul by constants + Sin + Cos + Concat as ngi.reference_models.encode_frequencies builds it -> frequency_encode
   torch.nan_to_num's IsNaN/IsInf/Where pattern (default limits) -> nan_to_num
 
-Anything else is refused with the node's name and op. So are files that do not parse (truncated, corrupt), graphs
+Anything else is refused with the node's name and op (every such node of a model in one error). So are files that do not parse (truncated, corrupt), graphs
 with a cycle, opsets outside 9..17 or other domains, symbolic, zero or negative input dimensions, initializers whose
 data does not match their shape, more than one input or output, attributes that are not finite numbers and weights
 that are not finite as stored (after folding; as F16 with half=True), which the loader would refuse. Only a regular
@@ -45,6 +51,7 @@ ONNX_MAX_BYTES = (2 << 30) - 1
 _ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp"}
 SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
                  "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout", "Identity", "Constant",
+                 "Pad", "DepthToSpace", "Resize", "AveragePool",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
 
@@ -241,6 +248,7 @@ class _Importer:
                     self.readers.setdefault(name, []).append(node)
         self.producer = {out: node for node in self.nodes for out in node.output if out}
         self.alias = {}      # ONNX tensor -> the ngi tensor it is (Identity, Dropout)
+        self.zero_pads = {}  # a zero Pad's output -> (its input, [top, left, bottom, right]): folded into convolutions
         self.channels = {self.input.name: self.input_nc}
         self.ir = []         # ngi nodes: dicts
         self.weights = {}    # tensor name -> float64 array
@@ -412,7 +420,10 @@ class _Importer:
     def _conv(self, node, attrs, transpose):
         if len(node.output) != 1:
             raise self.fail(node, "one output expected")
-        x = self.tensor(node, node.input[0])
+        src, extra = node.input[0], [0, 0, 0, 0]
+        if src in self.zero_pads and not transpose:  # a zero Pad before it: the convolution pads instead
+            src, extra = self.zero_pads[src]
+        x = self.tensor(node, src)
         w = self.const(node.input[1]) if len(node.input) > 1 else None
         if w is None:
             raise self.fail(node, "the weight must be a constant (an initializer)")
@@ -421,24 +432,25 @@ class _Importer:
         b = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else None
         if len(node.input) > 2 and node.input[2] and b is None:
             raise self.fail(node, "the bias must be a constant")
-        if attrs.get("group", 1) != 1:
-            raise self.fail(node, f"group {attrs['group']}: only group 1 is supported")
-        if any(d != 1 for d in attrs.get("dilations", [1, 1])):
-            raise self.fail(node, f"dilations {attrs['dilations']}: only 1 is supported")
+        cin = self.channels[x]
+        w = self._ungroup(node, w, int(attrs.get("group", 1)), cin, transpose)
+        w = self._undilate(node, w, list(attrs.get("dilations", [1, 1])))
         auto_pad = attrs.get("auto_pad", b"NOTSET")
         auto_pad = auto_pad.decode() if isinstance(auto_pad, bytes) else auto_pad
         if auto_pad not in ("NOTSET", "VALID"):
             raise self.fail(node, f"auto_pad {auto_pad}: give explicit pads")
         kh, kw = int(w.shape[2]), int(w.shape[3])
-        if list(attrs.get("kernel_shape", [kh, kw])) != [kh, kw]:
+        dil = list(attrs.get("dilations", [1, 1]))
+        declared = [(k - 1) * d + 1 for k, d in zip(attrs.get("kernel_shape", []), dil)]
+        if "kernel_shape" in attrs and declared != [kh, kw]:
             raise self.fail(node, f"kernel_shape {attrs['kernel_shape']} disagrees with the weight {list(w.shape)}")
         strides = list(attrs.get("strides", [1, 1]))
         pads = list(attrs.get("pads", [0, 0, 0, 0])) if auto_pad == "NOTSET" else [0, 0, 0, 0]
+        pads = [p + e for p, e in zip(pads, extra)]
         if len(strides) != 2 or strides[0] != strides[1]:
             raise self.fail(node, f"strides {strides}: only equal strides along H and W are supported")
         if len(pads) != 4 or len(set(pads)) != 1:
             raise self.fail(node, f"pads {pads}: only the same padding on every side is supported")
-        cin = self.channels[x]
         if transpose:
             if any(p != 0 for p in attrs.get("output_padding", [0, 0])):
                 raise self.fail(node, f"output_padding {attrs['output_padding']}: only 0 is supported")
@@ -460,6 +472,148 @@ class _Importer:
             "in": cin, "out": cout, "kernel": [kh, kw], "stride": strides[0], "pad": pads[0],
             "weight": self.put_weight(key + ".weight", w),
             "bias": self.put_weight(key + ".bias", b) if b is not None else None})
+
+    def _ungroup(self, node, w, group, cin, transpose):
+        """A grouped (or depthwise) convolution's weight as the dense one it equals: zero outside each group's
+        block. Exact; it costs group x the multiply-adds of the grouped layer."""
+        if group == 1:
+            return w
+        if group < 1 or cin % group:
+            raise self.fail(node, f"group {group} does not divide the input's {cin} channels")
+        if transpose:  # [cin, cout / group, kh, kw]
+            per_out = w.shape[1]
+            dense = np.zeros((cin, per_out * group) + w.shape[2:], np.float64)
+            per_in = cin // group
+            for g in range(group):
+                dense[g * per_in:(g + 1) * per_in, g * per_out:(g + 1) * per_out] = w[g * per_in:(g + 1) * per_in]
+            return dense
+        cout, per_in = w.shape[0], w.shape[1]
+        if per_in * group != cin or cout % group:
+            raise self.fail(node, f"weight {list(w.shape)} with group {group} does not fit {cin} input channels")
+        per_out = cout // group
+        dense = np.zeros((cout, cin) + w.shape[2:], np.float64)
+        for g in range(group):
+            dense[g * per_out:(g + 1) * per_out, g * per_in:(g + 1) * per_in] = w[g * per_out:(g + 1) * per_out]
+        return dense
+
+    def _undilate(self, node, w, dilations):
+        """A dilated kernel as the ordinary one it equals: zeros between the taps. Exact."""
+        if len(dilations) != 2 or any(d < 1 for d in dilations):
+            raise self.fail(node, f"dilations {dilations}: two positive integers expected")
+        if dilations == [1, 1]:
+            return w
+        dh, dw = dilations
+        kh, kw = w.shape[2], w.shape[3]
+        out = np.zeros(w.shape[:2] + ((kh - 1) * dh + 1, (kw - 1) * dw + 1), np.float64)
+        out[:, :, ::dh, ::dw] = w
+        return out
+
+    def _channel_copy(self, node, x, channels, kernel, weight_of, op, stride, pad, suffix="copy"):
+        """A convolution whose weight moves channels around without mixing values: weight_of(ci, co) -> the kernel
+        [kh, kw] from input channel ci to output channel co (or None). What nearest upsampling, depth-to-space and
+        average pooling are, exactly."""
+        cin = self.channels[x]
+        w = np.zeros((cin, channels, kernel, kernel) if op == "conv_transpose2d" else (channels, cin, kernel, kernel))
+        for ci in range(cin):
+            for co in range(channels):
+                k = weight_of(ci, co)
+                if k is not None:
+                    if op == "conv_transpose2d":
+                        w[ci, co] = k
+                    else:
+                        w[co, ci] = k
+        self.emit(node, op, [x], self.out(node, channels), **{
+            "in": cin, "out": channels, "kernel": [kernel, kernel], "stride": stride, "pad": pad,
+            "weight": self.put_weight(node.name + "." + suffix, w)})
+
+    def op_Pad(self, node, attrs):
+        # Zero padding of H and W read only by convolutions: folded into their padding (exact).
+        x = self.tensor(node, node.input[0])
+        mode = attrs.get("mode", b"constant")
+        mode = mode.decode() if isinstance(mode, bytes) else mode
+        pads = attrs.get("pads")
+        if pads is None and len(node.input) > 1 and node.input[1]:
+            pads = self.const(node.input[1])
+        value = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else attrs.get("value", 0.0)
+        if mode != "constant" or pads is None or value is None or np.any(np.asarray(value, np.float64) != 0):
+            raise self.fail(node, f"only zero (constant) padding before convolutions is supported (mode {mode})")
+        pads = [int(p) for p in np.asarray(pads).reshape(-1)]
+        if len(pads) != 8 or any(pads[i] for i in (0, 1, 4, 5)) or min(pads) < 0:
+            raise self.fail(node, f"pads {pads}: only non-negative padding of H and W is supported")
+        if not any(pads):  # what torch.onnx writes before an AvgPool2d without padding
+            self.alias[node.output[0]] = x
+            return
+        readers = self.readers.get(node.output[0], [])
+        if not readers or any(r.op_type not in ("Conv", "AveragePool") for r in readers):
+            raise self.fail(node, "zero padding is supported only where convolutions or average pooling alone read "
+                                  "it (it becomes their padding)")
+        self.zero_pads[node.output[0]] = (x, [pads[2], pads[3], pads[6], pads[7]])
+
+    def op_DepthToSpace(self, node, attrs):
+        # PixelShuffle: a stride-b transposed convolution whose b x b kernel routes each input channel to one output
+        # pixel of its block (exact).
+        x = self.tensor(node, node.input[0])
+        b = int(attrs.get("blocksize", 0))
+        mode = attrs.get("mode", b"DCR")
+        mode = mode.decode() if isinstance(mode, bytes) else mode
+        cin = self.channels[x]
+        if b < 1 or cin % (b * b) or mode not in ("DCR", "CRD"):
+            raise self.fail(node, f"blocksize {b}, mode {mode} on {cin} channels")
+        c = cin // (b * b)
+
+        def route(ci, co):
+            i, j, src_c = ((ci // c) // b, (ci // c) % b, ci % c) if mode == "DCR" else \
+                          ((ci % (b * b)) // b, ci % b, ci // (b * b))
+            if src_c != co:
+                return None
+            k = np.zeros((b, b))
+            k[i, j] = 1.0
+            return k
+        self._channel_copy(node, x, c, b, route, "conv_transpose2d", b, 0)
+
+    def op_Resize(self, node, attrs):
+        # Nearest upsampling by an integer factor (what F.interpolate(scale_factor=s) exports): each pixel copied to an
+        # s x s block, a stride-s transposed convolution with a one-hot channel kernel of ones (exact).
+        x = self.tensor(node, node.input[0])
+        get = lambda k, d: (attrs.get(k, d).decode() if isinstance(attrs.get(k, d), bytes) else attrs.get(k, d))  # noqa: E731
+        mode, ctm, nearest = get("mode", "nearest"), get("coordinate_transformation_mode", "half_pixel"), \
+            get("nearest_mode", "round_prefer_floor")
+        scales = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else None
+        if scales is None or np.asarray(scales).size == 0:
+            raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
+        sc = np.asarray(scales, np.float64).reshape(-1)
+        floor_map = (ctm == "asymmetric" and nearest == "floor") or \
+                    (ctm in ("half_pixel", "pytorch_half_pixel") and nearest.startswith("round_prefer"))
+        if mode != "nearest" or not floor_map:
+            raise self.fail(node, f"mode {mode} ({ctm}, {nearest}): only nearest upsampling that copies each pixel to "
+                                  "a block is supported (bilinear is not)")
+        if sc.size != 4 or sc[0] != 1 or sc[1] != 1 or sc[2] != sc[3] or sc[2] != int(sc[2]) or sc[2] < 1:
+            raise self.fail(node, f"scales {list(sc)}: only one integer factor along H and W is supported")
+        f = int(sc[2])
+        ones = np.ones((f, f))
+        self._channel_copy(node, x, self.channels[x], f, lambda ci, co: ones if ci == co else None,
+                           "conv_transpose2d", f, 0)
+
+    def op_AveragePool(self, node, attrs):
+        # A convolution with 1 / (kh kw) on the diagonal channel pairs (exact up to float summation order); padding
+        # only where the padded zeros count (count_include_pad, or no padding).
+        x = node.input[0]
+        pads = list(attrs.get("pads", [0, 0, 0, 0]))
+        counted = bool(attrs.get("count_include_pad", 0))
+        if x in self.zero_pads:  # zeros padded before the pooling count in its average
+            x, extra = self.zero_pads[x]
+            pads, counted = [p + e for p, e in zip(pads, extra)], True
+        x = self.tensor(node, x)
+        k = list(attrs.get("kernel_shape", []))
+        strides = list(attrs.get("strides", [1, 1]))
+        if len(k) != 2 or k[0] != k[1] or len(set(strides)) != 1 or len(set(pads)) != 1 or attrs.get("ceil_mode", 0):
+            raise self.fail(node, f"kernel {k}, strides {strides}, pads {pads}: square kernels, equal strides and "
+                                  "padding, ceil_mode 0 are supported")
+        if pads[0] and not counted:
+            raise self.fail(node, "padding without count_include_pad divides by a varying count: not supported")
+        avg = np.full((k[0], k[0]), 1.0 / (k[0] * k[0]))
+        self._channel_copy(node, x, self.channels[x], k[0], lambda ci, co: avg if ci == co else None, "conv2d",
+                           strides[0], pads[0])
 
     def op_Conv(self, node, attrs):
         self._conv(node, attrs, False)

@@ -71,6 +71,92 @@ def reference(module, x):
 # Round trips
 # --------------------------------------------------------------------------
 
+def export_at(module, example, opset):
+    f = io.BytesIO()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(module.eval(), example, f, opset_version=opset)
+    return f.getvalue()
+
+
+class _MobileBlock(torch.nn.Module):
+    """MobileNet-style depthwise-separable block: conv, BN, ReLU; depthwise 3 x 3 (groups = C); pointwise 1 x 1."""
+
+    def __init__(self):
+        super().__init__()
+        self.stem = torch.nn.Sequential(torch.nn.Conv2d(3, 8, 3, padding=1), torch.nn.BatchNorm2d(8), torch.nn.ReLU())
+        self.dw = torch.nn.Sequential(torch.nn.Conv2d(8, 8, 3, padding=1, groups=8), torch.nn.BatchNorm2d(8),
+                                      torch.nn.ReLU())
+        self.pw = torch.nn.Conv2d(8, 16, 1)
+
+    def forward(self, x):
+        return self.pw(self.dw(self.stem(x)))
+
+
+class _Espcn(torch.nn.Module):
+    """ESPCN-style upsampler: convolutions, then PixelShuffle (DepthToSpace)."""
+
+    def __init__(self):
+        super().__init__()
+        self.body = torch.nn.Sequential(torch.nn.Conv2d(3, 12, 5, padding=2), torch.nn.Tanh(),
+                                        torch.nn.Conv2d(12, 3 * 4, 3, padding=1), torch.nn.PixelShuffle(2))
+
+    def forward(self, x):
+        return self.body(x)
+
+
+class _PoolUnet(torch.nn.Module):
+    """An OIDN-style level: conv, average pooling, conv, nearest upsampling, skip concatenation, conv."""
+
+    def __init__(self):
+        super().__init__()
+        self.enc = torch.nn.Conv2d(3, 6, 3, padding=1)
+        self.pool = torch.nn.AvgPool2d(2)
+        self.mid = torch.nn.Conv2d(6, 6, 3, padding=1)
+        self.dec = torch.nn.Conv2d(12, 3, 3, padding=1)
+
+    def forward(self, x):
+        e = torch.relu(self.enc(x))
+        m = torch.relu(self.mid(self.pool(e)))
+        u = torch.nn.functional.interpolate(m, scale_factor=2, mode="nearest")
+        return self.dec(torch.cat([u, e], 1))
+
+
+class _DilatedGrouped(torch.nn.Module):
+    """A dilated convolution, a grouped convolution, a grouped transposed convolution."""
+
+    def __init__(self):
+        super().__init__()
+        self.dil = torch.nn.Conv2d(4, 6, 3, padding=2, dilation=2)
+        self.conv = torch.nn.Conv2d(6, 4, 3, padding=1, groups=2)
+        self.up = torch.nn.ConvTranspose2d(4, 6, 4, stride=2, padding=1, groups=2)
+
+    def forward(self, x):
+        return self.up(torch.relu(self.conv(torch.relu(self.dil(x)))))
+
+
+@pytest.mark.parametrize("opset", [13, 17])
+@pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("espcn", _Espcn, 3),
+                                                ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4)])
+def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
+    # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
+    # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
+    # channel-copying convolutions they equal) and match PyTorch in float64 within 1e-5 relative to the output's range.
+    torch.manual_seed(21)
+    net = make().eval()
+    randomize_batch_norm(net)
+    rc, err, out = convert(tmp_path, export_at(net, torch.randn(1, channels, 16, 16), opset), name)
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    x = np.random.default_rng(22).uniform(-1, 1, (1, channels, 16, 16)).astype(np.float32)
+    want = reference(net, x)
+    got = model.run(x)
+    assert got.shape == want.shape
+    rel = float(np.max(np.abs(got - want)) / np.max(np.abs(want)))
+    print(f"{name} opset {opset}: max |ngi - PyTorch float64| / max |PyTorch| = {rel:.3g}")
+    assert rel < 1e-5
+
+
 def test_pix2pix_generator_round_trip(dev, tmp_path):
     # junyanz UnetGenerator (eval: BatchNorm with running statistics, dropout off), ngf 4, 5 levels, 64 x 32.
     torch.manual_seed(1)
@@ -384,6 +470,29 @@ def test_every_node_that_cannot_be_converted_is_named_in_one_error(tmp_path):
                    "(supported ops: Conv,")
     rc, err, _ = convert(tmp_path, data, "again")
     assert "after_pool" not in err and "'cat'" not in err
+
+
+def test_zero_pad_nodes_become_the_padding_of_what_reads_them(tmp_path, dev):
+    # Issue 48: an explicit zero Pad (initializer pads, as exporters with constant folding write it) before a Conv
+    # and before an AveragePool becomes their padding (the pool's average counts the padded zeros, as ONNX's Pad
+    # then AveragePool does).
+    w = np.random.default_rng(31).uniform(-1, 1, (3, 2, 3, 3)).astype(np.float32)
+    pads = np.array([0, 0, 1, 1, 0, 0, 1, 1], np.int64)
+    inits = [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.tobytes(), raw=True),
+             helper.make_tensor("pads", TensorProto.INT64, [8], pads.tobytes(), raw=True)]
+    nodes = [helper.make_node("Pad", ["x", "pads"], ["p"], name="pad"),
+             helper.make_node("Conv", ["p", "w"], ["c"], name="conv"),
+             helper.make_node("Pad", ["c", "pads"], ["q"], name="pad2"),
+             helper.make_node("AveragePool", ["q"], ["y"], name="pool", kernel_shape=[3, 3], strides=[1, 1])]
+    rc, err, out = convert(tmp_path, small_model(nodes, inits).SerializeToString())
+    assert rc == 0, err
+    model = ngi.Model(dev, out)
+    assert [n["op"] for n in model.config["metadata"]["graph"]["nodes"]] == ["conv2d", "conv2d"]
+    x = np.random.default_rng(32).uniform(-1, 1, (1, 2, 8, 8)).astype(np.float32)
+    xt = torch.from_numpy(x).double()
+    c = torch.nn.functional.conv2d(xt, torch.from_numpy(w).double(), padding=1)
+    want = torch.nn.functional.avg_pool2d(c, 3, stride=1, padding=1, count_include_pad=True).numpy()
+    assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
 
 
 def test_truncated_file_is_refused(tmp_path):
