@@ -2,7 +2,9 @@
 """Writes the seed corpus of the ONNX converter's fuzzer (fuzz/corpus/onnx_convert/*.onnx): small models that reach
 every mapping of ngi.onnx_import -- convolutions with batch norm and each activation, a strided encoder-decoder with
 a skip concatenation, an item-list MLP of MatMul/Gemm, per-channel and scalar arithmetic, a Constant node, Clip then
-Exp, Dropout/Identity, two computed tensors added and multiplied -- and, when PyTorch is installed, three of ngi's
+Exp, Dropout/Identity, two computed tensors added and multiplied, a zero Pad before a Conv and an AveragePool -- and,
+when PyTorch is installed, a block of depthwise / dilated / grouped convolutions, PixelShuffle, average pooling and
+nearest upsampling, and three of ngi's
 networks as torch.onnx.export writes them (the pix2pix U-Net, seed 001's AO MLP, seed 002's Neural GI with its
 frequency encoding and nan_to_num pattern). Run from the repo root:
 
@@ -101,8 +103,26 @@ def torch_seeds():
             torch.onnx.export(module.eval(), example, f, opset_version=opset)
         return f.getvalue()
 
+    class Blocks(torch.nn.Module):
+        """Depthwise, dilated and grouped convolutions, PixelShuffle, average pooling, nearest upsampling."""
+
+        def __init__(self):
+            super().__init__()
+            self.dw = torch.nn.Conv2d(4, 4, 3, padding=1, groups=4)
+            self.dil = torch.nn.Conv2d(4, 8, 3, padding=2, dilation=2)
+            self.pool = torch.nn.AvgPool2d(2)
+            self.shuffle = torch.nn.PixelShuffle(2)
+            self.up = torch.nn.ConvTranspose2d(2, 4, 4, stride=2, padding=1, groups=2)
+
+        def forward(self, x):
+            y = self.dil(torch.relu(self.dw(x)))
+            z = self.shuffle(self.pool(y))                       # 8 -> 2 channels at the input's size
+            u = torch.nn.functional.interpolate(self.pool(z), scale_factor=2, mode="nearest")
+            return torch.cat([self.up(torch.nn.functional.avg_pool2d(u, 2)), x], 1)
+
     torch.manual_seed(51)
     return {
+        "blocks_op13": export(Blocks(), torch.randn(1, 4, 16, 16), 13),
         "pix2pix_ngf2_5levels_op13": export(build_generator("pix2pix_unet", 3, 3, 2, 5), torch.randn(1, 3, 32, 32), 13),
         "ao_mlp_op17": export(ao_mlp(8, 4), torch.randn(3, 48), 17),
         "neural_gi_small_op13": export(neural_gi.NeuralGI(buffer_channels=2, ngf=2, num_downs=5, mlp_width=8,
@@ -110,12 +130,22 @@ def torch_seeds():
     }
 
 
+def padded():
+    pads = numpy_helper.from_array(np.array([0, 0, 1, 1, 0, 0, 1, 1], np.int64), "pads")
+    n = [helper.make_node("Pad", ["x", "pads"], ["p"]),
+         helper.make_node("Conv", ["p", "w"], ["c"]),
+         helper.make_node("Pad", ["c", "pads"], ["q"]),
+         helper.make_node("AveragePool", ["q"], ["y"], kernel_shape=[3, 3])]
+    return model(n, [init("w", (3, 2, 3, 3)), pads], (1, 2, 8, 8))
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     seeds = {"conv_bn_relu_tanh": conv_bn_relu_tanh().SerializeToString(),
              "encoder_decoder_op17": encoder_decoder().SerializeToString(),
              "item_mlp": item_mlp().SerializeToString(),
-             "arithmetic_constant": arithmetic().SerializeToString()}
+             "arithmetic_constant": arithmetic().SerializeToString(),
+             "pad_conv_pool": padded().SerializeToString()}
     seeds.update(torch_seeds())
     for name, data in seeds.items():
         with open(os.path.join(OUT, name + ".onnx"), "wb") as f:

@@ -42,6 +42,9 @@ from . import _constants
 from .model_file import FORMAT_VERSION, ConversionError, check_output_file, read_input_file, write_model
 
 MIN_OPSET, MAX_OPSET = 9, 17
+# A kernel the converter builds (a grouped layer's dense kernel, a dilated one, a channel-copying one) may hold at most
+# this many values: 2^28 float32 is 1 GiB, half of what one ONNX file can hold.
+MAX_BUILT_WEIGHTS = 1 << 28
 EXP_CLAMP = 88.0  # ngi's exp activation: exp(min(x, 88))
 FLT_MAX = float(np.finfo(np.float32).max)
 FLT_MIN = float(np.finfo(np.float32).tiny)  # the least normal float32
@@ -204,6 +207,11 @@ def _topological(nodes, available, path):
         names = " -> ".join(f"'{nodes[k].name}' ({nodes[k].op_type})" for k in cycle + cycle[:1])
         raise ConversionError(f"{path}: the graph has a cycle: {names}")
     return [nodes[i] for i in order]
+
+
+def _text(value):
+    """A string attribute as text (bytes from protobuf; undecodable bytes replaced, so a message can quote them)."""
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
 def _attrs(onnx, node):
@@ -435,8 +443,7 @@ class _Importer:
         cin = self.channels[x]
         w = self._ungroup(node, w, int(attrs.get("group", 1)), cin, transpose)
         w = self._undilate(node, w, list(attrs.get("dilations", [1, 1])))
-        auto_pad = attrs.get("auto_pad", b"NOTSET")
-        auto_pad = auto_pad.decode() if isinstance(auto_pad, bytes) else auto_pad
+        auto_pad = _text(attrs.get("auto_pad", b"NOTSET"))
         if auto_pad not in ("NOTSET", "VALID"):
             raise self.fail(node, f"auto_pad {auto_pad}: give explicit pads")
         kh, kw = int(w.shape[2]), int(w.shape[3])
@@ -480,6 +487,9 @@ class _Importer:
             return w
         if group < 1 or cin % group:
             raise self.fail(node, f"group {group} does not divide the input's {cin} channels")
+        if (w.shape[0] != cin) if transpose else (w.shape[1] * group != cin):
+            raise self.fail(node, f"weight {list(w.shape)} with group {group} does not fit {cin} input channels")
+        self._check_built(node, w.size * group, f"group {group}")
         if transpose:  # [cin, cout / group, kh, kw]
             per_out = w.shape[1]
             dense = np.zeros((cin, per_out * group) + w.shape[2:], np.float64)
@@ -488,8 +498,8 @@ class _Importer:
                 dense[g * per_in:(g + 1) * per_in, g * per_out:(g + 1) * per_out] = w[g * per_in:(g + 1) * per_in]
             return dense
         cout, per_in = w.shape[0], w.shape[1]
-        if per_in * group != cin or cout % group:
-            raise self.fail(node, f"weight {list(w.shape)} with group {group} does not fit {cin} input channels")
+        if cout % group:
+            raise self.fail(node, f"weight {list(w.shape)} with group {group}: {cout} outputs do not split in groups")
         per_out = cout // group
         dense = np.zeros((cout, cin) + w.shape[2:], np.float64)
         for g in range(group):
@@ -504,33 +514,42 @@ class _Importer:
             return w
         dh, dw = dilations
         kh, kw = w.shape[2], w.shape[3]
+        if max((kh - 1) * dh + 1, (kw - 1) * dw + 1) > _constants.GRAPH_MAX_KERNEL:
+            raise self.fail(node, f"dilations {dilations} make a {kh} x {kw} kernel {(kh - 1) * dh + 1} x "
+                                  f"{(kw - 1) * dw + 1}, beyond ngi's {_constants.GRAPH_MAX_KERNEL}")
+        self._check_built(node, w.shape[0] * w.shape[1] * ((kh - 1) * dh + 1) * ((kw - 1) * dw + 1), "dilation")
         out = np.zeros(w.shape[:2] + ((kh - 1) * dh + 1, (kw - 1) * dw + 1), np.float64)
         out[:, :, ::dh, ::dw] = w
         return out
 
-    def _channel_copy(self, node, x, channels, kernel, weight_of, op, stride, pad, suffix="copy"):
-        """A convolution whose weight moves channels around without mixing values: weight_of(ci, co) -> the kernel
-        [kh, kw] from input channel ci to output channel co (or None). What nearest upsampling, depth-to-space and
-        average pooling are, exactly."""
+    def _check_built(self, node, values, what):
+        if values > MAX_BUILT_WEIGHTS:
+            raise self.fail(node, f"{what} would make a kernel of {values} values, beyond the {MAX_BUILT_WEIGHTS} "
+                                  "the converter builds")
+
+    def _channel_copy(self, node, x, channels, kernel, routes, op, stride, pad):
+        """A convolution whose weight moves channels around without mixing values: routes = (input channel, output
+        channel, kernel [kh, kw]) triples, every other pair zero. What nearest upsampling, depth-to-space and average
+        pooling are, exactly."""
         cin = self.channels[x]
+        for what, v in (("kernel", kernel), ("stride", stride)):
+            if not 1 <= v <= _constants.GRAPH_MAX_KERNEL:
+                raise self.fail(node, f"{what} {v} is outside ngi's 1..{_constants.GRAPH_MAX_KERNEL}")
+        self._check_built(node, cin * channels * kernel * kernel, "it")
         w = np.zeros((cin, channels, kernel, kernel) if op == "conv_transpose2d" else (channels, cin, kernel, kernel))
-        for ci in range(cin):
-            for co in range(channels):
-                k = weight_of(ci, co)
-                if k is not None:
-                    if op == "conv_transpose2d":
-                        w[ci, co] = k
-                    else:
-                        w[co, ci] = k
+        for ci, co, k in routes:
+            if op == "conv_transpose2d":
+                w[ci, co] = k
+            else:
+                w[co, ci] = k
         self.emit(node, op, [x], self.out(node, channels), **{
             "in": cin, "out": channels, "kernel": [kernel, kernel], "stride": stride, "pad": pad,
-            "weight": self.put_weight(node.name + "." + suffix, w)})
+            "weight": self.put_weight(node.name + ".copy", w)})
 
     def op_Pad(self, node, attrs):
         # Zero padding of H and W read only by convolutions: folded into their padding (exact).
         x = self.tensor(node, node.input[0])
-        mode = attrs.get("mode", b"constant")
-        mode = mode.decode() if isinstance(mode, bytes) else mode
+        mode = _text(attrs.get("mode", b"constant"))
         pads = attrs.get("pads")
         if pads is None and len(node.input) > 1 and node.input[1]:
             pads = self.const(node.input[1])
@@ -554,30 +573,29 @@ class _Importer:
         # pixel of its block (exact).
         x = self.tensor(node, node.input[0])
         b = int(attrs.get("blocksize", 0))
-        mode = attrs.get("mode", b"DCR")
-        mode = mode.decode() if isinstance(mode, bytes) else mode
+        mode = _text(attrs.get("mode", b"DCR"))
         cin = self.channels[x]
-        if b < 1 or cin % (b * b) or mode not in ("DCR", "CRD"):
-            raise self.fail(node, f"blocksize {b}, mode {mode} on {cin} channels")
+        if not 1 <= b <= _constants.GRAPH_MAX_KERNEL or cin % (b * b) or mode not in ("DCR", "CRD"):
+            raise self.fail(node, f"blocksize {b}, mode {mode} on {cin} channels: a blocksize in "
+                                  f"1..{_constants.GRAPH_MAX_KERNEL} dividing the channels as b^2, mode DCR or CRD")
         c = cin // (b * b)
 
-        def route(ci, co):
-            i, j, src_c = ((ci // c) // b, (ci // c) % b, ci % c) if mode == "DCR" else \
-                          ((ci % (b * b)) // b, ci % b, ci // (b * b))
-            if src_c != co:
-                return None
-            k = np.zeros((b, b))
-            k[i, j] = 1.0
-            return k
-        self._channel_copy(node, x, c, b, route, "conv_transpose2d", b, 0)
+        def routes():
+            for ci in range(cin):
+                i, j, co = ((ci // c) // b, (ci // c) % b, ci % c) if mode == "DCR" else \
+                           ((ci % (b * b)) // b, ci % b, ci // (b * b))
+                k = np.zeros((b, b))
+                k[i, j] = 1.0
+                yield ci, co, k
+        self._channel_copy(node, x, c, b, routes(), "conv_transpose2d", b, 0)
 
     def op_Resize(self, node, attrs):
         # Nearest upsampling by an integer factor (what F.interpolate(scale_factor=s) exports): each pixel copied to an
         # s x s block, a stride-s transposed convolution with a one-hot channel kernel of ones (exact).
         x = self.tensor(node, node.input[0])
-        get = lambda k, d: (attrs.get(k, d).decode() if isinstance(attrs.get(k, d), bytes) else attrs.get(k, d))  # noqa: E731
-        mode, ctm, nearest = get("mode", "nearest"), get("coordinate_transformation_mode", "half_pixel"), \
-            get("nearest_mode", "round_prefer_floor")
+        mode, ctm, nearest = (_text(attrs.get(k, d)) for k, d in (
+            ("mode", "nearest"), ("coordinate_transformation_mode", "half_pixel"),
+            ("nearest_mode", "round_prefer_floor")))
         scales = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else None
         if scales is None or np.asarray(scales).size == 0:
             raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
@@ -587,11 +605,13 @@ class _Importer:
         if mode != "nearest" or not floor_map:
             raise self.fail(node, f"mode {mode} ({ctm}, {nearest}): only nearest upsampling that copies each pixel to "
                                   "a block is supported (bilinear is not)")
-        if sc.size != 4 or sc[0] != 1 or sc[1] != 1 or sc[2] != sc[3] or sc[2] != int(sc[2]) or sc[2] < 1:
-            raise self.fail(node, f"scales {list(sc)}: only one integer factor along H and W is supported")
+        if sc.size != 4 or sc[0] != 1 or sc[1] != 1 or sc[2] != sc[3] or not 1 <= sc[2] <= _constants.GRAPH_MAX_KERNEL \
+                or sc[2] != int(sc[2]):
+            raise self.fail(node, f"scales {list(sc)}: only one integer factor along H and W is supported (at most "
+                                  f"{_constants.GRAPH_MAX_KERNEL})")
         f = int(sc[2])
         ones = np.ones((f, f))
-        self._channel_copy(node, x, self.channels[x], f, lambda ci, co: ones if ci == co else None,
+        self._channel_copy(node, x, self.channels[x], f, ((c, c, ones) for c in range(self.channels[x])),
                            "conv_transpose2d", f, 0)
 
     def op_AveragePool(self, node, attrs):
@@ -611,8 +631,11 @@ class _Importer:
                                   "padding, ceil_mode 0 are supported")
         if pads[0] and not counted:
             raise self.fail(node, "padding without count_include_pad divides by a varying count: not supported")
+        if not 1 <= k[0] <= _constants.GRAPH_MAX_KERNEL or not 0 <= pads[0] <= _constants.GRAPH_MAX_PAD:
+            raise self.fail(node, f"kernel {k}, pads {pads}: beyond ngi's limits ({_constants.GRAPH_MAX_KERNEL}, "
+                                  f"{_constants.GRAPH_MAX_PAD})")
         avg = np.full((k[0], k[0]), 1.0 / (k[0] * k[0]))
-        self._channel_copy(node, x, self.channels[x], k[0], lambda ci, co: avg if ci == co else None, "conv2d",
+        self._channel_copy(node, x, self.channels[x], k[0], ((c, c, avg) for c in range(self.channels[x])), "conv2d",
                            strides[0], pads[0])
 
     def op_Conv(self, node, attrs):

@@ -495,6 +495,39 @@ def test_zero_pad_nodes_become_the_padding_of_what_reads_them(tmp_path, dev):
     assert float(np.max(np.abs(model.run(x) - want))) < 1e-5
 
 
+def test_the_new_ops_fuzzer_findings_are_quick_one_line_refusals(tmp_path):
+    # Issue 48/51: the fuzz target's first minutes on the new conversions (grouped, dilated, Pad, DepthToSpace,
+    # Resize, AveragePool) found a MemoryError (a dilation of 2^40 expanding the kernel), a 10 s timeout (dilation
+    # 65537), a ValueError (a grouped ConvTranspose's weight not fitting its input) and UnicodeDecodeErrors (a mode
+    # attribute that is not UTF-8). Each is now refused at once in one line, before any large array exists.
+    def fresh():
+        for f in tmp_path.iterdir():
+            f.unlink()
+
+    for dil in ([1, 1 << 40], [1, 65537]):
+        fresh()
+        m = conv_model()
+        m.graph.node[0].attribute.append(helper.make_attribute("dilations", dil))
+        assert_refused(tmp_path, m.SerializeToString(), "bad.onnx", f"dilations {dil} make a 3 x 3 kernel",
+                       "beyond ngi's 64")
+    fresh()
+    w = np.ones((4, 2, 3, 3), np.float32)  # ConvTranspose weight [cin = 4, cout / group, kh, kw] on a 2-channel input
+    nodes = [helper.make_node("ConvTranspose", ["x", "w"], ["y"], name="up", group=2)]
+    inits = [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.tobytes(), raw=True)]
+    assert_refused(tmp_path, small_model(nodes, inits).SerializeToString(), "node 'up' (ConvTranspose): weight "
+                   "[4, 2, 3, 3] with group 2 does not fit 2 input channels")
+    fresh()
+    scales = helper.make_tensor("s", TensorProto.FLOAT, [4], [1, 1, 2, 2])
+    nodes = [helper.make_node("Resize", ["x", "", "s"], ["y"], name="resize", mode=b"\xff\xfe")]
+    assert_refused(tmp_path, small_model(nodes, [scales]).SerializeToString(), "node 'resize' (Resize): mode \ufffd")
+    fresh()
+    scales = helper.make_tensor("s", TensorProto.FLOAT, [4], [1, 1, 65, 65])
+    nodes = [helper.make_node("Resize", ["x", "", "s"], ["y"], name="resize", coordinate_transformation_mode="asymmetric",
+                              nearest_mode="floor")]
+    assert_refused(tmp_path, small_model(nodes, [scales]).SerializeToString(), "only one integer factor along H and W "
+                   "is supported (at most 64)")
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
