@@ -9,14 +9,15 @@
 //   COUNT_ALBEDO ... COUNT_ENV          counter slots of the non-finite values per Feature
 //   COUNT_SKY, COUNT_FAR, COUNT_SLOTS   then sky normals and far depths; the number of slots
 //   PREPROCESS_LOCAL                    the largest work-group size (per-work-item counts are summed in local memory)
+//   MAX_DEPTH_M                         depth beyond which a texel is no surface, the depth feature's scale
+//                                       (kMaxSurfaceDepth, host/src/pipeline/frame_planes.hpp)
 // Output: 10 planes of npix = faces * face_texels values, faces in order inside each plane (the layout the merge
 // table indexes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
 #if !defined(TRANSFER_REINHARD) || !defined(TRANSFER_CLAMP) || !defined(F_CHANNELS) || !defined(F_ENV) || \
-    !defined(COUNT_ENV) || !defined(COUNT_SLOTS) || !defined(PREPROCESS_LOCAL)
+    !defined(COUNT_ENV) || !defined(COUNT_SLOTS) || !defined(PREPROCESS_LOCAL) || !defined(MAX_DEPTH_M)
 #error "gbuffer.cl needs the host's constants: build it with preprocess_defines() (host/src/pipeline/preprocess.cpp)"
 #endif
 
-#define MAX_DEPTH_M 1000.0f
 // A normal whose largest component is below this is the zero vector: the renderer's "no surface" (sky).
 #define SKY_NORMAL_EPS 1e-6f
 

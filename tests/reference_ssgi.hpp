@@ -11,6 +11,7 @@
 #include "ngi/camera.hpp"
 #include "ngi/model.hpp"
 #include "ngi/pipeline.hpp"
+#include "pipeline/frame_planes.hpp"
 #include "pipeline/ssgi.hpp"
 
 namespace ngi::test {
@@ -50,7 +51,7 @@ inline SsgiRefResult ssgi_reference(const std::vector<float>& planes, int faces,
             Texel& t = tex[f * npix + pix];
             const double depth = at(f, frame_plane(Feature::Depth), pix);
             V m{at(f, 3, pix), at(f, 4, pix), at(f, 5, pix)};
-            if (!(depth > 0 && depth <= detail::kSsgiMaxDepth)) continue;
+            if (!(depth > 0 && depth <= detail::kMaxSurfaceDepth)) continue;
             if (!std::isfinite(m[0]) || !std::isfinite(m[1]) || !std::isfinite(m[2])) continue;
             const double big = std::max({std::abs(m[0]), std::abs(m[1]), std::abs(m[2])});
             if (!(big >= 1e-6)) continue;

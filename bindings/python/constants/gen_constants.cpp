@@ -13,6 +13,7 @@
 #include "ops/luminance.hpp"
 #include "ngi/render.hpp"
 #include "ops/op_types.hpp"
+#include "pipeline/frame_planes.hpp"
 #include "pipeline/neural_gi_inputs.hpp"
 #include "pipeline/pipeline_impl.hpp"
 
@@ -43,6 +44,8 @@ int main(int argc, char** argv) {
     s += "NEURAL_GI_RADIANCE_MAX = " + py_float(detail::kNeuralGiRadianceMax) + "\n";
     s += "# host/src/ops/op_types.hpp kActExpMax: the \"exp\" activation is exp(min(x, ACT_EXP_MAX)).\n";
     s += "ACT_EXP_MAX = " + py_float(kActExpMax) + "\n";
+    s += "# host/src/pipeline/frame_planes.hpp kMaxSurfaceDepth: depth (metres) beyond which a texel is no surface.\n";
+    s += "MAX_SURFACE_DEPTH = " + py_float(ngi::detail::kMaxSurfaceDepth) + "\n";
     s += "# host/src/models/voxel_sh_model.hpp kVoxelShInputBound: the voxel_sh input guard's bound.\n";
     s += "VOXEL_SH_INPUT_BOUND = " + py_float(detail::kVoxelShInputBound) + "\n";
     s += "# host/src/pipeline/pipeline_impl.hpp kLightMax: the largest lightmap value the decoding produces.\n";

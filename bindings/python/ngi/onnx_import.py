@@ -45,7 +45,7 @@ MIN_OPSET, MAX_OPSET = 9, 17
 # A kernel the converter builds (a grouped layer's dense kernel, a dilated one, a channel-copying one) may hold at most
 # this many values: 2^28 float32 is 1 GiB, half of what one ONNX file can hold.
 MAX_BUILT_WEIGHTS = 1 << 28
-EXP_CLAMP = 88.0  # ngi's exp activation: exp(min(x, 88))
+EXP_CLAMP = _constants.ACT_EXP_MAX  # ngi's exp activation: exp(min(x, ACT_EXP_MAX)), host/src/ops/op_types.hpp
 FLT_MAX = float(np.finfo(np.float32).max)
 FLT_MIN = float(np.finfo(np.float32).tiny)  # the least normal float32
 # An ONNX file is one protobuf message, which cannot exceed 2 GiB (larger models keep their weights in external

@@ -22,9 +22,10 @@ u = 2 (col + 0.5) / N - 1, v = 1 - 2 (row + 0.5) / N; depth is planar (along loo
 
 import numpy as np
 
+from . import _constants
 from .scoring import luminance
 
-SKY_DEPTH = 1000.0
+SKY_DEPTH = _constants.MAX_SURFACE_DEPTH  # beyond it a texel is no surface (host/src/pipeline/frame_planes.hpp)
 
 
 def mabd(images):

@@ -28,7 +28,7 @@ constexpr int kDisplayVec = 8;
 
 std::string display_defines() {
     // Beyond the preprocessing's depth range a pixel is sky (the renderer writes 1e4 m there), as for the ssgi gather.
-    return detail::join_defines({detail::frame_plane_defines(), detail::define("DISPLAY_MAX_DEPTH", detail::kSsgiMaxDepth),
+    return detail::join_defines({detail::frame_plane_defines(), detail::define("DISPLAY_MAX_DEPTH", detail::kMaxSurfaceDepth),
                                  detail::define("DISPLAY_VEC", kDisplayVec)});
 }
 

@@ -69,7 +69,8 @@ std::string preprocess_defines() {
     std::string d = join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
                                   define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)), frame_plane_defines(),
                                   define("COUNT_SKY", kCountSky), define("COUNT_FAR", kCountFar),
-                                  define("COUNT_SLOTS", kCounterSlots), define("PREPROCESS_LOCAL", kPreprocessLocal)});
+                                  define("COUNT_SLOTS", kCounterSlots), define("PREPROCESS_LOCAL", kPreprocessLocal),
+                                  define("MAX_DEPTH_M", kMaxSurfaceDepth)});
     for (int f = 0; f < kFeatureCount; ++f) {
         std::string name = "COUNT_";
         for (const char* c = feature_name(Feature(f)); *c; ++c) name += char(std::toupper(static_cast<unsigned char>(*c)));

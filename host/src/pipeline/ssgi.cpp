@@ -29,7 +29,7 @@ std::string ssgi_defines() {
             for (int c = 0; c < 3; ++c) faces[9 * f + 3 * k + c] = int(v[k][c]);
     }
     return join_defines({frame_plane_defines(), define_list("SSGI_FACE_BASIS", faces),
-                         define("SSGI_MAX_DEPTH", kSsgiMaxDepth),
+                         define("SSGI_MAX_DEPTH", kMaxSurfaceDepth),
                          define("SSGI_MIN_COS", kSsgiMinCos), define("SSGI_MAX_RADIANCE", kSsgiMaxRadiance),
                          define("SSGI_LOCAL", kSsgiLocal), define("SSGI_VEC", kSsgiVec)});
 }

@@ -12,8 +12,6 @@ namespace ngi::detail {
 
 // Build options of kernels/ssgi.cl.
 std::string ssgi_defines();
-// Depth beyond which a texel is no surface (the renderer's sky is 1e4 m); the preprocessing's depth scale too.
-constexpr float kSsgiMaxDepth = 1000.0f;
 // Smallest |cos| between a sender's normal and its camera ray used in its area: a texel seen within 6 degrees of
 // grazing covers a long, thin patch whose planar-depth position is poorly known; its area is capped at 10x.
 constexpr float kSsgiMinCos = 0.1f;
