@@ -531,6 +531,8 @@ class _Importer:
         """A convolution whose weight moves channels around without mixing values: routes = (input channel, output
         channel, kernel [kh, kw]) triples, every other pair zero. What nearest upsampling, depth-to-space and average
         pooling are, exactly."""
+        if self.layout == "nc":
+            raise self.fail(node, "a spatial op on an [N, C] item list (no H and W axes)")
         cin = self.channels[x]
         for what, v in (("kernel", kernel), ("stride", stride)):
             if not 1 <= v <= _constants.GRAPH_MAX_KERNEL:

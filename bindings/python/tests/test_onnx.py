@@ -526,6 +526,12 @@ def test_the_new_ops_fuzzer_findings_are_quick_one_line_refusals(tmp_path):
                               nearest_mode="floor")]
     assert_refused(tmp_path, small_model(nodes, [scales]).SerializeToString(), "only one integer factor along H and W "
                    "is supported (at most 64)")
+    # Found by the load check of the 1M campaign: an AveragePool on an [N, C] item list became a 2 x 2 conv2d, which
+    # the loader refuses for layout "nc". Refused at conversion now.
+    fresh()
+    nodes = [helper.make_node("AveragePool", ["x"], ["y"], name="pool", kernel_shape=[2, 2], strides=[2, 2])]
+    assert_refused(tmp_path, small_model(nodes, input_dims=(5, 2)).SerializeToString(),
+                   "node 'pool' (AveragePool): a spatial op on an [N, C] item list")
 
 
 def test_truncated_file_is_refused(tmp_path):
