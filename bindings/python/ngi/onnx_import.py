@@ -18,6 +18,9 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Add, Mul of two computed tensors of one shape -> add, mul
   Relu, LeakyRelu, Tanh, Sigmoid, Exp, Clip(min=0) -> activation (fused into the convolution before it, or into the
                                                     convolutions that read it, where that is exact)
+  Clip with other bounds (ReLU6)  -> lo + relu(x - lo) - relu(x - hi) as affine, activation and add nodes
+  PRelu with one slope            -> activation leaky_relu
+  SpaceToDepth                    -> conv2d routing each block pixel to its channel (exact)
   Clip(max=88) then Exp          -> activation exp (ngi's exp is exp(min(x, 88)))
   Concat (channel axis)          -> concat
   Dropout (inference), Identity  -> nothing (the tensor itself)
@@ -54,7 +57,7 @@ ONNX_MAX_BYTES = (2 << 30) - 1
 _ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp"}
 SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
                  "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout", "Identity", "Constant",
-                 "Pad", "DepthToSpace", "Resize", "AveragePool",
+                 "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "PRelu",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
 
@@ -591,6 +594,29 @@ class _Importer:
                 yield ci, co, k
         self._channel_copy(node, x, c, b, routes(), "conv_transpose2d", b, 0)
 
+    def op_SpaceToDepth(self, node, attrs):
+        # PixelUnshuffle: a stride-b convolution whose b x b kernel picks one pixel of each block into a channel (ONNX
+        # order: output channel (i b + j) C + c takes input channel c at block offset (i, j); exact).
+        x = self.tensor(node, node.input[0])
+        b = int(attrs.get("blocksize", 0))
+        if not 1 <= b <= _constants.GRAPH_MAX_KERNEL:
+            raise self.fail(node, f"blocksize {b}: 1..{_constants.GRAPH_MAX_KERNEL} expected")
+        c = self.channels[x]
+
+        def routes():
+            for co in range(c * b * b):
+                k = np.zeros((b, b))
+                k[(co // c) // b, (co // c) % b] = 1.0
+                yield co % c, co, k
+        self._channel_copy(node, x, c * b * b, b, routes(), "conv2d", b, 0)
+
+    def op_PRelu(self, node, attrs):
+        # One slope for every channel (nn.PReLU() as exported): a leaky ReLU. Per-channel slopes are not supported.
+        slope = self.const(node.input[1]) if len(node.input) > 1 else None
+        if slope is None or np.unique(np.asarray(slope, np.float64)).size != 1:
+            raise self.fail(node, "only one constant slope for every channel is supported (nn.PReLU(num_parameters=1))")
+        self._leaky_relu(node, float(np.float32(np.asarray(slope).reshape(-1)[0])))
+
     def op_Resize(self, node, attrs):
         # Nearest upsampling by an integer factor (what F.interpolate(scale_factor=s) exports): each pixel copied to an
         # s x s block, a stride-s transposed convolution with a one-hot channel kernel of ones (exact).
@@ -763,7 +789,9 @@ class _Importer:
         self._activation(node, "relu")
 
     def op_LeakyRelu(self, node, attrs):
-        alpha = float(np.float32(attrs.get("alpha", 0.01)))
+        self._leaky_relu(node, float(np.float32(attrs.get("alpha", 0.01))))
+
+    def _leaky_relu(self, node, alpha):
         # The loader's rule for a slope (host/src/models/graph_model.cpp): in [-1, 1], and 0 or a normal float32.
         if not (abs(alpha) <= 1.0 and (alpha == 0.0 or abs(alpha) >= FLT_MIN)):
             raise self.fail(node, f"alpha {alpha!r}: ngi's leaky_relu slope must lie in [-1, 1] and be 0 or at "
@@ -809,8 +837,46 @@ class _Importer:
         if lo == 0.0 and hi is None:
             self._activation(node, "relu")
             return
-        raise self.fail(node, f"Clip(min={lo}, max={hi}) is not supported: only Clip(min=0) (ReLU) and "
-                              f"Clip(max={EXP_CLAMP:g}) followed by Exp (ngi's exp activation)")
+        for v in (lo, hi):
+            if v is not None and not (math.isfinite(v) and abs(v) <= FLT_MAX):
+                raise self.fail(node, f"Clip(min={lo}, max={hi}): limits must be finite float32 numbers")
+        if lo is not None and hi is not None and not lo <= hi:
+            raise self.fail(node, f"Clip(min={lo}, max={hi}): min above max")
+        if lo is None and hi is None:  # a clip of nothing: the tensor itself
+            self.alias[node.output[0]] = self.tensor(node, node.input[0])
+            return
+        # Any other bounds (ReLU6 = Clip(0, 6)) as ReLUs of shifted copies:
+        #   clip(x, lo, hi) = lo + relu(x - lo) - relu(x - hi),  clip(x, lo) = lo + relu(x - lo),
+        #   clip(x, max=hi) = hi - relu(hi - x): exact in real arithmetic, within an ulp or two of the bound in float.
+        x = self.tensor(node, node.input[0])
+        c = self.channels[x]
+
+        def step(tag, op, inputs, output=None, **fields):
+            out = output or f"{node.output[0]}/{tag}"
+            entry = {"name": f"{node.name}/{tag}", "op": op, "inputs": list(inputs), "output": out}
+            for k, v in fields.items():
+                if k in ("scale", "shift"):
+                    entry[k] = self.put_weight(f"{node.name}/{tag}.{k}", np.full(c, v, np.float64))
+                else:
+                    entry[k] = v
+            self.ir.append(entry)
+            self.channels[out] = c
+            return out
+        final = node.output[0]
+        if lo is None:
+            t = step("flip", "affine", [x], scale=-1.0, shift=hi)
+            t = step("relu", "activation", [t], activation="relu")
+            step("out", "affine", [t], final, scale=-1.0, shift=hi)
+            return
+        t = step("above_min", "affine", [x], shift=-lo)
+        t = step("relu_min", "activation", [t], activation="relu")
+        if hi is None:
+            step("out", "affine", [t], final, shift=lo)
+            return
+        u = step("above_max", "affine", [x], shift=-hi)
+        u = step("relu_max", "activation", [u], activation="relu")
+        u = step("minus", "affine", [u], scale=-1.0, shift=lo)
+        step("out", "add", [t, u], final)
 
     def op_Concat(self, node, attrs):
         axis = attrs.get("axis")

@@ -93,6 +93,24 @@ class _MobileBlock(torch.nn.Module):
         return self.pw(self.dw(self.stem(x)))
 
 
+class _MobileV2Block(torch.nn.Module):
+    """MobileNetV2-style inverted residual: 1 x 1 expansion, ReLU6, depthwise 3 x 3, ReLU6, 1 x 1 projection, the
+    residual add; then SiLU (x sigmoid(x)), PReLU with one slope and a Clip with an upper bound only."""
+
+    def __init__(self):
+        super().__init__()
+        self.expand = torch.nn.Sequential(torch.nn.Conv2d(4, 12, 1), torch.nn.BatchNorm2d(12), torch.nn.ReLU6())
+        self.dw = torch.nn.Sequential(torch.nn.Conv2d(12, 12, 3, padding=1, groups=12), torch.nn.BatchNorm2d(12),
+                                      torch.nn.ReLU6())
+        self.project = torch.nn.Sequential(torch.nn.Conv2d(12, 4, 1), torch.nn.BatchNorm2d(4))
+        self.prelu = torch.nn.PReLU()
+
+    def forward(self, x):
+        y = x + self.project(self.dw(self.expand(x * 4.0)))
+        y = self.prelu(torch.nn.functional.silu(y))
+        return torch.clamp(y, max=0.5)
+
+
 class _Espcn(torch.nn.Module):
     """ESPCN-style upsampler: convolutions, then PixelShuffle (DepthToSpace)."""
 
@@ -136,7 +154,8 @@ class _DilatedGrouped(torch.nn.Module):
 
 
 @pytest.mark.parametrize("opset", [13, 17])
-@pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("espcn", _Espcn, 3),
+@pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("mobile_v2", _MobileV2Block, 4),
+                                                ("espcn", _Espcn, 3),
                                                 ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
@@ -532,6 +551,17 @@ def test_the_new_ops_fuzzer_findings_are_quick_one_line_refusals(tmp_path):
     nodes = [helper.make_node("AveragePool", ["x"], ["y"], name="pool", kernel_shape=[2, 2], strides=[2, 2])]
     assert_refused(tmp_path, small_model(nodes, input_dims=(5, 2)).SerializeToString(),
                    "node 'pool' (AveragePool): a spatial op on an [N, C] item list")
+
+
+def test_space_to_depth_routes_each_block_pixel_to_its_channel(tmp_path, dev):
+    # ONNX SpaceToDepth (output channel (i b + j) C + c = input channel c at block offset (i, j)); torch's
+    # PixelUnshuffle orders channels the other way and exports as Reshape / Transpose, which ngi does not convert.
+    nodes = [helper.make_node("SpaceToDepth", ["x"], ["y"], name="s2d", blocksize=2)]
+    rc, err, out = convert(tmp_path, small_model(nodes, input_dims=(1, 3, 8, 8)).SerializeToString())
+    assert rc == 0, err
+    x = np.random.default_rng(41).uniform(-1, 1, (1, 3, 8, 8)).astype(np.float32)
+    want = x.reshape(1, 3, 4, 2, 4, 2).transpose(0, 3, 5, 1, 2, 4).reshape(1, 12, 4, 4)
+    np.testing.assert_array_equal(ngi.Model(dev, out).run(x), want)
 
 
 def test_truncated_file_is_refused(tmp_path):
