@@ -48,6 +48,12 @@ runs=${2:-}
 # this checkout's when NGI_FUZZ_BUILD_DIR is another clone's tree).
 built_from=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$out/CMakeCache.txt" 2>/dev/null)
 built_from=${built_from:-$src}
+# The commits a record names, taken now (before the runs: commits made during a long campaign are not what ran): the
+# tree's for libFuzzer targets, this checkout's for Python targets (its script, and with NGI_FUZZ_PYTHONPATH its code).
+commit_of() { git -C "$1" rev-parse HEAD 2>/dev/null || echo unknown; }
+dirty_of() { git -C "$1" status --porcelain --untracked-files=no 2>/dev/null | head -c 1; }
+built_commit=$(commit_of "$built_from") built_dirty=$(dirty_of "$built_from")
+src_commit=$(commit_of "$src") src_dirty=$(dirty_of "$src")
 declare -A max_len=([npy]=4096 [exr]=16384 [png]=8192 [camera_json]=1024 [dataset_config]=4096 [plan_file]=2048
                     [safetensors]=32768 [frame_folder]=16384 [mesh]=8192 [model_config]=8192)
 targets=${NGI_FUZZ_TARGETS:-}
@@ -91,12 +97,10 @@ run_one() {
     printf '%-16s execs %10s  exec/s %7s  peak RSS %5s MB  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${rss:-?}" "$result"
     if [[ -n "${NGI_FUZZ_RECORD_DIR:-}" ]]; then  # one JSON record per campaign (issue 51: every figure on file)
         mkdir -p "$NGI_FUZZ_RECORD_DIR"
-        # A Python target runs this checkout's script and (with NGI_FUZZ_PYTHONPATH) its code: its commit is this one's.
-        local from=$built_from
-        [[ -f "$src/fuzz/fuzz_$t.py" ]] && from=$src
+        local commit=$built_commit dirty=$built_dirty
+        [[ -f "$src/fuzz/fuzz_$t.py" ]] && commit=$src_commit dirty=$src_dirty
         /usr/bin/python3 - "$NGI_FUZZ_RECORD_DIR" "$t" "${execs:-0}" "${rate:-0}" "${rss:-0}" "$rc" "$result" \
-            "$seconds" "${runs:-}" "$(git -C "$from" rev-parse HEAD 2>/dev/null || echo unknown)" \
-            "$(git -C "$from" status --porcelain --untracked-files=no 2>/dev/null | head -c 1)" <<'PY'
+            "$seconds" "${runs:-}" "$commit" "$dirty" <<'PY'
 import datetime, json, os, sys
 d, t, execs, rate, rss, rc, result, seconds, runs, commit, dirty = sys.argv[1:]
 now = datetime.datetime.now(datetime.timezone.utc)
