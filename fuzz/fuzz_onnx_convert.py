@@ -51,7 +51,7 @@ ATTR_NAMES = ["group", "dilations", "strides", "pads", "kernel_shape", "output_p
               "epsilon", "transA", "transB", "value", "min", "max", "mode", "ratio", "to", "beta", "momentum"]
 
 
-class Timeout(Exception):
+class Timeout(BaseException):  # not an Exception: the converter's broad handlers must not turn it into a refusal
     pass
 
 

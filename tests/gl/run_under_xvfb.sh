@@ -45,7 +45,7 @@ if [ ! -s "$tmp/display" ]; then
   echo "$0: Xvfb gave no display within 10 s" >&2
   exit 1
 fi
-DISPLAY=":$(head -n 1 "$tmp/display")" "${pdeath[@]}" "$@" &
+DISPLAY=":$(head -n 1 "$tmp/display")" "${pdeath[@]}" "$@" <&0 &  # <&0: a background job keeps stdin
 child=$!
 wait "$child"
 rc=$?

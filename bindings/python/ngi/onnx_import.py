@@ -18,7 +18,7 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Add, Mul of two computed tensors of one shape -> add, mul
   Relu, LeakyRelu, Tanh, Sigmoid, Exp, Clip(min=0) -> activation (fused into the convolution before it, or into the
                                                     convolutions that read it, where that is exact)
-  Clip with other bounds (ReLU6)  -> lo + relu(x - lo) - relu(x - hi) as affine, activation and add nodes
+  Clip with other bounds (ReLU6)  -> x - relu(x - hi) + relu(lo - x) as affine, activation and add nodes
   PRelu with one slope            -> activation leaky_relu
   SpaceToDepth                    -> conv2d routing each block pixel to its channel (exact)
   Clip(max=88) then Exp          -> activation exp (ngi's exp is exp(min(x, 88)))
@@ -45,9 +45,10 @@ from . import _constants
 from .model_file import FORMAT_VERSION, ConversionError, check_output_file, read_input_file, write_model
 
 MIN_OPSET, MAX_OPSET = 9, 17
-# A kernel the converter builds (a grouped layer's dense kernel, a dilated one, a channel-copying one) may hold at most
-# this many values: 2^28 float32 is 1 GiB, half of what one ONNX file can hold.
-MAX_BUILT_WEIGHTS = 1 << 28
+# The kernels the converter builds (grouped layers' dense kernels, dilated ones, channel-copying ones) may hold at most
+# this many values in all, per model: 2^26 values are 256 MiB as the file's float32 (512 MiB while converted, in
+# float64), far above what a model ngi runs needs (a depthwise 3 x 3 layer of 1,024 channels expands to 9.4 M).
+MAX_BUILT_WEIGHTS = 1 << 26
 EXP_CLAMP = _constants.ACT_EXP_MAX  # ngi's exp activation: exp(min(x, ACT_EXP_MAX)), host/src/ops/op_types.hpp
 FLT_MAX = float(np.finfo(np.float32).max)
 FLT_MIN = float(np.finfo(np.float32).tiny)  # the least normal float32
@@ -260,6 +261,7 @@ class _Importer:
         self.producer = {out: node for node in self.nodes for out in node.output if out}
         self.alias = {}      # ONNX tensor -> the ngi tensor it is (Identity, Dropout)
         self.zero_pads = {}  # a zero Pad's output -> (its input, [top, left, bottom, right]): folded into convolutions
+        self.built_values = 0  # values of the kernels built so far (MAX_BUILT_WEIGHTS)
         self.channels = {self.input.name: self.input_nc}
         self.ir = []         # ngi nodes: dicts
         self.weights = {}    # tensor name -> float64 array
@@ -495,7 +497,7 @@ class _Importer:
         self._check_built(node, w.size * group, f"group {group}")
         if transpose:  # [cin, cout / group, kh, kw]
             per_out = w.shape[1]
-            dense = np.zeros((cin, per_out * group) + w.shape[2:], np.float64)
+            dense = np.zeros((cin, per_out * group) + w.shape[2:], np.float32)
             per_in = cin // group
             for g in range(group):
                 dense[g * per_in:(g + 1) * per_in, g * per_out:(g + 1) * per_out] = w[g * per_in:(g + 1) * per_in]
@@ -504,7 +506,7 @@ class _Importer:
         if cout % group:
             raise self.fail(node, f"weight {list(w.shape)} with group {group}: {cout} outputs do not split in groups")
         per_out = cout // group
-        dense = np.zeros((cout, cin) + w.shape[2:], np.float64)
+        dense = np.zeros((cout, cin) + w.shape[2:], np.float32)
         for g in range(group):
             dense[g * per_out:(g + 1) * per_out, g * per_in:(g + 1) * per_in] = w[g * per_out:(g + 1) * per_out]
         return dense
@@ -521,14 +523,15 @@ class _Importer:
             raise self.fail(node, f"dilations {dilations} make a {kh} x {kw} kernel {(kh - 1) * dh + 1} x "
                                   f"{(kw - 1) * dw + 1}, beyond ngi's {_constants.GRAPH_MAX_KERNEL}")
         self._check_built(node, w.shape[0] * w.shape[1] * ((kh - 1) * dh + 1) * ((kw - 1) * dw + 1), "dilation")
-        out = np.zeros(w.shape[:2] + ((kh - 1) * dh + 1, (kw - 1) * dw + 1), np.float64)
+        out = np.zeros(w.shape[:2] + ((kh - 1) * dh + 1, (kw - 1) * dw + 1), np.float32)
         out[:, :, ::dh, ::dw] = w
         return out
 
     def _check_built(self, node, values, what):
-        if values > MAX_BUILT_WEIGHTS:
-            raise self.fail(node, f"{what} would make a kernel of {values} values, beyond the {MAX_BUILT_WEIGHTS} "
-                                  "the converter builds")
+        self.built_values += values
+        if self.built_values > MAX_BUILT_WEIGHTS:
+            raise self.fail(node, f"{what} would make a kernel of {values} values, taking the kernels the converter "
+                                  f"builds for this model to {self.built_values}, beyond {MAX_BUILT_WEIGHTS}")
 
     def _channel_copy(self, node, x, channels, kernel, routes, op, stride, pad):
         """A convolution whose weight moves channels around without mixing values: routes = (input channel, output
@@ -541,7 +544,8 @@ class _Importer:
             if not 1 <= v <= _constants.GRAPH_MAX_KERNEL:
                 raise self.fail(node, f"{what} {v} is outside ngi's 1..{_constants.GRAPH_MAX_KERNEL}")
         self._check_built(node, cin * channels * kernel * kernel, "it")
-        w = np.zeros((cin, channels, kernel, kernel) if op == "conv_transpose2d" else (channels, cin, kernel, kernel))
+        w = np.zeros((cin, channels, kernel, kernel) if op == "conv_transpose2d" else (channels, cin, kernel, kernel),
+                     np.float32)
         for ci, co, k in routes:
             if op == "conv_transpose2d":
                 w[ci, co] = k
@@ -624,7 +628,8 @@ class _Importer:
         mode, ctm, nearest = (_text(attrs.get(k, d)) for k, d in (
             ("mode", "nearest"), ("coordinate_transformation_mode", "half_pixel"),
             ("nearest_mode", "round_prefer_floor")))
-        scales = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else None
+        at = 1 if self.opset < 11 else 2  # Resize-10: (X, scales); 11+: (X, roi, scales, sizes)
+        scales = self.const(node.input[at]) if len(node.input) > at and node.input[at] else None
         if scales is None or np.asarray(scales).size == 0:
             raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
         sc = np.asarray(scales, np.float64).reshape(-1)
@@ -646,11 +651,18 @@ class _Importer:
         # A convolution with 1 / (kh kw) on the diagonal channel pairs (exact up to float summation order); padding
         # only where the padded zeros count (count_include_pad, or no padding).
         x = node.input[0]
+        if _text(attrs.get("auto_pad", b"NOTSET")) not in ("NOTSET", "VALID"):
+            raise self.fail(node, f"auto_pad {_text(attrs['auto_pad'])}: give explicit pads")
         pads = list(attrs.get("pads", [0, 0, 0, 0]))
-        counted = bool(attrs.get("count_include_pad", 0))
-        if x in self.zero_pads:  # zeros padded before the pooling count in its average
+        # Padded zeros count in the average with count_include_pad, or when the pool has no padding of its own (then
+        # the only padding is a Pad node's, whose zeros are values the pool averages).
+        counted = bool(attrs.get("count_include_pad", 0)) or not any(pads)
+        if x in self.zero_pads:
+            if not counted:
+                raise self.fail(node, "a Pad before a pooling that pads without count_include_pad: the two paddings "
+                                      "average differently")
             x, extra = self.zero_pads[x]
-            pads, counted = [p + e for p, e in zip(pads, extra)], True
+            pads = [p + e for p, e in zip(pads, extra)]
         x = self.tensor(node, x)
         k = list(attrs.get("kernel_shape", []))
         strides = list(attrs.get("strides", [1, 1]))
@@ -845,9 +857,9 @@ class _Importer:
         if lo is None and hi is None:  # a clip of nothing: the tensor itself
             self.alias[node.output[0]] = self.tensor(node, node.input[0])
             return
-        # Any other bounds (ReLU6 = Clip(0, 6)) as ReLUs of shifted copies:
-        #   clip(x, lo, hi) = lo + relu(x - lo) - relu(x - hi),  clip(x, lo) = lo + relu(x - lo),
-        #   clip(x, max=hi) = hi - relu(hi - x): exact in real arithmetic, within an ulp or two of the bound in float.
+        # Any other bounds (ReLU6 = Clip(0, 6)) as ReLUs of shifted copies added to x:
+        #   clip(x, lo, hi) = x - relu(x - hi) + relu(lo - x): exactly x inside [lo, hi] (both ReLUs are 0), the bound
+        #   within an ulp of x outside it (x - (x - hi) rounds once).
         x = self.tensor(node, node.input[0])
         c = self.channels[x]
 
@@ -863,20 +875,16 @@ class _Importer:
             self.channels[out] = c
             return out
         final = node.output[0]
-        if lo is None:
-            t = step("flip", "affine", [x], scale=-1.0, shift=hi)
-            t = step("relu", "activation", [t], activation="relu")
-            step("out", "affine", [t], final, scale=-1.0, shift=hi)
-            return
-        t = step("above_min", "affine", [x], shift=-lo)
-        t = step("relu_min", "activation", [t], activation="relu")
-        if hi is None:
-            step("out", "affine", [t], final, shift=lo)
-            return
-        u = step("above_max", "affine", [x], shift=-hi)
-        u = step("relu_max", "activation", [u], activation="relu")
-        u = step("minus", "affine", [u], scale=-1.0, shift=lo)
-        step("out", "add", [t, u], final)
+        y = x
+        if hi is not None:
+            t = step("above_max", "affine", [x], shift=-hi)
+            t = step("relu_max", "activation", [t], activation="relu")
+            t = step("minus_excess", "affine", [t], scale=-1.0)
+            y = step("out" if lo is None else "capped", "add", [y, t], final if lo is None else None)
+        if lo is not None:
+            t = step("below_min", "affine", [x], scale=-1.0, shift=lo)
+            t = step("relu_min", "activation", [t], activation="relu")
+            step("out", "add", [y, t], final)
 
     def op_Concat(self, node, attrs):
         axis = attrs.get("axis")
@@ -1092,7 +1100,7 @@ def _fuse(ir, weights, output):
             weights[src["weight"]] = w * scale.reshape(shape)
             bias = weights[src["bias"]] if "bias" in src else np.zeros(src["out"])
             if "bias" not in src:
-                src["bias"] = src["weight"][:-len(".weight")] + ".bias"
+                src["bias"] = src["name"] + ".bias"  # node names are unique; weight keys end in .weight or .copy
             weights[src["bias"]] = bias * scale + shift
             for key in ("scale", "shift"):
                 weights.pop(n.get(key), None)

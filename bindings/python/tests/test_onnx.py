@@ -564,6 +564,54 @@ def test_space_to_depth_routes_each_block_pixel_to_its_channel(tmp_path, dev):
     np.testing.assert_array_equal(ngi.Model(dev, out).run(x), want)
 
 
+def test_review_findings_on_the_new_conversions(tmp_path, dev):
+    # A review of the new conversions found: (1) an affine folded into a channel-copying kernel named its new bias
+    # by cutting ".weight" off "NAME.copy", so two Resize layers followed by a Mul shared one bias; (2) AveragePool
+    # ignored auto_pad; (3) a Pad folded into a pool that pads without count_include_pad changed its border average;
+    # (4) a wide Clip lost precision (x - lo + lo); (5) a 100-byte file could build a 1.8 GiB kernel.
+    def fresh():
+        for f in tmp_path.iterdir():
+            f.unlink()
+
+    scales = helper.make_tensor("s", TensorProto.FLOAT, [4], [1, 1, 2, 2])
+    c1 = helper.make_tensor("c1", TensorProto.FLOAT, [1, 2, 1, 1], [2.0, 3.0])
+    c2 = helper.make_tensor("c2", TensorProto.FLOAT, [1, 2, 1, 1], [0.5, -1.0])
+    up = {"coordinate_transformation_mode": "asymmetric", "nearest_mode": "floor"}
+    nodes = [helper.make_node("Resize", ["x", "", "s"], ["a"], name="r1", **up),
+             helper.make_node("Add", ["a", "c1"], ["b"], name="add1"),
+             helper.make_node("Resize", ["b", "", "s"], ["c"], name="r2", **up),
+             helper.make_node("Add", ["c", "c2"], ["y"], name="add2")]
+    rc, err, out = convert(tmp_path, small_model(nodes, [scales, c1, c2], input_dims=(1, 2, 4, 4)).SerializeToString())
+    assert rc == 0, err
+    x = np.random.default_rng(51).uniform(-1, 1, (1, 2, 4, 4)).astype(np.float32)
+    want = x.repeat(4, 2).repeat(4, 3) + np.array([2.5, 2.0], np.float32).reshape(1, 2, 1, 1)
+    np.testing.assert_allclose(ngi.Model(dev, out).run(x), want, atol=1e-6)
+
+    fresh()
+    nodes = [helper.make_node("AveragePool", ["x"], ["y"], name="pool", kernel_shape=[3, 3], auto_pad="SAME_UPPER")]
+    assert_refused(tmp_path, small_model(nodes).SerializeToString(), "node 'pool' (AveragePool): auto_pad SAME_UPPER")
+    fresh()
+    pads = helper.make_tensor("p", TensorProto.INT64, [8], [0, 0, 1, 1, 0, 0, 1, 1])
+    nodes = [helper.make_node("Pad", ["x", "p"], ["q"], name="pad"),
+             helper.make_node("AveragePool", ["q"], ["y"], name="pool", kernel_shape=[3, 3], pads=[1, 1, 1, 1])]
+    assert_refused(tmp_path, small_model(nodes, [pads]).SerializeToString(), "a Pad before a pooling that pads "
+                   "without count_include_pad")
+    fresh()
+    lim = [helper.make_tensor("lo", TensorProto.FLOAT, [], [-65504.0]), helper.make_tensor("hi", TensorProto.FLOAT, [],
+                                                                                            [65504.0])]
+    nodes = [helper.make_node("Clip", ["x", "lo", "hi"], ["y"], name="clip")]
+    rc, err, out = convert(tmp_path, small_model(nodes, lim).SerializeToString())
+    assert rc == 0, err
+    x = np.random.default_rng(52).uniform(-1, 1, (1, 2, 8, 8)).astype(np.float32)
+    x[0, 0, 0, :3] = [1e5, -1e5, 65504.0]
+    want = np.clip(x, -65504.0, 65504.0)
+    np.testing.assert_array_equal(ngi.Model(dev, out).run(x), want)  # exact inside the range and at the bounds
+    fresh()
+    nodes = [helper.make_node("AveragePool", ["x"], ["y"], name="pool", kernel_shape=[3, 3])]
+    assert_refused(tmp_path, small_model(nodes, input_dims=(1, 5000, 8, 8)).SerializeToString(),
+                   "node 'pool' (AveragePool): it would make a kernel of 225000000 values")
+
+
 def test_truncated_file_is_refused(tmp_path):
     data = conv_model().SerializeToString()
     assert_refused(tmp_path, data[:len(data) // 2], "bad.onnx", "truncated")
