@@ -98,7 +98,8 @@ run_one() {
     if [[ -n "${NGI_FUZZ_RECORD_DIR:-}" ]]; then  # one JSON record per campaign (issue 51: every figure on file)
         mkdir -p "$NGI_FUZZ_RECORD_DIR"
         local commit=$built_commit dirty=$built_dirty
-        [[ -f "$src/fuzz/fuzz_$t.py" ]] && commit=$src_commit dirty=$src_dirty
+        # A Python target's code is this checkout's only with NGI_FUZZ_PYTHONPATH (else the tree's copy of its own).
+        [[ -f "$src/fuzz/fuzz_$t.py" && -n "${NGI_FUZZ_PYTHONPATH:-}" ]] && commit=$src_commit dirty=$src_dirty
         /usr/bin/python3 - "$NGI_FUZZ_RECORD_DIR" "$t" "${execs:-0}" "${rate:-0}" "${rss:-0}" "$rc" "$result" \
             "$seconds" "${runs:-}" "$commit" "$dirty" <<'PY'
 import datetime, json, os, sys

@@ -565,7 +565,10 @@ class _Importer:
         value = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else attrs.get("value", 0.0)
         if mode != "constant" or pads is None or value is None or np.any(np.asarray(value, np.float64) != 0):
             raise self.fail(node, f"only zero (constant) padding before convolutions is supported (mode {mode})")
-        pads = [int(p) for p in np.asarray(pads).reshape(-1)]
+        pads = np.asarray(pads).reshape(-1)
+        if pads.dtype.kind not in "iu":  # ONNX says int64; a float tensor (NaN, 1.5) is no padding
+            raise self.fail(node, f"pads of type {pads.dtype}: integers expected")
+        pads = [int(p) for p in pads]
         if len(pads) != 8 or any(pads[i] for i in (0, 1, 4, 5)) or min(pads) < 0:
             raise self.fail(node, f"pads {pads}: only non-negative padding of H and W is supported")
         if not any(pads):  # what torch.onnx writes before an AvgPool2d without padding

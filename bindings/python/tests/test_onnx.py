@@ -587,6 +587,12 @@ def test_review_findings_on_the_new_conversions(tmp_path, dev):
     want = x.repeat(4, 2).repeat(4, 3) + np.array([2.5, 2.0], np.float32).reshape(1, 2, 1, 1)
     np.testing.assert_allclose(ngi.Model(dev, out).run(x), want, atol=1e-6)
 
+    fresh()  # found by the million-run campaign: float pads holding NaN raised ValueError (int(nan))
+    pads = helper.make_tensor("p", TensorProto.FLOAT, [8], [0, 0, float("nan"), 1, 0, 0, 1, 1])
+    nodes = [helper.make_node("Pad", ["x", "p"], ["q"], name="pad"), helper.make_node("Conv", ["q", "w"], ["y"],
+                                                                                       name="conv")]
+    assert_refused(tmp_path, small_model(nodes, [pads, conv_weight()]).SerializeToString(),
+                   "node 'pad' (Pad): pads of type float32: integers expected")
     fresh()
     nodes = [helper.make_node("AveragePool", ["x"], ["y"], name="pool", kernel_shape=[3, 3], auto_pad="SAME_UPPER")]
     assert_refused(tmp_path, small_model(nodes).SerializeToString(), "node 'pool' (AveragePool): auto_pad SAME_UPPER")
