@@ -135,12 +135,14 @@ void check_voxel_sh(const ngi::ModelConfig& cfg) {
 }
 
 // Family ssgi: what the pipeline's gather relies on (pipeline/ssgi.cpp): a known view, a cluster level and bounce
-// count within their bounds, finite non-negative distances, 3 output channels of indirect light and no network input.
+// count within their bounds, finite non-negative distances, visibility samples within theirs, 3 output channels of indirect light and no network input.
 void check_ssgi(const ngi::ModelConfig& cfg) {
     const ngi::ModelConfig::Ssgi& s = cfg.ssgi;
     if ((s.view != "surround" && s.view != "front") || s.cluster_level < 0 ||
         s.cluster_level > ngi::detail::kSsgiMaxClusterLevel || s.bounces < 1 || s.bounces > ngi::detail::kSsgiMaxBounces ||
         !std::isfinite(s.near_factor) || s.near_factor < 0 || !std::isfinite(s.min_distance) || s.min_distance < 0 ||
+        s.visibility_steps < 0 || s.visibility_steps > ngi::detail::kSsgiMaxVisibilitySteps ||
+        !std::isfinite(s.thickness) || s.thickness < 0 ||
         cfg.input_nc != 0 || cfg.output_nc != 3 || cfg.output_mode != "indirect")
         __builtin_trap();
 }

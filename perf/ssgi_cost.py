@@ -37,8 +37,9 @@ def frame_images(d):
     return images, cam["look"], cam["up"]
 
 
-def variants(tmp):
+def variants(tmp, extra=()):
     out = {f"shipped:{p.stem}": p for p in sorted((bench_record.REPO / "models" / "ssgi").glob("*.safetensors"))}
+    out.update({f"file:{Path(p).stem}": Path(p) for p in extra})
     for level, near in SETTINGS:
         path = Path(tmp) / f"L{level}_near{near:g}.safetensors"
         model_file.write_model(path, {}, {"format_version": 1, "family": "ssgi", "view": "surround",
@@ -54,6 +55,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--extra", default="", help="more ssgi rung files to time, comma-separated (e.g. ssgi_variants' "
+                                                 "output); named file:<stem>")
     args = ap.parse_args()
     frames = sorted(p.parent for p in args.frames.rglob("camera.json") if ".tmp-" not in str(p))
     if args.max_frames and len(frames) > args.max_frames:
@@ -62,7 +65,7 @@ def main():
         raise SystemExit(f"ssgi_cost: no frame folders under {args.frames}")
     dev = ngi.Device(args.device)
     with tempfile.TemporaryDirectory() as tmp:
-        paths = variants(tmp)
+        paths = variants(tmp, [p for p in args.extra.split(",") if p])
         models = {name: ngi.Model(dev, str(p)) for name, p in paths.items()}
         configs = {name: model_file.read_config(p) for name, p in paths.items()}
         pipes, per = {}, {name: {"gather_ms": [], "total_ms": []} for name in models}
@@ -85,8 +88,7 @@ def main():
         "device": dev.name,
         "commit": bench_record.git_head(), "load": bench_record.load(), "repeats": args.repeats,
         "frames": [bench_record.relative(d) for d in frames],
-        "variants": {name: {"config": {k: configs[name].get(k) for k in ("view", "cluster_level", "near_factor",
-                                                                            "min_distance", "bounces")},
+        "variants": {name: {"config": {k: configs[name].get(k) for k in model_file.SSGI_GATHER_FIELDS},
                             "gather_ms_median": float(np.median(v["gather_ms"])),
                             "gather_ms_max": float(np.max(v["gather_ms"])),
                             "total_ms_median": float(np.median(v["total_ms"])),

@@ -67,7 +67,8 @@ std::string write_unet(const std::string& stem, std::uint32_t seed, bool zero_ou
     // The gather of the shipped rung (its file's settings), as training's export copies them.
     const nlohmann::json rung = nlohmann::json::parse(Model::load(test::device(), kSsgiRung).config().json);
     nlohmann::json gather;
-    for (const char* k : {"view", "cluster_level", "bounces", "near_factor", "min_distance"})
+    for (const char* k :
+         {"view", "cluster_level", "bounces", "near_factor", "min_distance", "visibility_steps", "thickness"})
         if (rung.contains(k)) gather[k] = rung[k];
     nlohmann::json config = {{"family", "pix2pix_unet"}, {"input_nc", in}, {"output_nc", out}, {"ngf", ngf},
                              {"num_downs", 5}, {"bn_mode", "running"}, {"output_mode", "ssgi_residual"},

@@ -69,3 +69,22 @@ def test_engine_summarize_groups_and_files():
     assert ssgi["honesty"]["scans"]["below_direct_share"] == 0
     assert ssgi["honesty"]["characters"]["worst_vs_direct"] == {"file": "chr_cat", "frame": 50, "db": -3.0}
     assert s["direct_only"]["honesty"]["all"]["below_ssgi_share"] == 0  # exactly 1 dB below is not more than 1 dB
+
+
+def test_ssgi_variants_write_loadable_rungs_named_by_their_settings(tmp_path):
+    import ngi
+    from ngi import model_file
+    from ngi_train.generator import ssgi_variants as sv
+
+    grid = sv.parse_grid(["bounces=1,2", "visibility_steps=4", "thickness=0.25"])
+    assert grid == {"bounces": [1, 2], "visibility_steps": [4], "thickness": [0.25]}
+    sv.main(["--out", str(tmp_path), "--grid", "bounces=1,2", "visibility_steps=4", "thickness=0.25"])
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["b1_v4_t0.25.safetensors", "b2_v4_t0.25.safetensors"]
+    cfg = model_file.read_config(str(tmp_path / "b2_v4_t0.25.safetensors"))
+    assert (cfg["family"], cfg["bounces"], cfg["visibility_steps"], cfg["thickness"]) == ("ssgi", 2, 4, 0.25)
+    ngi.Model(ngi.Device(), str(tmp_path / "b2_v4_t0.25.safetensors"))  # the C++ loader accepts the settings
+    assert sv.name_of({"view": "front", "cluster_level": 2}) == "f_L2"
+    for bad in (["bounces"], ["wings=2"], ["bounces=two"], ["visibility_steps=1.5"]):
+        with pytest.raises(SystemExit):
+            sv.parse_grid(bad)

@@ -29,6 +29,10 @@ DROPOUT_MODES = ("off", "seeded")
 # What a pix2pix_unet generator's decoded output is (docs/MODEL_FORMAT.md, "output_mode"): the front view's whole
 # lightmap (the thesis's; the default) or indirect light only, which the pipeline adds to the frame's direct light.
 OUTPUT_MODES = ("lightmap", "indirect", "ssgi_residual")
+# The settings of an SSGI gather (family "ssgi", and the "ssgi" object of a network that corrects it): the fields
+# host/src/models/ssgi_config.cpp reads (docs/MODEL_FORMAT.md "ssgi").
+SSGI_GATHER_FIELDS = ("view", "cluster_level", "bounces", "near_factor", "min_distance", "visibility_steps",
+                      "thickness")
 
 # Hyper-parameters both upstream generators hard-code; they are written into
 # the config anyway so the C++ side never has to assume them (DROPOUT_P, the

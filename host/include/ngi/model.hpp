@@ -99,6 +99,10 @@ struct ModelConfig {
                                         // that close by its texels
         float min_distance = 0.5f;      // metres: closer sender-receiver pairs are skipped
         int bounces = 1;                // 2+: each further bounce first gathers at every sender face
+        int visibility_steps = 0;       // > 0: each pair's segment is marched through the faces' depth in this
+                                        // many samples and blocked pairs send nothing; 0: no visibility test
+        float thickness = 0.0f;         // how far a surface is assumed to extend behind what the faces see, as a
+                                        // fraction of its depth (a sample farther behind it is free); 0: unbounded
     } ssgi;
 };
 

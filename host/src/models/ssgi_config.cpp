@@ -10,7 +10,7 @@ namespace ngi::detail {
 
 namespace {
 
-const char* const kGatherFields = "view, cluster_level, bounces, near_factor, min_distance";
+const char* const kGatherFields = "view, cluster_level, bounces, near_factor, min_distance, visibility_steps, thickness";
 
 // Reads the gather's settings present in `j` into `s` (absent ones keep their defaults); `what` starts every error.
 void read_gather_fields(const nlohmann::json& j, const std::string& what, ModelConfig::Ssgi& s) {
@@ -43,6 +43,8 @@ void read_gather_fields(const nlohmann::json& j, const std::string& what, ModelC
     s.bounces = integer("bounces", 1, kSsgiMaxBounces, s.bounces);
     s.near_factor = number("near_factor", 0.0, 1e3, s.near_factor);
     s.min_distance = number("min_distance", 0.0, 1e3, s.min_distance);
+    s.visibility_steps = integer("visibility_steps", 0, kSsgiMaxVisibilitySteps, s.visibility_steps);
+    s.thickness = number("thickness", 0.0, 1e3, s.thickness);
 }
 
 }  // namespace
@@ -53,7 +55,8 @@ ModelConfig::Ssgi parse_ssgi_gather(const nlohmann::json& j, const std::string& 
     const std::string inner = what + "'ssgi': ";
     for (const auto& item : j.items()) {
         const std::string& k = item.key();
-        if (k != "view" && k != "cluster_level" && k != "bounces" && k != "near_factor" && k != "min_distance")
+        if (k != "view" && k != "cluster_level" && k != "bounces" && k != "near_factor" && k != "min_distance" &&
+            k != "visibility_steps" && k != "thickness")
             throw InputError(inner + "field '" + k.substr(0, 80) + "' is not a setting of the gather (" +
                              kGatherFields + ")");
     }
@@ -91,11 +94,12 @@ ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) 
         c.source = j["source"].get<std::string>();
     }
     static const std::set<std::string> kKnown = {"format_version", "family", "view", "cluster_level", "bounces",
-                                                 "near_factor", "min_distance", "output_mode", "source", "comment"};
+                                                 "near_factor", "min_distance", "visibility_steps", "thickness",
+                                                 "output_mode", "source", "comment"};
     for (const auto& item : j.items())
         if (!kKnown.count(item.key()))
             throw InputError(what + "field '" + item.key().substr(0, 80) + "' is not a field of family ssgi (" +
-                             "view, cluster_level, bounces, near_factor, min_distance, output_mode, source, comment)");
+                             kGatherFields + ", output_mode, source, comment)");
     return c;
 }
 

@@ -12,6 +12,8 @@ namespace ngi::detail {
 // Largest cluster_level (blocks of 2^level x 2^level texels) and bounce count accepted.
 constexpr int kSsgiMaxClusterLevel = 5;
 constexpr int kSsgiMaxBounces = 4;
+// Largest visibility_steps accepted: samples per pair multiply the gather's cost.
+constexpr int kSsgiMaxVisibilitySteps = 64;
 // Input channels of a network that corrects SSGI: the front view's 10 and the SSGI estimate's 3, named by
 // ngi::ssgi_residual_input_channels() (the pipeline checks that list against this count).
 constexpr int kSsgiResidualInputs = 13;
@@ -21,8 +23,9 @@ constexpr int kSsgiResidualInputs = 13;
 ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path);
 
 // The gather's settings of a network that corrects SSGI (pix2pix_unet, output_mode "ssgi_residual"): its metadata
-// field "ssgi", an object of the fields above (view, cluster_level, bounces, near_factor, min_distance; absent ones
-// take ModelConfig::Ssgi's defaults, unknown ones are refused). `what` starts every error message.
+// field "ssgi", an object of the fields above (view, cluster_level, bounces, near_factor, min_distance,
+// visibility_steps, thickness; absent ones take ModelConfig::Ssgi's defaults, unknown ones are refused). `what` starts
+// every error message.
 ModelConfig::Ssgi parse_ssgi_gather(const nlohmann::json& j, const std::string& what);
 
 }  // namespace ngi::detail

@@ -31,7 +31,8 @@ std::string ssgi_defines() {
     return join_defines({frame_plane_defines(), define_list("SSGI_FACE_BASIS", faces),
                          define("SSGI_MAX_DEPTH", kMaxSurfaceDepth),
                          define("SSGI_MIN_COS", kSsgiMinCos), define("SSGI_MAX_RADIANCE", kSsgiMaxRadiance),
-                         define("SSGI_LOCAL", kSsgiLocal), define("SSGI_VEC", kSsgiVec)});
+                         define("SSGI_LOCAL", kSsgiLocal), define("SSGI_VEC", kSsgiVec),
+                         define("SSGI_VIS_SLOPE", kSsgiVisSlope)});
 }
 
 Ssgi::Ssgi(Context& ctx)
@@ -74,6 +75,7 @@ void Ssgi::enqueue(Context& ctx, cl_mem planes, int faces, int n, bool has_emiss
     const glm::vec3 al = cluster.alpha, be = cluster.beta, ga = cluster.gamma;  // the kernels' SSGI_CLUSTER_ARGS
     const float near2 = p.near_factor * p.near_factor;
     const float min_d2 = std::max(p.min_distance * p.min_distance, FLT_MIN);  // coincident points send nothing
+    const float thickness = p.thickness > 0.0f ? p.thickness : FLT_MAX;  // x depth; 0: everything behind is solid
     static const std::size_t local[1] = {kSsgiLocal};
     // Parent record i = the sum of child records [i k, (i + 1) k); zero records past `count` up to `stride`.
     auto sum_children = [&](const Buffer& child, int child_stride, int k, std::size_t count, std::size_t stride,
@@ -96,7 +98,8 @@ void Ssgi::enqueue(Context& ctx, cl_mem planes, int faces, int n, bool has_emiss
         if (b > 1) sum_children(mid, mid_stride, 4, texels / (std::size_t(b) * b), coarse_count, coarse_);
         const int faces_out = last ? 1 : senders;
         gather_.args(planes, n, al.x, al.y, al.z, be.x, be.y, be.z, ga.x, ga.y, ga.z, coarse, cstride, mid, mid_stride, fine_, int(fine_count), bm * bm, int(b > 1),
-                     near2, min_d2, 0, faces_out, int(last), last ? lightmap : bounce_.get());
+                     near2, min_d2, 0, faces_out, int(last), senders, p.visibility_steps, thickness, b,
+                     last ? lightmap : bounce_.get());
         const std::size_t gg[1] = {round_up(std::size_t(faces_out) * npix, std::size_t(kSsgiLocal))};
         ctx.launch(gather_, 1, gg, local);
     }

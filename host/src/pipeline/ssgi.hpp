@@ -18,6 +18,10 @@ constexpr float kSsgiMinCos = 0.1f;
 // Sender radiance cap: far above any light (the half-float limit is 65504), low enough that sums of area x radiance
 // over a cluster stay finite in float.
 constexpr float kSsgiMaxRadiance = 1e30f;
+// Visibility's depth bias (kernels/ssgi.cl SSGI_VIS_SLOPE): a march sample blocks a pair only when it lies behind
+// the face's surface by more than depth * slope * 2 / N, what a surface tilted to 63 degrees from the camera ray
+// changes in depth across two texels' width; less and a flat floor would block the light crossing it.
+constexpr float kSsgiVisSlope = 2.0f;
 // Work-group size of every ssgi kernel (fixed: PoCL compiles one work-group function per size).
 constexpr int kSsgiLocal = 64;
 // Sender records one gathering work-item reads as a vector (kernels/ssgi.cl SSGI_VEC): 8 fills an AVX2 register and

@@ -181,7 +181,7 @@ def _pipeline(device, n):
 def ssgi_gather(name):
     """The gather settings of the SSGI rung `name` (its file's metadata), as a correction of it records them."""
     cfg = model_file.read_config(ngi_py.resolve_model(name))
-    return {k: cfg[k] for k in ("view", "cluster_level", "bounces", "near_factor", "min_distance") if k in cfg}
+    return {k: cfg[k] for k in model_file.SSGI_GATHER_FIELDS if k in cfg}
 
 
 def _ssgi_model(device, name):

@@ -89,7 +89,7 @@ def main(argv=None):
             "name": f"{f.stem}_n{args.n}", "kind": "ssgi", "file": str(f.relative_to(args.zoo.resolve().parent)),
             "sha256": zoo_mod.sha256(f), "layout": "surround" if cfg.get("view", "surround") == "surround" else
             "single_view", "n": args.n, "weights": None, "input": None, "gflop": None, "memory_mib": None,
-            "config": {k: cfg.get(k) for k in ("view", "cluster_level", "near_factor", "min_distance", "bounces")},
+            "config": {k: cfg.get(k) for k in model_file.SSGI_GATHER_FIELDS},
             "cost": {key: {"generator_ms": gather["gather_ms_median"], "generator_ms_max": gather["gather_ms_max"],
                            "lightmap_ms": float(np.median(walls)), "lightmap_ms_all": walls,
                            "source": le.rel(args.cost)}},
