@@ -46,9 +46,10 @@ from ngi.model_file import ConversionError, read_config
 INT_EDGES = [0, 1, -1, 2, 3, 7, 64, 65, 4096, 65536, 65537, 2**31 - 1, -2**31, 2**40, 2**63 - 1]
 FLOAT_EDGES = [0.0, -0.0, 1.0, -1.0, 0.2, 1e-45, 1.2e-38, 65504.0, 1e30, 3.4e38, float("nan"), float("inf"),
                -float("inf"), 88.0, 89.0, -1e30]
-OPS = list(onnx_import.SUPPORTED_OPS) + ["Resize", "MaxPool", "Pad", "Softplus", "Reshape", "Flatten", "Unknown"]
+OPS = list(onnx_import.SUPPORTED_OPS) + ["Resize", "Pad", "Reshape", "Flatten", "Elu", "LpPool", "Unknown"]
 ATTR_NAMES = ["group", "dilations", "strides", "pads", "kernel_shape", "output_padding", "auto_pad", "axis", "alpha",
-              "epsilon", "transA", "transB", "value", "min", "max", "mode", "ratio", "to", "beta", "momentum"]
+              "epsilon", "transA", "transB", "value", "min", "max", "mode", "ratio", "to", "beta", "momentum", "axes",
+              "keepdims", "ceil_mode", "storage_order"]
 
 
 class Timeout(BaseException):  # not an Exception: the converter's broad handlers must not turn it into a refusal

@@ -120,9 +120,26 @@ def torch_seeds():
             u = torch.nn.functional.interpolate(self.pool(z), scale_factor=2, mode="nearest")
             return torch.cat([self.up(torch.nn.functional.avg_pool2d(u, 2)), x], 1)
 
+    class PoolNormBlocks(torch.nn.Module):
+        """Max pooling (padded), squeeze-excitation (global average pool, broadcast multiply), ReduceMean, instance
+        normalization, GELU (Erf) and Softplus."""
+
+        def __init__(self):
+            super().__init__()
+            self.conv = torch.nn.Conv2d(4, 8, 3, padding=1)
+            self.norm = torch.nn.InstanceNorm2d(8, affine=True)
+            self.fc1 = torch.nn.Conv2d(8, 2, 1)
+            self.fc2 = torch.nn.Conv2d(2, 8, 1)
+
+        def forward(self, x):
+            y = torch.nn.functional.gelu(self.norm(self.conv(torch.nn.functional.max_pool2d(x, 3, 1, 1))))
+            s = torch.sigmoid(self.fc2(torch.relu(self.fc1(torch.nn.functional.adaptive_avg_pool2d(y, 1)))))
+            return torch.nn.functional.softplus(y * s + y.mean((2, 3), keepdim=True))
+
     torch.manual_seed(51)
     return {
         "blocks_op13": export(Blocks(), torch.randn(1, 4, 16, 16), 13),
+        "pool_norm_blocks_op17": export(PoolNormBlocks(), torch.randn(1, 4, 16, 16), 17),
         "pix2pix_ngf2_5levels_op13": export(build_generator("pix2pix_unet", 3, 3, 2, 5), torch.randn(1, 3, 32, 32), 13),
         "ao_mlp_op17": export(ao_mlp(8, 4), torch.randn(3, 48), 17),
         "neural_gi_small_op13": export(neural_gi.NeuralGI(buffer_channels=2, ngf=2, num_downs=5, mlp_width=8,

@@ -2,7 +2,7 @@
 // them (programs gemm, im2col, col2im, norm, elementwise, mlp in host/src/runtime/programs.cpp), with the codes of
 // ngi::Activation and the exp cap as build options (activation_defines(), host/src/ops/op_types.hpp).
 #if !defined(ACT_NONE) || !defined(ACT_RELU) || !defined(ACT_LEAKY_RELU) || !defined(ACT_TANH) || \
-    !defined(ACT_SIGMOID) || !defined(ACT_EXP) || !defined(ACT_EXP_MAX)
+    !defined(ACT_SIGMOID) || !defined(ACT_EXP) || !defined(ACT_SOFTPLUS) || !defined(ACT_ERF) || !defined(ACT_EXP_MAX)
 #error "activation.cl needs the activation codes: build it with activation_defines() (host/src/ops/op_types.hpp)"
 #endif
 
@@ -35,6 +35,9 @@ static inline float ngi_activate(float x, int act, float alpha) {
         case ACT_TANH: return ngi_tanh(x);                   // saturates to +-1, never NaN for finite x
         case ACT_SIGMOID: return 1.0f / (1.0f + exp(-x));    // exp overflow -> inf -> 0, still finite
         case ACT_EXP: return exp(fmin(x, ACT_EXP_MAX));      // capped below FLT_MAX: never +Inf
+        // log(1 + e^x) as max(x, 0) + log1p(e^-|x|): no overflow for large x, no cancellation; +Inf -> +Inf
+        case ACT_SOFTPLUS: return fmax(x, 0.0f) + log1p(exp(-fabs(x)));
+        case ACT_ERF: return erf(x);                         // the built-in (OpenCL 1.2: within 16 ulp)
         default: return x;
     }
 }
@@ -58,6 +61,8 @@ static inline float ngi_activate(float x, int act, float alpha) {
             case ACT_TANH: return ngi_tanh_##SUFFIX(x);                                                       \
             case ACT_SIGMOID: return (T)(1.0f) / ((T)(1.0f) + exp(-x));                                       \
             case ACT_EXP: return exp(fmin(x, (T)(ACT_EXP_MAX)));                                              \
+            case ACT_SOFTPLUS: return fmax(x, (T)(0.0f)) + log1p(exp(-fabs(x)));                              \
+            case ACT_ERF: return erf(x);                                                                      \
             default: return x;                                                                                \
         }                                                                                                     \
     }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace ngi::ref {
@@ -15,6 +16,8 @@ inline double activate(double x, int act, double alpha) {
         case 3: return std::tanh(x);
         case 4: return 1.0 / (1.0 + std::exp(-x));
         case 5: return std::exp(std::min(x, 88.0));
+        case 6: return x > 30 ? x + std::log1p(std::exp(-x)) : std::log1p(std::exp(x));  // softplus, log(1 + e^x)
+        case 7: return std::erf(x);
         default: return x;
     }
 }
@@ -203,6 +206,37 @@ inline std::vector<double> set_pool(const std::vector<float>& x, int item_stride
             out[std::size_t(s) * channels + c] = count == 0 ? 0.0 : max ? acc : acc / count;
         }
     return out;
+}
+
+// 2D max pooling (ONNX MaxPool, ceil_mode 0, dilation 1) of planar x [C][H][W]: the input padded with -Inf (pt, pb
+// rows above and below, pl, pr columns left and right), then y[c][oy][ox] = the max of the KH x KW window at
+// (oy * SH, ox * SW) of the padded plane; NaN when the window holds a NaN (PyTorch's max_pool2d). OH and OW:
+// floor((H + pt + pb - KH) / SH) + 1 and the same across.
+inline std::vector<float> max_pool2d(const std::vector<float>& x, int C, int H, int W, int KH, int KW, int SH, int SW,
+                                     int pt, int pl, int pb, int pr, int& OH, int& OW) {
+    const int PH = H + pt + pb, PW = W + pl + pr;
+    OH = (PH - KH) / SH + 1;
+    OW = (PW - KW) / SW + 1;
+    std::vector<float> y(std::size_t(C) * OH * OW);
+    for (int c = 0; c < C; ++c) {
+        std::vector<float> padded(std::size_t(PH) * PW, -INFINITY);
+        for (int iy = 0; iy < H; ++iy)
+            for (int ix = 0; ix < W; ++ix)
+                padded[std::size_t(iy + pt) * PW + ix + pl] = x[(std::size_t(c) * H + iy) * W + ix];
+        for (int oy = 0; oy < OH; ++oy)
+            for (int ox = 0; ox < OW; ++ox) {
+                bool nan = false;
+                float best = -INFINITY;
+                for (int ky = 0; ky < KH; ++ky)
+                    for (int kx = 0; kx < KW; ++kx) {
+                        const float v = padded[std::size_t(oy * SH + ky) * PW + ox * SW + kx];
+                        nan = nan || std::isnan(v);
+                        if (!std::isnan(v)) best = std::max(best, v);
+                    }
+                y[(std::size_t(c) * OH + oy) * OW + ox] = nan ? std::numeric_limits<float>::quiet_NaN() : best;
+            }
+    }
+    return y;
 }
 
 }  // namespace ngi::ref

@@ -63,6 +63,10 @@ TEST_CASE("op harness: JBU, SH, set pooling, image gathering", "[op_harness]") {
     run_rows({"JointBilateralUpsample::", "ShEvaluate::", "SetPool::", "GatherImage::"}, false);
 }
 
+TEST_CASE("op harness: max pooling", "[op_harness]") {
+    run_rows({"MaxPool2d::"}, false);
+}
+
 TEST_CASE("op harness: probe shading and the light-transition function", "[op_harness]") {
     run_rows({"ProbeShade::", "VoxelLtf::"}, false);
 }
@@ -80,7 +84,8 @@ TEST_CASE("op harness: every op entry point has rows, a tiny one among them, and
         "Elementwise::sanitize + sanitized_count", "Elementwise::channel_affine", "Elementwise::add",
         "Elementwise::mul", "FusedMlp::enqueue", "DenseMlp::enqueue", "FrequencyEncodePlanar::enqueue",
         "JointBilateralUpsample::enqueue", "ShEvaluate::enqueue", "SetPool::pool", "SetPool::broadcast_concat",
-        "SetPool::pool_planar", "GatherImage::enqueue", "ProbeShade::enqueue", "VoxelLtf::run"};
+        "SetPool::pool_planar", "GatherImage::enqueue", "ProbeShade::enqueue", "VoxelLtf::run",
+        "MaxPool2d::enqueue"};
     std::set<std::string> with_rows, with_tiny;
     for (const OpCase& c : op_cases()) {
         with_rows.insert(c.op);

@@ -13,6 +13,7 @@
 #include "ops/gather_image.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/jbu.hpp"
+#include "ops/max_pool.hpp"
 #include "ops/mlp.hpp"
 #include "ops/norm.hpp"
 #include "ops/probe_shade.hpp"
@@ -660,6 +661,32 @@ Prepared pool_planar_case(Context& ctx, PoolMode mode, int channels, int ld, int
     return r;
 }
 
+// ---- max pooling ---------------------------------------------------------------------------------------------
+
+Prepared max_pool_case(Context& ctx, const MaxPoolGeometry& g, int C, int H, int W, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", C}, {"H", H}, {"W", W}, {"k", g.kh}, {"x", g.kw}, {"s", g.stride_h}, {"x", g.stride_w},
+                    {"pad t", g.pad_top}, {"l", g.pad_left}, {"b", g.pad_bottom}, {"r", g.pad_right}});
+    auto op = std::make_shared<MaxPool2d>(ctx, g);
+    const Shape in{C, H, W}, out = op->output_shape(in);
+    const auto x = uniform(in.size(), rng, -5.0f, 5.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, out.size());
+    r.flops = double(out.size()) * g.kh * g.kw;  // comparisons
+    r.bytes = 4.0 * (double(in.size()) + double(out.size()));
+    r.run = [=](Context& cx) { op->enqueue(cx, View{xb->mem(), xb->offset(), in}, View{yb->mem(), yb->offset(), out}); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp;
+        cmp.got = yb->read_floats(cx);
+        int oh = 0, ow = 0;
+        cmp.want = to_double(ref::max_pool2d(x, C, H, W, g.kh, g.kw, g.stride_h, g.stride_w, g.pad_top, g.pad_left,
+                                             g.pad_bottom, g.pad_right, oh, ow));
+        if (oh != out.h || ow != out.w) cmp.mismatch = "output shape differs from the reference's";
+        return cmp;
+    };
+    return r;
+}
+
 // ---- image gathering -----------------------------------------------------------------------------------------
 
 // n x n image under a layout: `format`, `channels` stored, interleaved (padded pixels and rows) or planar.
@@ -1055,7 +1082,7 @@ std::vector<OpCase> build_table() {
         [](Context& c, Size, std::mt19937& rng) { return batch_norm_case(c, true, Form::serial, 3, 5, 3, rng); });
 
     // Elementwise.
-    for (int a = 0; a <= 5; ++a)
+    for (int a = 0; a <= int(Activation::Erf); ++a)
         row("Elementwise::activate", to_string(Activation(a)), false, kTolActivate,
             [a](Context& c, Size z, std::mt19937& rng) { return activate_case(c, act_of(a), pick(z, 1031, 1 << 22), rng); });
     row("Elementwise::activate", "tiny tanh", true, kTolActivate,
@@ -1160,6 +1187,26 @@ std::vector<OpCase> build_table() {
         [](Context& c, Size z, std::mt19937& rng) { return broadcast_case(c, 5, 17, 9, pick(z, 150, 20000), rng); });
     row("SetPool::broadcast_concat", "tiny", true, kTolExact,
         [](Context& c, Size, std::mt19937& rng) { return broadcast_case(c, 2, 3, 4, 2, rng); });
+
+    // Max pooling (exact: every output is one of the inputs): odd sizes, asymmetric pads, stride above the kernel;
+    // perf at U-Net-sized planes.
+    const struct {
+        const char* name;
+        MaxPoolGeometry g;
+        int c, h, w, perf_c, perf_h, perf_w;
+        bool tiny;
+    } max_pools[] = {
+        {"k2 s2", {2, 2, 2, 2, 0, 0, 0, 0}, 7, 33, 47, 64, 256, 512, false},
+        {"k3 s2 p1", {3, 3, 2, 2, 1, 1, 1, 1}, 13, 37, 29, 64, 256, 512, false},
+        {"k5x3 s3x1, asymmetric pads", {5, 3, 3, 1, 4, 0, 1, 2}, 5, 23, 19, 32, 256, 256, false},
+        {"k2 s3, stride above the kernel", {2, 2, 3, 3, 0, 1, 1, 0}, 3, 17, 31, 32, 256, 256, false},
+        {"tiny k3 s2 p1", {3, 3, 2, 2, 1, 1, 1, 1}, 3, 5, 7, 0, 0, 0, true},
+    };
+    for (const auto& m : max_pools)
+        row("MaxPool2d::enqueue", m.name, m.tiny, kTolExact, [m](Context& c, Size z, std::mt19937& rng) {
+            const bool perf = z == Size::Perf && !m.tiny;
+            return max_pool_case(c, m.g, perf ? m.perf_c : m.c, perf ? m.perf_h : m.h, perf ? m.perf_w : m.w, rng);
+        });
 
     // Image gathering: each format, interleaved and planar, both row orders.
     const struct {

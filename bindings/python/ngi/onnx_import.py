@@ -15,9 +15,14 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Gemm, MatMul (weights constant) -> dense (a 1 x 1 convolution over the items)
   BatchNormalization (inference) -> folded into the convolution before it, else a per-channel affine
   Add, Sub, Mul, Div by a constant that varies along channels only (or not at all) -> affine (folded likewise)
-  Add, Mul of two computed tensors of one shape -> add, mul
-  Relu, LeakyRelu, Tanh, Sigmoid, Exp, Clip(min=0) -> activation (fused into the convolution before it, or into the
-                                                    convolutions that read it, where that is exact)
+  Add, Mul of two computed tensors of one shape -> add, mul; of a tensor and a [1, C, 1, 1] one (a global pool's
+                                    result and what 1 x 1 convolutions and activations make of it: squeeze-excitation)
+                                    -> add, mul with broadcast
+  Relu, LeakyRelu, Tanh, Sigmoid, Exp, Softplus, Erf (GELU's), Clip(min=0) -> activation (fused into the convolution
+                                    before it, or into the convolutions that read it, where that is exact)
+  MaxPool (ceil_mode 0, dilation 1, each pad below its kernel side) -> max_pool2d
+  GlobalAveragePool, ReduceMean over H and W (keepdims) -> global_avg_pool
+  InstanceNormalization          -> instance_norm
   Clip with other bounds (ReLU6)  -> x - relu(x - hi) + relu(lo - x) as affine, activation and add nodes
   PRelu with one slope            -> activation leaky_relu
   SpaceToDepth                    -> conv2d routing each block pixel to its channel (exact)
@@ -55,10 +60,12 @@ FLT_MIN = float(np.finfo(np.float32).tiny)  # the least normal float32
 # An ONNX file is one protobuf message, which cannot exceed 2 GiB (larger models keep their weights in external
 # data, which the importer refuses): the most _load reads.
 ONNX_MAX_BYTES = (2 << 30) - 1
-_ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp"}
+_ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigmoid": "sigmoid", "Exp": "exp",
+                "Softplus": "softplus", "Erf": "erf"}
 SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
-                 "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout", "Identity", "Constant",
-                 "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "PRelu",
+                 "Softplus", "Erf", "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout",
+                 "Identity", "Constant", "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "MaxPool",
+                 "GlobalAveragePool", "ReduceMean", "InstanceNormalization", "PRelu",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
 
@@ -263,6 +270,7 @@ class _Importer:
         self.zero_pads = {}  # a zero Pad's output -> (its input, [top, left, bottom, right]): folded into convolutions
         self.built_values = 0  # values of the kernels built so far (MAX_BUILT_WEIGHTS)
         self.channels = {self.input.name: self.input_nc}
+        self.unit = set()    # ngi tensors of one value a channel ([1, C, 1, 1]): a global pool's and what follows
         self.ir = []         # ngi nodes: dicts
         self.weights = {}    # tensor name -> float64 array
         self.done = set()    # ONNX node names consumed by a pattern
@@ -484,6 +492,8 @@ class _Importer:
             "in": cin, "out": cout, "kernel": [kh, kw], "stride": strides[0], "pad": pads[0],
             "weight": self.put_weight(key + ".weight", w),
             "bias": self.put_weight(key + ".bias", b) if b is not None else None})
+        if x in self.unit and not transpose and kh == kw == 1 and strides[0] == 1 and pads[0] == 0:
+            self.unit.add(node.output[0])  # a 1 x 1 layer keeps one value a channel
 
     def _ungroup(self, node, w, group, cin, transpose):
         """A grouped (or depthwise) convolution's weight as the dense one it equals: zero outside each group's
@@ -753,6 +763,8 @@ class _Importer:
         self.emit(node, "affine", [x], self.out(node, self.channels[x]),
                   scale=self.put_weight(key + ".scale", scale) if scale is not None else None,
                   shift=self.put_weight(key + ".shift", shift) if shift is not None else None)
+        if x in self.unit:
+            self.unit.add(node.output[0])
 
     def _binary(self, node, kind):
         a, b = node.input[0], node.input[1]
@@ -764,7 +776,13 @@ class _Importer:
             if self.channels[x] != self.channels[y]:
                 raise self.fail(node, f"combines {self.channels[x]} and {self.channels[y]} channels (no "
                                       "broadcasting between computed tensors)")
-            self.emit(node, kind.lower(), [x, y], self.out(node, self.channels[x]))
+            if x in self.unit and y not in self.unit:
+                x, y = y, x  # add and mul commute: the [1, C, 1, 1] operand second
+            broadcast = y in self.unit and x not in self.unit
+            out = self.out(node, self.channels[x])
+            self.emit(node, kind.lower(), [x, y], out, broadcast=True if broadcast else None)
+            if x in self.unit and y in self.unit:
+                self.unit.add(out)
             return
         if ca is not None and cb is not None:
             raise self.fail(node, "both operands are constants (constant folding was off at export?)")
@@ -799,6 +817,8 @@ class _Importer:
     def _activation(self, node, kind, slope=None):
         x = self.tensor(node, node.input[0])
         self.emit(node, "activation", [x], self.out(node, self.channels[x]), activation=kind, slope=slope)
+        if x in self.unit:
+            self.unit.add(node.output[0])
 
     def op_Relu(self, node, attrs):
         self._activation(node, "relu")
@@ -818,6 +838,80 @@ class _Importer:
 
     def op_Sigmoid(self, node, attrs):
         self._activation(node, "sigmoid")
+
+    def op_Softplus(self, node, attrs):
+        # ngi's softplus is max(x, 0) + log1p(exp(-|x|)): log(1 + e^x) without overflow.
+        self._activation(node, "softplus")
+
+    def op_Erf(self, node, attrs):
+        # GELU as PyTorch exports it (x / sqrt(2) -> Erf -> + 1 -> * x -> * 0.5) maps node by node.
+        self._activation(node, "erf")
+
+    def _spatial(self, node):
+        """The computed image input of a spatial op (refused on an [N, C] item list)."""
+        if self.layout == "nc":
+            raise self.fail(node, "a spatial op on an [N, C] item list (no H and W axes)")
+        return self.tensor(node, node.input[0])
+
+    def op_MaxPool(self, node, attrs):
+        if len(node.output) > 1 and node.output[1] and self.readers.get(node.output[1]):
+            raise self.fail(node, "its indices output is used; only the pooled values map")
+        x = self._spatial(node)
+        k = [int(v) for v in attrs.get("kernel_shape", [])]
+        strides = [int(v) for v in attrs.get("strides", [1, 1])]
+        auto_pad = _text(attrs.get("auto_pad", b"NOTSET"))
+        if auto_pad not in ("NOTSET", "VALID"):
+            raise self.fail(node, f"auto_pad {auto_pad}: give explicit pads")
+        pads = [int(v) for v in attrs.get("pads", [0, 0, 0, 0])] if auto_pad == "NOTSET" else [0, 0, 0, 0]
+        if len(k) != 2 or len(strides) != 2 or len(pads) != 4:
+            raise self.fail(node, f"kernel {k}, strides {strides}, pads {pads}: only 2-D pooling is supported")
+        if attrs.get("ceil_mode", 0) or any(int(d) != 1 for d in attrs.get("dilations", [1, 1])) \
+                or attrs.get("storage_order", 0):
+            raise self.fail(node, "ceil_mode 0, dilations 1 and storage_order 0 are supported")
+        if not all(1 <= v <= _constants.GRAPH_MAX_KERNEL for v in k) \
+                or not all(1 <= v <= _constants.GRAPH_MAX_STRIDE for v in strides) \
+                or not all(0 <= v <= _constants.GRAPH_MAX_PAD for v in pads):
+            raise self.fail(node, f"kernel {k}, strides {strides}, pads {pads}: beyond ngi's limits "
+                                  f"({_constants.GRAPH_MAX_KERNEL}, {_constants.GRAPH_MAX_STRIDE}, "
+                                  f"{_constants.GRAPH_MAX_PAD})")
+        if any(p >= k[s % 2] for s, p in enumerate(pads)):
+            raise self.fail(node, f"pads {pads} with kernel {k}: each pad must be below its kernel side (a window of "
+                                  "padding alone has no value)")
+        self.emit(node, "max_pool2d", [x], self.out(node, self.channels[x]), kernel=k, stride=strides, pads=pads)
+
+    def _global_mean(self, node):
+        x = self._spatial(node)
+        out = self.out(node, self.channels[x])
+        self.emit(node, "global_avg_pool", [x], out)
+        self.unit.add(out)
+
+    def op_GlobalAveragePool(self, node, attrs):
+        self._global_mean(node)
+
+    def op_ReduceMean(self, node, attrs):
+        # The mean over H and W with the axes kept (x.mean((2, 3), keepdim=True)): a global average pool.
+        if len(node.input) > 1 and node.input[1]:
+            raise self.fail(node, "axes as an input (opset 18) are not supported")
+        axes = sorted(int(a) % 4 for a in attrs.get("axes", []))
+        if self.layout == "nc" or axes != [2, 3] or not attrs.get("keepdims", 1):
+            raise self.fail(node, f"axes {list(attrs.get('axes', []))}, keepdims {attrs.get('keepdims', 1)}: only the "
+                                  "mean over H and W of an image with the axes kept maps (a global average pool)")
+        self._global_mean(node)
+
+    def op_InstanceNormalization(self, node, attrs):
+        x = self._spatial(node)
+        c = self.channels[x]
+        params = [self.const(n) if n else None for n in node.input[1:3]]
+        if len(params) != 2 or any(p is None for p in params):
+            raise self.fail(node, "scale and bias must be constants")
+        scale, bias = (np.asarray(p, np.float64).reshape(-1) for p in params)
+        if scale.shape != (c,) or bias.shape != (c,):
+            raise self.fail(node, f"scale and bias have {scale.size} and {bias.size} values, the input {c} channels")
+        eps = float(attrs.get("epsilon", 1e-5))
+        if not (0 < eps <= 1.0) or np.float32(eps) == 0 or not np.isfinite(np.float32(eps)):
+            raise self.fail(node, f"epsilon {eps}: ngi's instance_norm takes a positive float32 epsilon up to 1")
+        self.emit(node, "instance_norm", [x], self.out(node, c), eps=float(np.float32(eps)),
+                  scale=self.put_weight(node.name + ".scale", scale), shift=self.put_weight(node.name + ".shift", bias))
 
     def op_Exp(self, node, attrs):
         # ngi's exp is exp(min(x, 88)); a bare Exp differs only where x > 88 (float32 exp >= 1.6e38 there, inf
@@ -1205,7 +1299,9 @@ def _check_loader_limits(config, channels, path):
             raise ConversionError(f"{where}: {len(n['inputs'])} inputs; ngi takes at most {c.GRAPH_MAX_NODE_INPUTS}")
         limits = {"in": (1, c.GRAPH_MAX_CHANNELS), "out": (1, c.GRAPH_MAX_CHANNELS),
                   "stride": (1, c.GRAPH_MAX_STRIDE), "pad": (0, c.GRAPH_MAX_PAD)}
-        values = [(k, n[k]) for k in limits if k in n] + [("kernel", k) for k in n.get("kernel", [])]
+        # stride and pads are lists on max_pool2d ([h, w], [top, left, bottom, right]), numbers elsewhere
+        values = [(k, v) for k in limits if k in n for v in (n[k] if isinstance(n[k], list) else [n[k]])]
+        values += [("pad", v) for v in n.get("pads", [])] + [("kernel", k) for k in n.get("kernel", [])]
         for key, v in values:
             lo, hi = limits.get(key, (1, c.GRAPH_MAX_KERNEL))
             if not lo <= v <= hi:

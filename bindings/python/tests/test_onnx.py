@@ -153,10 +153,62 @@ class _DilatedGrouped(torch.nn.Module):
         return self.up(torch.relu(self.conv(torch.relu(self.dil(x)))))
 
 
+class _MaxPoolUnet(torch.nn.Module):
+    """OIDN's level: conv, 2 x 2 max pooling, conv, nearest upsampling, skip concatenation; and a ResNet stem's
+    3 x 3 / stride 2 / pad 1 max pooling (padding that must never win)."""
+
+    def __init__(self):
+        super().__init__()
+        self.enc = torch.nn.Conv2d(3, 6, 3, padding=1)
+        self.mid = torch.nn.Conv2d(6, 6, 3, padding=1)
+        self.dec = torch.nn.Conv2d(12, 3, 3, padding=1)
+
+    def forward(self, x):
+        e = torch.relu(self.enc(x))
+        m = torch.relu(self.mid(torch.nn.functional.max_pool2d(e, 2)))
+        u = torch.nn.functional.interpolate(m, scale_factor=2, mode="nearest")
+        y = self.dec(torch.cat([u, e], 1))
+        return torch.nn.functional.max_pool2d(y - 2.0, 3, stride=2, padding=1)
+
+
+class _SqueezeExcite(torch.nn.Module):
+    """torchvision's squeeze-excitation (global average pool, 1 x 1 convolutions, sigmoid gate multiplied in) and a
+    ReduceMean over H and W added back (x.mean((2, 3), keepdim=True))."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(4, 8, 3, padding=1)
+        self.fc1 = torch.nn.Conv2d(8, 2, 1)
+        self.fc2 = torch.nn.Conv2d(2, 8, 1)
+        self.out = torch.nn.Conv2d(8, 3, 1)
+
+    def forward(self, x):
+        y = torch.relu(self.conv(x))
+        s = torch.sigmoid(self.fc2(torch.relu(self.fc1(torch.nn.functional.adaptive_avg_pool2d(y, 1)))))
+        y = y * s
+        return self.out(y + y.mean((2, 3), keepdim=True))
+
+
+class _InstanceNormGelu(torch.nn.Module):
+    """Style-transfer / diffusion-style activations: instance normalization (affine), exact GELU (Erf), Softplus."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(3, 6, 3, padding=1)
+        self.norm = torch.nn.InstanceNorm2d(6, affine=True)
+        self.conv2 = torch.nn.Conv2d(6, 3, 3, padding=1)
+
+    def forward(self, x):
+        y = torch.nn.functional.gelu(self.norm(self.conv(x) * 3.0))
+        return torch.nn.functional.softplus(self.conv2(y) * 4.0)
+
+
 @pytest.mark.parametrize("opset", [13, 17])
 @pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("mobile_v2", _MobileV2Block, 4),
                                                 ("espcn", _Espcn, 3),
-                                                ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4)])
+                                                ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4),
+                                                ("maxpool_unet", _MaxPoolUnet, 3), ("squeeze_excite", _SqueezeExcite, 4),
+                                                ("instance_norm_gelu", _InstanceNormGelu, 3)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
     # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
@@ -478,14 +530,14 @@ def test_every_node_that_cannot_be_converted_is_named_in_one_error(tmp_path):
     # Issue 48: only the first unsupported node was reported. Now one error names each node that cannot be mapped
     # (op, name, why); nodes that read a failed node's output are not listed (they fail only because of it), and
     # nothing is written.
-    nodes = [helper.make_node("MaxPool", ["x"], ["p"], name="pool", kernel_shape=[2, 2], strides=[2, 2]),
+    nodes = [helper.make_node("LpPool", ["x"], ["p"], name="pool", kernel_shape=[2, 2], strides=[2, 2]),
              helper.make_node("Conv", ["p", "w"], ["c"], name="after_pool", pads=[1, 1, 1, 1]),
-             helper.make_node("Softplus", ["x"], ["s"], name="soft"),
+             helper.make_node("Elu", ["x"], ["s"], name="soft"),
              helper.make_node("Conv", ["x", "w"], ["g"], name="grouped", pads=[1, 1, 1, 1], group=2),
              helper.make_node("Concat", ["c", "s", "g"], ["y"], name="cat", axis=1)]
     data = small_model(nodes, [conv_weight()]).SerializeToString()
-    assert_refused(tmp_path, data, "bad.onnx: 3 nodes cannot be converted:", "node 'pool' (MaxPool): op MaxPool is not "
-                   "supported", "node 'soft' (Softplus): op Softplus is not supported", "node 'grouped' (Conv)",
+    assert_refused(tmp_path, data, "bad.onnx: 3 nodes cannot be converted:", "node 'pool' (LpPool): op LpPool is not "
+                   "supported", "node 'soft' (Elu): op Elu is not supported", "node 'grouped' (Conv)",
                    "(supported ops: Conv,")
     rc, err, _ = convert(tmp_path, data, "again")
     assert "after_pool" not in err and "'cat'" not in err
@@ -690,12 +742,55 @@ WEIGHT = {"c.weight": np.ones((3, 2, 3, 3), np.float32)}
     ([CONV, dict(CONV, name="c")], WEIGHT, "node 'c': a second node of this name"),
     ([CONV, dict(CONV, name="d")], WEIGHT, "node 'd' (conv2d): output 'y' is made a second time"),
     ([dict(CONV, stride=0)], WEIGHT, "node 'c' (conv2d): 'stride' must be an integer in 1..64"),
+    # Issue 48's new nodes.
+    ([{"name": "p", "op": "max_pool2d", "inputs": ["x"], "output": "y", "kernel": [2, 2], "stride": [2, 2],
+       "pads": [2, 0, 0, 0]}], {}, "node 'p' (max_pool2d): 'pads' must be [top, left, bottom, right]"),
+    ([{"name": "p", "op": "max_pool2d", "inputs": ["x"], "output": "y", "kernel": [2, 65], "stride": [2, 2],
+       "pads": [0, 0, 0, 0]}], {}, "node 'p' (max_pool2d): 'kernel' must be [h, w], integers in 1..64"),
+    ([{"name": "p", "op": "max_pool2d", "inputs": ["x"], "output": "y", "kernel": [2, 2], "stride": 2,
+       "pads": [0, 0, 0, 0]}], {}, "node 'p' (max_pool2d): 'stride' must be [h, w]"),
+    ([{"name": "g", "op": "global_avg_pool", "inputs": ["x"], "output": "y", "kernel": [2, 2]}], {},
+     "node 'g' (global_avg_pool): unknown field 'kernel'"),
+    ([{"name": "n", "op": "instance_norm", "inputs": ["x"], "output": "y", "scale": "s", "shift": "b", "eps": 0}],
+     {"s": np.ones(2, np.float32), "b": np.zeros(2, np.float32)}, "node 'n' (instance_norm): 'eps' must be a number"),
+    ([{"name": "n", "op": "instance_norm", "inputs": ["x"], "output": "y", "scale": "s", "eps": 1e-5}],
+     {"s": np.ones(2, np.float32)}, "node 'n' (instance_norm): 'shift' (a tensor name) is missing"),
+    ([{"name": "n", "op": "instance_norm", "inputs": ["x"], "output": "y", "scale": "s", "shift": "b", "eps": 1e-5}],
+     {"s": np.ones(3, np.float32), "b": np.zeros(2, np.float32)}, "tensor 's' (scale) is [3], expected [2]"),
+    ([{"name": "m", "op": "mul", "inputs": ["x", "x"], "output": "y", "broadcast": 1}], {},
+     "node 'm' (mul): 'broadcast' must be true or false"),
 ])
 def test_graph_loader_refuses_hostile_node_lists(dev, tmp_path, nodes, tensors, needle):
     path = graph_file(tmp_path, nodes, tensors)
     with pytest.raises(ngi.InputError, match=None) as info:
         ngi.Model(dev, path)
     assert needle in str(info.value)
+
+
+def test_broadcast_needs_one_value_a_channel_when_the_graph_is_built(dev, tmp_path):
+    # A 'broadcast' mul whose second input is not C x 1 x 1 is refused when the graph is built for a size, naming it.
+    nodes = [{"name": "m", "op": "mul", "inputs": ["x", "x"], "output": "y", "broadcast": True}]
+    model = ngi.Model(dev, graph_file(tmp_path, nodes, {}))
+    with pytest.raises(ngi.InputError, match=r"the second must be 2x1x1"):
+        model.run(np.ones((1, 2, 4, 4), np.float32))
+
+
+def test_new_pooling_and_normalization_refusals_name_the_node(tmp_path):
+    # MaxPool forms ngi does not run, a ReduceMean over other axes and an InstanceNormalization with computed
+    # parameters: one-line refusals, nothing written.
+    w = conv_weight()
+    cases = [
+        (helper.make_node("MaxPool", ["x"], ["y"], name="p", kernel_shape=[2, 2], ceil_mode=1), "ceil_mode 0"),
+        (helper.make_node("MaxPool", ["x"], ["y"], name="p", kernel_shape=[2, 2], pads=[2, 0, 0, 0]),
+         "each pad must be below its kernel side"),
+        (helper.make_node("MaxPool", ["x"], ["y"], name="p", kernel_shape=[2, 2], dilations=[2, 2]), "dilations 1"),
+        (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[1]), "only the mean over H and W"),
+        (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[2, 3], keepdims=0), "only the mean over H and W"),
+        (helper.make_node("InstanceNormalization", ["x", "x", "x"], ["y"], name="p"), "scale and bias must be constants"),
+    ]
+    for k, (node, needle) in enumerate(cases):
+        data = small_model([node], [w]).SerializeToString()
+        assert_refused(tmp_path, data, f"node 'p' ({node.op_type})", needle)
 
 
 def test_graph_loader_refuses_an_output_no_node_makes(dev, tmp_path):

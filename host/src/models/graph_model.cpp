@@ -8,6 +8,8 @@
 #include <set>
 
 #include "graph/nodes.hpp"
+#include "ops/max_pool.hpp"
+#include "ops/set_pool.hpp"
 #include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
 #include "models/unet.hpp"
@@ -75,6 +77,71 @@ private:
     bool mul_;
 };
 
+// y = x * s or x + s with s of shape C x 1 x 1 (a squeeze-excitation's channel weights): s is copied into the
+// scale (or shift) of a per-channel affine. Not in place (the affine kernel's input and output are restrict).
+class BroadcastNode : public Op {
+public:
+    BroadcastNode(Context& ctx, bool mul, int channels) : ew_(ctx), mul_(mul), channels_(channels) {
+        const std::vector<float> ones(std::size_t(channels), 1.0f), zeros(std::size_t(channels), 0.0f);
+        operand_ = ctx.alloc(std::size_t(channels) * sizeof(float), "graph broadcast operand");
+        fixed_ = ctx.alloc(std::size_t(channels) * sizeof(float), "graph broadcast identity");
+        ctx.write(fixed_, 0, std::size_t(channels) * sizeof(float), mul ? zeros.data() : ones.data(),
+                  "graph broadcast identity");
+    }
+    std::string kind() const override { return mul_ ? "mul (broadcast)" : "add (broadcast)"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        if (in.size() != 2) throw InputError(kind() + " takes two inputs");
+        if (in[0].c != channels_ || !(in[1] == Shape{channels_, 1, 1}))
+            throw InputError(kind() + ": the inputs are " + to_string(in[0]) + " and " + to_string(in[1]) +
+                             "; the second must be " + std::to_string(channels_) + "x1x1 (one value a channel)");
+        return in[0];
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        ctx.copy(in[1].mem, in[1].offset * sizeof(float), operand_.get(), 0, std::size_t(channels_) * sizeof(float),
+                 "graph broadcast operand");
+        const int n = in[0].shape.h * in[0].shape.w;
+        cl_event e = ew_.channel_affine(ctx, in[0].mem, in[0].offset, 1, n, channels_, n,
+                                        mul_ ? operand_.get() : fixed_.get(), mul_ ? fixed_.get() : operand_.get(),
+                                        out.mem, out.offset, ev != nullptr);
+        if (ev && e) ev->push_back(e);
+    }
+
+private:
+    Elementwise ew_;
+    bool mul_;
+    int channels_;
+    Buffer operand_, fixed_;
+};
+
+// ONNX MaxPool (ops/max_pool.hpp): padded cells never win.
+class MaxPoolNode : public Op {
+public:
+    MaxPoolNode(Context& ctx, const MaxPoolGeometry& g) : pool_(ctx, g) {}
+    std::string kind() const override { return "max_pool2d"; }
+    Shape infer(const std::vector<Shape>& in) const override { return pool_.output_shape(ConvNode::one(in)); }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        pool_.enqueue(ctx, in[0], out, ev);
+    }
+
+private:
+    MaxPool2d pool_;
+};
+
+// The mean of every channel over H x W: C x H x W -> C x 1 x 1 (ONNX GlobalAveragePool, ReduceMean over H and W).
+class GlobalAvgPoolNode : public Op {
+public:
+    explicit GlobalAvgPoolNode(Context& ctx) : pool_(ctx) {}
+    std::string kind() const override { return "global_avg_pool"; }
+    Shape infer(const std::vector<Shape>& in) const override { return {ConvNode::one(in).c, 1, 1}; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>*) override {
+        const int n = in[0].shape.h * in[0].shape.w;
+        pool_.pool_planar(ctx, in[0].mem, in[0].offset, in[0].shape.c, n, 0, n, PoolMode::Mean, out.mem, out.offset);
+    }
+
+private:
+    SetPool pool_;
+};
+
 // y[c] = scale[c] x[c] + shift[c] (a batch norm that follows no convolution, a Mul or Add by a constant).
 class AffineNode : public Op {
 public:
@@ -107,8 +174,9 @@ private:
 };
 
 const std::set<std::string> kOps = {"conv2d", "conv_transpose2d", "dense", "concat", "activation",
-                                    "affine", "add", "mul", "frequency_encode", "nan_to_num"};
-const std::set<std::string> kActivations = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp"};
+                                    "affine", "add", "mul", "frequency_encode", "nan_to_num",
+                                    "max_pool2d", "global_avg_pool", "instance_norm"};
+const std::set<std::string> kActivations = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp", "softplus", "erf"};
 
 bool is_int_in(const nlohmann::json& v, long long lo, long long hi) {
     if (!v.is_number_integer()) return false;
@@ -130,6 +198,8 @@ Act node_activation(const nlohmann::json& n, const char* key) {
     if (a == "tanh") return Act::tanh();
     if (a == "sigmoid") return Act::sigmoid();
     if (a == "exp") return Act::exp();
+    if (a == "softplus") return Act::softplus();
+    if (a == "erf") return Act::erf();
     return Act::none();
 }
 
@@ -177,7 +247,8 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
         label = "node '" + node.name + "' (" + node.op.substr(0, 80) + ")";
         if (!kOps.count(node.op))
             throw bad("op '" + node.op.substr(0, 80) + "' is not one of conv2d, conv_transpose2d, dense, concat, "
-                      "activation, affine, add, mul, frequency_encode, nan_to_num");
+                      "activation, affine, add, mul, frequency_encode, nan_to_num, max_pool2d, global_avg_pool, "
+                      "instance_norm");
         static const std::map<std::string, std::set<std::string>> kFields = {
             {"conv2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
             {"conv_transpose2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
@@ -185,10 +256,13 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             {"concat", {}},
             {"activation", {"activation", "slope"}},
             {"affine", {"scale", "shift"}},
-            {"add", {}},
-            {"mul", {}},
+            {"add", {"broadcast"}},
+            {"mul", {"broadcast"}},
             {"frequency_encode", {"encoding"}},
-            {"nan_to_num", {}}};
+            {"nan_to_num", {}},
+            {"max_pool2d", {"kernel", "stride", "pads"}},
+            {"global_avg_pool", {}},
+            {"instance_norm", {"scale", "shift", "eps"}}};
         const std::set<std::string>& allowed = kFields.at(node.op);
         for (auto it = n.begin(); it != n.end(); ++it) {
             const std::string& key = it.key();
@@ -221,7 +295,8 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
         for (const char* key : {"activation", "input_activation"}) {
             if (!n.contains(key)) continue;
             if (!n[key].is_string() || !kActivations.count(n[key].get<std::string>()))
-                throw bad(std::string("'") + key + "' must be one of none, relu, leaky_relu, tanh, sigmoid, exp");
+                throw bad(std::string("'") + key + "' must be one of none, relu, leaky_relu, tanh, sigmoid, exp, "
+                          "softplus, erf");
         }
         if (node.op == "activation" && !n.contains("activation")) throw bad("'activation' is missing");
         if (n.contains("slope")) {
@@ -267,9 +342,41 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
                                             std::to_string(kMaxChannels) + ")");
             node.out_channels = int(c);
         } else if (node.op == "add" || node.op == "mul") {
+            if (n.contains("broadcast") && !n["broadcast"].is_boolean()) throw bad("'broadcast' must be true or false");
             if (channels[node.inputs[1]] != cin)
                 throw bad("combines " + std::to_string(cin) + " and " + std::to_string(channels[node.inputs[1]]) +
-                          " channels (no broadcasting between computed tensors)");
+                          " channels (the second input may be one value a channel, 'broadcast', not fewer channels)");
+            if (nc && n.value("broadcast", false)) throw bad("layout \"nc\" has no spatial axes to broadcast over");
+            node.out_channels = cin;
+        } else if (node.op == "max_pool2d") {
+            if (nc) throw bad("layout \"nc\" has no spatial axes to pool");
+            auto pair = [&](const char* key, int lo, int hi) {
+                const std::string rule = std::string("'") + key + "' must be [h, w], integers in " + std::to_string(lo) +
+                                         ".." + std::to_string(hi);
+                if (!n.contains(key) || !n[key].is_array() || n[key].size() != 2 || !is_int_in(n[key][0], lo, hi) ||
+                    !is_int_in(n[key][1], lo, hi))
+                    throw bad(rule);
+                return std::pair<int, int>{n[key][0].get<int>(), n[key][1].get<int>()};
+            };
+            const auto [kh, kw] = pair("kernel", 1, kMaxKernel);
+            pair("stride", 1, kMaxStride);
+            const std::string rule = "'pads' must be [top, left, bottom, right], integers in 0.." +
+                                     std::to_string(kMaxPad) + ", each below its kernel side";
+            if (!n.contains("pads") || !n["pads"].is_array() || n["pads"].size() != 4) throw bad(rule);
+            for (int s = 0; s < 4; ++s)
+                if (!is_int_in(n["pads"][s], 0, kMaxPad) || n["pads"][s].get<int>() >= (s % 2 ? kw : kh)) throw bad(rule);
+            node.out_channels = cin;
+        } else if (node.op == "global_avg_pool") {
+            if (nc) throw bad("layout \"nc\" has no spatial axes to pool");
+            node.out_channels = cin;
+        } else if (node.op == "instance_norm") {
+            if (nc) throw bad("layout \"nc\" has no spatial axes to normalize over");
+            tensor_field("scale", true);
+            tensor_field("shift", true);
+            const nlohmann::json* eps = n.contains("eps") ? &n["eps"] : nullptr;
+            if (!eps || !eps->is_number() || !(eps->get<double>() > 0) || !(eps->get<double>() <= 1.0) ||
+                !float32_representable(eps->get<double>()) || !(float(eps->get<double>()) > 0.0f))
+                throw bad(std::string("'eps' must be a number in (0, 1] ") + kFloat32Rule);
             node.out_channels = cin;
         } else if (node.op == "affine") {
             tensor_field("scale", false);
@@ -390,7 +497,7 @@ std::vector<GraphNodeWeights> check_graph_weights(const GraphDesc& d, const Safe
         } else if (n.op == "dense") {
             w.w = weight(n, "weight", {cout, cin});
             w.b = weight(n, "bias", {cout});
-        } else if (n.op == "affine") {
+        } else if (n.op == "affine" || n.op == "instance_norm") {
             w.scale = weight(n, "scale", {cin});
             w.shift = weight(n, "shift", {cin});
         }
@@ -446,7 +553,22 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
                                                   w.shift ? w.shift->data : std::vector<float>(cin, 0.0f));
                 m.weight_bytes += 2 * std::size_t(cin) * sizeof(float);
             } else if (n.op == "add" || n.op == "mul") {
-                op = std::make_shared<BinaryNode>(ctx, n.op == "mul");
+                if (n.fields.value("broadcast", false))
+                    op = std::make_shared<BroadcastNode>(ctx, n.op == "mul", cin);
+                else
+                    op = std::make_shared<BinaryNode>(ctx, n.op == "mul");
+            } else if (n.op == "max_pool2d") {
+                const nlohmann::json& f = n.fields;
+                op = std::make_shared<MaxPoolNode>(
+                    ctx, MaxPoolGeometry{f["kernel"][0].get<int>(), f["kernel"][1].get<int>(), f["stride"][0].get<int>(),
+                                         f["stride"][1].get<int>(), f["pads"][0].get<int>(), f["pads"][1].get<int>(),
+                                         f["pads"][2].get<int>(), f["pads"][3].get<int>()});
+            } else if (n.op == "global_avg_pool") {
+                op = std::make_shared<GlobalAvgPoolNode>(ctx);
+            } else if (n.op == "instance_norm") {
+                op = std::make_shared<BatchNormNode>(ctx, cin, w.scale->data, w.shift->data,
+                                                     n.fields["eps"].get<float>(), Act::none());
+                m.weight_bytes += 2 * std::size_t(cin) * sizeof(float);
             } else if (n.op == "frequency_encode") {
                 ModelConfig e;
                 parse_encoding_fields(n.fields, e, "");

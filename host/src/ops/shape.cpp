@@ -10,6 +10,8 @@ std::string to_string(Activation a) {
         case Activation::Tanh: return "tanh";
         case Activation::Sigmoid: return "sigmoid";
         case Activation::Exp: return "exp";
+        case Activation::Softplus: return "softplus";
+        case Activation::Erf: return "erf";
     }
     return "unknown";
 }

@@ -15,6 +15,7 @@ const std::vector<ProgramSources>& programs() {
         {"elementwise", {"activation", "elementwise"}},
         {"mlp", {"activation", "mlp"}},
         {"set_pool", {"set_pool"}},
+        {"max_pool", {"max_pool"}},
         {"sh", {"sh_basis", "sh"}},
         {"probe_shade", {"sh_basis", "probe_shade"}},
         {"voxel_ltf", {"luminance", "voxel_ltf"}},
