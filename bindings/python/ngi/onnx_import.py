@@ -24,7 +24,7 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   GlobalAveragePool, ReduceMean over H and W (keepdims) -> global_avg_pool
   InstanceNormalization          -> instance_norm
   Clip with other bounds (ReLU6)  -> x - relu(x - hi) + relu(lo - x) as affine, activation and add nodes
-  PRelu with one slope            -> activation leaky_relu
+  PRelu with one slope            -> activation leaky_relu; with a slope per channel -> relu(x) - a relu(-x)
   SpaceToDepth                    -> conv2d routing each block pixel to its channel (exact)
   Clip(max=88) then Exp          -> activation exp (ngi's exp is exp(min(x, 88)))
   Concat (channel axis)          -> concat
@@ -293,6 +293,9 @@ class _Importer:
                 raise ConversionError(f"{self.path}: input '{value_info.name}' dimension {k} is {d.dim_value}; "
                                       "dimensions must be positive")
             dims.append(d.dim_value)
+        if len(dims) in (2, 4) and dims[1] > _constants.GRAPH_MAX_CHANNELS:
+            raise ConversionError(f"{self.path}: input '{value_info.name}' has {dims[1]} channels; ngi loads at most "
+                                  f"{_constants.GRAPH_MAX_CHANNELS}")
         if len(dims) == 4 and dims[0] == 1:
             return "nchw", dims[1], (dims[2], dims[3])
         if len(dims) == 2:
@@ -435,6 +438,10 @@ class _Importer:
         handler(node, attrs)
 
     def out(self, node, channels):
+        # Refused at once, not at the end with the loader's other limits: a per-channel constant of that many
+        # channels is built in float64 (2^31 channels took 16 GiB; the fuzzer found it).
+        if channels > _constants.GRAPH_MAX_CHANNELS:
+            raise self.fail(node, f"makes {channels} channels; ngi loads at most {_constants.GRAPH_MAX_CHANNELS}")
         self.channels[node.output[0]] = channels
         return node.output[0]
 
@@ -628,11 +635,30 @@ class _Importer:
         self._channel_copy(node, x, c * b * b, b, routes(), "conv2d", b, 0)
 
     def op_PRelu(self, node, attrs):
-        # One slope for every channel (nn.PReLU() as exported): a leaky ReLU. Per-channel slopes are not supported.
+        # One slope for every channel (nn.PReLU() as exported): a leaky ReLU. A slope per channel
+        # (nn.PReLU(num_parameters=C)): relu(x) - a relu(-x) as activation, affine and add nodes -- exactly x where
+        # x > 0 (x + -0) and a x where x < 0 (one rounding, as a x itself).
         slope = self.const(node.input[1]) if len(node.input) > 1 else None
-        if slope is None or np.unique(np.asarray(slope, np.float64)).size != 1:
-            raise self.fail(node, "only one constant slope for every channel is supported (nn.PReLU(num_parameters=1))")
-        self._leaky_relu(node, float(np.float32(np.asarray(slope).reshape(-1)[0])))
+        if slope is None:
+            raise self.fail(node, "the slope must be a constant")
+        if np.unique(np.asarray(slope, np.float64)).size == 1:
+            self._leaky_relu(node, float(np.float32(np.asarray(slope).reshape(-1)[0])))
+            return
+        x = self.tensor(node, node.input[0])
+        c = self.channels[x]
+        a = self.per_channel(node, slope, c, "the slope")
+        names = {tag: f"{node.output[0]}/{tag}" for tag in ("positive", "negated", "negative_part", "scaled")}
+        for tag, op, inputs, fields in (
+                ("positive", "activation", [x], {"activation": "relu"}),
+                ("negated", "affine", [x], {"scale": -np.ones(c)}),
+                ("negative_part", "activation", [names["negated"]], {"activation": "relu"}),
+                ("scaled", "affine", [names["negative_part"]], {"scale": -a})):
+            entry = {"name": f"{node.name}/{tag}", "op": op, "inputs": inputs, "output": names[tag]}
+            for k, v in fields.items():
+                entry[k] = self.put_weight(f"{node.name}/{tag}.{k}", v) if k == "scale" else v
+            self.ir.append(entry)
+            self.channels[names[tag]] = c
+        self.emit(node, "add", [names["positive"], names["scaled"]], self.out(node, c))
 
     def op_Resize(self, node, attrs):
         # Nearest upsampling by an integer factor (what F.interpolate(scale_factor=s) exports): each pixel copied to an

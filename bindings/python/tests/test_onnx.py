@@ -22,7 +22,7 @@ from ngi.model_file import write_model
 onnx = pytest.importorskip("onnx", reason="ONNX import needs Debian's python3-onnx (tools/install-deps.sh)")
 torch = pytest.importorskip("torch")
 
-from onnx import TensorProto, helper  # noqa: E402
+from onnx import TensorProto, helper, numpy_helper  # noqa: E402
 
 from ngi import neural_gi as ngi_net  # noqa: E402
 from ngi.reference_models import ao_mlp, build_generator  # noqa: E402
@@ -203,12 +203,28 @@ class _InstanceNormGelu(torch.nn.Module):
         return torch.nn.functional.softplus(self.conv2(y) * 4.0)
 
 
+class _PReluPerChannel(torch.nn.Module):
+    """A PReLU with a slope per channel (SRGAN / EDSR-style bodies), slopes on both sides of 0 and above 1."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(3, 6, 3, padding=1)
+        self.act = torch.nn.PReLU(6)
+        self.out = torch.nn.Conv2d(6, 3, 3, padding=1)
+        with torch.no_grad():
+            self.act.weight.copy_(torch.tensor([0.25, -0.5, 0.0, 1.5, 0.01, -1.0]))
+
+    def forward(self, x):
+        return self.out(self.act(self.conv(x)))
+
+
 @pytest.mark.parametrize("opset", [13, 17])
 @pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("mobile_v2", _MobileV2Block, 4),
                                                 ("espcn", _Espcn, 3),
                                                 ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4),
                                                 ("maxpool_unet", _MaxPoolUnet, 3), ("squeeze_excite", _SqueezeExcite, 4),
-                                                ("instance_norm_gelu", _InstanceNormGelu, 3)])
+                                                ("instance_norm_gelu", _InstanceNormGelu, 3),
+                                                ("prelu_per_channel", _PReluPerChannel, 3)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
     # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
@@ -773,6 +789,22 @@ def test_broadcast_needs_one_value_a_channel_when_the_graph_is_built(dev, tmp_pa
     model = ngi.Model(dev, graph_file(tmp_path, nodes, {}))
     with pytest.raises(ngi.InputError, match=r"the second must be 2x1x1"):
         model.run(np.ones((1, 2, 4, 4), np.float32))
+
+
+def test_channel_counts_beyond_the_loader_are_refused_before_anything_is_built(tmp_path):
+    # Found by the fuzzer (2026-12-07): an input of 2^31 - 1 channels multiplied by a constant built the per-channel
+    # constant in float64 first (16 GiB, minutes) and was refused by the loader's limits only at the end. Now the
+    # input, and any node making more channels than the loader takes (a concat), is refused at once.
+    import time
+    scale = numpy_helper.from_array(np.array(2.0, np.float32), "s")
+    start = time.monotonic()
+    data = small_model([helper.make_node("Mul", ["x", "s"], ["y"], name="m")], [scale],
+                       input_dims=(1, 2**31 - 1, 8, 8)).SerializeToString()
+    assert_refused(tmp_path, data, "input 'x' has 2147483647 channels; ngi loads at most 65536")
+    data = small_model([helper.make_node("Concat", ["x", "x", "x"], ["y"], name="cat", axis=1)],
+                       input_dims=(1, 40000, 1, 1)).SerializeToString()
+    assert_refused(tmp_path, data, "node 'cat' (Concat): makes 120000 channels; ngi loads at most 65536")
+    assert time.monotonic() - start < 30
 
 
 def test_new_pooling_and_normalization_refusals_name_the_node(tmp_path):
