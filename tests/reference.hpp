@@ -239,4 +239,83 @@ inline std::vector<float> max_pool2d(const std::vector<float>& x, int C, int H, 
     return y;
 }
 
+// 2D padding (ONNX Pad over H and W, PyTorch F.pad) of planar x [C][H][W] to [C][H + pt + pb][W + pl + pr]: the
+// padded plane at (py, px) is x at (py - pt, px - pl) inside the input; outside it, mode 0 (constant) is `value`,
+// mode 1 (reflect) the mirror image about the edge pixel, not repeating it (x[-k] = x[k], x[H - 1 + k] =
+// x[H - 1 - k]; pads below the axis' size), mode 2 (edge) the nearest pixel of the input.
+inline std::vector<float> pad2d(const std::vector<float>& x, int C, int H, int W, int pt, int pl, int pb, int pr,
+                                int mode, float value) {
+    const int OH = H + pt + pb, OW = W + pl + pr;
+    // The input index a padded index reads along an axis of n pixels, -1 for the constant.
+    auto source = [mode](int i, int n) {
+        if (i >= 0 && i < n) return i;
+        if (mode == 0) return -1;
+        if (mode == 2) return i < 0 ? 0 : n - 1;
+        return i < 0 ? -i : (n - 1) - (i - (n - 1));  // reflect: k before the first reads k, k past the last n-1-k
+    };
+    std::vector<float> y(std::size_t(C) * OH * OW);
+    for (int c = 0; c < C; ++c)
+        for (int oy = 0; oy < OH; ++oy)
+            for (int ox = 0; ox < OW; ++ox) {
+                const int iy = source(oy - pt, H), ix = source(ox - pl, W);
+                y[(std::size_t(c) * OH + oy) * OW + ox] =
+                    iy < 0 || ix < 0 ? value : x[(std::size_t(c) * H + iy) * W + ix];
+            }
+    return y;
+}
+
+// Bilinear resize (ONNX Resize, mode linear; PyTorch F.interpolate bilinear) of planar x [C][H][W] to [C][OH][OW],
+// in double. Along an axis of `in` input and `out` output pixels, output coordinate o reads the source position
+// s(o) of the coordinate transformation mode: 0 half_pixel (o + 1/2) / scale - 1/2; 1 pytorch_half_pixel, the same
+// but 0 when out = 1; 2 align_corners o (in - 1) / (out - 1), 0 when out = 1; 3 asymmetric o / scale. A scale of 0
+// stands for out / in (then o / scale is written o in / out, exact at integers). Taps and weights, PyTorch's
+// (aten UpSample.h, compute_source_index_and_lambda): an axis with out = in and s(o) = o reads pixel o alone
+// (weights 1, 0 on it twice); otherwise s is clamped below at 0, i0 = min(floor(s), in - 1), lambda = min(s - i0,
+// 1), i1 = i0 + 1 below the last pixel, else i0. y = sum over the 2 x 2 taps of w_row w_col x, every product taken,
+// so a NaN tap gives NaN and an infinite tap with weight 0 gives NaN (0 * Inf). Unrounded: doubles out.
+inline std::vector<double> resize_bilinear(const std::vector<float>& x, int C, int H, int W, int OH, int OW,
+                                           double scale_h, double scale_w, int mode) {
+    struct Tap {
+        int i0, i1;
+        double lambda;
+    };
+    auto taps = [mode](int in, int out, double scale) {
+        auto position = [&](int o) -> double {
+            if ((mode == 1 || mode == 2) && out == 1) return 0.0;
+            if (mode == 2) return double(o) * (in - 1) / (out - 1);
+            if (mode == 3) return scale > 0 ? o / scale : double(o) * in / out;
+            return scale > 0 ? (o + 0.5) / scale - 0.5 : (o + 0.5) * in / out - 0.5;
+        };
+        bool unchanged = out == in;
+        for (int o = 0; o < out && unchanged; ++o) unchanged = position(o) == o;
+        std::vector<Tap> t(out);
+        for (int o = 0; o < out; ++o) {
+            if (unchanged) {
+                t[o] = {o, o, 0.0};
+                continue;
+            }
+            const double s = std::max(position(o), 0.0);
+            const int i0 = int(std::min(std::floor(s), double(in - 1)));
+            t[o] = {i0, i0 < in - 1 ? i0 + 1 : i0, std::min(s - i0, 1.0)};
+        }
+        return t;
+    };
+    const std::vector<Tap> ty = taps(H, OH, scale_h), tx = taps(W, OW, scale_w);
+    std::vector<double> y(std::size_t(C) * OH * OW);
+    for (int c = 0; c < C; ++c)
+        for (int oy = 0; oy < OH; ++oy)
+            for (int ox = 0; ox < OW; ++ox) {
+                const int rows[2] = {ty[oy].i0, ty[oy].i1}, cols[2] = {tx[ox].i0, tx[ox].i1};
+                const double wr[2] = {1.0 - ty[oy].lambda, ty[oy].lambda}, wc[2] = {1.0 - tx[ox].lambda, tx[ox].lambda};
+                double sum = 0.0;
+                for (int r = 0; r < 2; ++r) {
+                    double row = 0.0;
+                    for (int k = 0; k < 2; ++k) row += wc[k] * double(x[(std::size_t(c) * H + rows[r]) * W + cols[k]]);
+                    sum += wr[r] * row;
+                }
+                y[(std::size_t(c) * OH + oy) * OW + ox] = sum;
+            }
+    return y;
+}
+
 }  // namespace ngi::ref

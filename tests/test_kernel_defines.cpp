@@ -55,6 +55,8 @@ TEST_CASE("kernel defines: every kernel file that needs host constants refuses t
         {"mlp", "mlp_fused", "mlp_defines"},
         {"jbu", "jbu_upsample", "JBU_MAX_RADIUS"},
         {"max_pool", "max_pool2d", "MAX_POOL_LOCAL"},
+        {"pad2d", "pad2d", "PAD2D_LOCAL"},
+        {"resize", "resize_bilinear", "RESIZE_LOCAL"},
         {"voxel_ltf", "ltf_energy", "LTF_R_MIN"},
         {"voxel_ltf", "ltf_energy", "luminance_defines"},  // luminance.cl, listed before voxel_ltf.cl
         {"probe_shade", "probe_shade", "probe_shade_defines"},

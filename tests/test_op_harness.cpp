@@ -67,6 +67,10 @@ TEST_CASE("op harness: max pooling", "[op_harness]") {
     run_rows({"MaxPool2d::"}, false);
 }
 
+TEST_CASE("op harness: padding and bilinear resize", "[op_harness]") {
+    run_rows({"Pad2d::", "ResizeBilinear::"}, false);
+}
+
 TEST_CASE("op harness: probe shading and the light-transition function", "[op_harness]") {
     run_rows({"ProbeShade::", "VoxelLtf::"}, false);
 }
@@ -85,7 +89,7 @@ TEST_CASE("op harness: every op entry point has rows, a tiny one among them, and
         "Elementwise::mul", "FusedMlp::enqueue", "DenseMlp::enqueue", "FrequencyEncodePlanar::enqueue",
         "JointBilateralUpsample::enqueue", "ShEvaluate::enqueue", "SetPool::pool", "SetPool::broadcast_concat",
         "SetPool::pool_planar", "GatherImage::enqueue", "ProbeShade::enqueue", "VoxelLtf::run",
-        "MaxPool2d::enqueue"};
+        "MaxPool2d::enqueue", "Pad2d::enqueue", "ResizeBilinear::enqueue"};
     std::set<std::string> with_rows, with_tiny;
     for (const OpCase& c : op_cases()) {
         with_rows.insert(c.op);

@@ -16,7 +16,9 @@
 #include "ops/max_pool.hpp"
 #include "ops/mlp.hpp"
 #include "ops/norm.hpp"
+#include "ops/pad2d.hpp"
 #include "ops/probe_shade.hpp"
+#include "ops/resize.hpp"
 #include "ops/set_pool.hpp"
 #include "ops/sh.hpp"
 #include "ops/voxel_ltf.hpp"
@@ -687,6 +689,50 @@ Prepared max_pool_case(Context& ctx, const MaxPoolGeometry& g, int C, int H, int
     return r;
 }
 
+// ---- padding and resizing ------------------------------------------------------------------------------------
+
+Prepared pad_case(Context& ctx, const PadGeometry& g, int C, int H, int W, std::mt19937& rng) {
+    Prepared r;
+    r.shape = dims({{"C", C}, {"H", H}, {"W", W}, {"pad t", g.top}, {"l", g.left}, {"b", g.bottom}, {"r", g.right}}) +
+              " " + pad_mode_name(g.mode);
+    auto op = std::make_shared<Pad2d>(ctx, g);
+    const Shape in{C, H, W}, out = op->output_shape(in);
+    const auto x = uniform(in.size(), rng, -5.0f, 5.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, out.size());
+    r.bytes = 4.0 * (double(in.size()) + double(out.size()));
+    r.run = [=](Context& cx) { op->enqueue(cx, View{xb->mem(), xb->offset(), in}, View{yb->mem(), yb->offset(), out}); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp;
+        cmp.got = yb->read_floats(cx);
+        cmp.want = to_double(ref::pad2d(x, C, H, W, g.top, g.left, g.bottom, g.right, int(g.mode), g.value));
+        return cmp;
+    };
+    return r;
+}
+
+Prepared resize_case(Context& ctx, const ResizeGeometry& g, int C, int H, int W, std::mt19937& rng) {
+    Prepared r;
+    std::ostringstream scales;
+    scales << " scales " << g.scale_h << " x " << g.scale_w << " " << resize_coord_name(g.mode);
+    r.shape = dims({{"C", C}, {"H", H}, {"W", W}, {"OH", g.out_h}, {"OW", g.out_w}}) + scales.str();
+    auto op = std::make_shared<ResizeBilinear>(ctx, g);
+    const Shape in{C, H, W}, out = op->output_shape(in);
+    const auto x = uniform(in.size(), rng, -5.0f, 5.0f);
+    auto xb = add(ctx, r, "x", Role::Input, x);
+    auto yb = add_out(ctx, r, "y", Role::Output, out.size());
+    r.flops = 9.0 * double(out.size());  // 6 multiplies and 3 adds per output
+    r.bytes = 4.0 * (double(in.size()) + double(out.size()));
+    r.run = [=](Context& cx) { op->enqueue(cx, View{xb->mem(), xb->offset(), in}, View{yb->mem(), yb->offset(), out}); };
+    r.compare = [=](Context& cx) {
+        Comparison cmp;
+        cmp.got = yb->read_floats(cx);
+        cmp.want = ref::resize_bilinear(x, C, H, W, g.out_h, g.out_w, g.scale_h, g.scale_w, int(g.mode));
+        return cmp;
+    };
+    return r;
+}
+
 // ---- image gathering -----------------------------------------------------------------------------------------
 
 // n x n image under a layout: `format`, `channels` stored, interleaved (padded pixels and rows) or planar.
@@ -950,6 +996,10 @@ constexpr double kTolGather = 1e-6;
 constexpr double kTolProbe = 1e-6;
 // Light-transition function: fp32 sums over V = 97 senders per bounce, 2 bounces; worst 3.5e-7 (physical, tiled).
 constexpr double kTolLtf = 2e-6;
+// Bilinear resize: exact source positions, float weights (one division each) and three lerps; worst 1.2e-7
+// (asymmetric 7 -> 3, 9 -> 20, PoCL). tests/test_resize.cpp claims 1e-6 of max |x| (its derivation there; its
+// cases reach 2.3e-7 on PoCL and rusticl).
+constexpr double kTolResize = 1e-6;
 
 int pick(Size size, int test, int perf) { return size == Size::Perf ? perf : test; }
 
@@ -1206,6 +1256,51 @@ std::vector<OpCase> build_table() {
         row("MaxPool2d::enqueue", m.name, m.tiny, kTolExact, [m](Context& c, Size z, std::mt19937& rng) {
             const bool perf = z == Size::Perf && !m.tiny;
             return max_pool_case(c, m.g, perf ? m.perf_c : m.c, perf ? m.perf_h : m.h, perf ? m.perf_w : m.w, rng);
+        });
+
+    // Padding (exact: copies and the constant): each mode, odd sizes, asymmetric pads; perf at U-Net-sized planes.
+    const struct {
+        const char* name;
+        PadGeometry g;
+        int c, h, w, perf_c, perf_h, perf_w;
+        bool tiny;
+    } pads[] = {
+        {"constant, asymmetric", {1, 2, 3, 0, PadMode::Constant, -0.5f}, 7, 33, 47, 64, 256, 512, false},
+        {"reflect, largest pads", {12, 16, 12, 16, PadMode::Reflect, 0.0f}, 5, 13, 17, 32, 256, 256, false},
+        {"edge, one side", {0, 0, 9, 4, PadMode::Edge, 0.0f}, 13, 29, 37, 64, 256, 512, false},
+        {"tiny reflect", {2, 1, 1, 3, PadMode::Reflect, 0.0f}, 3, 5, 7, 0, 0, 0, true},
+    };
+    for (const auto& m : pads)
+        row("Pad2d::enqueue", m.name, m.tiny, kTolExact, [m](Context& c, Size z, std::mt19937& rng) {
+            const bool perf = z == Size::Perf && !m.tiny;
+            return pad_case(c, m.g, perf ? m.perf_c : m.c, perf ? m.perf_h : m.h, perf ? m.perf_w : m.w, rng);
+        });
+
+    // Bilinear resize: each coordinate mode, up and down by non-integer factors, explicit scales; perf at a U-Net
+    // decoder's x2.
+    const struct {
+        const char* name;
+        ResizeGeometry g;
+        int c, h, w;
+        ResizeGeometry perf_g;
+        int perf_c, perf_h, perf_w;
+        bool tiny;
+    } resizes[] = {
+        {"half_pixel x2", {34, 46, 0, 0, ResizeCoord::HalfPixel}, 7, 17, 23,
+         {256, 512, 0, 0, ResizeCoord::HalfPixel}, 64, 128, 256, false},
+        {"align_corners 5 -> 7, 37 -> 11", {7, 11, 0, 0, ResizeCoord::AlignCorners}, 13, 5, 37,
+         {256, 512, 0, 0, ResizeCoord::AlignCorners}, 64, 128, 256, false},
+        {"asymmetric 7 -> 3, 9 -> 20", {3, 20, 0, 0, ResizeCoord::Asymmetric}, 5, 7, 9,
+         {128, 256, 0, 0, ResizeCoord::Asymmetric}, 64, 256, 512, false},
+        {"pytorch_half_pixel, explicit scales", {11, 6, 1.7f, 0.6f, ResizeCoord::PytorchHalfPixel}, 3, 7, 11,
+         {435, 307, 1.7f, 0.6f, ResizeCoord::PytorchHalfPixel}, 32, 256, 512, false},
+        {"tiny half_pixel 3x5 -> 5x2", {5, 2, 0, 0, ResizeCoord::HalfPixel}, 2, 3, 5, {}, 0, 0, 0, true},
+    };
+    for (const auto& m : resizes)
+        row("ResizeBilinear::enqueue", m.name, m.tiny, kTolResize, [m](Context& c, Size z, std::mt19937& rng) {
+            const bool perf = z == Size::Perf && !m.tiny;
+            return resize_case(c, perf ? m.perf_g : m.g, perf ? m.perf_c : m.c, perf ? m.perf_h : m.h,
+                               perf ? m.perf_w : m.w, rng);
         });
 
     // Image gathering: each format, interleaved and planar, both row orders.

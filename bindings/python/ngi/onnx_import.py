@@ -9,6 +9,8 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
                                     dilated kernels expanded to the dense kernel they equal (zeros outside the groups
                                     and between the taps: exact, at group x the multiply-adds)
   Pad (zeros, H and W) read only by Conv -> the convolutions' padding
+  Pad (reflect, edge, a constant, or zeros read by other nodes) -> pad2d
+  Resize (linear = bilinear, by constant scales)            -> resize_bilinear
   DepthToSpace (DCR, CRD: PixelShuffle), Resize (nearest, one integer factor), AveragePool (square kernel; padding
                                     only with count_include_pad) -> conv2d / conv_transpose2d whose kernel copies or
                                     averages each channel (exact up to float summation order)
@@ -23,6 +25,7 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   MaxPool (ceil_mode 0, dilation 1, each pad below its kernel side) -> max_pool2d
   GlobalAveragePool, ReduceMean over H and W (keepdims) -> global_avg_pool
   InstanceNormalization          -> instance_norm
+  Reshape [0, G, -1] + InstanceNormalization + Reshape(Shape(x)) (GroupNorm as PyTorch exports it) -> group_norm
   Clip with other bounds (ReLU6)  -> x - relu(x - hi) + relu(lo - x) as affine, activation and add nodes
   PRelu with one slope            -> activation leaky_relu; with a slope per channel -> relu(x) - a relu(-x)
   SpaceToDepth                    -> conv2d routing each block pixel to its channel (exact)
@@ -65,7 +68,8 @@ _ACTIVATIONS = {"Relu": "relu", "LeakyRelu": "leaky_relu", "Tanh": "tanh", "Sigm
 SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRelu", "Tanh", "Sigmoid", "Exp",
                  "Softplus", "Erf", "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout",
                  "Identity", "Constant", "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "MaxPool",
-                 "GlobalAveragePool", "ReduceMean", "InstanceNormalization", "PRelu",
+                 "GlobalAveragePool", "ReduceMean", "InstanceNormalization", "PRelu", "ConstantOfShape", "Reshape",
+                 "Slice", "Transpose", "Unsqueeze", "Squeeze", "Shape",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
 
@@ -84,6 +88,75 @@ def _onnx():
 # --------------------------------------------------------------------------
 
 _DTYPES = {1: np.float32, 10: np.float16, 11: np.float64, 7: np.int64, 6: np.int32, 9: np.bool_}
+
+
+# Shape arithmetic exporters write between constants (F.pad's pads at opset 13: ConstantOfShape, Concat, Reshape,
+# Slice, Transpose, Cast): folded into the constant it makes when every input is a constant. Bounded: at most
+# _FOLD_MAX_VALUES values a result and _FOLD_MAX_DEPTH producers deep, else the node stays unfolded (and is refused
+# where it is read).
+_FOLDABLE = ("ConstantOfShape", "Concat", "Reshape", "Slice", "Transpose", "Cast", "Unsqueeze", "Squeeze")
+_FOLD_MAX_VALUES = 1 << 16
+_FOLD_MAX_DEPTH = 64
+_CAST_TYPES = {1: np.float32, 6: np.int32, 7: np.int64, 9: np.bool_, 10: np.float16, 11: np.float64}
+
+
+def _fold(node, attrs, inputs, opset):
+    """The constant `node` makes from the constant `inputs` (np arrays, None for an absent optional input), or None
+    when it is not a shape computation this folds."""
+    op = node.op_type
+    ints = lambda v: [int(i) for i in np.asarray(v).reshape(-1)]  # noqa: E731
+    if op == "ConstantOfShape":
+        shape = ints(inputs[0])
+        if any(d < 0 for d in shape) or np.prod(shape, dtype=np.float64) > _FOLD_MAX_VALUES:
+            return None
+        fill = attrs.get("value")
+        if fill is not None and np.asarray(fill).size != 1:
+            return None
+        return np.zeros(shape, np.float32) if fill is None else np.full(shape, np.asarray(fill).reshape(-1)[0])
+    if op == "Concat":
+        return np.concatenate([np.asarray(v) for v in inputs], axis=int(attrs.get("axis", 0)))
+    if op == "Reshape":
+        shape, data = ints(inputs[1]), np.asarray(inputs[0])
+        if attrs.get("allowzero", 0) == 0:
+            shape = [data.shape[k] if d == 0 and k < data.ndim else d for k, d in enumerate(shape)]
+        return data.reshape(shape)
+    if op == "Transpose":
+        perm = attrs.get("perm")
+        return np.transpose(np.asarray(inputs[0]), None if perm is None else [int(p) for p in perm])
+    if op == "Cast":
+        to = _CAST_TYPES.get(int(attrs.get("to", 0)))
+        return None if to is None else np.asarray(inputs[0]).astype(to)
+    if op == "Slice":
+        data = np.asarray(inputs[0])
+        if opset < 10:
+            starts, ends, axes, steps = attrs.get("starts"), attrs.get("ends"), attrs.get("axes"), None
+        else:
+            starts, ends = inputs[1], inputs[2]
+            axes = inputs[3] if len(inputs) > 3 else None
+            steps = inputs[4] if len(inputs) > 4 else None
+        starts, ends = ints(starts), ints(ends)
+        axes = list(range(len(starts))) if axes is None else ints(axes)
+        steps = [1] * len(starts) if steps is None else ints(steps)
+        if not len(starts) == len(ends) == len(axes) == len(steps) or 0 in steps:
+            return None
+        index = [slice(None)] * data.ndim
+        for s, e, a, st in zip(starts, ends, axes, steps):
+            clip = lambda v: max(min(v, 2**62), -2**62)  # noqa: E731 (INT64_MAX / MIN as "to the end")
+            index[a] = slice(clip(s), clip(e), st)
+        return data[tuple(index)]
+    if op in ("Unsqueeze", "Squeeze"):
+        data = np.asarray(inputs[0])
+        axes = attrs.get("axes") if opset < 13 else (inputs[1] if len(inputs) > 1 else None)
+        if axes is None:
+            return np.squeeze(data) if op == "Squeeze" else None
+        axes = ints(axes)
+        if op == "Squeeze":
+            return np.squeeze(data, axis=tuple(axes))
+        out = data
+        for a in sorted(a % (data.ndim + len(axes)) for a in axes):
+            out = np.expand_dims(out, a)
+        return out
+    return None
 
 
 def _tensor_array(onnx, t, what, path):
@@ -274,6 +347,7 @@ class _Importer:
         self.ir = []         # ngi nodes: dicts
         self.weights = {}    # tensor name -> float64 array
         self.done = set()    # ONNX node names consumed by a pattern
+        self.fold_depth = 0  # producers being folded (const()), bounded by _FOLD_MAX_DEPTH
 
     def fail(self, node, message):
         return ConversionError(f"{self.path}: node '{node.name}' ({node.op_type}): {message}")
@@ -325,6 +399,29 @@ class _Importer:
                 self.consts[name] = value
                 self.done.add(node.name)
             return value
+        if node.op_type in _FOLDABLE and len(node.output) == 1:
+            if self.fold_depth >= _FOLD_MAX_DEPTH:
+                return None
+            self.fold_depth += 1
+            try:
+                inputs = [self.const(i) if i else None for i in node.input]
+                if any(i and v is None for i, v in zip(node.input, inputs)) \
+                        or sum(np.asarray(v).size for v in inputs if v is not None) > _FOLD_MAX_VALUES:
+                    return None
+                attrs = _attrs(self.onnx, node)
+                if node.op_type == "ConstantOfShape" and "value" in attrs:  # a TensorProto
+                    attrs["value"] = _tensor_array(self.onnx, attrs["value"], "ConstantOfShape value", self.path)
+                try:
+                    value = _fold(node, attrs, inputs, self.opset)
+                except (ValueError, IndexError, TypeError, OverflowError, np.AxisError):
+                    value = None  # not a computation these shapes allow: left to the reader, which refuses it
+            finally:
+                self.fold_depth -= 1
+            if value is None or np.asarray(value).size > _FOLD_MAX_VALUES:
+                return None
+            self.consts[name] = np.asarray(value)
+            self.done.add(node.name)
+            return self.consts[name]
         return None
 
     def tensor(self, node, name):
@@ -375,6 +472,15 @@ class _Importer:
                     runs.append((i, run))
                     i = run[-1]
                 self.freq_runs[node.name] = runs
+        # GroupNorm as PyTorch exports it at opsets <= 17: Reshape(x, [0, G, -1]) -> InstanceNormalization (G
+        # constants) -> Reshape(., Shape(x)), then the affine as Mul and Add by constants (mapped as usual).
+        self.group_norms = {}
+        for node in self.nodes:
+            if node.op_type == "InstanceNormalization":
+                found = self._group_norm_pattern(node)
+                if found is not None:
+                    self.group_norms[node.name] = found
+                    self.done.update(n.name for n in found[1:4])
         # Every node that cannot be mapped is reported in one pass (issue 48): a failed node's outputs are marked, and
         # the nodes reading them are skipped (they fail only because of it).
         failures, failed = [], set()
@@ -413,6 +519,8 @@ class _Importer:
         if op == "Constant":
             self.const(node.output[0])
             return
+        if op in _FOLDABLE and self.const(node.output[0]) is not None:
+            return  # shape arithmetic between constants: folded
         if op == "Identity" or op == "Dropout":
             if op == "Dropout":
                 if len(node.output) > 1 and node.output[1] and self.readers.get(node.output[1]):
@@ -433,7 +541,11 @@ class _Importer:
                 raise self.fail(node, "Sin and Cos are supported only as part of a frequency encoding "
                                       "(Concat of [x,] Sin(s x), Cos(s x), ... with s = 2^k or 2^k pi doubling)")
             if op in ("IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less"):
-                raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits")
+                raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits"
+                                + (" or between constants" if op == "Cast" else ""))
+            if op in _FOLDABLE:
+                raise self.fail(node, f"{op} is supported only as shape arithmetic between constants, folded into a "
+                                      f"constant of at most {_FOLD_MAX_VALUES} values")
             raise self.fail(node, f"op {op} is not supported; supported: {', '.join(SUPPORTED_OPS)}")
         handler(node, attrs)
 
@@ -573,15 +685,24 @@ class _Importer:
             "weight": self.put_weight(node.name + ".copy", w)})
 
     def op_Pad(self, node, attrs):
-        # Zero padding of H and W read only by convolutions: folded into their padding (exact).
+        # Zero padding of H and W read only by convolutions (or counting average pools): folded into their padding
+        # (exact). Any other padding of H and W -- reflect, edge, a constant, zeros read by anything else -- is a
+        # pad2d node.
         x = self.tensor(node, node.input[0])
         mode = _text(attrs.get("mode", b"constant"))
         pads = attrs.get("pads")
         if pads is None and len(node.input) > 1 and node.input[1]:
             pads = self.const(node.input[1])
         value = self.const(node.input[2]) if len(node.input) > 2 and node.input[2] else attrs.get("value", 0.0)
-        if mode != "constant" or pads is None or value is None or np.any(np.asarray(value, np.float64) != 0):
-            raise self.fail(node, f"only zero (constant) padding before convolutions is supported (mode {mode})")
+        if mode not in ("constant", "reflect", "edge"):
+            raise self.fail(node, f"mode {mode}: constant, reflect and edge are supported")
+        if pads is None or value is None:
+            raise self.fail(node, "pads and the constant value must be constants (pads an exporter computes with "
+                                  "shape nodes, as nn.ZeroPad2d at opset 13 writes them, are not supported)")
+        value = np.asarray(value, np.float64).reshape(-1)
+        if value.size != 1 or not np.isfinite(value[0]) or abs(value[0]) > FLT_MAX:
+            raise self.fail(node, f"constant value {list(value)}: one finite float32 number expected")
+        value = float(np.float32(value[0]))
         pads = np.asarray(pads).reshape(-1)
         if pads.dtype.kind not in "iu":  # ONNX says int64; a float tensor (NaN, 1.5) is no padding
             raise self.fail(node, f"pads of type {pads.dtype}: integers expected")
@@ -591,11 +712,18 @@ class _Importer:
         if not any(pads):  # what torch.onnx writes before an AvgPool2d without padding
             self.alias[node.output[0]] = x
             return
+        sides = [pads[2], pads[3], pads[6], pads[7]]  # top, left, bottom, right
         readers = self.readers.get(node.output[0], [])
-        if not readers or any(r.op_type not in ("Conv", "AveragePool") for r in readers):
-            raise self.fail(node, "zero padding is supported only where convolutions or average pooling alone read "
-                                  "it (it becomes their padding)")
-        self.zero_pads[node.output[0]] = (x, [pads[2], pads[3], pads[6], pads[7]])
+        if mode == "constant" and value == 0 and readers and node.output[0] != self.output_name \
+                and all(r.op_type in ("Conv", "AveragePool") for r in readers):
+            self.zero_pads[node.output[0]] = (x, sides)
+            return
+        if self.layout == "nc":
+            raise self.fail(node, "a spatial op on an [N, C] item list (no H and W axes)")
+        if max(sides) > _constants.GRAPH_MAX_PAD:
+            raise self.fail(node, f"pads {pads}: beyond ngi's {_constants.GRAPH_MAX_PAD}")
+        self.emit(node, "pad2d", [x], self.out(node, self.channels[x]), pads=sides, mode=mode,
+                  value=value if mode == "constant" else None)
 
     def op_DepthToSpace(self, node, attrs):
         # PixelShuffle: a stride-b transposed convolution whose b x b kernel routes each input channel to one output
@@ -672,6 +800,9 @@ class _Importer:
         if scales is None or np.asarray(scales).size == 0:
             raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
         sc = np.asarray(scales, np.float64).reshape(-1)
+        if mode == "linear":
+            self._resize_linear(node, attrs, x, ctm, sc)
+            return
         floor_map = (ctm == "asymmetric" and nearest == "floor") or \
                     (ctm in ("half_pixel", "pytorch_half_pixel") and nearest.startswith("round_prefer"))
         if mode != "nearest" or not floor_map:
@@ -685,6 +816,21 @@ class _Importer:
         ones = np.ones((f, f))
         self._channel_copy(node, x, self.channels[x], f, ((c, c, ones) for c in range(self.channels[x])),
                            "conv_transpose2d", f, 0)
+
+    def _resize_linear(self, node, attrs, x, ctm, sc):
+        # Bilinear resize by constant scales (F.interpolate(mode="bilinear", scale_factor=s)): resize_bilinear, the
+        # output floor(in * scale) a side as ONNX derives it.
+        if ctm not in ("half_pixel", "pytorch_half_pixel", "align_corners", "asymmetric"):
+            raise self.fail(node, f"coordinate_transformation_mode {ctm}: half_pixel, pytorch_half_pixel, "
+                                  "align_corners and asymmetric are supported")
+        if attrs.get("exclude_outside", 0) or attrs.get("antialias", 0):
+            raise self.fail(node, "exclude_outside and antialias are not supported")
+        if self.layout == "nc":
+            raise self.fail(node, "a spatial op on an [N, C] item list (no H and W axes)")
+        if sc.size != 4 or sc[0] != 1 or sc[1] != 1 or not all(1 / 64 <= s <= 64 for s in sc[2:]):
+            raise self.fail(node, f"scales {list(sc)}: scales of H and W in [1/64, 64] (N and C 1) are supported")
+        self.emit(node, "resize_bilinear", [x], self.out(node, self.channels[x]),
+                  scales=[float(np.float32(sc[2])), float(np.float32(sc[3]))], coordinate=ctm)
 
     def op_AveragePool(self, node, attrs):
         # A convolution with 1 / (kh kw) on the diagonal channel pairs (exact up to float summation order); padding
@@ -924,7 +1070,61 @@ class _Importer:
                                   "mean over H and W of an image with the axes kept maps (a global average pool)")
         self._global_mean(node)
 
+    def _only_reader(self, tensor):
+        readers = self.readers.get(tensor, [])
+        return readers[0] if len(readers) == 1 and tensor != self.output_name else None
+
+    def _group_norm_pattern(self, inorm):
+        """(source tensor, the first Reshape, the Shape node, the second Reshape, groups) when `inorm` is the middle of
+        PyTorch's GroupNorm export; else None (then it maps, or is refused, as an InstanceNormalization)."""
+        first = self.producer.get(inorm.input[0])
+        if first is None or first.op_type != "Reshape" or self._only_reader(first.output[0]) is not inorm:
+            return None
+        shape = self.const(first.input[1]) if len(first.input) > 1 else None
+        if shape is None:
+            return None
+        shape = [int(v) for v in np.asarray(shape).reshape(-1)]
+        if len(shape) != 3 or shape[0] not in (0, 1) or shape[1] < 1 or shape[2] != -1:
+            return None
+        second = self._only_reader(inorm.output[0])
+        if second is None or second.op_type != "Reshape" or len(second.input) < 2:
+            return None
+        size = self.producer.get(second.input[1])
+        if size is None or size.op_type != "Shape" or size.input[0] != first.input[0] \
+                or self._only_reader(size.output[0]) is not second:
+            return None
+        return first.input[0], first, size, second, shape[1]
+
+    def _group_norm(self, node, attrs, found):
+        src, _, _, second, groups = found
+        if self.layout == "nc":
+            raise self.fail(node, "a group normalization of an [N, C] item list (no H and W axes)")
+        x = self.tensor(node, src)
+        c = self.channels[x]
+        if c % groups:
+            raise self.fail(node, f"{groups} groups do not divide {c} channels")
+        params = [self.const(n) if n else None for n in node.input[1:3]]
+        if len(params) != 2 or any(p is None for p in params):
+            raise self.fail(node, "scale and bias must be constants")
+        scale, bias = (np.asarray(p, np.float64).reshape(-1) for p in params)
+        if scale.shape != (groups,) or bias.shape != (groups,):
+            raise self.fail(node, f"scale and bias have {scale.size} and {bias.size} values for {groups} groups")
+        eps = self._epsilon(node, attrs)
+        self.channels[second.output[0]] = c
+        self.emit(node, "group_norm", [x], second.output[0], groups=groups, eps=eps,
+                  scale=self.put_weight(node.name + ".scale", scale), shift=self.put_weight(node.name + ".shift", bias),
+                  source=f"{node.name} (GroupNorm: Reshape, InstanceNormalization, Shape, Reshape)")
+
+    def _epsilon(self, node, attrs):
+        eps = float(attrs.get("epsilon", 1e-5))
+        if not (0 < eps <= 1.0) or np.float32(eps) == 0 or not np.isfinite(np.float32(eps)):
+            raise self.fail(node, f"epsilon {eps}: ngi's normalization takes a positive float32 epsilon up to 1")
+        return float(np.float32(eps))
+
     def op_InstanceNormalization(self, node, attrs):
+        if node.name in self.group_norms:
+            self._group_norm(node, attrs, self.group_norms[node.name])
+            return
         x = self._spatial(node)
         c = self.channels[x]
         params = [self.const(n) if n else None for n in node.input[1:3]]
@@ -933,10 +1133,8 @@ class _Importer:
         scale, bias = (np.asarray(p, np.float64).reshape(-1) for p in params)
         if scale.shape != (c,) or bias.shape != (c,):
             raise self.fail(node, f"scale and bias have {scale.size} and {bias.size} values, the input {c} channels")
-        eps = float(attrs.get("epsilon", 1e-5))
-        if not (0 < eps <= 1.0) or np.float32(eps) == 0 or not np.isfinite(np.float32(eps)):
-            raise self.fail(node, f"epsilon {eps}: ngi's instance_norm takes a positive float32 epsilon up to 1")
-        self.emit(node, "instance_norm", [x], self.out(node, c), eps=float(np.float32(eps)),
+        eps = self._epsilon(node, attrs)
+        self.emit(node, "instance_norm", [x], self.out(node, c), eps=eps,
                   scale=self.put_weight(node.name + ".scale", scale), shift=self.put_weight(node.name + ".shift", bias))
 
     def op_Exp(self, node, attrs):

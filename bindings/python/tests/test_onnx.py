@@ -218,13 +218,35 @@ class _PReluPerChannel(torch.nn.Module):
         return self.out(self.act(self.conv(x)))
 
 
+class _DiffusersBlock(torch.nn.Module):
+    """A diffusers-style up block: GroupNorm + SiLU, bilinear upsampling (half-pixel), a reflect-padded convolution, an
+    edge-padded one and an align-corners bilinear downsampling."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv_in = torch.nn.Conv2d(3, 8, 3, padding=1)
+        self.norm = torch.nn.GroupNorm(4, 8)
+        self.conv = torch.nn.Conv2d(8, 6, 3)
+        self.norm2 = torch.nn.GroupNorm(2, 6, eps=1e-6)
+        self.conv_out = torch.nn.Conv2d(6, 3, 3)
+
+    def forward(self, x):
+        f = torch.nn.functional
+        y = f.silu(self.norm(self.conv_in(x) * 2.0))
+        y = f.interpolate(y, scale_factor=2, mode="bilinear", align_corners=False)
+        y = f.silu(self.norm2(self.conv(f.pad(y, (1, 1, 1, 1), mode="reflect"))))
+        y = self.conv_out(f.pad(y, (2, 0, 1, 1), mode="replicate"))
+        return f.interpolate(y, scale_factor=0.75, mode="bilinear", align_corners=True)
+
+
 @pytest.mark.parametrize("opset", [13, 17])
 @pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("mobile_v2", _MobileV2Block, 4),
                                                 ("espcn", _Espcn, 3),
                                                 ("pool_unet", _PoolUnet, 3), ("dilated", _DilatedGrouped, 4),
                                                 ("maxpool_unet", _MaxPoolUnet, 3), ("squeeze_excite", _SqueezeExcite, 4),
                                                 ("instance_norm_gelu", _InstanceNormGelu, 3),
-                                                ("prelu_per_channel", _PReluPerChannel, 3)])
+                                                ("prelu_per_channel", _PReluPerChannel, 3),
+                                                ("diffusers_block", _DiffusersBlock, 3)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
     # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
@@ -775,6 +797,17 @@ WEIGHT = {"c.weight": np.ones((3, 2, 3, 3), np.float32)}
      {"s": np.ones(3, np.float32), "b": np.zeros(2, np.float32)}, "tensor 's' (scale) is [3], expected [2]"),
     ([{"name": "m", "op": "mul", "inputs": ["x", "x"], "output": "y", "broadcast": 1}], {},
      "node 'm' (mul): 'broadcast' must be true or false"),
+    ([{"name": "p", "op": "pad2d", "inputs": ["x"], "output": "y", "pads": [1, 1, 1, 1], "mode": "wrap"}], {},
+     "node 'p' (pad2d): 'mode' must be"),
+    ([{"name": "p", "op": "pad2d", "inputs": ["x"], "output": "y", "pads": [1, 1, 65, 1], "mode": "edge"}], {},
+     "node 'p' (pad2d): 'pads' must be [top, left, bottom, right], integers in 0..64"),
+    ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 100],
+       "coordinate": "half_pixel"}], {}, "node 'r' (resize_bilinear): 'scales' must be [h, w], numbers in [1/64, 64]"),
+    ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 2],
+       "coordinate": "tf_crop_and_resize"}], {}, "node 'r' (resize_bilinear): 'coordinate' must be"),
+    ([{"name": "g", "op": "group_norm", "inputs": ["x"], "output": "y", "groups": 3, "scale": "s", "shift": "b",
+       "eps": 1e-5}], {"s": np.ones(3, np.float32), "b": np.zeros(3, np.float32)},
+     "node 'g' (group_norm): 'groups' (3) must divide the input's 2 channels"),
 ])
 def test_graph_loader_refuses_hostile_node_lists(dev, tmp_path, nodes, tensors, needle):
     path = graph_file(tmp_path, nodes, tensors)
@@ -819,10 +852,26 @@ def test_new_pooling_and_normalization_refusals_name_the_node(tmp_path):
         (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[1]), "only the mean over H and W"),
         (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[2, 3], keepdims=0), "only the mean over H and W"),
         (helper.make_node("InstanceNormalization", ["x", "x", "x"], ["y"], name="p"), "scale and bias must be constants"),
+        (helper.make_node("Pad", ["x", "pads"], ["y"], name="p", mode="wrap"), "mode wrap"),
+        (helper.make_node("Resize", ["x", "", "scales"], ["y"], name="p", mode="cubic"), "mode cubic"),
+        (helper.make_node("Resize", ["x", "", "scales"], ["y"], name="p", mode="linear", exclude_outside=1),
+         "exclude_outside"),
+        (helper.make_node("Resize", ["x", "", "scales"], ["y"], name="p", mode="linear",
+                          coordinate_transformation_mode="tf_crop_and_resize"), "coordinate_transformation_mode"),
+        (helper.make_node("Resize", ["x", "", "big"], ["y"], name="p", mode="linear"), "scales of H and W in"),
+        # Shape arithmetic that would build a huge constant is not folded: its reader is refused.
+        (helper.make_node("Pad", ["x", "huge"], ["y"], name="bomb", mode="reflect"),
+         "node 'bomb' (ConstantOfShape): ConstantOfShape is supported only as shape arithmetic between constants"),
     ]
+    extra = [numpy_helper.from_array(np.array([0, 0, 1, 1, 0, 0, 1, 1], np.int64), "pads"),
+             numpy_helper.from_array(np.array([1, 1, 2, 2], np.float32), "scales"),
+             numpy_helper.from_array(np.array([1, 1, 2, 100], np.float32), "big")]
+    huge = [numpy_helper.from_array(np.array([1 << 20, 1 << 20], np.int64), "shape"),
+            helper.make_node("ConstantOfShape", ["shape"], ["huge"], name="bomb")]
     for k, (node, needle) in enumerate(cases):
-        data = small_model([node], [w]).SerializeToString()
-        assert_refused(tmp_path, data, f"node 'p' ({node.op_type})", needle)
+        nodes = [huge[1], node] if "huge" in node.input else [node]
+        data = small_model(nodes, [w, *extra, huge[0]]).SerializeToString()
+        assert_refused(tmp_path, data, f"node 'p' ({node.op_type})" if node.name == "p" else "", needle)
 
 
 def test_graph_loader_refuses_an_output_no_node_makes(dev, tmp_path):

@@ -9,6 +9,8 @@
 
 #include "graph/nodes.hpp"
 #include "ops/max_pool.hpp"
+#include "ops/pad2d.hpp"
+#include "ops/resize.hpp"
 #include "ops/set_pool.hpp"
 #include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
@@ -127,6 +129,85 @@ private:
     MaxPool2d pool_;
 };
 
+// GroupNorm's normalization (ONNX's export: Reshape [0, G, -1], InstanceNormalization, Reshape back): each of G
+// groups of C / G channels normalized over its channels and pixels together (mean and biased variance), then
+// scale[g], shift[g]. A group's channels are contiguous in C x H x W, so this is the per-image batch norm over the
+// same memory viewed as G x 1 x (C / G) H W; in place.
+class GroupNormNode : public Op {
+public:
+    GroupNormNode(Context& ctx, int channels, int groups, const std::vector<float>& scale,
+                  const std::vector<float>& shift, float eps)
+        : bn_(ctx, groups, scale, shift, eps, Act::none()), channels_(channels), groups_(groups) {}
+    std::string kind() const override { return "group_norm"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        const Shape& s = ConvNode::one(in);
+        if (s.c != channels_)
+            throw InputError("group_norm: the input has " + std::to_string(s.c) + " channels, the node " +
+                             std::to_string(channels_));
+        return s;
+    }
+    std::size_t scratch_floats(const std::vector<Shape>&) const override {
+        return bn_.scratch_floats(Shape{groups_, 1, 1});
+    }
+    bool in_place() const override { return true; }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View&, cl_mem scratch,
+                 std::vector<cl_event>* ev) override {
+        const Shape& s = in[0].shape;
+        bn_.enqueue(ctx, View{in[0].mem, in[0].offset, {groups_, 1, channels_ / groups_ * s.h * s.w}}, scratch, 0, ev);
+    }
+
+private:
+    BatchNormPerImage bn_;
+    int channels_, groups_;
+};
+
+// ONNX Pad over H and W (ops/pad2d.hpp): constant, reflect or edge.
+class PadNode : public Op {
+public:
+    PadNode(Context& ctx, const PadGeometry& g) : pad_(ctx, g) {}
+    std::string kind() const override { return "pad2d"; }
+    Shape infer(const std::vector<Shape>& in) const override { return pad_.output_shape(ConvNode::one(in)); }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        pad_.enqueue(ctx, in[0], out, ev);
+    }
+
+private:
+    Pad2d pad_;
+};
+
+// ONNX Resize, mode linear, by constant scales (ops/resize.hpp): the output is floor(in * scale) a side, as ONNX
+// derives it, so the op is made per output size (a graph is built per input size).
+class ResizeNode : public Op {
+public:
+    ResizeNode(Context& ctx, float scale_h, float scale_w, ResizeCoord mode)
+        : ctx_(ctx), scale_h_(scale_h), scale_w_(scale_w), mode_(mode) {}
+    std::string kind() const override { return "resize_bilinear"; }
+    Shape infer(const std::vector<Shape>& in) const override {
+        const Shape& s = ConvNode::one(in);
+        const double oh = std::floor(double(s.h) * scale_h_), ow = std::floor(double(s.w) * scale_w_);
+        if (!(oh >= 1 && ow >= 1 && oh <= kMaxDim && ow <= kMaxDim))
+            throw InputError("resize_bilinear: scales " + std::to_string(scale_h_) + " x " + std::to_string(scale_w_) +
+                             " make " + to_string(s) + " an output of " + std::to_string(oh) + " x " +
+                             std::to_string(ow) + " (each side 1.." + std::to_string(kMaxDim) + ")");
+        return op(int(oh), int(ow)).output_shape(s);
+    }
+    void enqueue(Context& ctx, const std::vector<View>& in, const View& out, cl_mem, std::vector<cl_event>* ev) override {
+        op(out.shape.h, out.shape.w).enqueue(ctx, in[0], out, ev);
+    }
+
+private:
+    static constexpr int kMaxDim = 1 << 16;
+    ResizeBilinear& op(int oh, int ow) const {
+        auto& r = ops_[{oh, ow}];
+        if (!r) r = std::make_unique<ResizeBilinear>(ctx_, ResizeGeometry{oh, ow, scale_h_, scale_w_, mode_});
+        return *r;
+    }
+    Context& ctx_;
+    float scale_h_, scale_w_;
+    ResizeCoord mode_;
+    mutable std::map<std::pair<int, int>, std::unique_ptr<ResizeBilinear>> ops_;
+};
+
 // The mean of every channel over H x W: C x H x W -> C x 1 x 1 (ONNX GlobalAveragePool, ReduceMean over H and W).
 class GlobalAvgPoolNode : public Op {
 public:
@@ -175,7 +256,8 @@ private:
 
 const std::set<std::string> kOps = {"conv2d", "conv_transpose2d", "dense", "concat", "activation",
                                     "affine", "add", "mul", "frequency_encode", "nan_to_num",
-                                    "max_pool2d", "global_avg_pool", "instance_norm"};
+                                    "max_pool2d", "global_avg_pool", "instance_norm", "group_norm", "pad2d",
+                                    "resize_bilinear"};
 const std::set<std::string> kActivations = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp", "softplus", "erf"};
 
 bool is_int_in(const nlohmann::json& v, long long lo, long long hi) {
@@ -248,7 +330,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
         if (!kOps.count(node.op))
             throw bad("op '" + node.op.substr(0, 80) + "' is not one of conv2d, conv_transpose2d, dense, concat, "
                       "activation, affine, add, mul, frequency_encode, nan_to_num, max_pool2d, global_avg_pool, "
-                      "instance_norm");
+                      "instance_norm, group_norm, pad2d, resize_bilinear");
         static const std::map<std::string, std::set<std::string>> kFields = {
             {"conv2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
             {"conv_transpose2d", {"in", "out", "kernel", "stride", "pad", "weight", "bias", "activation", "input_activation", "slope"}},
@@ -262,7 +344,10 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             {"nan_to_num", {}},
             {"max_pool2d", {"kernel", "stride", "pads"}},
             {"global_avg_pool", {}},
-            {"instance_norm", {"scale", "shift", "eps"}}};
+            {"instance_norm", {"scale", "shift", "eps"}},
+            {"group_norm", {"groups", "scale", "shift", "eps"}},
+            {"pad2d", {"pads", "mode", "value"}},
+            {"resize_bilinear", {"scales", "coordinate"}}};
         const std::set<std::string>& allowed = kFields.at(node.op);
         for (auto it = n.begin(); it != n.end(); ++it) {
             const std::string& key = it.key();
@@ -366,11 +451,38 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             for (int s = 0; s < 4; ++s)
                 if (!is_int_in(n["pads"][s], 0, kMaxPad) || n["pads"][s].get<int>() >= (s % 2 ? kw : kh)) throw bad(rule);
             node.out_channels = cin;
+        } else if (node.op == "pad2d") {
+            if (nc) throw bad("layout \"nc\" has no spatial axes to pad");
+            const std::string rule = "'pads' must be [top, left, bottom, right], integers in 0.." + std::to_string(kMaxPad);
+            if (!n.contains("pads") || !n["pads"].is_array() || n["pads"].size() != 4) throw bad(rule);
+            for (const auto& p : n["pads"])
+                if (!is_int_in(p, 0, kMaxPad)) throw bad(rule);
+            if (!n.contains("mode") || !n["mode"].is_string() ||
+                (n["mode"] != "constant" && n["mode"] != "reflect" && n["mode"] != "edge"))
+                throw bad("'mode' must be \"constant\", \"reflect\" or \"edge\"");
+            if (n.contains("value") && (!n["value"].is_number() || !float32_representable(n["value"].get<double>())))
+                throw bad(std::string("'value' must be a number ") + kFloat32Rule);
+            node.out_channels = cin;
+        } else if (node.op == "resize_bilinear") {
+            if (nc) throw bad("layout \"nc\" has no spatial axes to resize");
+            const std::string rule = "'scales' must be [h, w], numbers in [1/64, 64]";
+            if (!n.contains("scales") || !n["scales"].is_array() || n["scales"].size() != 2) throw bad(rule);
+            for (const auto& s : n["scales"])
+                if (!s.is_number() || !(s.get<double>() >= 1.0 / 64) || !(s.get<double>() <= 64)) throw bad(rule);
+            static const std::set<std::string> kCoords = {"half_pixel", "pytorch_half_pixel", "align_corners",
+                                                          "asymmetric"};
+            if (!n.contains("coordinate") || !n["coordinate"].is_string() || !kCoords.count(n["coordinate"].get<std::string>()))
+                throw bad("'coordinate' must be \"half_pixel\", \"pytorch_half_pixel\", \"align_corners\" or "
+                          "\"asymmetric\"");
+            node.out_channels = cin;
         } else if (node.op == "global_avg_pool") {
             if (nc) throw bad("layout \"nc\" has no spatial axes to pool");
             node.out_channels = cin;
-        } else if (node.op == "instance_norm") {
+        } else if (node.op == "instance_norm" || node.op == "group_norm") {
             if (nc) throw bad("layout \"nc\" has no spatial axes to normalize over");
+            if (node.op == "group_norm" && cin % int_field("groups", 1, kMaxChannels) != 0)
+                throw bad("'groups' (" + n["groups"].dump() + ") must divide the input's " + std::to_string(cin) +
+                          " channels");
             tensor_field("scale", true);
             tensor_field("shift", true);
             const nlohmann::json* eps = n.contains("eps") ? &n["eps"] : nullptr;
@@ -500,6 +612,10 @@ std::vector<GraphNodeWeights> check_graph_weights(const GraphDesc& d, const Safe
         } else if (n.op == "affine" || n.op == "instance_norm") {
             w.scale = weight(n, "scale", {cin});
             w.shift = weight(n, "shift", {cin});
+        } else if (n.op == "group_norm") {
+            const int groups = n.fields["groups"].get<int>();
+            w.scale = weight(n, "scale", {groups});
+            w.shift = weight(n, "shift", {groups});
         }
     }
     for (const auto& [name, t] : file.tensors)
@@ -565,6 +681,27 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
                                          f["pads"][2].get<int>(), f["pads"][3].get<int>()});
             } else if (n.op == "global_avg_pool") {
                 op = std::make_shared<GlobalAvgPoolNode>(ctx);
+            } else if (n.op == "pad2d") {
+                const nlohmann::json& f = n.fields;
+                const std::string mode = f["mode"].get<std::string>();
+                op = std::make_shared<PadNode>(
+                    ctx, PadGeometry{f["pads"][0].get<int>(), f["pads"][1].get<int>(), f["pads"][2].get<int>(),
+                                     f["pads"][3].get<int>(),
+                                     mode == "reflect" ? PadMode::Reflect : mode == "edge" ? PadMode::Edge : PadMode::Constant,
+                                     f.value("value", 0.0f)});
+            } else if (n.op == "resize_bilinear") {
+                const nlohmann::json& f = n.fields;
+                const std::string c = f["coordinate"].get<std::string>();
+                const ResizeCoord mode = c == "half_pixel"           ? ResizeCoord::HalfPixel
+                                         : c == "pytorch_half_pixel" ? ResizeCoord::PytorchHalfPixel
+                                         : c == "align_corners"      ? ResizeCoord::AlignCorners
+                                                                     : ResizeCoord::Asymmetric;
+                op = std::make_shared<ResizeNode>(ctx, f["scales"][0].get<float>(), f["scales"][1].get<float>(), mode);
+            } else if (n.op == "group_norm") {
+                const int groups = n.fields["groups"].get<int>();
+                op = std::make_shared<GroupNormNode>(ctx, cin, groups, w.scale->data, w.shift->data,
+                                                     n.fields["eps"].get<float>());
+                m.weight_bytes += 2 * std::size_t(groups) * sizeof(float);
             } else if (n.op == "instance_norm") {
                 op = std::make_shared<BatchNormNode>(ctx, cin, w.scale->data, w.shift->data,
                                                      n.fields["eps"].get<float>(), Act::none());

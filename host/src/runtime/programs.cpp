@@ -16,6 +16,8 @@ const std::vector<ProgramSources>& programs() {
         {"mlp", {"activation", "mlp"}},
         {"set_pool", {"set_pool"}},
         {"max_pool", {"max_pool"}},
+        {"pad2d", {"pad2d"}},
+        {"resize", {"resize"}},
         {"sh", {"sh_basis", "sh"}},
         {"probe_shade", {"sh_basis", "probe_shade"}},
         {"voxel_ltf", {"luminance", "voxel_ltf"}},
