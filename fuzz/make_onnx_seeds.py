@@ -122,19 +122,22 @@ def torch_seeds():
 
     class PoolNormBlocks(torch.nn.Module):
         """Max pooling (padded), squeeze-excitation (global average pool, broadcast multiply), ReduceMean, instance
-        normalization, GELU (Erf) and Softplus."""
+        and group normalization, GELU (Erf), Softplus, a reflect Pad (shape arithmetic for its pads) and bilinear
+        resizing."""
 
         def __init__(self):
             super().__init__()
             self.conv = torch.nn.Conv2d(4, 8, 3, padding=1)
             self.norm = torch.nn.InstanceNorm2d(8, affine=True)
+            self.group = torch.nn.GroupNorm(2, 8)
             self.fc1 = torch.nn.Conv2d(8, 2, 1)
             self.fc2 = torch.nn.Conv2d(2, 8, 1)
 
         def forward(self, x):
             y = torch.nn.functional.gelu(self.norm(self.conv(torch.nn.functional.max_pool2d(x, 3, 1, 1))))
             s = torch.sigmoid(self.fc2(torch.relu(self.fc1(torch.nn.functional.adaptive_avg_pool2d(y, 1)))))
-            return torch.nn.functional.softplus(y * s + y.mean((2, 3), keepdim=True))
+            y = self.group(torch.nn.functional.pad(y * s + y.mean((2, 3), keepdim=True), (1, 1, 1, 1), mode="reflect"))
+            return torch.nn.functional.interpolate(torch.nn.functional.softplus(y), scale_factor=2, mode="bilinear")
 
     torch.manual_seed(51)
     return {
