@@ -4,7 +4,8 @@
 #   the rpath the README documents; C through find_package(ngi COMPONENTS c); C++ through find_package for
 #   ngi::core (which must not look for OpenEXR, libpng or assimp), ngi::io, ngi::pipeline (the default components;
 #   the application owns its OpenCL context) and ngi::render; the ngi CLI and the Python package finding the
-#   shipped models by name. Checks that libngi_c exports nothing but the C ABI. Prints the number of checks passed
+#   shipped models by name; the READMEs' C++ and Python snippets (tools/ci/readme_snippets.py). Checks that libngi_c
+#   exports nothing but the C ABI. Prints the number of checks passed
 #   on stdout; exits non-zero on a failure.
 # Usage: tools/ci/install_consumers.sh BUILD_DIR              the install stage of tools/test.sh: installs
 #                                                             BUILD_DIR into a temporary prefix and tests that
@@ -127,4 +128,14 @@ import ngi.model_file
 print("install: python: ngi", ngi.__version__, "from", ngi.__file__, "model surround =", m.path, file=sys.stderr)
 ' "$pydir" "$models") || { step "the installed Python package does not work"; exit 1; }
 checks=$((checks + 1))
+
+# 6. The READMEs' snippets: README.md's C++ blocks built as one more find_package consumer, the Python blocks of
+# README.md and bindings/python/README.md run with the installed package on a frame the installed CLI renders.
+readme_cmake_prefix=""
+[ ${#cmake_prefix[@]} -gt 0 ] && readme_cmake_prefix=${cmake_prefix[0]#-DCMAKE_PREFIX_PATH=}
+n=$(env "${model_env[@]}" /usr/bin/python3 "$root/tools/ci/readme_snippets.py" --prefix "$prefix" \
+      --pythonpath "$pydir" --cmake-prefix "$readme_cmake_prefix" --work "$work") ||
+  { step "a README snippet does not build or run against the installed ngi"; exit 1; }
+step "README snippets: $n built or run against the installed ngi"
+checks=$((checks + n))
 echo "$checks"

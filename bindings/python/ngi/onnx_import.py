@@ -69,7 +69,7 @@ SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRe
                  "Softplus", "Erf", "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout",
                  "Identity", "Constant", "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "MaxPool",
                  "GlobalAveragePool", "ReduceMean", "InstanceNormalization", "PRelu", "ConstantOfShape", "Reshape",
-                 "Slice", "Transpose", "Unsqueeze", "Squeeze", "Shape",
+                 "Slice", "Transpose", "Unsqueeze", "Squeeze",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
 
@@ -96,6 +96,9 @@ _DTYPES = {1: np.float32, 10: np.float16, 11: np.float64, 7: np.int64, 6: np.int
 # where it is read).
 _FOLDABLE = ("ConstantOfShape", "Concat", "Reshape", "Slice", "Transpose", "Cast", "Unsqueeze", "Squeeze")
 _FOLD_MAX_VALUES = 1 << 16
+# ONNX ops that act pixel by pixel (a [1, C, 1, 1] input gives a [1, C, 1, 1] output).
+_PIXELWISE = ("Relu", "LeakyRelu", "PRelu", "Tanh", "Sigmoid", "Exp", "Softplus", "Erf", "Clip", "Concat", "Add",
+              "Sub", "Mul", "Div", "BatchNormalization")
 _FOLD_MAX_DEPTH = 64
 _CAST_TYPES = {1: np.float32, 6: np.int32, 7: np.int64, 9: np.bool_, 10: np.float16, 11: np.float64}
 
@@ -152,10 +155,10 @@ def _fold(node, attrs, inputs, opset):
         axes = ints(axes)
         if op == "Squeeze":
             return np.squeeze(data, axis=tuple(axes))
-        out = data
-        for a in sorted(a % (data.ndim + len(axes)) for a in axes):
-            out = np.expand_dims(out, a)
-        return out
+        rank = data.ndim + len(axes)
+        if any(not -rank <= a < rank for a in axes) or len({a % rank for a in axes}) != len(axes):
+            return None  # out of range or repeated: an invalid model, left to its reader's refusal
+        return np.expand_dims(data, tuple(a % rank for a in axes))
     return None
 
 
@@ -348,6 +351,19 @@ class _Importer:
         self.weights = {}    # tensor name -> float64 array
         self.done = set()    # ONNX node names consumed by a pattern
         self.fold_depth = 0  # producers being folded (const()), bounded by _FOLD_MAX_DEPTH
+        self.not_const = set()  # tensors const() found not to be constants
+        # Every tensor name of the file: the converter's own intermediate tensors (Clip, PRelu) avoid them.
+        self.taken = {t.name for t in graph.initializer} | {self.input.name} | {
+            n for node in graph.node for n in [*node.input, *node.output] if n}
+        self.node_names = {node.name for node in graph.node}
+
+    def fresh(self, base, taken):
+        """`base`, or base with underscores appended, not in `taken` (the file's tensor or node names); reserved."""
+        name = base
+        while name in taken:
+            name += "_"
+        taken.add(name)
+        return name
 
     def fail(self, node, message):
         return ConversionError(f"{self.path}: node '{node.name}' ({node.op_type}): {message}")
@@ -380,12 +396,25 @@ class _Importer:
     # -- tensors --------------------------------------------------------------------------------------------------
 
     def const(self, name):
-        """The constant value of tensor `name` (initializer, Constant node, Identity of either), or None."""
+        """The constant value of tensor `name` (initializer, Constant node, Identity of either, shape arithmetic
+        between constants), or None. A tensor found not constant is remembered (a chain of nodes each reading its
+        predecessor twice was asked again and again: exponential time), and the producers followed are bounded
+        (_FOLD_MAX_DEPTH: a chain of 5,000 Identity nodes overflowed Python's stack)."""
         if name in self.consts:
             return self.consts[name]
+        if name in self.not_const:
+            return None
         node = self.producer.get(name)
         if node is None:
             return None
+        if node.op_type in ("Identity", *_FOLDABLE) and self.fold_depth >= _FOLD_MAX_DEPTH:
+            return None  # not remembered: a shorter path may reach it
+        value = self._const_of(name, node)
+        if value is None and node.op_type in ("Identity", *_FOLDABLE):
+            self.not_const.add(name)
+        return value
+
+    def _const_of(self, name, node):
         if node.op_type == "Constant":
             attrs = _attrs(self.onnx, node)
             if "value" not in attrs:
@@ -394,14 +423,16 @@ class _Importer:
             self.done.add(node.name)
             return self.consts[name]
         if node.op_type == "Identity":
-            value = self.const(node.input[0])
+            self.fold_depth += 1
+            try:
+                value = self.const(node.input[0])
+            finally:
+                self.fold_depth -= 1
             if value is not None:
                 self.consts[name] = value
                 self.done.add(node.name)
             return value
         if node.op_type in _FOLDABLE and len(node.output) == 1:
-            if self.fold_depth >= _FOLD_MAX_DEPTH:
-                return None
             self.fold_depth += 1
             try:
                 inputs = [self.const(i) if i else None for i in node.input]
@@ -546,8 +577,17 @@ class _Importer:
             if op in _FOLDABLE:
                 raise self.fail(node, f"{op} is supported only as shape arithmetic between constants, folded into a "
                                       f"constant of at most {_FOLD_MAX_VALUES} values")
+            if op == "Shape":
+                raise self.fail(node, "supported only as part of GroupNorm's export (Reshape [0, G, -1], "
+                                      "InstanceNormalization, Reshape to Shape(x))")
             raise self.fail(node, f"op {op} is not supported; supported: {', '.join(SUPPORTED_OPS)}")
         handler(node, attrs)
+        # One value a channel stays one value a channel through what acts pixel by pixel (ReLU6's several nodes,
+        # a per-channel PReLU, a concat of such tensors, ...), so a later multiply broadcasts it.
+        if op in _PIXELWISE and node.output and node.output[0] in self.channels:
+            computed = [self.alias.get(i, i) for i in node.input if self.alias.get(i, i) in self.channels]
+            if computed and all(i in self.unit for i in computed):
+                self.unit.add(node.output[0])
 
     def out(self, node, channels):
         # Refused at once, not at the end with the loader's other limits: a per-channel constant of that many
@@ -775,13 +815,15 @@ class _Importer:
         x = self.tensor(node, node.input[0])
         c = self.channels[x]
         a = self.per_channel(node, slope, c, "the slope")
-        names = {tag: f"{node.output[0]}/{tag}" for tag in ("positive", "negated", "negative_part", "scaled")}
+        names = {tag: self.fresh(f"{node.output[0]}/{tag}", self.taken)
+                 for tag in ("positive", "negated", "negative_part", "scaled")}
         for tag, op, inputs, fields in (
                 ("positive", "activation", [x], {"activation": "relu"}),
                 ("negated", "affine", [x], {"scale": -np.ones(c)}),
                 ("negative_part", "activation", [names["negated"]], {"activation": "relu"}),
                 ("scaled", "affine", [names["negative_part"]], {"scale": -a})):
-            entry = {"name": f"{node.name}/{tag}", "op": op, "inputs": inputs, "output": names[tag]}
+            entry = {"name": self.fresh(f"{node.name}/{tag}", self.node_names), "op": op, "inputs": inputs,
+                     "output": names[tag]}
             for k, v in fields.items():
                 entry[k] = self.put_weight(f"{node.name}/{tag}.{k}", v) if k == "scale" else v
             self.ir.append(entry)
@@ -801,6 +843,8 @@ class _Importer:
             raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
         sc = np.asarray(scales, np.float64).reshape(-1)
         if mode == "linear":
+            if self.opset < 11:  # Resize-10 has no coordinate modes: its linear resize is asymmetric
+                ctm = "asymmetric"
             self._resize_linear(node, attrs, x, ctm, sc)
             return
         floor_map = (ctm == "asymmetric" and nearest == "floor") or \
@@ -1064,8 +1108,9 @@ class _Importer:
         # The mean over H and W with the axes kept (x.mean((2, 3), keepdim=True)): a global average pool.
         if len(node.input) > 1 and node.input[1]:
             raise self.fail(node, "axes as an input (opset 18) are not supported")
-        axes = sorted(int(a) % 4 for a in attrs.get("axes", []))
-        if self.layout == "nc" or axes != [2, 3] or not attrs.get("keepdims", 1):
+        given = [int(a) for a in attrs.get("axes", [])]
+        axes = sorted(a % 4 for a in given if -4 <= a < 4)
+        if self.layout == "nc" or len(given) != 2 or axes != [2, 3] or not attrs.get("keepdims", 1):
             raise self.fail(node, f"axes {list(attrs.get('axes', []))}, keepdims {attrs.get('keepdims', 1)}: only the "
                                   "mean over H and W of an image with the axes kept maps (a global average pool)")
         self._global_mean(node)
@@ -1166,6 +1211,8 @@ class _Importer:
             self.done.add(exp.name)
             self.emit(exp, "activation", [x], self.out(exp, self.channels[x]), activation="exp",
                       source=f"{node.name} (Clip max 88) + {exp.name} (Exp)")
+            if x in self.unit:
+                self.unit.add(exp.output[0])
             return
         if lo == 0.0 and hi is None:
             self._activation(node, "relu")
@@ -1185,8 +1232,9 @@ class _Importer:
         c = self.channels[x]
 
         def step(tag, op, inputs, output=None, **fields):
-            out = output or f"{node.output[0]}/{tag}"
-            entry = {"name": f"{node.name}/{tag}", "op": op, "inputs": list(inputs), "output": out}
+            out = output or self.fresh(f"{node.output[0]}/{tag}", self.taken)
+            entry = {"name": self.fresh(f"{node.name}/{tag}", self.node_names), "op": op, "inputs": list(inputs),
+                     "output": out}
             for k, v in fields.items():
                 if k in ("scale", "shift"):
                     entry[k] = self.put_weight(f"{node.name}/{tag}.{k}", np.full(c, v, np.float64))

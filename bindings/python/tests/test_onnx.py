@@ -904,3 +904,77 @@ def test_graph_copies_a_concat_before_changing_it_in_place(dev, tmp_path):
     y = model.run(x)
     t = 0.5 * x.astype(np.float64)
     np.testing.assert_allclose(y, np.concatenate([np.maximum(t, 0), np.maximum(t, 0), 2 * t], axis=1), atol=1e-6)
+
+
+class _SqueezeReLU6Odd(torch.nn.Module):
+    """Review findings: a squeeze-excitation gate through ReLU6 (Clip(0, 6): several nodes) multiplied in, and a
+    bilinear resize by 0.7 (10 pixels -> 7, where the float32 scale times 10 is 6.99999988)."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(3, 4, 3, padding=1)
+        self.fc = torch.nn.Conv2d(4, 4, 1)
+
+    def forward(self, x):
+        y = self.conv(x)
+        s = torch.nn.functional.relu6(self.fc(torch.nn.functional.adaptive_avg_pool2d(y, 1)) * 4.0 + 3.0)
+        return torch.nn.functional.interpolate(y * s, scale_factor=0.7, mode="bilinear")
+
+
+@pytest.mark.parametrize("opset", [13, 17])
+def test_review_findings_of_the_new_ops_convert_and_match(dev, tmp_path, opset):
+    torch.manual_seed(5)
+    net = _SqueezeReLU6Odd().eval()
+    rc, err, out = convert(tmp_path, export_at(net, torch.randn(1, 3, 10, 10), opset), "odd")
+    assert rc == 0, err
+    x = np.random.default_rng(6).uniform(-1, 1, (1, 3, 10, 10)).astype(np.float32)
+    want = reference(net, x)
+    got = ngi.Model(dev, out).run(x)
+    assert got.shape == want.shape == (1, 4, 7, 7)
+    assert float(np.max(np.abs(got - want)) / np.max(np.abs(want))) < 1e-5
+
+
+def test_review_findings_of_the_new_ops_are_refused_or_mapped(tmp_path, dev):
+    import time
+    w = conv_weight()
+    # A linear Resize at opset 10 has no coordinate modes: it is asymmetric (it was mapped as half-pixel).
+    scales = numpy_helper.from_array(np.array([1, 1, 2, 2], np.float32), "scales")
+    data = small_model([helper.make_node("Resize", ["x", "scales"], ["y"], name="r", mode="linear")], [scales],
+                       opset=10).SerializeToString()
+    rc, err, out = convert(tmp_path, data, "r10")
+    assert rc == 0, err
+    from ngi.model_file import read_config
+    assert [n["coordinate"] for n in read_config(str(out))["graph"]["nodes"]] == ["asymmetric"]
+    # Shape arithmetic whose every node reads its predecessor twice: refused at once, not in exponential time.
+    base = numpy_helper.from_array(np.array([0, 2, -1], np.int64), "base")
+    nodes = [helper.make_node("Shape", ["x"], ["c0"], name="shape")]
+    for i in range(40):
+        nodes.append(helper.make_node("Concat", [f"c{i}", f"c{i}"], [f"c{i + 1}"], name=f"cat{i}", axis=0))
+    nodes += [helper.make_node("Reshape", ["x", "c40"], ["r"], name="reshape"),
+              helper.make_node("InstanceNormalization", ["r", "s", "b"], ["y"], name="norm")]
+    s, b = (numpy_helper.from_array(np.ones(2, np.float32), n) for n in ("s", "b"))
+    start = time.monotonic()
+    rc, err, _ = convert(tmp_path, small_model(nodes, [base, s, b]).SerializeToString(), "doubling")
+    assert rc == 1 and time.monotonic() - start < 30, err
+    # 5,000 Identity nodes in a row before a shape input: a one-line refusal, not a RecursionError.
+    nodes = [helper.make_node("Identity", ["base" if i == 0 else f"i{i - 1}"], [f"i{i}"], name=f"id{i}")
+             for i in range(5000)]
+    nodes.append(helper.make_node("Pad", ["x", "i4999"], ["y"], name="pad", mode="reflect"))
+    rc, err, _ = convert(tmp_path, small_model(nodes, [base]).SerializeToString(), "deep")
+    assert rc == 1 and "RecursionError" not in err and len(err.strip().splitlines()) == 1, err
+    # The converter's own tensors never take a name the file uses: a Relu output named 'p/positive' beside a
+    # per-channel PRelu whose output is 'p'.
+    slope = numpy_helper.from_array(np.array([0.1, -0.2], np.float32).reshape(2, 1, 1), "slope")
+    nodes = [helper.make_node("Relu", ["x"], ["p/positive"], name="relu"),
+             helper.make_node("PRelu", ["x", "slope"], ["p"], name="prelu"),
+             helper.make_node("Add", ["p", "p/positive"], ["y"], name="add")]
+    rc, err, out = convert(tmp_path, small_model(nodes, [slope]).SerializeToString(), "names")
+    assert rc == 0, err
+    xs = np.random.default_rng(3).normal(size=(1, 2, 8, 8)).astype(np.float32)
+    a = np.array([0.1, -0.2]).reshape(1, 2, 1, 1)
+    want = np.where(xs > 0, xs, a * xs) + np.maximum(xs, 0)
+    assert float(np.max(np.abs(ngi.Model(dev, out).run(xs) - want))) < 1e-6
+    # A Shape node outside GroupNorm's pattern names what it is for.
+    data = small_model([helper.make_node("Shape", ["x"], ["y"], name="p")]).SerializeToString()
+    (tmp_path / "shape").mkdir()
+    assert_refused(tmp_path / "shape", data, "node 'p' (Shape): supported only as part of GroupNorm")

@@ -175,8 +175,10 @@ private:
     Pad2d pad_;
 };
 
-// ONNX Resize, mode linear, by constant scales (ops/resize.hpp): the output is floor(in * scale) a side, as ONNX
-// derives it, so the op is made per output size (a graph is built per input size).
+// ONNX Resize, mode linear, by constant scales (ops/resize.hpp): the output is floor(in * scale) a side with the
+// product taken in float32, as onnxruntime does (PyTorch's exporter declares floor(10 * 0.7) = 7 for scale_factor
+// 0.7, whose float32 scale 0.699999988 times 10 is 6.99999988 in double: 6), so the op is made per output size (a
+// graph is built per input size).
 class ResizeNode : public Op {
 public:
     ResizeNode(Context& ctx, float scale_h, float scale_w, ResizeCoord mode)
@@ -184,7 +186,8 @@ public:
     std::string kind() const override { return "resize_bilinear"; }
     Shape infer(const std::vector<Shape>& in) const override {
         const Shape& s = ConvNode::one(in);
-        const double oh = std::floor(double(s.h) * scale_h_), ow = std::floor(double(s.w) * scale_w_);
+        const volatile float ph = float(s.h) * scale_h_, pw = float(s.w) * scale_w_;  // rounded to float32
+        const double oh = std::floor(double(ph)), ow = std::floor(double(pw));
         if (!(oh >= 1 && ow >= 1 && oh <= kMaxDim && ow <= kMaxDim))
             throw InputError("resize_bilinear: scales " + std::to_string(scale_h_) + " x " + std::to_string(scale_w_) +
                              " make " + to_string(s) + " an output of " + std::to_string(oh) + " x " +
