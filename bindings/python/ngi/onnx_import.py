@@ -5,7 +5,8 @@
 Needs Debian's python3-onnx (the `onnx` package, 1.12 on Debian 12). The ONNX graph is checked, sorted
 topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md, family "graph"):
 
-  Conv, ConvTranspose            -> conv2d, conv_transpose2d (2-D, symmetric padding); grouped / depthwise and
+  Conv, ConvTranspose            -> conv2d, conv_transpose2d (2-D, symmetric padding; output_padding as a crop of a
+                                    layer padded less); grouped / depthwise and
                                     dilated kernels expanded to the dense kernel they equal (zeros outside the groups
                                     and between the taps: exact, at group x the multiply-adds)
   Pad (zeros, H and W) read only by Conv -> the convolutions' padding
@@ -23,7 +24,8 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Relu, LeakyRelu, Tanh, Sigmoid, Exp, Softplus, Erf (GELU's), Clip(min=0) -> activation (fused into the convolution
                                     before it, or into the convolutions that read it, where that is exact)
   MaxPool (ceil_mode 0, dilation 1, each pad below its kernel side) -> max_pool2d
-  GlobalAveragePool, ReduceMean over H and W (keepdims) -> global_avg_pool
+  GlobalAveragePool, ReduceMean over H and W -> global_avg_pool; Flatten, Reshape, Unsqueeze, Squeeze of its result
+                                    -> the same tensor, Gemm / MatMul on it -> a 1 x 1 conv2d
   InstanceNormalization          -> instance_norm
   Reshape [0, G, -1] + InstanceNormalization + Reshape(Shape(x)) (GroupNorm as PyTorch exports it) -> group_norm
   Clip with other bounds (ReLU6)  -> x - relu(x - hi) + relu(lo - x) as affine, activation and add nodes
@@ -69,6 +71,7 @@ SUPPORTED_OPS = ("Conv", "ConvTranspose", "BatchNormalization", "Relu", "LeakyRe
                  "Softplus", "Erf", "Clip", "Concat", "Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Dropout",
                  "Identity", "Constant", "Pad", "DepthToSpace", "SpaceToDepth", "Resize", "AveragePool", "MaxPool",
                  "GlobalAveragePool", "ReduceMean", "InstanceNormalization", "PRelu", "ConstantOfShape", "Reshape",
+                 "Flatten",
                  "Slice", "Transpose", "Unsqueeze", "Squeeze",
                  "Sin", "Cos", "IsNaN", "IsInf", "Where", "Cast", "And", "Greater", "Less")
 
@@ -630,9 +633,16 @@ class _Importer:
             raise self.fail(node, f"strides {strides}: only equal strides along H and W are supported")
         if len(pads) != 4 or len(set(pads)) != 1:
             raise self.fail(node, f"pads {pads}: only the same padding on every side is supported")
+        crop = 0  # output_padding o: the layer with padding p - o, then its first o rows and columns cropped
         if transpose:
-            if any(p != 0 for p in attrs.get("output_padding", [0, 0])):
-                raise self.fail(node, f"output_padding {attrs['output_padding']}: only 0 is supported")
+            out_pad = [int(v) for v in attrs.get("output_padding", [0, 0])]
+            if any(out_pad):
+                if len(out_pad) != 2 or out_pad[0] != out_pad[1] or not 0 < out_pad[0] < strides[0] \
+                        or out_pad[0] > pads[0]:
+                    raise self.fail(node, f"output_padding {out_pad} with stride {strides[0]}, pads {pads}: the same "
+                                          "output_padding along H and W, below the stride and at most the padding, "
+                                          "is supported")
+                crop = out_pad[0]
             if "output_shape" in attrs:
                 raise self.fail(node, "output_shape is not supported; give pads")
             if w.shape[0] != cin:
@@ -647,10 +657,20 @@ class _Importer:
         if self.layout == "nc":
             raise self.fail(node, "a convolution on an [N, C] item list")
         key = node.name
-        self.emit(node, "conv_transpose2d" if transpose else "conv2d", [x], self.out(node, cout), **{
-            "in": cin, "out": cout, "kernel": [kh, kw], "stride": strides[0], "pad": pads[0],
+        # output_padding o (ONNX: o more rows and columns at the bottom and right, rows p .. of the full transposed
+        # convolution): the layer padded p - o gives rows p - o .., o more at each end; cropping the first o of them
+        # (a pad2d of -o at the top and left) leaves exactly ONNX's rows. Exact.
+        out = self.fresh(f"{node.output[0]}/uncropped", self.taken) if crop else self.out(node, cout)
+        if crop:
+            self.channels[out] = cout
+        self.emit(node, "conv_transpose2d" if transpose else "conv2d", [x], out, **{
+            "in": cin, "out": cout, "kernel": [kh, kw], "stride": strides[0], "pad": pads[0] - crop,
             "weight": self.put_weight(key + ".weight", w),
             "bias": self.put_weight(key + ".bias", b) if b is not None else None})
+        if crop:
+            self.ir.append({"name": self.fresh(f"{node.name}/output_padding", self.node_names), "op": "pad2d",
+                            "inputs": [out], "output": self.out(node, cout), "pads": [-crop, -crop, 0, 0],
+                            "mode": "constant"})
         if x in self.unit and not transpose and kh == kw == 1 and strides[0] == 1 and pads[0] == 0:
             self.unit.add(node.output[0])  # a 1 x 1 layer keeps one value a channel
 
@@ -747,14 +767,14 @@ class _Importer:
         if pads.dtype.kind not in "iu":  # ONNX says int64; a float tensor (NaN, 1.5) is no padding
             raise self.fail(node, f"pads of type {pads.dtype}: integers expected")
         pads = [int(p) for p in pads]
-        if len(pads) != 8 or any(pads[i] for i in (0, 1, 4, 5)) or min(pads) < 0:
-            raise self.fail(node, f"pads {pads}: only non-negative padding of H and W is supported")
+        if len(pads) != 8 or any(pads[i] for i in (0, 1, 4, 5)) or min(pads) < -_constants.GRAPH_MAX_PAD:
+            raise self.fail(node, f"pads {pads}: only padding (or cropping: negative) of H and W is supported")
         if not any(pads):  # what torch.onnx writes before an AvgPool2d without padding
             self.alias[node.output[0]] = x
             return
         sides = [pads[2], pads[3], pads[6], pads[7]]  # top, left, bottom, right
         readers = self.readers.get(node.output[0], [])
-        if mode == "constant" and value == 0 and readers and node.output[0] != self.output_name \
+        if mode == "constant" and value == 0 and min(sides) >= 0 and readers and node.output[0] != self.output_name \
                 and all(r.op_type in ("Conv", "AveragePool") for r in readers):
             self.zero_pads[node.output[0]] = (x, sides)
             return
@@ -916,6 +936,19 @@ class _Importer:
     def _dense(self, node, x, weight, bias):
         """weight [out, in] float64, bias [out] or None."""
         cin = self.channels[x]
+        if self.layout != "nc" and x in self.unit:
+            # A fully connected layer on one value a channel (squeeze-excitation written with Linear layers, after a
+            # Flatten or a mean over H and W): a 1 x 1 convolution of the C x 1 x 1 tensor.
+            if weight.shape[1] != cin:
+                raise self.fail(node, f"the weight takes {weight.shape[1]} inputs, the input has {cin} channels")
+            cout = int(weight.shape[0])
+            out = self.out(node, cout)
+            self.emit(node, "conv2d", [x], out, **{
+                "in": cin, "out": cout, "kernel": [1, 1], "stride": 1, "pad": 0,
+                "weight": self.put_weight(node.name + ".weight", weight.reshape(cout, cin, 1, 1)),
+                "bias": self.put_weight(node.name + ".bias", bias) if bias is not None else None})
+            self.unit.add(out)
+            return
         if self.layout != "nc":
             raise self.fail(node, "a matrix product on an image: ngi maps Gemm/MatMul on [N, C] item lists only "
                                   "(use a 1 x 1 Conv for a per-pixel layer)")
@@ -1110,7 +1143,9 @@ class _Importer:
             raise self.fail(node, "axes as an input (opset 18) are not supported")
         given = [int(a) for a in attrs.get("axes", [])]
         axes = sorted(a % 4 for a in given if -4 <= a < 4)
-        if self.layout == "nc" or len(given) != 2 or axes != [2, 3] or not attrs.get("keepdims", 1):
+        # keepdims 0 ([1, C], x.mean((2, 3))): the same C x 1 x 1 tensor, which Flatten, Reshape and Unsqueeze keep
+        # and Gemm reads as a 1 x 1 convolution.
+        if self.layout == "nc" or len(given) != 2 or axes != [2, 3]:
             raise self.fail(node, f"axes {list(attrs.get('axes', []))}, keepdims {attrs.get('keepdims', 1)}: only the "
                                   "mean over H and W of an image with the axes kept maps (a global average pool)")
         self._global_mean(node)
@@ -1165,6 +1200,36 @@ class _Importer:
         if not (0 < eps <= 1.0) or np.float32(eps) == 0 or not np.isfinite(np.float32(eps)):
             raise self.fail(node, f"epsilon {eps}: ngi's normalization takes a positive float32 epsilon up to 1")
         return float(np.float32(eps))
+
+    def _unit_view(self, node, what):
+        """Flatten, Reshape, Unsqueeze, Squeeze of a tensor of one value a channel: the same tensor (C x 1 x 1)."""
+        x = self.tensor(node, node.input[0])
+        if x not in self.unit:
+            raise self.fail(node, f"{what} of a computed tensor is supported only on one value a channel (a global "
+                                  "pool's result, squeeze-excitation); ngi's tensors are C x H x W")
+        if what == "Reshape":
+            shape = self.const(node.input[1]) if len(node.input) > 1 else None
+            dims = None if shape is None else [int(d) for d in np.asarray(shape).reshape(-1)]
+            c = self.channels[x]
+            if dims is None or not 2 <= len(dims) <= 4 or dims[0] not in (0, 1, -1) or dims[1] not in (0, c, -1) \
+                    or any(d != 1 for d in dims[2:]) or dims.count(-1) > 1:
+                raise self.fail(node, f"shape {dims}: a reshape of a [1, {c}, 1, 1] tensor to [1, {c}] or "
+                                      f"[1, {c}, 1, 1] is supported")
+        self.alias[node.output[0]] = x
+
+    def op_Flatten(self, node, attrs):
+        if int(attrs.get("axis", 1)) != 1:
+            raise self.fail(node, f"axis {attrs.get('axis')}: a Flatten from axis 1 is supported")
+        self._unit_view(node, "Flatten")
+
+    def op_Reshape(self, node, attrs):
+        self._unit_view(node, "Reshape")
+
+    def op_Unsqueeze(self, node, attrs):
+        self._unit_view(node, "Unsqueeze")
+
+    def op_Squeeze(self, node, attrs):
+        self._unit_view(node, "Squeeze")
 
     def op_InstanceNormalization(self, node, attrs):
         if node.name in self.group_norms:
@@ -1570,10 +1635,11 @@ def _check_loader_limits(config, channels, path):
         if len(n.get("inputs", [])) > c.GRAPH_MAX_NODE_INPUTS:
             raise ConversionError(f"{where}: {len(n['inputs'])} inputs; ngi takes at most {c.GRAPH_MAX_NODE_INPUTS}")
         limits = {"in": (1, c.GRAPH_MAX_CHANNELS), "out": (1, c.GRAPH_MAX_CHANNELS),
-                  "stride": (1, c.GRAPH_MAX_STRIDE), "pad": (0, c.GRAPH_MAX_PAD)}
+                  "stride": (1, c.GRAPH_MAX_STRIDE), "pad": (0, c.GRAPH_MAX_PAD),
+                  "pads": (-c.GRAPH_MAX_PAD, c.GRAPH_MAX_PAD)}  # pad2d crops with negative pads
         # stride and pads are lists on max_pool2d ([h, w], [top, left, bottom, right]), numbers elsewhere
-        values = [(k, v) for k in limits if k in n for v in (n[k] if isinstance(n[k], list) else [n[k]])]
-        values += [("pad", v) for v in n.get("pads", [])] + [("kernel", k) for k in n.get("kernel", [])]
+        values = [(k, v) for k in limits if k in n and k != "pads" for v in (n[k] if isinstance(n[k], list) else [n[k]])]
+        values += [("pads", v) for v in n.get("pads", [])] + [("kernel", k) for k in n.get("kernel", [])]
         for key, v in values:
             lo, hi = limits.get(key, (1, c.GRAPH_MAX_KERNEL))
             if not lo <= v <= hi:

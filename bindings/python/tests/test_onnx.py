@@ -239,6 +239,40 @@ class _DiffusersBlock(torch.nn.Module):
         return f.interpolate(y, scale_factor=0.75, mode="bilinear", align_corners=True)
 
 
+class _TransposeOutputPadding(torch.nn.Module):
+    """ConvTranspose with output_padding (the decoder of many autoencoders: stride 2, kernel 3, padding 1,
+    output_padding 1 doubles the size exactly), and a crop written as a negative F.pad."""
+
+    def __init__(self):
+        super().__init__()
+        self.up = torch.nn.ConvTranspose2d(3, 6, 3, stride=2, padding=1, output_padding=1)
+        self.up3 = torch.nn.ConvTranspose2d(6, 3, 5, stride=3, padding=2, output_padding=2)
+
+    def forward(self, x):
+        y = torch.relu(self.up(x))
+        return torch.nn.functional.pad(self.up3(y), (-1, 0, -2, -1))
+
+
+class _SqueezeExciteLinear(torch.nn.Module):
+    """Squeeze-excitation as many ResNets write it: a mean over H and W (keepdims off), Linear layers, the gate
+    reshaped with view(b, c, 1, 1); and a second gate through Flatten and an Unsqueeze."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(4, 8, 3, padding=1)
+        self.fc1 = torch.nn.Linear(8, 2)
+        self.fc2 = torch.nn.Linear(2, 8)
+        self.fc3 = torch.nn.Linear(8, 8)
+
+    def forward(self, x):
+        y = torch.relu(self.conv(x))
+        b, c = y.shape[:2]
+        s = torch.sigmoid(self.fc2(torch.relu(self.fc1(y.mean((2, 3))))))
+        y = y * s.view(b, c, 1, 1)
+        t = torch.tanh(self.fc3(torch.flatten(torch.nn.functional.adaptive_avg_pool2d(y, 1), 1)))
+        return y + t[:, :, None, None]
+
+
 @pytest.mark.parametrize("opset", [13, 17])
 @pytest.mark.parametrize("name,make,channels", [("mobile", _MobileBlock, 3), ("mobile_v2", _MobileV2Block, 4),
                                                 ("espcn", _Espcn, 3),
@@ -246,7 +280,9 @@ class _DiffusersBlock(torch.nn.Module):
                                                 ("maxpool_unet", _MaxPoolUnet, 3), ("squeeze_excite", _SqueezeExcite, 4),
                                                 ("instance_norm_gelu", _InstanceNormGelu, 3),
                                                 ("prelu_per_channel", _PReluPerChannel, 3),
-                                                ("diffusers_block", _DiffusersBlock, 3)])
+                                                ("diffusers_block", _DiffusersBlock, 3),
+                                                ("squeeze_excite_linear", _SqueezeExciteLinear, 4),
+                                                ("transpose_output_padding", _TransposeOutputPadding, 3)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
     # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
@@ -800,7 +836,7 @@ WEIGHT = {"c.weight": np.ones((3, 2, 3, 3), np.float32)}
     ([{"name": "p", "op": "pad2d", "inputs": ["x"], "output": "y", "pads": [1, 1, 1, 1], "mode": "wrap"}], {},
      "node 'p' (pad2d): 'mode' must be"),
     ([{"name": "p", "op": "pad2d", "inputs": ["x"], "output": "y", "pads": [1, 1, 65, 1], "mode": "edge"}], {},
-     "node 'p' (pad2d): 'pads' must be [top, left, bottom, right], integers in 0..64"),
+     "node 'p' (pad2d): 'pads' must be [top, left, bottom, right], integers in -64..64"),
     ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 100],
        "coordinate": "half_pixel"}], {}, "node 'r' (resize_bilinear): 'scales' must be [h, w], numbers in [1/64, 64]"),
     ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 2],
@@ -850,7 +886,7 @@ def test_new_pooling_and_normalization_refusals_name_the_node(tmp_path):
          "each pad must be below its kernel side"),
         (helper.make_node("MaxPool", ["x"], ["y"], name="p", kernel_shape=[2, 2], dilations=[2, 2]), "dilations 1"),
         (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[1]), "only the mean over H and W"),
-        (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[2, 3], keepdims=0), "only the mean over H and W"),
+        (helper.make_node("ReduceMean", ["x"], ["y"], name="p", axes=[-1, -3]), "only the mean over H and W"),
         (helper.make_node("InstanceNormalization", ["x", "x", "x"], ["y"], name="p"), "scale and bias must be constants"),
         (helper.make_node("Pad", ["x", "pads"], ["y"], name="p", mode="wrap"), "mode wrap"),
         (helper.make_node("Resize", ["x", "", "scales"], ["y"], name="p", mode="cubic"), "mode cubic"),

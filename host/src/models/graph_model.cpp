@@ -456,10 +456,11 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             node.out_channels = cin;
         } else if (node.op == "pad2d") {
             if (nc) throw bad("layout \"nc\" has no spatial axes to pad");
-            const std::string rule = "'pads' must be [top, left, bottom, right], integers in 0.." + std::to_string(kMaxPad);
+            const std::string rule = "'pads' must be [top, left, bottom, right], integers in -" +
+                                     std::to_string(kMaxPad) + ".." + std::to_string(kMaxPad) + " (negative: a crop)";
             if (!n.contains("pads") || !n["pads"].is_array() || n["pads"].size() != 4) throw bad(rule);
             for (const auto& p : n["pads"])
-                if (!is_int_in(p, 0, kMaxPad)) throw bad(rule);
+                if (!is_int_in(p, -kMaxPad, kMaxPad)) throw bad(rule);
             if (!n.contains("mode") || !n["mode"].is_string() ||
                 (n["mode"] != "constant" && n["mode"] != "reflect" && n["mode"] != "edge"))
                 throw bad("'mode' must be \"constant\", \"reflect\" or \"edge\"");

@@ -41,8 +41,6 @@ std::string pad_mode_name(PadMode m) {
 
 Pad2d::Pad2d(Context& ctx, const PadGeometry& geom) : geom_(geom) {
     const auto& g = geom;
-    if (g.top < 0 || g.left < 0 || g.bottom < 0 || g.right < 0)
-        throw InputError(std::string(kOp) + ": invalid geometry (" + geometry_text(g) + "): pads must be >= 0");
     if (g.mode != PadMode::Constant && g.mode != PadMode::Reflect && g.mode != PadMode::Edge)
         throw InputError(std::string(kOp) + ": unknown mode " + std::to_string(int(g.mode)) +
                          " (constant 0, reflect 1, edge 2)");
@@ -70,6 +68,8 @@ Shape Pad2d::output_shape(const Shape& in) const {
                                  to_string(in) + ", " + geometry_text(g) + ")");
     }
     const long long oh = (long long)in.h + g.top + g.bottom, ow = (long long)in.w + g.left + g.right;
+    if (oh < 1 || ow < 1)  // negative pads crop (ONNX Pad allows them): not the whole input
+        throw InputError(std::string(kOp) + ": " + geometry_text(g) + " crops the whole input " + to_string(in));
     // The kernel indexes outputs and input planes with 32-bit ints.
     if (in.size() > std::size_t(INT_MAX) || oh > INT_MAX || ow > INT_MAX || (long long)in.c * oh * ow > INT_MAX)
         throw InputError(std::string(kOp) + ": input " + to_string(in) + " or its padded output " +

@@ -1,6 +1,6 @@
 // 2D padding (kernels/pad2d.cl): ONNX Pad over the H and W axes (modes constant, reflect, edge) / PyTorch F.pad
 // with 4 pads (constant, reflect, replicate), on a planar C x H x W tensor (batch 1; a batch N is folded into
-// C = N * channels, since every plane pads on its own). Pads are >= 0 and may be asymmetric; reflect mirrors about
+// C = N * channels, since every plane pads on its own). Pads may be asymmetric, and negative (a crop, as ONNX Pad allows); reflect mirrors about
 // the edge pixel without repeating it and needs every pad below its axis' size. Exact: every output is an input or
 // the constant.
 #pragma once
@@ -32,7 +32,7 @@ inline std::string pad2d_defines() {
                          define("PAD2D_REFLECT", int(PadMode::Reflect)), define("PAD2D_EDGE", int(PadMode::Edge))});
 }
 
-// Pads in ONNX's order of axes (top and bottom pad H, left and right pad W), each >= 0; the mode; the constant
+// Pads in ONNX's order of axes (top and bottom pad H, left and right pad W), negative ones crop; the mode; the constant
 // mode's value (any float, NaN and +-Inf included; ignored by the other modes).
 struct PadGeometry {
     int top = 0, left = 0, bottom = 0, right = 0;
@@ -42,7 +42,7 @@ struct PadGeometry {
 
 class Pad2d {
 public:
-    // Throws InputError naming "pad2d" and the values for a negative pad or an unknown mode.
+    // Throws InputError naming "pad2d" and the values for an unknown mode.
     Pad2d(Context& ctx, const PadGeometry& geom);
     // {C, H + top + bottom, W + left + right}; throws InputError for an empty input, a reflect pad not below its
     // axis' size (top or bottom >= H, left or right >= W), or a tensor of 2^31 floats or more.
