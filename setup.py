@@ -8,9 +8,12 @@ Environment:
   NGI_PIP_CMAKE_ARGS      extra arguments for the CMake configure of a fresh build (build-pip/cmake).
 Without NGI_PIP_BUILD_DIR the build tree is build-pip/cmake (Release; no tests, benchmarks or GL viewer), kept for
 the next install. setuptools' own staging goes to build-pip/ too (<NGI_PIP_BUILD_DIR>/pip when that is given),
-never to setuptools' default ./build (the developers' CMake tree).
+never to setuptools' default ./build (the developers' CMake tree). A source tree that is not writable (a read-only
+checkout, a mounted source) builds in the user's cache instead: ${XDG_CACHE_HOME:-~/.cache}/ngi/build-pip-<hash of
+the source path>.
 """
 
+import hashlib
 import os
 import re
 import shlex
@@ -27,6 +30,9 @@ from setuptools.dist import Distribution
 ROOT = Path(__file__).resolve().parent
 # setuptools' staging (and, without NGI_PIP_BUILD_DIR, the CMake tree): build-pip/, or <NGI_PIP_BUILD_DIR>/pip.
 PIP_DIR = ROOT / "build-pip"
+if not os.access(ROOT, os.W_OK) and not os.access(PIP_DIR, os.W_OK):  # a read-only source tree
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    PIP_DIR = cache / "ngi" / ("build-pip-" + hashlib.sha256(str(ROOT).encode()).hexdigest()[:12])
 if os.environ.get("NGI_PIP_BUILD_DIR"):
     PIP_DIR = Path(os.environ["NGI_PIP_BUILD_DIR"]).resolve() / "pip"
 PIP_DIR.mkdir(parents=True, exist_ok=True)  # egg_info's egg_base must exist

@@ -9,7 +9,7 @@
 // Meshes: "knot:seed=1" (any scene spec: ngi::make_scene(spec).mesh; when the scene has no triangles or its
 // family is unknown, the benchmark's own torus-knot tube of ~100k triangles stands in), "tube:N" (this file's
 // (2, 3) torus-knot tube of ~N triangles), "bunny" (--bunny PATH, by default tools/fetch_bunny.sh's output
-// $NGI_ASSET_DIR/bunny.obj, else build/assets/bunny.obj; skipped when absent), "file:PATH" (any mesh
+// $NGI_ASSET_DIR/bunny.obj, else $XDG_CACHE_HOME or ~/.cache + /ngi/assets/bunny.obj; skipped when absent), "file:PATH" (any mesh
 // ngi::load_mesh reads).
 // Rays (8 floats each, the layout DeviceBvh::trace takes), the same array for both tracers:
 //   primary  a pinhole camera, size x size pixels, looking at the centre of the mesh's bounding box from outside
@@ -540,7 +540,12 @@ int main(int argc, char** argv) {
         const auto device_specs = split(arg(argc, argv, "--devices", arg(argc, argv, "--device", "pocl")));
         const auto mesh_specs = split(arg(argc, argv, "--meshes", "knot:seed=1,bunny,tube:1000000"));
         const char* assets = std::getenv("NGI_ASSET_DIR");
-        const std::string bunny = arg(argc, argv, "--bunny", std::string(assets && *assets ? assets : "build/assets") + "/bunny.obj");
+        // tools/fetch_bunny.sh's default: $NGI_ASSET_DIR, else the user's cache directory.
+        const char* xdg = std::getenv("XDG_CACHE_HOME");
+        const char* home = std::getenv("HOME");
+        const std::string cache = xdg && *xdg ? std::string(xdg) : std::string(home && *home ? home : ".") + "/.cache";
+        const std::string bunny =
+            arg(argc, argv, "--bunny", (assets && *assets ? std::string(assets) : cache + "/ngi/assets") + "/bunny.obj");
         const auto ray_sets = split(arg(argc, argv, "--rays", "primary,bounce,shadow"));
         const int size = std::stoi(arg(argc, argv, "--size", "512"));
         const int repeats = std::max(1, std::stoi(arg(argc, argv, "--repeats", "9")));

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fetches the Stanford bunny and writes it as an OBJ that `ngi render --scene <path>` and load_mesh take:
-#   $NGI_ASSET_DIR/bunny.obj       (default: build/assets/bunny.obj)
+#   $NGI_ASSET_DIR/bunny.obj       (default: ${XDG_CACHE_HOME:-~/.cache}/ngi/assets/bunny.obj: a user directory, so a
+#                                  read-only checkout or an installed ngi works too)
 # Source: the npm package "bunny" (public domain; a Stanford scan's `positions` and `cells`: 1,839 vertices,
 # 3,674 triangles), installed with npm into $NGI_ASSET_DIR/npm and converted with node. The OBJ is scaled so the
 # bunny stands 40 m tall on y = 0 (x and z centred on 0): the size of the procedural mesh families and of the
@@ -11,7 +12,7 @@
 # needs the bunny. Prints the OBJ's path on stdout when it exists.
 set -uo pipefail
 cd "$(dirname "$0")/.."
-assets=${NGI_ASSET_DIR:-$PWD/build/assets}
+assets=${NGI_ASSET_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ngi/assets}
 out=$assets/bunny.obj
 version=1.0.1  # pinned: the same bunny (and the same OBJ bytes) everywhere
 if [[ -s "$out" ]]; then echo "$out"; exit 0; fi

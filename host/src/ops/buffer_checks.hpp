@@ -1,9 +1,11 @@
 // Checks an op makes of the raw cl_mem buffers a caller hands it: present, and large enough for the shapes given.
 // One place for the wording, so every op's error names the op, the buffer, the bytes it holds and what needs more.
 #pragma once
+#include <climits>
 #include <string>
 
 #include "ngi/error.hpp"
+#include "ops/view.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {
@@ -23,6 +25,14 @@ inline void require_buffer(cl_mem m, std::size_t need, const std::string& op, co
     if (have < need)
         throw InputError(op + ": the " + name + " buffer holds " + std::to_string(have) + " bytes, " + for_what +
                          " needs " + std::to_string(need));
+}
+
+// Throws InputError "<op>: the <name> tensor ... lies beyond 2^31 - 1 floats of its buffer" when a kernel that
+// indexes with 32-bit ints could not reach all of `v` (its offset plus its size).
+inline void require_int_indexable(const View& v, const std::string& op, const char* name) {
+    if ((unsigned long long)v.offset + v.shape.size() > (unsigned long long)INT_MAX)
+        throw InputError(op + ": the " + name + " tensor " + to_string(v.shape) + " at offset " +
+                         std::to_string(v.offset) + " lies beyond 2^31 - 1 floats of its buffer");
 }
 
 }  // namespace ngi::detail

@@ -7,11 +7,13 @@
 #include <numeric>
 #include <string>
 
+#include "ops/buffer_checks.hpp"
+
 namespace ngi::detail {
 
 namespace {
 
-constexpr const char* kOp = "resize_bilinear";
+constexpr const char* kResizeOp = "resize_bilinear";
 
 // The shortest decimal that reads back as v ("0.6", "1e-30", "nan", "inf").
 std::string float_text(float v) {
@@ -43,7 +45,7 @@ AxisMap axis_map(int in, int out, float scale, ResizeCoord mode, const char* axi
     // rounding in the checks below.
     const double limit = 2305843009213693952.0;  // 2^61
     auto too_far = [&](const std::string& why) {
-        return InputError(std::string(kOp) + ": the " + axis + " scale " + float_text(scale) + " with input " + axis +
+        return InputError(std::string(kResizeOp) + ": the " + axis + " scale " + float_text(scale) + " with input " + axis +
                           " " + std::to_string(in) + " and output " + axis + " " + std::to_string(out) + ": " + why);
     };
     if (single) {
@@ -87,12 +89,6 @@ AxisMap axis_map(int in, int out, float scale, ResizeCoord mode, const char* axi
     return m;
 }
 
-void check_int_range(const View& v, const char* name) {
-    if ((unsigned long long)v.offset + v.shape.size() > (unsigned long long)INT_MAX)
-        throw InputError(std::string(kOp) + ": the " + name + " tensor " + to_string(v.shape) + " at offset " +
-                         std::to_string(v.offset) + " lies beyond 2^31 - 1 floats of its buffer");
-}
-
 }  // namespace
 
 std::string resize_coord_name(ResizeCoord m) {
@@ -109,25 +105,25 @@ ResizeBilinear::ResizeBilinear(Context& ctx, const ResizeGeometry& geom) : geom_
     const auto& g = geom;
     if (g.mode != ResizeCoord::HalfPixel && g.mode != ResizeCoord::PytorchHalfPixel &&
         g.mode != ResizeCoord::AlignCorners && g.mode != ResizeCoord::Asymmetric)
-        throw InputError(std::string(kOp) + ": unknown coordinate transformation mode " + std::to_string(int(g.mode)) +
+        throw InputError(std::string(kResizeOp) + ": unknown coordinate transformation mode " + std::to_string(int(g.mode)) +
                          " (half_pixel 0, pytorch_half_pixel 1, align_corners 2, asymmetric 3)");
     if (g.out_h < 1 || g.out_w < 1)
-        throw InputError(std::string(kOp) + ": invalid geometry (" + geometry_text(g) +
+        throw InputError(std::string(kResizeOp) + ": invalid geometry (" + geometry_text(g) +
                          "): the output size must be >= 1");
     for (const auto& [scale, axis] : {std::pair{g.scale_h, "height"}, std::pair{g.scale_w, "width"}})
         if (!std::isfinite(scale) || scale < 0.0f)
-            throw InputError(std::string(kOp) + ": invalid geometry (" + geometry_text(g) + "): the " + axis +
+            throw InputError(std::string(kResizeOp) + ": invalid geometry (" + geometry_text(g) + "): the " + axis +
                              " scale must be positive and finite (0: output / input)");
     kernel_ = ctx.kernel("resize", "resize_bilinear", resize_defines());
 }
 
 Shape ResizeBilinear::output_shape(const Shape& in) const {
-    if (in.c < 1 || in.h < 1 || in.w < 1) throw InputError(std::string(kOp) + ": empty input " + to_string(in));
+    if (in.c < 1 || in.h < 1 || in.w < 1) throw InputError(std::string(kResizeOp) + ": empty input " + to_string(in));
     const auto& g = geom_;
     const Shape out{in.c, g.out_h, g.out_w};
     // The kernel indexes outputs and input planes with 32-bit ints.
     if (in.size() > std::size_t(INT_MAX) || out.size() > std::size_t(INT_MAX))
-        throw InputError(std::string(kOp) + ": input " + to_string(in) + " or output " + to_string(out) +
+        throw InputError(std::string(kResizeOp) + ": input " + to_string(in) + " or output " + to_string(out) +
                          " holds 2^31 floats or more");
     axis_map(in.h, out.h, g.scale_h, g.mode, "height");
     axis_map(in.w, out.w, g.scale_w, g.mode, "width");
@@ -137,11 +133,11 @@ Shape ResizeBilinear::output_shape(const Shape& in) const {
 void ResizeBilinear::enqueue(Context& ctx, const View& x, const View& y, std::vector<cl_event>* events) {
     const Shape out = output_shape(x.shape);
     if (!(y.shape == out))
-        throw InputError(std::string(kOp) + ": the output is " + to_string(y.shape) + ", input " + to_string(x.shape) +
+        throw InputError(std::string(kResizeOp) + ": the output is " + to_string(y.shape) + ", input " + to_string(x.shape) +
                          " resizes to " + to_string(out));
-    if (!x.mem || !y.mem) throw InputError(std::string(kOp) + ": the " + (x.mem ? "output" : "input") + " buffer is null");
-    check_int_range(x, "input");
-    check_int_range(y, "output");
+    if (!x.mem || !y.mem) throw InputError(std::string(kResizeOp) + ": the " + (x.mem ? "output" : "input") + " buffer is null");
+    require_int_indexable(x, kResizeOp, "input");
+    require_int_indexable(y, kResizeOp, "output");
     const auto& g = geom_;
     const AxisMap mh = axis_map(x.shape.h, out.h, g.scale_h, g.mode, "height");
     const AxisMap mw = axis_map(x.shape.w, out.w, g.scale_w, g.mode, "width");
