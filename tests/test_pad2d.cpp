@@ -15,6 +15,7 @@
 
 #include "ops/pad2d.hpp"
 #include "reference.hpp"
+#include "guarded_op.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
@@ -39,24 +40,12 @@ std::string describe(const Case& k) {
     return s.str();
 }
 
-// Runs the op on x (at an offset inside a bigger buffer whose other words are NaN: a read outside the input poisons
-// an output) into y (at an offset, between sentinels: a write outside y changes one). Returns y.
+// Runs the op on x between guards (tests/guarded_op.hpp); returns y.
 std::vector<float> run_pad(const Case& k, const std::vector<float>& x, Shape& out) {
-    auto& c = test::ctx();
-    constexpr std::size_t kXOff = 3, kYOff = 7, kTail = 5;
-    constexpr float kSentinel = 1234.5f;
-    Pad2d op(c, k.g);
+    Pad2d op(test::ctx(), k.g);
     const Shape in{k.c, k.h, k.w};
     out = op.output_shape(in);
-    std::vector<float> xs(kXOff + x.size() + kTail, kNaN);
-    std::copy(x.begin(), x.end(), xs.begin() + kXOff);
-    Buffer xb = test::upload(xs);
-    Buffer yb = test::upload(std::vector<float>(kYOff + out.size() + kTail, kSentinel));
-    op.enqueue(c, View{xb.get(), kXOff, in}, View{yb.get(), kYOff, out});
-    const std::vector<float> all = test::download(yb, kYOff + out.size() + kTail);
-    for (std::size_t i = 0; i < kYOff; ++i) CHECK(all[i] == kSentinel);
-    for (std::size_t i = kYOff + out.size(); i < all.size(); ++i) CHECK(all[i] == kSentinel);
-    return std::vector<float>(all.begin() + kYOff, all.begin() + kYOff + std::ptrdiff_t(out.size()));
+    return test::run_guarded(x, in, out, [&](Context& c, const View& xv, const View& yv) { op.enqueue(c, xv, yv); });
 }
 
 // Elements whose bits differ (a copy keeps every bit: NaN payloads, the sign of zero), the first reported.

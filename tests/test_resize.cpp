@@ -22,6 +22,7 @@
 
 #include "ops/resize.hpp"
 #include "reference.hpp"
+#include "guarded_op.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
@@ -51,25 +52,13 @@ std::string describe(const Case& k) {
     return s.str();
 }
 
-// Runs the op on x (at an offset inside a bigger buffer whose other words are NaN: a read outside the input poisons
-// an output) into y (at an offset, between sentinels: a write outside y changes one). Returns y.
+// Runs the op on x between guards (tests/guarded_op.hpp); returns y.
 std::vector<float> run_resize(const Case& k, const std::vector<float>& x) {
-    auto& c = test::ctx();
-    constexpr std::size_t kXOff = 5, kYOff = 3, kTail = 7;
-    constexpr float kSentinel = 1234.5f;
-    ResizeBilinear op(c, k.g);
+    ResizeBilinear op(test::ctx(), k.g);
     const Shape in{k.c, k.h, k.w};
     const Shape out = op.output_shape(in);
     REQUIRE(out == Shape{k.c, k.g.out_h, k.g.out_w});
-    std::vector<float> xs(kXOff + x.size() + kTail, kNaN);
-    std::copy(x.begin(), x.end(), xs.begin() + kXOff);
-    Buffer xb = test::upload(xs);
-    Buffer yb = test::upload(std::vector<float>(kYOff + out.size() + kTail, kSentinel));
-    op.enqueue(c, View{xb.get(), kXOff, in}, View{yb.get(), kYOff, out});
-    const std::vector<float> all = test::download(yb, kYOff + out.size() + kTail);
-    for (std::size_t i = 0; i < kYOff; ++i) CHECK(all[i] == kSentinel);
-    for (std::size_t i = kYOff + out.size(); i < all.size(); ++i) CHECK(all[i] == kSentinel);
-    return std::vector<float>(all.begin() + kYOff, all.begin() + kYOff + std::ptrdiff_t(out.size()));
+    return test::run_guarded(x, in, out, [&](Context& c, const View& xv, const View& yv) { op.enqueue(c, xv, yv); });
 }
 
 // max |x| over the finite values of x (1e-30 when none).
