@@ -11,7 +11,7 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
                                     and between the taps: exact, at group x the multiply-adds)
   Pad (zeros, H and W) read only by Conv -> the convolutions' padding
   Pad (reflect, edge, a constant, or zeros read by other nodes) -> pad2d
-  Resize (linear = bilinear, by constant scales)            -> resize_bilinear
+  Resize (linear = bilinear, by constant scales, or to a size: F.interpolate(size=...)) -> resize_bilinear
   DepthToSpace (DCR, CRD: PixelShuffle), Resize (nearest, one integer factor), AveragePool (square kernel; padding
                                     only with count_include_pad) -> conv2d / conv_transpose2d whose kernel copies or
                                     averages each channel (exact up to float summation order)
@@ -515,6 +515,13 @@ class _Importer:
                 if found is not None:
                     self.group_norms[node.name] = found
                     self.done.update(n.name for n in found[1:4])
+        # A bilinear resize to a fixed size (F.interpolate(size=...)): sizes = Concat(Slice(Shape(x), 0, 2), [h, w]).
+        self.resize_sizes = {}
+        for node in self.nodes:
+            found = self._resize_sizes(node)
+            if found is not None:
+                self.resize_sizes[node.name] = found[0]
+                self.done.update(n.name for n in found[1])
         # Every node that cannot be mapped is reported in one pass (issue 48): a failed node's outputs are marked, and
         # the nodes reading them are skipped (they fail only because of it).
         failures, failed = [], set()
@@ -859,6 +866,11 @@ class _Importer:
             ("nearest_mode", "round_prefer_floor")))
         at = 1 if self.opset < 11 else 2  # Resize-10: (X, scales); 11+: (X, roi, scales, sizes)
         scales = self.const(node.input[at]) if len(node.input) > at and node.input[at] else None
+        if (scales is None or np.asarray(scales).size == 0) and node.name in self.resize_sizes:
+            if mode != "linear":
+                raise self.fail(node, f"mode {mode} by sizes: only a bilinear resize takes an output size")
+            self._resize_linear(node, attrs, x, ctm, None, self.resize_sizes[node.name])
+            return
         if scales is None or np.asarray(scales).size == 0:
             raise self.fail(node, "only Resize by constant scales is supported (export with scale_factor, not size)")
         sc = np.asarray(scales, np.float64).reshape(-1)
@@ -881,9 +893,42 @@ class _Importer:
         self._channel_copy(node, x, self.channels[x], f, ((c, c, ones) for c in range(self.channels[x])),
                            "conv_transpose2d", f, 0)
 
-    def _resize_linear(self, node, attrs, x, ctm, sc):
+    def _resize_sizes(self, node):
+        """[h, w] when `node` (a Resize) takes its output size as F.interpolate(size=(h, w)) writes it at opsets
+        11..17: sizes = Concat(Slice(Shape(x), 0, 2), [h, w]) with x the Resize's own input (N and C kept); the
+        constant form [1, C, h, w] too. Else None."""
+        if node.op_type != "Resize" or self.opset < 11 or len(node.input) < 4 or not node.input[3]:
+            return None
+        if len(node.input) > 2 and node.input[2] and self.const(node.input[2]) is not None \
+                and np.asarray(self.const(node.input[2])).size:
+            return None  # scales given
+        sizes = self.const(node.input[3])
+        if sizes is not None:
+            s = [int(v) for v in np.asarray(sizes).reshape(-1)]
+            return (s[2:], []) if len(s) == 4 and s[0] == 1 else None
+        cat = self.producer.get(node.input[3])
+        if cat is None or cat.op_type != "Concat" or len(cat.input) != 2 or self._only_reader(cat.output[0]) is not node:
+            return None
+        hw = self.const(cat.input[1])
+        sl = self.producer.get(cat.input[0])
+        if hw is None or np.asarray(hw).size != 2 or sl is None or sl.op_type != "Slice" \
+                or self._only_reader(sl.output[0]) is not cat:
+            return None
+        bounds = [self.const(i) if i else None for i in sl.input[1:]]
+        if len(bounds) < 2 or any(b is None for b in bounds[:2]) \
+                or [int(np.asarray(b).reshape(-1)[0]) for b in bounds[:2]] != [0, 2] \
+                or (len(bounds) > 2 and bounds[2] is not None and int(np.asarray(bounds[2]).reshape(-1)[0]) != 0) \
+                or (len(bounds) > 3 and bounds[3] is not None and int(np.asarray(bounds[3]).reshape(-1)[0]) != 1):
+            return None
+        shape = self.producer.get(sl.input[0])
+        if shape is None or shape.op_type != "Shape" or shape.input[0] != node.input[0] \
+                or self._only_reader(shape.output[0]) is not sl:
+            return None
+        return [int(v) for v in np.asarray(hw).reshape(-1)], [shape, sl, cat]
+
+    def _resize_linear(self, node, attrs, x, ctm, sc, sizes=None):
         # Bilinear resize by constant scales (F.interpolate(mode="bilinear", scale_factor=s)): resize_bilinear, the
-        # output floor(in * scale) a side as ONNX derives it.
+        # output floor(in * scale) a side as ONNX derives it; or to a fixed output size (size=(h, w)).
         if ctm not in ("half_pixel", "pytorch_half_pixel", "align_corners", "asymmetric"):
             raise self.fail(node, f"coordinate_transformation_mode {ctm}: half_pixel, pytorch_half_pixel, "
                                   "align_corners and asymmetric are supported")
@@ -891,6 +936,12 @@ class _Importer:
             raise self.fail(node, "exclude_outside and antialias are not supported")
         if self.layout == "nc":
             raise self.fail(node, "a spatial op on an [N, C] item list (no H and W axes)")
+        if sizes is not None:
+            if not all(1 <= s <= 65536 for s in sizes):
+                raise self.fail(node, f"sizes {sizes}: output sizes in 1..65536 are supported")
+            self.emit(node, "resize_bilinear", [x], self.out(node, self.channels[x]), sizes=list(sizes),
+                      coordinate=ctm)
+            return
         if sc.size != 4 or sc[0] != 1 or sc[1] != 1 or not all(1 / 64 <= s <= 64 for s in sc[2:]):
             raise self.fail(node, f"scales {list(sc)}: scales of H and W in [1/64, 64] (N and C 1) are supported")
         self.emit(node, "resize_bilinear", [x], self.out(node, self.channels[x]),

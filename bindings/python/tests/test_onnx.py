@@ -253,6 +253,20 @@ class _TransposeOutputPadding(torch.nn.Module):
         return torch.nn.functional.pad(self.up3(y), (-1, 0, -2, -1))
 
 
+class _ResizeToSize(torch.nn.Module):
+    """Bilinear resizes to fixed sizes (F.interpolate(size=...): ONNX sizes from Shape(x)), half-pixel and
+    align-corners, up and down."""
+
+    def __init__(self):
+        super().__init__()
+        self.conv = torch.nn.Conv2d(3, 4, 3, padding=1)
+
+    def forward(self, x):
+        f = torch.nn.functional
+        y = f.interpolate(self.conv(x), size=(23, 9), mode="bilinear", align_corners=False)
+        return f.interpolate(torch.tanh(y), size=(12, 20), mode="bilinear", align_corners=True)
+
+
 class _SqueezeExciteLinear(torch.nn.Module):
     """Squeeze-excitation as many ResNets write it: a mean over H and W (keepdims off), Linear layers, the gate
     reshaped with view(b, c, 1, 1); and a second gate through Flatten and an Unsqueeze."""
@@ -282,7 +296,8 @@ class _SqueezeExciteLinear(torch.nn.Module):
                                                 ("prelu_per_channel", _PReluPerChannel, 3),
                                                 ("diffusers_block", _DiffusersBlock, 3),
                                                 ("squeeze_excite_linear", _SqueezeExciteLinear, 4),
-                                                ("transpose_output_padding", _TransposeOutputPadding, 3)])
+                                                ("transpose_output_padding", _TransposeOutputPadding, 3),
+                                                ("resize_to_size", _ResizeToSize, 3)])
 def test_common_blocks_convert_with_pytorch_parity(dev, tmp_path, name, make, channels, opset):
     # Issue 48: blocks public projects write -- depthwise-separable convolutions, PixelShuffle, average pooling with
     # nearest upsampling, dilated and grouped convolutions, explicit zero padding -- convert (as the exact dense or
@@ -841,6 +856,10 @@ WEIGHT = {"c.weight": np.ones((3, 2, 3, 3), np.float32)}
        "coordinate": "half_pixel"}], {}, "node 'r' (resize_bilinear): 'scales' must be [h, w], numbers in [1/64, 64]"),
     ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 2],
        "coordinate": "tf_crop_and_resize"}], {}, "node 'r' (resize_bilinear): 'coordinate' must be"),
+    ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "scales": [2, 2], "sizes": [4, 4],
+       "coordinate": "half_pixel"}], {}, "node 'r' (resize_bilinear): exactly one of 'scales'"),
+    ([{"name": "r", "op": "resize_bilinear", "inputs": ["x"], "output": "y", "sizes": [0, 4],
+       "coordinate": "half_pixel"}], {}, "node 'r' (resize_bilinear): 'sizes' must be [h, w], integers in 1..65536"),
     ([{"name": "g", "op": "group_norm", "inputs": ["x"], "output": "y", "groups": 3, "scale": "s", "shift": "b",
        "eps": 1e-5}], {"s": np.ones(3, np.float32), "b": np.zeros(3, np.float32)},
      "node 'g' (group_norm): 'groups' (3) must divide the input's 2 channels"),

@@ -183,9 +183,13 @@ class ResizeNode : public Op {
 public:
     ResizeNode(Context& ctx, float scale_h, float scale_w, ResizeCoord mode)
         : ctx_(ctx), scale_h_(scale_h), scale_w_(scale_w), mode_(mode) {}
+    // A fixed output size (ONNX 'sizes'): the scales of the coordinates are out / in, exactly.
+    ResizeNode(Context& ctx, int out_h, int out_w, ResizeCoord mode)
+        : ctx_(ctx), scale_h_(0.0f), scale_w_(0.0f), mode_(mode), out_h_(out_h), out_w_(out_w) {}
     std::string kind() const override { return "resize_bilinear"; }
     Shape infer(const std::vector<Shape>& in) const override {
         const Shape& s = ConvNode::one(in);
+        if (out_h_ > 0) return op(out_h_, out_w_).output_shape(s);
         const volatile float ph = float(s.h) * scale_h_, pw = float(s.w) * scale_w_;  // rounded to float32
         const double oh = std::floor(double(ph)), ow = std::floor(double(pw));
         if (!(oh >= 1 && ow >= 1 && oh <= kMaxDim && ow <= kMaxDim))
@@ -208,6 +212,7 @@ private:
     Context& ctx_;
     float scale_h_, scale_w_;
     ResizeCoord mode_;
+    int out_h_ = 0, out_w_ = 0;  // > 0: a fixed output size
     mutable std::map<std::pair<int, int>, std::unique_ptr<ResizeBilinear>> ops_;
 };
 
@@ -350,7 +355,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             {"instance_norm", {"scale", "shift", "eps"}},
             {"group_norm", {"groups", "scale", "shift", "eps"}},
             {"pad2d", {"pads", "mode", "value"}},
-            {"resize_bilinear", {"scales", "coordinate"}}};
+            {"resize_bilinear", {"scales", "sizes", "coordinate"}}};
         const std::set<std::string>& allowed = kFields.at(node.op);
         for (auto it = n.begin(); it != n.end(); ++it) {
             const std::string& key = it.key();
@@ -469,10 +474,19 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             node.out_channels = cin;
         } else if (node.op == "resize_bilinear") {
             if (nc) throw bad("layout \"nc\" has no spatial axes to resize");
-            const std::string rule = "'scales' must be [h, w], numbers in [1/64, 64]";
-            if (!n.contains("scales") || !n["scales"].is_array() || n["scales"].size() != 2) throw bad(rule);
-            for (const auto& s : n["scales"])
-                if (!s.is_number() || !(s.get<double>() >= 1.0 / 64) || !(s.get<double>() <= 64)) throw bad(rule);
+            if (n.contains("scales") == n.contains("sizes"))
+                throw bad("exactly one of 'scales' ([h, w] factors) and 'sizes' ([h, w] output pixels) is needed");
+            if (n.contains("scales")) {
+                const std::string rule = "'scales' must be [h, w], numbers in [1/64, 64]";
+                if (!n["scales"].is_array() || n["scales"].size() != 2) throw bad(rule);
+                for (const auto& s : n["scales"])
+                    if (!s.is_number() || !(s.get<double>() >= 1.0 / 64) || !(s.get<double>() <= 64)) throw bad(rule);
+            } else {
+                const std::string rule = "'sizes' must be [h, w], integers in 1..65536";
+                if (!n["sizes"].is_array() || n["sizes"].size() != 2 || !is_int_in(n["sizes"][0], 1, 65536) ||
+                    !is_int_in(n["sizes"][1], 1, 65536))
+                    throw bad(rule);
+            }
             static const std::set<std::string> kCoords = {"half_pixel", "pytorch_half_pixel", "align_corners",
                                                           "asymmetric"};
             if (!n.contains("coordinate") || !n["coordinate"].is_string() || !kCoords.count(n["coordinate"].get<std::string>()))
@@ -700,7 +714,11 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
                                          : c == "pytorch_half_pixel" ? ResizeCoord::PytorchHalfPixel
                                          : c == "align_corners"      ? ResizeCoord::AlignCorners
                                                                      : ResizeCoord::Asymmetric;
-                op = std::make_shared<ResizeNode>(ctx, f["scales"][0].get<float>(), f["scales"][1].get<float>(), mode);
+                if (f.contains("sizes"))
+                    op = std::make_shared<ResizeNode>(ctx, f["sizes"][0].get<int>(), f["sizes"][1].get<int>(), mode);
+                else
+                    op = std::make_shared<ResizeNode>(ctx, f["scales"][0].get<float>(), f["scales"][1].get<float>(),
+                                                      mode);
             } else if (n.op == "group_norm") {
                 const int groups = n.fields["groups"].get<int>();
                 op = std::make_shared<GroupNormNode>(ctx, cin, groups, w.scale->data, w.shift->data,
