@@ -190,7 +190,7 @@ public:
     Shape infer(const std::vector<Shape>& in) const override {
         const Shape& s = ConvNode::one(in);
         if (out_h_ > 0) return op(out_h_, out_w_).output_shape(s);
-        const volatile float ph = float(s.h) * scale_h_, pw = float(s.w) * scale_w_;  // rounded to float32
+        const float ph = float(s.h) * scale_h_, pw = float(s.w) * scale_w_;  // a float32 product (FLT_EVAL_METHOD 0)
         const double oh = std::floor(double(ph)), ow = std::floor(double(pw));
         if (!(oh >= 1 && ow >= 1 && oh <= kMaxDim && ow <= kMaxDim))
             throw InputError("resize_bilinear: scales " + std::to_string(scale_h_) + " x " + std::to_string(scale_w_) +
