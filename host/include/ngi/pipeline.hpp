@@ -116,6 +116,10 @@ struct FrameDesc {
     glm::vec3 look{0, 0, -1}, up{0, 1, 0};  // the front camera (world space)
     static FrameDesc of(const Frame& frame, int faces);  // from a Frame: presence of emission/env, look, up
 };
+// The inverse of pack_frame_planes: a Frame of n x n images from planes in that layout (frame_planes_bytes(n,
+// desc.faces) bytes are read), desc.faces of its faces (6, or 1: the front face), the optional features desc says are
+// present, desc's look and up. Throws InputError for faces other than 1 or 6, n < 1 or null planes.
+Frame unpack_frame_planes(const float* planes, int n, const FrameDesc& desc);
 
 // The outputs of one frame; empty buffers are not produced. Each is N x N x 3 planar float32 (3 N^2 floats):
 // lightmap = linear HDR lightmap of the front view (for an output_mode "indirect" model: its decoded indirect light

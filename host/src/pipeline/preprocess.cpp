@@ -63,6 +63,29 @@ FrameDesc FrameDesc::of(const Frame& frame, int faces) {
     return d;
 }
 
+Frame unpack_frame_planes(const float* planes, int n, const FrameDesc& desc) {
+    if (desc.faces != 1 && desc.faces != kFaceCount)
+        throw InputError("unpack frame planes: faces must be 1 (front) or 6, got " + std::to_string(desc.faces));
+    if (n < 1) throw InputError("unpack frame planes: n must be positive, got " + std::to_string(n));
+    if (!planes) throw InputError("unpack frame planes: planes is null");
+    Frame frame;
+    frame.n = n;
+    frame.look = desc.look;
+    frame.up = desc.up;
+    const std::size_t face_plane = std::size_t(n) * std::size_t(n);
+    for (int fi = 0; fi < kFeatureCount; ++fi) {
+        const Feature f = Feature(fi);
+        if ((f == Feature::Emission && !desc.has_emission) || (f == Feature::Env && !desc.has_env)) continue;
+        for (int i = 0; i < desc.faces; ++i) {
+            Image im(n, n, feature_channels(f));
+            const float* src = planes + (std::size_t(i) * kFramePlanes + std::size_t(frame_plane(f))) * face_plane;
+            std::copy(src, src + im.data.size(), im.data.begin());
+            frame.get(f, kAllFaces[i]) = std::move(im);
+        }
+    }
+    return frame;
+}
+
 namespace detail {
 
 std::string preprocess_defines() {
