@@ -100,7 +100,8 @@ TEST_CASE("bvh: closest and any hits equal brute force on random triangle soups"
             REQUIRE(any[i].t <= rays[8 * i + 3]);
         }
         REQUIRE(hit_count > int(hits.size()) / 8);  // the targeted rays do hit
-        // The renderer's llvmpipe loop budget assumes at most 32 steps per tree level (renderer.cpp trace_loops).
+        // The renderer's llvmpipe loop budget assumes at most 32 steps per tree level (trace_loops in
+        // render/renderer_impl.hpp).
         const auto worst = *std::max_element(steps.begin(), steps.end());
         CAPTURE(worst);
         REQUIRE(long(worst) <= 32L * bvh.depth);

@@ -26,6 +26,7 @@ struct Model::Impl {
     bool voxel_sh_enqueued = false;
     std::unique_ptr<detail::NeuralGiOps> neural_gi;  // family "neural_gi" (instead of ops; graphs as a U-Net's)
     std::unique_ptr<detail::GraphModelOps> graph_model;  // family "graph" (instead of ops; its own graphs)
+    nlohmann::json ao;  // family "mlp": the metadata's "ao" value (null when absent; ModelAccess::ao)
 
     // The graph for an input of h x w, built, planned and allocated on first use.
     detail::Graph& graph(int h, int w) {
@@ -53,13 +54,15 @@ Model Model::load(const Device& device, const std::string& path, const ModelOpti
     if (meta == file.metadata.end())
         throw InputError("load model " + path + ": no __metadata__[\"ngi\"] architecture config; convert the "
                          "checkpoint with python3 -m ngi.convert (docs/MODEL_FORMAT.md)");
-    ModelConfig cfg = detail::parse_model_config(meta->second, path);  // every family, the JSON parsed once
+    nlohmann::json ao;
+    ModelConfig cfg = detail::parse_model_config(meta->second, path, &ao);  // every family, the JSON parsed once
     if (cfg.family == "graph" && (!options.bn_mode.empty() || !options.dropout.empty()))
         throw InputError("load model " + path + ": bn_mode and dropout apply to the U-Net families; an imported "
                          "graph runs as exported (inference batch norm folded in, no dropout)");
     if (!options.bn_mode.empty()) cfg.bn_mode = options.bn_mode;
     if (!options.dropout.empty()) cfg.dropout = options.dropout;
-    auto impl = std::make_unique<Impl>(Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr, nullptr});
+    auto impl = std::make_unique<Impl>(
+        Impl{device, cfg, {}, {}, nullptr, nullptr, false, nullptr, false, nullptr, nullptr, std::move(ao)});
     auto& ctx = ngi::detail::context_of(device);
     if (cfg.family == "ssgi") {  // no network: nothing to build; the pipeline runs it on frames
         if (!options.bn_mode.empty() || !options.dropout.empty() || !options.mlp_path.empty())
@@ -191,6 +194,10 @@ void ModelAccess::enqueue(Model& model, cl_mem in, std::size_t in_offset, cl_mem
 }
 
 const Device& ModelAccess::device(const Model& model) { return model.impl_->device; }
+
+AoMetadata ModelAccess::ao(const Model& model, const std::string& what) {
+    return parse_ao_metadata(model.impl_->ao, what);
+}
 
 }  // namespace detail
 

@@ -119,7 +119,7 @@ ChannelAffine fold(const SafetensorsFile& f, const std::string& bias, const std:
 
 }  // namespace
 
-ModelConfig parse_model_config(const std::string& text, const std::string& path) {
+ModelConfig parse_model_config(const std::string& text, const std::string& path, nlohmann::json* ao) {
     const std::string what = "load model " + path + ": metadata 'ngi': ";
     nlohmann::json j;
     try {
@@ -222,6 +222,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& path)
     c.input_nc = int(integer("input_nc", 1, kMaxChannels, 0, true));
     if (c.family == "mlp") {
         parse_mlp_fields(j, c, what);  // layers, encoding; output_nc = the last layer's width
+        if (ao && j.contains("ao")) *ao = j["ao"];  // seed 001's AO network (ModelAccess::ao)
         if (j.contains("output_nc") && integer("output_nc", 1, kMaxChannels, 0, true) != c.output_nc)
             throw fail("output_nc", "the last layer's width (" + std::to_string(c.output_nc) + ")");
     } else {

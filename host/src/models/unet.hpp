@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "graph/graph.hpp"
 #include "models/safetensors.hpp"
 #include "ngi/model.hpp"
@@ -34,8 +36,9 @@ inline constexpr int kModelFormatVersion = 1;
 inline constexpr int kMaxChannels = 65536;
 
 // Parses and validates __metadata__["ngi"] (every field's type and range, docs/MODEL_FORMAT.md). Throws InputError
-// naming the file and the field.
-ModelConfig parse_model_config(const std::string& json, const std::string& path);
+// naming the file and the field. `ao`, if given, receives an mlp's "ao" value (null when it has none), which
+// ModelAccess::ao reads (models/ao_metadata.hpp): the JSON is parsed once, here.
+ModelConfig parse_model_config(const std::string& json, const std::string& path, nlohmann::json* ao = nullptr);
 UNetSpec unet_spec(const ModelConfig& cfg);
 // Expected tensor name -> shape, derived from the spec (used to report missing / unexpected / misshaped tensors).
 std::vector<std::pair<std::string, std::vector<int>>> expected_tensors(const UNetSpec& spec);

@@ -5,13 +5,13 @@
 #include <climits>
 #include <cmath>
 
-#include <nlohmann/json.hpp>
-
-#include "models/float_field.hpp"
+#include "models/model_access.hpp"
 #include "ngi/error.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi {
+
+static_assert(AoNetwork::kRingPoints == detail::kAoNeighbours, "the AO model file's ring is the network's input");
 
 struct AoNetwork::Impl {
     Device device;
@@ -39,30 +39,13 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
     if (c.family != "mlp") throw fail("family is '" + c.family + "', an AO model is an \"mlp\"");
     if (c.input_nc != 3 * kRingPoints) throw fail("input_nc is " + std::to_string(c.input_nc) + ", expected 48 (16 normals)");
     if (c.layers.back().out != 1) throw fail("the last layer has " + std::to_string(c.layers.back().out) + " outputs, expected 1");
-    const nlohmann::json j = nlohmann::json::parse(c.json, nullptr, false);
-    if (j.is_discarded() || !j.contains("ao") || !j["ao"].is_object()) throw fail("no \"ao\" object in the metadata");
-    const nlohmann::json& a = j["ao"];
-    if (!a.contains("neighbours") || !a["neighbours"].is_number_integer() || a["neighbours"].get<long long>() != kRingPoints)
-        throw fail("field 'ao.neighbours' must be 16");
-    // float32-representable too: a radius of 1e-300 is 0 in float, the seed's "no neighbours" inference.
-    if (!a.contains("radius_px") || !a["radius_px"].is_number() || !std::isfinite(a["radius_px"].get<double>()) ||
-        a["radius_px"].get<double>() < 0 || a["radius_px"].get<double>() > 1024 ||
-        !detail::float32_representable(a["radius_px"].get<double>()))
-        throw fail(std::string("field 'ao.radius_px' must be a number in 0..1024 ") + detail::kFloat32Rule);
-    if (!a.contains("at_size") || !a["at_size"].is_number_integer() || a["at_size"].get<long long>() < 1 ||
-        a["at_size"].get<long long>() > 65536)
-        throw fail("field 'ao.at_size' must be an integer in 1..65536");
-    std::string normals = "smooth";
-    if (a.contains("normals")) {
-        if (!a["normals"].is_string() || (a["normals"] != "smooth" && a["normals"] != "face"))
-            throw fail("field 'ao.normals' must be \"smooth\" or \"face\"");
-        normals = a["normals"].get<std::string>();
-    }
+    // The "ao" object (ring, radius, training size, normals), as the models library read it at load.
+    const detail::AoMetadata a = detail::ModelAccess::ao(model, "AO model " + path + ": ");
     auto impl = std::make_unique<Impl>(device, std::move(model));
-    impl->normals = normals;
+    impl->normals = a.normals;
     impl->path = path;
-    impl->radius = a["radius_px"].get<float>();
-    impl->at_size = a["at_size"].get<int>();
+    impl->radius = a.radius_px;
+    impl->at_size = a.at_size;
     detail::Context& ctx = detail::context_of(device);
     impl->gather = ctx.kernel("ao", "ao_ring_gather");
     impl->finish = ctx.kernel("ao", "ao_finish");

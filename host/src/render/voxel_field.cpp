@@ -1,11 +1,19 @@
-// Surface-voxel compaction of seed 004's voxel radiance field (kernels/voxel_compact.cl); the path-traced field
-// itself is Renderer::render_voxel_field (renderer.cpp). Definitions: docs/VOXEL_FIELD.md.
+// Seed 004's voxel radiance field (docs/VOXEL_FIELD.md): the surface voxels compacted on the device
+// (kernels/voxel_compact.cl) and the path-traced ground truth of a Renderer's scene for them, the SH field, probe
+// and face lighting (the vf_* kernels of kernels/voxel_field.cl) and the voxel-pair visibility
+// (kernels/voxel_visibility.cl).
 #include "ngi/voxel_field.hpp"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "ngi/error.hpp"
+#include "ngi/render.hpp"
+#include "render/renderer_impl.hpp"
 #include "render/tracer_constants.hpp"
 #include "runtime/context.hpp"
 #include "runtime/kernel_defines.hpp"
@@ -24,6 +32,85 @@ std::string compact_defines() {
 
 std::string dims(glm::ivec3 s) {
     return std::to_string(s.x) + "x" + std::to_string(s.y) + "x" + std::to_string(s.z);
+}
+
+constexpr int kMaxFieldSamples = 1 << 20;  // per-voxel sample counts (directions, sun rays, point samples)
+
+// Voxels usable with a renderer of grid `size`: from surface_voxels() of a scene of that size, consistent arrays.
+void check_voxels(const SurfaceVoxels& v, glm::ivec3 size, const std::string& what, std::size_t limit) {
+    if (v.grid != size)
+        throw InputError(what + ": surface voxels of a " + dims(v.grid) + " grid, the renderer's scene is " +
+                         dims(size));
+    const std::size_t blocks = std::size_t(size.x) * std::size_t(size.y) * std::size_t(size.z);
+    if (blocks > kMaxFieldGridBlocks)
+        throw InputError(what + ": the scene's grid " + dims(size) + " has more than " +
+                         std::to_string(kMaxFieldGridBlocks) + " blocks");
+    const std::size_t V = v.size();
+    if (V == 0) throw InputError(what + ": no surface voxels");
+    if (V > limit)
+        throw InputError(what + ": " + std::to_string(V) + " surface voxels, more than the " + std::to_string(limit) +
+                         " it takes");
+    if (v.probe.size() != V || v.normal.size() != V || v.exposed.size() != V ||
+        v.attributes.size() != V * kVoxelAttributes || v.index_of.size() != blocks)
+        throw InputError(what + ": inconsistent surface voxels (" + std::to_string(V) + " cells, " +
+                         std::to_string(v.probe.size()) + " probe points, " + std::to_string(v.normal.size()) +
+                         " normals, " + std::to_string(v.exposed.size()) + " exposed masks, " +
+                         std::to_string(v.attributes.size()) + " attribute values, " +
+                         std::to_string(v.index_of.size()) + " index entries)");
+    for (std::size_t i = 0; i < V; ++i) {
+        const glm::ivec3 c = v.cell[i];
+        if (glm::any(glm::lessThan(c, glm::ivec3(0))) || glm::any(glm::greaterThanEqual(c, size)) ||
+            v.exposed[i] == 0 || v.exposed[i] >= 64)
+            throw InputError(what + ": surface voxel " + std::to_string(i) + " at (" + std::to_string(c.x) + ", " +
+                             std::to_string(c.y) + ", " + std::to_string(c.z) + ") with exposed mask " +
+                             std::to_string(v.exposed[i]) + " is not a surface voxel of a " + dims(size) +
+                             " grid");
+    }
+}
+
+void check_field_settings(const VoxelFieldSettings& s) {
+    const int m = int(std::lround(std::sqrt(double(std::max(s.directions, 0)))));
+    if (s.directions < 1 || s.directions > kMaxFieldSamples || m * m != s.directions)
+        throw InputError("voxel field: directions " + std::to_string(s.directions) +
+                         " is not a perfect square m * m in 1..2^20");
+    if (s.sun_rays < 1 || s.sun_rays > kMaxFieldSamples)
+        throw InputError("voxel field: sun_rays " + std::to_string(s.sun_rays) + " not in 1..2^20");
+    if (s.point_samples < 1 || s.point_samples > kMaxFieldSamples)
+        throw InputError("voxel field: point_samples " + std::to_string(s.point_samples) + " not in 1..2^20");
+    if (s.max_bounces < 0) throw InputError("voxel field: max_bounces " + std::to_string(s.max_bounces) + " < 0");
+    if (s.rr_start < 0) throw InputError("voxel field: rr_start " + std::to_string(s.rr_start) + " < 0");
+    if (s.max_samples_per_launch < 0)
+        throw InputError("voxel field: max_samples_per_launch " + std::to_string(s.max_samples_per_launch) + " < 0");
+}
+
+// The voxels' probe points, shading normals (normalize(probe - centre): the Eq. 3 normal except at creases, where
+// the probe moved to a face centre) and cells with their exposed masks, as the vf_* kernels read them.
+struct VoxelBuffers {
+    detail::Buffer probe, normal, cells;
+};
+
+VoxelBuffers upload_voxels(detail::Context& ctx, const SurfaceVoxels& v, bool normals) {
+    const std::size_t V = v.size();
+    std::vector<float> p(3 * V), n(normals ? 3 * V : 0);
+    std::vector<std::int32_t> c(4 * V);
+    for (std::size_t i = 0; i < V; ++i) {
+        for (int k = 0; k < 3; ++k) p[3 * i + k] = v.probe[i][k];
+        if (normals) {
+            const glm::vec3 d = glm::normalize(v.probe[i] - (glm::vec3(v.cell[i]) + 0.5f));
+            for (int k = 0; k < 3; ++k) n[3 * i + k] = d[k];
+        }
+        c[4 * i] = v.cell[i].x; c[4 * i + 1] = v.cell[i].y; c[4 * i + 2] = v.cell[i].z; c[4 * i + 3] = v.exposed[i];
+    }
+    VoxelBuffers b;
+    b.probe = ctx.alloc(p.size() * 4, "voxel field: probe points");
+    ctx.write(b.probe, 0, p.size() * 4, p.data(), "voxel field: upload probe points");
+    if (normals) {
+        b.normal = ctx.alloc(n.size() * 4, "voxel field: normals");
+        ctx.write(b.normal, 0, n.size() * 4, n.data(), "voxel field: upload normals");
+    }
+    b.cells = ctx.alloc(c.size() * 4, "voxel field: cells");
+    ctx.write(b.cells, 0, c.size() * 4, c.data(), "voxel field: upload cells");
+    return b;
 }
 
 }  // namespace
@@ -109,6 +196,131 @@ SurfaceVoxels surface_voxels(const Device& device, const VoxelScene& scene, cons
         out.normal[i] = {n[3 * i], n[3 * i + 1], n[3 * i + 2]};
         out.probe[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
     }
+    return out;
+}
+
+VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Lighting& lighting,
+                                        const VoxelFieldSettings& s) {
+    Impl& m = *impl_;
+    check_voxels(voxels, m.size, "voxel field", kMaxFieldVoxels);
+    check_field_settings(s);
+    // vf_sh projects the radiance its rays meet; rays never meet the area light (it is not geometry), so its SH
+    // would miss the light's direct part while the other outputs include it. Refused rather than inconsistent.
+    if (lighting.area_light.enabled())
+        throw InputError("voxel field: the lighting has an area light, which the voxel field does not support");
+    const auto t0 = std::chrono::steady_clock::now();
+    detail::Context& ctx = *m.ctx;
+    m.kernel(m.k_vf_sun, "voxel_field", "vf_sun_visibility");
+    m.kernel(m.k_vf_sh, "voxel_field", "vf_sh");
+    m.kernel(m.k_vf_probe, "voxel_field", "vf_probe_lighting");
+    m.kernel(m.k_vf_face, "voxel_field", "vf_face_lighting");
+    const std::size_t local_sun = Impl::local_size(m.k_vf_sun), local_sh = Impl::local_size(m.k_vf_sh),
+                      local_probe = Impl::local_size(m.k_vf_probe), local_face = Impl::local_size(m.k_vf_face);
+    RenderSettings rs;
+    rs.max_bounces = s.max_bounces;
+    rs.rr_start = s.rr_start;
+    rs.seed = s.seed;
+    rs.sky_portals = s.sky_portals;
+    rs.sunlit_patches = s.sunlit_patches;
+    m.upload_frame(CameraPose{}, lighting, rs, "voxel_field");
+    const std::size_t V = voxels.size();
+    const VoxelBuffers in = upload_voxels(ctx, voxels, true);
+    detail::Buffer vis = ctx.alloc(V * 4, "voxel field: sun visibility");
+    detail::Buffer sh = ctx.alloc(V * 27 * 4, "voxel field: SH");
+    detail::Buffer direct = ctx.alloc(V * 3 * 4, "voxel field: direct lighting");
+    detail::Buffer full = ctx.alloc(V * 3 * 4, "voxel field: lighting");
+    detail::Buffer face = ctx.alloc(V * 18 * 4, "voxel field: face lighting");
+    detail::Buffer rays = ctx.alloc(V * 6 * 4, "voxel field: ray counts");
+    const int nvox = int(V);
+    const std::uint32_t seed = s.seed;
+    const std::size_t global = V, global6 = 6 * V;
+    VoxelField out;
+    const long walk = m.trace_loops(), bounce = m.bounce_loops();
+    const int cap = s.max_samples_per_launch;
+
+    // The sun's visibility first: vf_sh's last launch adds the sun with it.
+    const glm::vec3 E = lighting.sun.irradiance;
+    if (E.r + E.g + E.b > 0.0f) {
+        const int chunk = m.items_per_launch(64, walk + 8, cap, "voxel field: sun visibility");
+        for (int first = 0; first < s.sun_rays; first += chunk) {
+            const int last = int(std::min<long>(s.sun_rays, long(first) + chunk));
+            m.set_scene_args(m.k_vf_sun, rs, in.probe, in.cells, nvox, s.sun_rays, first, last, seed, vis, rays);
+            ctx.launch(m.k_vf_sun, 1, &global, &local_sun);
+        }
+        out.rays += m.sum_rays(rays, V);
+    } else {
+        ctx.fill_zero(vis, 0, V * 4, "voxel field: sun visibility");
+    }
+
+    const int side = int(std::lround(std::sqrt(double(s.directions))));
+    {
+        const long per_direction = walk + long(s.max_bounces) * bounce + 32;
+        const int chunk = m.items_per_launch(4 * 27 + 64, per_direction, cap, "voxel field: SH projection");
+        for (int first = 0; first < s.directions; first += chunk) {
+            const int last = int(std::min<long>(s.directions, long(first) + chunk));
+            m.set_scene_args(m.k_vf_sh, rs, in.probe, in.cells, nvox, side, first, last, s.max_bounces, s.rr_start,
+                             seed, vis, sh, rays);
+            ctx.launch(m.k_vf_sh, 1, &global, &local_sh);
+        }
+        out.rays += m.sum_rays(rays, V);
+    }
+
+    for (const bool is_direct : {true, false}) {
+        const int bounces = is_direct ? 0 : s.max_bounces;
+        const detail::Buffer& dst = is_direct ? direct : full;
+        const int chunk =
+            m.items_per_launch(64, (long(bounces) + 1) * bounce, cap, "voxel field: lighting at probe points");
+        for (int first = 0; first < s.point_samples; first += chunk) {
+            const int last = int(std::min<long>(s.point_samples, long(first) + chunk));
+            m.set_scene_args(m.k_vf_probe, rs, in.probe, in.normal, in.cells, nvox, s.point_samples, first, last,
+                             bounces, s.rr_start, seed, dst, rays);
+            ctx.launch(m.k_vf_probe, 1, &global, &local_probe);
+        }
+        out.rays += m.sum_rays(rays, V);
+    }
+
+    {
+        const int chunk =
+            m.items_per_launch(64, (long(s.max_bounces) + 1) * bounce + 8, cap, "voxel field: face lighting");
+        for (int first = 0; first < s.point_samples; first += chunk) {
+            const int last = int(std::min<long>(s.point_samples, long(first) + chunk));
+            m.set_scene_args(m.k_vf_face, rs, in.cells, nvox, s.point_samples, first, last, s.max_bounces,
+                             s.rr_start, seed, face, rays);
+            ctx.launch(m.k_vf_face, 1, &global6, &local_face);
+        }
+        out.rays += m.sum_rays(rays, 6 * V);
+    }
+
+    out.sh.resize(V * 27);
+    out.direct.resize(V * 3);
+    out.lighting.resize(V * 3);
+    out.face_lighting.resize(V * 18);
+    ctx.read(sh, 0, out.sh.size() * 4, out.sh.data(), "voxel field: read SH");
+    ctx.read(direct, 0, out.direct.size() * 4, out.direct.data(), "voxel field: read direct lighting");
+    ctx.read(full, 0, out.lighting.size() * 4, out.lighting.data(), "voxel field: read lighting");
+    ctx.read(face, 0, out.face_lighting.size() * 4, out.face_lighting.data(), "voxel field: read face lighting");
+    out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+std::vector<std::uint32_t> Renderer::voxel_visibility(const SurfaceVoxels& voxels) {
+    Impl& m = *impl_;
+    check_voxels(voxels, m.size, "voxel visibility", kMaxVisibilityVoxels);
+    detail::Context& ctx = *m.ctx;
+    m.kernel(m.k_vf_vis, "voxel_visibility", "vf_visibility");
+    const std::size_t V = voxels.size(), words = (V + 31) / 32;
+    const VoxelBuffers in = upload_voxels(ctx, voxels, false);
+    detail::Buffer mask = ctx.alloc(V * words * 4, "voxel visibility: mask");
+    const int chunk = std::min(32, m.items_per_launch(64, m.trace_loops() + 8, 0, "voxel visibility"));
+    const std::size_t global[2] = {V, words}, local[2] = {Impl::local_size(m.k_vf_vis), 1};
+    for (int first = 0; first < 32; first += chunk) {
+        const int last = std::min(32, first + chunk);
+        m.k_vf_vis.args(m.grid, m.size.x, m.size.y, m.size.z, in.probe, in.cells, int(V), int(words), first, last,
+                        mask);
+        ctx.launch(m.k_vf_vis, 2, global, local);
+    }
+    std::vector<std::uint32_t> out(V * words);
+    ctx.read(mask, 0, out.size() * 4, out.data(), "voxel visibility: read mask");
     return out;
 }
 
