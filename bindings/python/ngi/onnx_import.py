@@ -1127,7 +1127,7 @@ class _Importer:
         self._leaky_relu(node, float(np.float32(attrs.get("alpha", 0.01))))
 
     def _leaky_relu(self, node, alpha):
-        # The loader's rule for a slope (host/src/models/graph_model.cpp): in [-1, 1], and 0 or a normal float32.
+        # The loader's rule for a slope (host/src/models/graph_config.cpp): in [-1, 1], and 0 or a normal float32.
         if not (abs(alpha) <= 1.0 and (alpha == 0.0 or abs(alpha) >= FLT_MIN)):
             raise self.fail(node, f"alpha {alpha!r}: ngi's leaky_relu slope must lie in [-1, 1] and be 0 or at "
                                   "least 1.2e-38 in magnitude")
@@ -1651,7 +1651,7 @@ def _check_weights(ir, weights, path, half):
 
 
 def _check_loader_limits(config, channels, path):
-    """Refuse what ngi's graph loader (host/src/models/graph_model.cpp) would refuse on reading the file back: more
+    """Refuse what ngi's graph loader (host/src/models/graph_config.cpp) would refuse on reading the file back: more
     nodes than it loads, names longer than it reads, channel counts, kernels, strides and paddings beyond its
     limits (ngi/_constants.py, printed from the C++ definitions), naming the .onnx file and the node."""
     c = _constants

@@ -1,8 +1,9 @@
 // The "graph" model family (docs/MODEL_FORMAT.md "graph"): a network stored as a list of nodes over named tensors,
-// as python3 -m ngi.convert writes it from an ONNX file. Each node is one of the graph ops ngi has (conv2d,
-// conv_transpose2d, dense, concat, activation, affine, add, mul, frequency_encode, nan_to_num); the loader checks the
-// list as hostile input (unknown op or field, a tensor used before it is made or never made, channel counts that do
-// not chain, weights missing, misshaped or unused) and names the node in every error.
+// as python3 -m ngi.convert writes it from an ONNX file. Each node is one of the node kinds of graph/node_kind.hpp
+// (conv2d, conv_transpose2d, dense, concat, activation, affine, add, mul, ...); the loader checks the list as hostile
+// input (unknown op or field, a tensor used before it is made or never made, channel counts that do not chain,
+// weights missing, misshaped or unused) and names the node in every error. graph_config.cpp parses the config and
+// the node list, graph_model.cpp checks the weights and builds the ops (graph/nodes.hpp) and the graph.
 #pragma once
 #include <memory>
 #include <optional>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "graph/graph.hpp"
+#include "graph/node_kind.hpp"
 #include "models/safetensors.hpp"
 #include "ngi/model.hpp"
 #include "ops/gemm.hpp"
@@ -28,7 +30,8 @@ inline constexpr int kMaxGraphNodeInputs = 1024;
 // One node of the list, checked: its inputs are tensor indices (0 = the graph input, i + 1 = node i's output), so
 // every input is made before it is read (a list cannot hold a cycle).
 struct GraphNodeDesc {
-    std::string name, op, output;
+    std::string name, op, output;  // op: the kind's name, as the file writes it
+    NodeKind kind = NodeKind::conv2d;
     std::vector<int> inputs;
     int out_channels = 0;
     nlohmann::json fields;  // the node's JSON object (weights, geometry, activation)
