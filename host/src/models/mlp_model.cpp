@@ -22,13 +22,6 @@ Act activation_of(const ModelConfig::Layer& l) {
     throw InputError("mlp: unknown activation '" + l.activation + "'");  // parse_mlp_fields already refused it
 }
 
-bool grow(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
-    if (b.bytes() >= bytes) return false;
-    b.reset();
-    b = ctx.alloc(bytes, what);
-    return true;
-}
-
 }  // namespace
 
 void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
@@ -176,14 +169,14 @@ MlpRunner::MlpRunner(Context& ctx, const MlpSpec& spec, const GemmParams& gemm, 
 
 void MlpRunner::enqueue(Context& ctx, cl_mem in, cl_mem out, int n) {
     const std::size_t in_bytes = std::size_t(spec_.inputs) * n * sizeof(float);
-    grow(ctx, in_, in_bytes, "mlp input");
+    ensure_buffer(ctx, in_, in_bytes, "mlp input");
     ctx.copy(in, 0, in_.get(), 0, in_bytes, "mlp input");
     guard_.sanitize(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, lo_, hi_);
     const int out_c = spec_.layers.back().out;
     if (fused_) {
         fused_->enqueue(ctx, in_.get(), 0, ItemLayout::planar(n), n, out, 0, ItemLayout::planar(n));
     } else {
-        grow(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
+        ensure_buffer(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
         dense_->enqueue(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, View{out, 0, Shape{out_c, 1, n}},
                         scratch_.get());
     }
@@ -215,14 +208,14 @@ Tensor MlpRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
         src = planar.data();
     }
     const std::size_t in_bytes = std::size_t(spec_.inputs) * n * sizeof(float), out_bytes = std::size_t(out_c) * n * sizeof(float);
-    grow(ctx, in_, in_bytes, "mlp input");
-    grow(ctx, out_, out_bytes, "mlp output");
+    ensure_buffer(ctx, in_, in_bytes, "mlp input");
+    ensure_buffer(ctx, out_, out_bytes, "mlp output");
     ctx.write(in_, 0, in_bytes, src, "mlp input");
     guard_.sanitize(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, lo_, hi_);
     if (fused_) {
         fused_->enqueue(ctx, in_.get(), 0, ItemLayout::planar(n), n, out_.get(), 0, ItemLayout::planar(n));
     } else {
-        grow(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
+        ensure_buffer(ctx, scratch_, dense_->scratch_floats(n) * sizeof(float), "mlp scratch");
         dense_->enqueue(ctx, View{in_.get(), 0, Shape{spec_.inputs, 1, n}}, View{out_.get(), 0, Shape{out_c, 1, n}},
                         scratch_.get());
     }

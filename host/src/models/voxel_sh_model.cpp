@@ -33,13 +33,6 @@ const char* const kArchitectures[] = {"mlp", "set", "resnet"};
 const char* const kDefaultLayout[kVoxelShInputs] = {"x", "y", "z", "albedo.r", "albedo.g", "albedo.b",
                                                     "emission.r", "emission.g", "emission.b", "id"};
 
-bool grow(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
-    if (b.bytes() >= bytes) return false;
-    b.reset();
-    b = ctx.alloc(bytes, what);
-    return true;
-}
-
 }  // namespace
 
 ModelConfig parse_voxel_sh_config(const nlohmann::json& metadata, const std::string& path) {
@@ -399,8 +392,8 @@ Tensor VoxelShRunner::run(Context& ctx, const Tensor& x, RunInfo* info) {
     if (n < 1 || n > (1 << 30)) throw InputError("run model: " + std::to_string(n) + " voxels (1 .. 2^30)");
     const std::size_t in_bytes = x.data.size() * sizeof(float);
     const std::size_t out_bytes = std::size_t(kVoxelShOutputs) * std::size_t(n) * sizeof(float);
-    grow(ctx, raw_, in_bytes, "voxel_sh input");
-    grow(ctx, out_, out_bytes, "voxel_sh output");
+    ensure_buffer(ctx, raw_, in_bytes, "voxel_sh input");
+    ensure_buffer(ctx, out_, out_bytes, "voxel_sh output");
     ctx.write(raw_, 0, in_bytes, x.data.data(), "voxel_sh input");
     // The point list is transposed on the way in by the affine, and back by the last layer's item-major store.
     forward(ctx, raw_.get(), kVoxelShInputs, 1, n, out_.get(), true);

@@ -12,16 +12,16 @@ const std::size_t kLocal2[2] = {64, 1};
 // Values per work-item of sanitize_inplace (one float16): the kernel's SANITIZE_VEC.
 constexpr std::size_t kSanitizeVec = 16;
 // The program's build options: the activation codes and SANITIZE_VEC (the same for every kernel: one program).
-std::string defines() { return activation_defines() + " -DSANITIZE_VEC=" + std::to_string(kSanitizeVec); }
+std::string elementwise_defines() { return activation_defines() + " -DSANITIZE_VEC=" + std::to_string(kSanitizeVec); }
 }
 
 Elementwise::Elementwise(Context& ctx)
-    : act_(ctx.kernel(kProgram, "activate_inplace", defines())),
-      dropout_(ctx.kernel(kProgram, "dropout_seeded", defines())),
-      sanitize_(ctx.kernel(kProgram, "sanitize_inplace", defines())),
-      affine_(ctx.kernel(kProgram, "channel_affine_planar", defines())),
-      add_(ctx.kernel(kProgram, "add_inplace", defines())),
-      mul_(ctx.kernel(kProgram, "mul_inplace", defines())),
+    : act_(ctx.kernel(kProgram, "activate_inplace", elementwise_defines())),
+      dropout_(ctx.kernel(kProgram, "dropout_seeded", elementwise_defines())),
+      sanitize_(ctx.kernel(kProgram, "sanitize_inplace", elementwise_defines())),
+      affine_(ctx.kernel(kProgram, "channel_affine_planar", elementwise_defines())),
+      add_(ctx.kernel(kProgram, "add_inplace", elementwise_defines())),
+      mul_(ctx.kernel(kProgram, "mul_inplace", elementwise_defines())),
       counter_(ctx.alloc(sizeof(int), "sanitize counter")) {}
 
 cl_event Elementwise::activate(Context& ctx, const View& x, Act act, bool want_event) {

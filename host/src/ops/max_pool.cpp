@@ -11,7 +11,7 @@ namespace {
 
 constexpr const char* kMaxPoolOp = "max_pool2d";
 
-std::string geometry_text(const MaxPoolGeometry& g) {
+std::string max_pool_text(const MaxPoolGeometry& g) {
     return "kernel " + std::to_string(g.kh) + "x" + std::to_string(g.kw) + ", stride " + std::to_string(g.stride_h) +
            "x" + std::to_string(g.stride_w) + ", pads top " + std::to_string(g.pad_top) + " left " +
            std::to_string(g.pad_left) + " bottom " + std::to_string(g.pad_bottom) + " right " +
@@ -21,7 +21,7 @@ std::string geometry_text(const MaxPoolGeometry& g) {
 void check_geometry(const MaxPoolGeometry& g) {
     if (g.kh < 1 || g.kw < 1 || g.stride_h < 1 || g.stride_w < 1 || g.pad_top < 0 || g.pad_left < 0 ||
         g.pad_bottom < 0 || g.pad_right < 0)
-        throw InputError(std::string(kMaxPoolOp) + ": invalid geometry (" + geometry_text(g) +
+        throw InputError(std::string(kMaxPoolOp) + ": invalid geometry (" + max_pool_text(g) +
                          "): kernel and stride must be >= 1, pads >= 0");
     // A pad as large as its kernel side would let a window lie wholly in the padding (no value to take; ONNX gives
     // -Inf there, PyTorch refuses pads above half the kernel).
@@ -37,7 +37,7 @@ void check_geometry(const MaxPoolGeometry& g) {
         if (p.pad >= p.k)
             throw InputError(std::string(kMaxPoolOp) + ": the " + p.side + " padding " + std::to_string(p.pad) +
                              " is not below the kernel " + p.k_name + " " + std::to_string(p.k) + " (" +
-                             geometry_text(g) + ")");
+                             max_pool_text(g) + ")");
 }
 
 // Output size along one axis (ceil_mode 0); throws when the kernel is larger than the padded input.

@@ -8,7 +8,7 @@ constexpr std::size_t kSerialLocal = 16;  // channels per work-group of channel_
                                           // work-group function per local size)
 const std::size_t kApplyLocal[2] = {64, 1};
 
-std::string defines(bool chunked) {
+std::string norm_defines(bool chunked) {
     return "-DLOCAL=" + std::to_string(kStatsLocal) + " -DCHUNKED=" + (chunked ? "1" : "0") + " " +
            activation_defines();
 }
@@ -22,10 +22,10 @@ BatchNormPerImage::BatchNormPerImage(Context& ctx, int channels, const std::vect
       act_(act),
       form_(form),
       cpu_(ctx.info().is_cpu),
-      stats_(ctx.kernel("norm", "channel_stats", defines(chunked.value_or(ctx.info().is_cpu)))),
-      apply_(ctx.kernel("norm", "channel_affine_act", defines(chunked.value_or(ctx.info().is_cpu)))),
-      fused_kernel_(ctx.kernel("norm", "channel_norm", defines(chunked.value_or(ctx.info().is_cpu)))),
-      serial_kernel_(ctx.kernel("norm", "channel_norm_serial", defines(chunked.value_or(ctx.info().is_cpu)))) {
+      stats_(ctx.kernel("norm", "channel_stats", norm_defines(chunked.value_or(ctx.info().is_cpu)))),
+      apply_(ctx.kernel("norm", "channel_affine_act", norm_defines(chunked.value_or(ctx.info().is_cpu)))),
+      fused_kernel_(ctx.kernel("norm", "channel_norm", norm_defines(chunked.value_or(ctx.info().is_cpu)))),
+      serial_kernel_(ctx.kernel("norm", "channel_norm_serial", norm_defines(chunked.value_or(ctx.info().is_cpu)))) {
     if (int(gamma.size()) != channels || int(beta.size()) != channels)
         throw InputError("batch norm: expected " + std::to_string(channels) + " gamma and beta values, got " +
                          std::to_string(gamma.size()) + " and " + std::to_string(beta.size()));

@@ -12,7 +12,7 @@ namespace {
 
 constexpr const char* kPad2dOp = "pad2d";
 
-std::string geometry_text(const PadGeometry& g) {
+std::string pad_text(const PadGeometry& g) {
     std::string s = "pads top " + std::to_string(g.top) + " left " + std::to_string(g.left) + " bottom " +
                     std::to_string(g.bottom) + " right " + std::to_string(g.right) + ", mode " + pad_mode_name(g.mode);
     if (g.mode == PadMode::Constant) {
@@ -61,11 +61,11 @@ Shape Pad2d::output_shape(const Shape& in) const {
             if (p.pad >= p.size)
                 throw InputError(std::string(kPad2dOp) + ": the reflect " + p.side + " padding " + std::to_string(p.pad) +
                                  " is not below the input " + p.axis + " " + std::to_string(p.size) + " (input " +
-                                 to_string(in) + ", " + geometry_text(g) + ")");
+                                 to_string(in) + ", " + pad_text(g) + ")");
     }
     const long long oh = (long long)in.h + g.top + g.bottom, ow = (long long)in.w + g.left + g.right;
     if (oh < 1 || ow < 1)  // negative pads crop (ONNX Pad allows them): not the whole input
-        throw InputError(std::string(kPad2dOp) + ": " + geometry_text(g) + " crops the whole input " + to_string(in));
+        throw InputError(std::string(kPad2dOp) + ": " + pad_text(g) + " crops the whole input " + to_string(in));
     // The kernel indexes outputs and input planes with 32-bit ints.
     if (in.size() > std::size_t(INT_MAX) || oh > INT_MAX || ow > INT_MAX || (long long)in.c * oh * ow > INT_MAX)
         throw InputError(std::string(kPad2dOp) + ": input " + to_string(in) + " or its padded output " +

@@ -10,7 +10,7 @@ namespace ngi::detail {
 
 namespace {
 
-void require_buffer(cl_mem m, std::size_t need, const std::string& name, const std::string& for_what) {
+void require_probe_buffer(cl_mem m, std::size_t need, const std::string& name, const std::string& for_what) {
     detail::require_buffer(m, need, "probe shading", name, for_what);
 }
 
@@ -45,13 +45,13 @@ int ProbeShade::enqueue(Context& ctx, const ProbeShadeInputs& in, cl_mem out, bo
         throw InputError("probe shading: the camera's look vector is zero");
     const std::size_t npix = std::size_t(in.n) * in.n;
     const std::string face = std::to_string(in.n) + "x" + std::to_string(in.n) + " face";
-    require_buffer(in.depth, npix * sizeof(float), "depth", "a " + face);
-    require_buffer(in.normal, 3 * npix * sizeof(float), "normal", "a " + face);
-    require_buffer(out, 3 * npix * sizeof(float), "output", "a " + face);
-    require_buffer(in.index_of, std::size_t(X) * Y * Z * sizeof(std::int32_t), "index_of", "the grid");
+    require_probe_buffer(in.depth, npix * sizeof(float), "depth", "a " + face);
+    require_probe_buffer(in.normal, 3 * npix * sizeof(float), "normal", "a " + face);
+    require_probe_buffer(out, 3 * npix * sizeof(float), "output", "a " + face);
+    require_probe_buffer(in.index_of, std::size_t(X) * Y * Z * sizeof(std::int32_t), "index_of", "the grid");
     const std::size_t per_voxel = in.mode == ProbeField::Sh ? 27 : 4;
     if (in.voxels > 0)
-        require_buffer(in.field, std::size_t(in.voxels) * per_voxel * sizeof(float),
+        require_probe_buffer(in.field, std::size_t(in.voxels) * per_voxel * sizeof(float),
                        in.mode == ProbeField::Sh ? "SH field" : "per-voxel lighting",
                        std::to_string(in.voxels) + " voxels");
     for (cl_mem m : {in.depth, in.normal, in.index_of, in.field})

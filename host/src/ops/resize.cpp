@@ -24,7 +24,7 @@ std::string float_text(float v) {
     return std::string(buf, r.ptr);
 }
 
-std::string geometry_text(const ResizeGeometry& g) {
+std::string resize_text(const ResizeGeometry& g) {
     return "output " + std::to_string(g.out_h) + "x" + std::to_string(g.out_w) + ", scales " + float_text(g.scale_h) +
            " x " + float_text(g.scale_w) + ", mode " + resize_coord_name(g.mode);
 }
@@ -108,11 +108,11 @@ ResizeBilinear::ResizeBilinear(Context& ctx, const ResizeGeometry& geom) : geom_
         throw InputError(std::string(kResizeOp) + ": unknown coordinate transformation mode " + std::to_string(int(g.mode)) +
                          " (half_pixel 0, pytorch_half_pixel 1, align_corners 2, asymmetric 3)");
     if (g.out_h < 1 || g.out_w < 1)
-        throw InputError(std::string(kResizeOp) + ": invalid geometry (" + geometry_text(g) +
+        throw InputError(std::string(kResizeOp) + ": invalid geometry (" + resize_text(g) +
                          "): the output size must be >= 1");
     for (const auto& [scale, axis] : {std::pair{g.scale_h, "height"}, std::pair{g.scale_w, "width"}})
         if (!std::isfinite(scale) || scale < 0.0f)
-            throw InputError(std::string(kResizeOp) + ": invalid geometry (" + geometry_text(g) + "): the " + axis +
+            throw InputError(std::string(kResizeOp) + ": invalid geometry (" + resize_text(g) + "): the " + axis +
                              " scale must be positive and finite (0: output / input)");
     kernel_ = ctx.kernel("resize", "resize_bilinear", resize_defines());
 }

@@ -20,7 +20,7 @@ const std::string kLocalDefine =
 // whatever a compiler adds around the sender loop.
 constexpr long kLoopSlack = 64;
 
-void require_buffer(cl_mem m, std::size_t need, const std::string& name, int voxels) {
+void require_ltf_buffer(cl_mem m, std::size_t need, const std::string& name, int voxels) {
     detail::require_buffer(m, need, "voxel LTF", name, std::to_string(voxels) + " voxels");
 }
 
@@ -102,14 +102,14 @@ void VoxelLtf::run(Context& ctx, const LtfInputs& in, int bounces, LtfVariant va
         throw InputError("voxel LTF: a visibility mask was given to the as-written variant, which has no shadow term "
                          "(seed 004 section 3.4)");
     const std::size_t v4 = std::size_t(V) * 4 * sizeof(float);
-    require_buffer(in.position, v4, "position", V);
-    require_buffer(in.normal, v4, "normal", V);
-    require_buffer(in.albedo, v4, "albedo", V);
-    require_buffer(in.direct, v4, "direct lighting", V);
-    require_buffer(in.exposed, std::size_t(V) * sizeof(std::uint32_t), "exposed-faces", V);
-    require_buffer(out, v4, "output", V);
+    require_ltf_buffer(in.position, v4, "position", V);
+    require_ltf_buffer(in.normal, v4, "normal", V);
+    require_ltf_buffer(in.albedo, v4, "albedo", V);
+    require_ltf_buffer(in.direct, v4, "direct lighting", V);
+    require_ltf_buffer(in.exposed, std::size_t(V) * sizeof(std::uint32_t), "exposed-faces", V);
+    require_ltf_buffer(out, v4, "output", V);
     const int words = (V + 31) / 32;
-    if (visibility) require_buffer(visibility, std::size_t(V) * words * sizeof(std::uint32_t), "visibility", V);
+    if (visibility) require_ltf_buffer(visibility, std::size_t(V) * words * sizeof(std::uint32_t), "visibility", V);
     for (cl_mem m : {in.position, in.normal, in.albedo, in.direct, in.exposed, visibility})
         if (m == out) throw InputError("voxel LTF: the output buffer is also an input");
 

@@ -54,7 +54,7 @@ void check_settings(const DisplaySettings& s) {
             "clip_margin " + std::to_string(s.clip_margin) + " is not finite (a negative value turns the clamp off)");
 }
 
-void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const std::string& what) {
+void check_display_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const std::string& what) {
     const std::string where = std::string(kOp) + ": the " + what + " buffer";
     if (!b) throw InputError(where + " is empty");
     if (detail::shared_context_of(b.device()) != detail::shared_context_of(device))
@@ -149,15 +149,15 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
             "the camera position is not finite");
     const CameraArgs cam = CameraArgs::of(position, desc.look, desc.up);
     const std::size_t lo_plane = std::size_t(n) * n, hi_plane = std::size_t(s) * s;
-    check_buffer(low_planes, im.device, frame_planes_bytes(n, 1), false, "low-resolution planes");
-    check_buffer(low_lightmap, im.device, 3 * lo_plane * sizeof(float), false, "low-resolution lightmap");
+    check_display_buffer(low_planes, im.device, frame_planes_bytes(n, 1), false, "low-resolution planes");
+    check_display_buffer(low_lightmap, im.device, 3 * lo_plane * sizeof(float), false, "low-resolution lightmap");
     const int display_planes_used = desc.has_env ? kFramePlanes : desc.has_emission ? frame_plane(Feature::Env)
                                                                                       : frame_plane(Feature::Emission);
-    check_buffer(display_planes, im.device, display_planes_used * hi_plane * sizeof(float), false, "display planes");
+    check_display_buffer(display_planes, im.device, display_planes_used * hi_plane * sizeof(float), false, "display planes");
     const DeviceBuffer* outs[3] = {&outputs.lightmap, &outputs.final_image, &outputs.display};
     const char* names[3] = {"lightmap", "final image", "display"};
     for (int i = 0; i < 3; ++i)
-        if (*outs[i]) check_buffer(*outs[i], im.device, 3 * hi_plane * sizeof(float), true, names[i]);
+        if (*outs[i]) check_display_buffer(*outs[i], im.device, 3 * hi_plane * sizeof(float), true, names[i]);
     if (outputs.display)
         require(std::isfinite(outputs.tonemap.exposure_ev) && std::abs(outputs.tonemap.exposure_ev) <= 64.0f,
                 "tone map exposure " + std::to_string(outputs.tonemap.exposure_ev) + " EV is not in [-64, 64]");

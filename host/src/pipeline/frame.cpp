@@ -16,7 +16,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void check_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
+void check_frame_buffer(const DeviceBuffer& b, const Device& device, std::size_t need, bool write, const char* what) {
     const std::string where = std::string("enqueue frame: the ") + what + " buffer";
     if (!b) throw InputError(where + " is empty");
     if (detail::shared_context_of(b.device()) != detail::shared_context_of(device))
@@ -37,11 +37,11 @@ void check_tonemap(const ToneMapOptions& t) {
 void SurroundPipeline::Impl::check_frame_buffers(const DeviceBuffer& planes, int faces_used,
                                                  const FrameOutputs& outputs) {
     const std::size_t out_bytes = 3 * std::size_t(n) * n * sizeof(float);
-    check_buffer(planes, device, frame_planes_bytes(n, faces_used), false, "planes");
+    check_frame_buffer(planes, device, frame_planes_bytes(n, faces_used), false, "planes");
     const DeviceBuffer* outs[3] = {&outputs.lightmap, &outputs.final_image, &outputs.display};
     const char* names[3] = {"lightmap", "final image", "display"};
     for (int i = 0; i < 3; ++i)
-        if (*outs[i]) check_buffer(*outs[i], device, out_bytes, true, names[i]);
+        if (*outs[i]) check_frame_buffer(*outs[i], device, out_bytes, true, names[i]);
     if (outputs.display) check_tonemap(outputs.tonemap);
 }
 

@@ -122,13 +122,6 @@ bool indirect_output(const ModelConfig& config, const char* what) {
                      "\"; expected \"lightmap\", \"indirect\" or \"ssgi_residual\"");
 }
 
-bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
-    if (b.bytes() >= bytes) return false;
-    b.reset();
-    b = ctx.alloc(bytes, what);
-    return true;
-}
-
 }  // namespace detail
 
 SurroundPipeline::Impl::Impl(const Device& d, int n_, GlobalViewMode mode_, LuminationTransfer transfer_)

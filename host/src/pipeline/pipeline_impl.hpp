@@ -60,9 +60,6 @@ int frame_faces(const ModelConfig& config);
 // "indirect" (a hand-built ModelConfig: the loader refuses other values).
 bool indirect_output(const ModelConfig& config, const char* what);
 
-// Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept).
-bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what);
-
 // Wall-clock stage times into a timings struct (FrameTimings, DisplayTimings), when one is given: each lap waits for
 // the device and stores the time since the previous lap into the named field.
 template <class Timings>

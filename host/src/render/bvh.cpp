@@ -33,7 +33,7 @@ int bin_of(float c, float lo, float scale) {
     return f >= float(kBvhBins - 1) ? kBvhBins - 1 : (f > 0.0f ? int(f) : 0);
 }
 
-struct Builder {
+struct BvhBuilder {
     std::vector<Box> tri_box;
     std::vector<glm::vec3> centroid;
     std::vector<std::uint32_t> idx;  // triangle indices, partitioned in place
@@ -147,10 +147,10 @@ Bvh build_bvh(const TriangleMesh& mesh) {
     // NGI_HOST_MEMORY_LIMIT is kept (issue 51: a 400 KB .glb of 16.8 M instanced triangles reached 3.7 GB at 1G).
     const std::uint64_t nodes = 2 * std::uint64_t(ntri) / std::uint64_t(kBvhMaxLeaf) + 1;
     const std::uint64_t per_triangle = sizeof(Box) + sizeof(glm::vec3) + 4 + 4 + 2 * (12 + 4) * sizeof(float);
-    const std::uint64_t per_node = sizeof(Builder::Node) + 2 * 8 * sizeof(float);
+    const std::uint64_t per_node = sizeof(BvhBuilder::Node) + 2 * 8 * sizeof(float);
     check_host_memory("build the BVH of " + std::to_string(ntri) + " triangles",
                       ntri * per_triangle + nodes * per_node + mesh.positions.size() * 2 * 4 * sizeof(float));
-    Builder b;
+    BvhBuilder b;
     b.tri_box.resize(ntri);
     b.centroid.resize(ntri);
     b.idx.resize(ntri);

@@ -40,7 +40,7 @@ glm::dmat3 random_rotation(Rand& r) {
 }
 
 // A mesh under construction in double precision.
-struct Builder {
+struct MeshBuilder {
     std::vector<glm::dvec3> p, n;
     std::vector<glm::uvec3> t;
     std::uint32_t vertex(glm::dvec3 pos, glm::dvec3 normal = glm::dvec3(0.0)) {
@@ -61,7 +61,7 @@ struct Builder {
 
 // Rotates, scales the largest extent to `size` metres, moves the minimum corner to the origin, orients the
 // triangles outward (positive signed volume) and rounds to float; normals analytic if given, else area-weighted.
-LoadedMesh finish(Builder& b, Rand& r, double size, bool analytic_normals, Material material) {
+LoadedMesh finish(MeshBuilder& b, Rand& r, double size, bool analytic_normals, Material material) {
     const glm::dmat3 R = random_rotation(r);
     glm::dvec3 lo(1e300), hi(-1e300);
     for (auto& q : b.p) {
@@ -131,7 +131,7 @@ LoadedMesh knot(std::uint32_t seed) {
         }
     }
     const double tube = std::min(double(r.range(0.10f, 0.22f)), 0.7 * thick);
-    Builder b;
+    MeshBuilder b;
     for (int i = 0; i < U; ++i) {
         const glm::dvec3 B = glm::cross(T[i], N[i]);
         for (int k = 0; k < V; ++k) {
@@ -151,7 +151,7 @@ LoadedMesh superquadric(std::uint32_t seed) {
     // Exponents below 1 are boxy, 1 round, above 1 pinched; 2 - e stays positive, so the normals stay finite.
     const double e1 = r.range(0.3f, 1.7f), e2 = r.range(0.3f, 1.7f);
     const glm::dvec3 a(1.0, r.range(0.6f, 1.0f), r.range(0.6f, 1.0f));
-    Builder b;
+    MeshBuilder b;
     if (r.chance(0.6f)) {  // superellipsoid: latitude rings and two poles
         const int rings = 128, around = 256;  // 2 x 256 x 127 = 65,024 triangles
         const std::uint32_t south = b.vertex({0.0, 0.0, -a.z}, {0.0, 0.0, -1.0});
@@ -197,7 +197,7 @@ LoadedMesh superquadric(std::uint32_t seed) {
 // ---- blob ------------------------------------------------------------------------------------------------------
 LoadedMesh blob(std::uint32_t seed) {
     Rand r(seed, 0x626c6f62u);  // "blob"
-    Builder b;
+    MeshBuilder b;
     const double g = (1.0 + std::sqrt(5.0)) / 2.0;
     const glm::dvec3 ico[12] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
                                 {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};

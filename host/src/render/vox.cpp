@@ -97,7 +97,7 @@ struct Node {
     std::vector<int> children;  // node ids (transform: one; group: many) or model ids (shape)
 };
 
-float srgb_to_linear(std::uint8_t v) {
+float srgb8_to_linear(std::uint8_t v) {
     const float c = float(v) / 255.0f;
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
@@ -131,7 +131,7 @@ IMat decode_rotation(const Reader& rd, int bits) {
     return m;
 }
 
-int parse_int(const Reader& rd, const std::string& s, const char* what) {
+int parse_vox_int(const Reader& rd, const std::string& s, const char* what) {
     try {
         std::size_t used = 0;
         const int v = std::stoi(s, &used);
@@ -276,7 +276,7 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
                     r.fail("nTRN declares " + std::to_string(frames) + " frames, more than its " +
                            std::to_string(r.left()) + " bytes can hold");
                 auto f = r.dict("nTRN");  // frame 0; animation frames are ignored
-                if (f.count("_r")) node.rot = decode_rotation(r, parse_int(r, f["_r"], "nTRN _r"));
+                if (f.count("_r")) node.rot = decode_rotation(r, parse_vox_int(r, f["_r"], "nTRN _r"));
                 if (f.count("_t")) node.t = parse_translation(r, f["_t"]);
             } else if (c.id == "nGRP") {
                 node.kind = Node::Group;
@@ -439,7 +439,7 @@ VoxelScene parse_vox(const std::string& b, const std::string& path) {
             if (m == 0) {
                 const auto& rgb = colours[v[3]];
                 const glm::vec3 albedo = glm::min(
-                    glm::vec3(srgb_to_linear(rgb[0]), srgb_to_linear(rgb[1]), srgb_to_linear(rgb[2])), glm::vec3(0.95f));
+                    glm::vec3(srgb8_to_linear(rgb[0]), srgb8_to_linear(rgb[1]), srgb8_to_linear(rgb[2])), glm::vec3(0.95f));
                 const auto e = emit.find(v[3]);
                 m = s.add_material({albedo, e == emit.end() ? glm::vec3(0.0f) : albedo * e->second, false});
             }

@@ -210,6 +210,15 @@ std::filesystem::path cache_dir();
 // Writes `bytes` to `path` through a unique temporary and a rename; a cache that cannot be written is not an error.
 void write_cache_file(const std::filesystem::path& path, const std::string& bytes);
 
+// Makes `b` at least `bytes` large; returns true when it had to (re)allocate (contents not kept). The old buffer is
+// released first, so growing never holds both.
+inline bool ensure_buffer(Context& ctx, Buffer& b, std::size_t bytes, const char* what) {
+    if (b.bytes() >= bytes) return false;
+    b.reset();
+    b = ctx.alloc(bytes, what);
+    return true;
+}
+
 // A new buffer holding `v` (at least one float, so an empty vector still gives a valid cl_mem).
 Buffer upload_floats(Context& ctx, const std::vector<float>& v, const char* what);
 
