@@ -1,6 +1,8 @@
 """setuptools build step of `pip install .` (pyproject.toml): builds ngi with CMake and puts into the package
 ngi (from bindings/python/ngi) its native module _ngi, the native command-line tool (ngi/ngi-cli, run by the `ngi`
-entry point) and the shipped models (ngi/models, where model names find them: ngi.Model(dev, "surround")).
+entry point) and the shipped models (ngi/models, where model names find them: ngi.Model(dev, "surround")); beside
+it, the modules of the training package ngi_train that `ngi adapt` runs (training/ngi_train/installed.txt; PyTorch
+is the extra `adapt`: pip install .[adapt]).
 
 Environment:
   NGI_PIP_BUILD_DIR=DIR   use this existing, built CMake tree (its python/ngi/_ngi*.so and ngi) as it is: no
@@ -28,6 +30,7 @@ from setuptools.command.build_py import build_py
 from setuptools.dist import Distribution
 
 ROOT = Path(__file__).resolve().parent
+TRAIN = ROOT / "training" / "ngi_train"
 # setuptools' staging (and, without NGI_PIP_BUILD_DIR, the CMake tree): build-pip/, or <NGI_PIP_BUILD_DIR>/pip.
 PIP_DIR = ROOT / "build-pip"
 if not os.access(ROOT, os.W_OK) and not os.access(PIP_DIR, os.W_OK):  # a read-only source tree
@@ -67,8 +70,22 @@ def cmake_tree():
     return tree
 
 
+def train_modules():
+    """The ngi_train modules an installation ships (training/ngi_train/installed.txt), relative to the package."""
+    lines = (TRAIN / "installed.txt").read_text().splitlines()
+    return {line.strip() for line in lines if line.strip() and not line.startswith("#")}
+
+
 class BuildWithCMake(build_py):
     """build_py, then the native module, the CLI and the models from the CMake tree into the staged package."""
+
+    def find_package_modules(self, package, package_dir):
+        """Of ngi_train, only the modules installed.txt lists (as cmake --install)."""
+        modules = super().find_package_modules(package, package_dir)
+        if package.split(".")[0] != "ngi_train":
+            return modules
+        keep = train_modules()
+        return [m for m in modules if Path(m[2]).resolve().relative_to(TRAIN).as_posix() in keep]
 
     def run(self):
         super().run()
@@ -110,8 +127,8 @@ class NativeDistribution(Distribution):
 
 setup(
     version=version(),
-    packages=["ngi"],
-    package_dir={"ngi": "bindings/python/ngi"},
+    packages=["ngi", "ngi_train", "ngi_train.generator"],
+    package_dir={"ngi": "bindings/python/ngi", "ngi_train": "training/ngi_train"},
     package_data={"ngi": ["py.typed", "*.pyi"]},
     cmdclass={"build_py": BuildWithCMake},
     distclass=NativeDistribution,

@@ -117,10 +117,13 @@ int main(int argc, char** argv) {
     for (auto add : {ngi_cli::add_devices, ngi_cli::add_generate, ngi_cli::add_metrics, ngi_cli::add_merge,
                      ngi_cli::add_lightmap, ngi_cli::add_render, ngi_cli::add_dataset, ngi_cli::add_ao_data,
                      ngi_cli::add_ao, ngi_cli::add_voxel_data, ngi_cli::add_probe_gi, ngi_cli::add_neural_gi,
-                     ngi_cli::add_warmup}) {
+                     ngi_cli::add_warmup, ngi_cli::add_adapt}) {
         ngi_cli::Run run = add(app);
         commands.emplace_back(app.get_subcommands({}).back(), std::move(run));
     }
+    // `ngi adapt ARGS...`: the arguments are the Python adaptation's, exactly as given (a leading "--" too).
+    if (argc >= 2 && std::strcmp(argv[1], "adapt") == 0)
+        return ngi_cli::run_adapt(std::vector<std::string>(argv + 2, argv + argc));
     std::string topic;
     CLI::App* help = ngi_cli::add_command(app, "help", "list the commands, or with COMMAND: that command's options");
     std::string names;

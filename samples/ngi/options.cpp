@@ -80,6 +80,8 @@ public:
         std::string out = get_label("Usage") + ": " + name;
         if (!app->get_subcommands([](const CLI::App* s) { return !s->get_name().empty(); }).empty())
             return out + " COMMAND [options]   (ngi help COMMAND: the command's options)\n";
+        if (app->get_prefix_command())  // adapt: every argument is passed on as it is
+            return out + " ARGS...   (" + name + " --help: the options)\n";
         bool optional = false;
         for (const CLI::Option* o : app->get_options()) {
             if (o == app->get_help_ptr() || o->get_positional()) continue;

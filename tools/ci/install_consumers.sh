@@ -4,9 +4,10 @@
 #   the rpath the README documents; C through find_package(ngi COMPONENTS c); C++ through find_package for
 #   ngi::core (which must not look for OpenEXR, libpng or assimp), ngi::io, ngi::pipeline (the default components;
 #   the application owns its OpenCL context) and ngi::render; the ngi CLI and the Python package finding the
-#   shipped models by name; the READMEs' C++ and Python snippets (tools/ci/readme_snippets.py). Checks that libngi_c
-#   exports nothing but the C ABI. Prints the number of checks passed
-#   on stdout; exits non-zero on a failure.
+#   shipped models by name; the READMEs' C++ and Python snippets (tools/ci/readme_snippets.py); `ngi adapt` with the
+#   installed Python packages (--help, a missing scene refused, and from a temporary prefix a whole tiny adaptation).
+#   Checks that libngi_c exports nothing but the C ABI. Prints the number of checks passed on stdout; exits non-zero
+#   on a failure.
 # Usage: tools/ci/install_consumers.sh BUILD_DIR              the install stage of tools/test.sh: installs
 #                                                             BUILD_DIR into a temporary prefix and tests that
 #        tools/ci/install_consumers.sh --installed PREFIX     an existing installation on the system's default
@@ -138,4 +139,68 @@ n=$(env "${model_env[@]}" /usr/bin/python3 "$root/tools/ci/readme_snippets.py" -
   { step "a README snippet does not build or run against the installed ngi"; exit 1; }
 step "README snippets: $n built or run against the installed ngi"
 checks=$((checks + n))
+
+# 7. `ngi adapt` (issue 46) from the installation alone: no PYTHONPATH, NGI_BIN or NGI_MODEL_PATH from outside, run
+# from a folder without ngi sources. A stand-in interpreter records what the CLI hands over (its PYTHONPATH must start
+# with the installed Python folder, NGI_BIN must be the installed ngi), then runs the real one. --help is the
+# adaptation's; a missing scene is refused before any work (exit 2, nothing written, not even a work folder in the
+# cache). From a temporary prefix also a whole tiny adaptation through PREFIX/bin/ngi adapt (the stand-in shrinks
+# ngi_train.adapt's frames and steps as training/tests/test_adapt.py does: 16 spp, 2 + 2 frames, 20-step chunks, a
+# 30-second budget; about 40 s here): the base found by name among the installed models, the work folder in the
+# user's cache, a model the installed ngi runs.
+adapt_env=$work/adapt_env.txt
+cat > "$work/adapt_tiny.py" << 'EOF'
+import sys
+from ngi_train import adapt
+for name, value in (("FEATURE_SPP", 16), ("REFERENCE_SPP", 16), ("VAL_FRAMES", (12, 62)), ("CHUNK_STEPS", 20),
+                    ("MIN_TRAIN_SECONDS", 5.0), ("EXPORT_RESERVE_S", 5.0), ("MAX_TRAIN_FRAMES", 2)):
+    setattr(adapt, name, value)
+code = sys.argv[2]  # python3 adapt_tiny.py -c BOOTSTRAP ARGS...: the CLI's bootstrap, run with ARGS
+del sys.argv[1:3]
+exec(code)
+EOF
+cat > "$work/adapt-python" << EOF
+#!/bin/sh
+printf '%s\n' "\${PYTHONPATH-}" "\${NGI_BIN-}" > "$adapt_env"
+if [ -n "\${ADAPT_TINY-}" ]; then exec /usr/bin/python3 "$work/adapt_tiny.py" "\$@"; fi
+exec /usr/bin/python3 "\$@"
+EOF
+chmod +x "$work/adapt-python"
+adapt_run() { (cd "$work" && env -u PYTHONPATH -u NGI_BIN -u NGI_MODEL_PATH NGI_PYTHON="$work/adapt-python" \
+                 XDG_CACHE_HOME="$work/cache" "$@"); }
+real_pydir=$(realpath "$pydir") real_ngi=$(realpath "$prefix/bin/ngi")
+adapt_run "$prefix/bin/ngi" adapt --help > "$work/adapt_help.out" || { step "ngi adapt --help failed"; exit 1; }
+grep -q "^usage: ngi adapt " "$work/adapt_help.out" && grep -q -- "--budget-minutes" "$work/adapt_help.out" ||
+  { head -5 "$work/adapt_help.out" >&2; step "ngi adapt --help is not ngi_train.adapt's"; exit 1; }
+[ "$(head -1 "$adapt_env" | cut -d: -f1)" = "$real_pydir" ] && [ "$(sed -n 2p "$adapt_env")" = "$real_ngi" ] ||
+  { cat "$adapt_env" >&2; step "ngi adapt: PYTHONPATH does not start with $real_pydir, or NGI_BIN is not $real_ngi"; exit 1; }
+set +e
+adapt_run "$prefix/bin/ngi" adapt --scene "$work/missing.vox" --out "$work/adapted.safetensors" 2> "$work/adapt_missing.err"
+rc=$?
+set -e
+[ $rc = 2 ] && grep -q -- "--scene $work/missing.vox: cannot be loaded" "$work/adapt_missing.err" ||
+  { cat "$work/adapt_missing.err" >&2; step "ngi adapt: a missing scene gave exit code $rc"; exit 1; }
+[ ! -e "$work/adapted.safetensors" ] && [ ! -e "$work/cache/ngi/adapt" ] ||
+  { step "ngi adapt: a missing scene left files behind"; exit 1; }
+step "ngi adapt: --help and a missing scene refused (exit 2, nothing written), with $real_pydir and $real_ngi"
+checks=$((checks + 1))
+if [ $system = 0 ]; then
+  start_adapt=$SECONDS
+  adapt_run env ADAPT_TINY=1 "$prefix/bin/ngi" adapt --scene knot:seed=1 --out "$work/adapted.safetensors" \
+      --budget-minutes 0.5 > "$work/adapt.log" 2>&1 || { tail -30 "$work/adapt.log" >&2; step "the tiny ngi adapt failed"; exit 1; }
+  adapt_work=$work/cache/ngi/adapt/knot_seed1
+  [ -f "$work/adapted.md" ] && [ -f "$adapt_work/adapt.json" ] ||
+    { step "the tiny ngi adapt wrote no card, or not into its default work folder $adapt_work"; exit 1; }
+  (cd "$work" && PYTHONPATH="$pydir" /usr/bin/python3 -c '
+import sys, ngi.model_file as model_file
+a = model_file.read_config(sys.argv[1])["adapt"]
+assert a["base"] == "adapt_base_ssgi_residual_n64" and a["scene"] == "knot:seed=1" and a["steps"] >= 20, a
+' "$work/adapted.safetensors") || { step "the tiny ngi adapt's model has no adapt record"; exit 1; }
+  frame=$(find "$adapt_work/data/val" -mindepth 1 -maxdepth 1 -type d | sort | head -1)
+  env -u NGI_MODEL_PATH "$prefix/bin/ngi" lightmap --frame "$frame" --model "$work/adapted.safetensors" \
+      --out "$work/adapted_lightmap" > "$work/adapted_lightmap.log" 2>&1 ||
+    { cat "$work/adapted_lightmap.log" >&2; step "the installed ngi does not run the adapted model"; exit 1; }
+  step "ngi adapt: a tiny adaptation through $prefix/bin/ngi, run by its ngi lightmap ($((SECONDS - start_adapt)) s)"
+  checks=$((checks + 1))
+fi
 echo "$checks"

@@ -46,8 +46,8 @@ checks=$(bash "$root/tools/ci/install_consumers.sh" --installed /usr)
 # Removed again, leaving nothing of ngi behind.
 start=$SECONDS
 dpkg --purge "${packages[@]}" > "$out/purge.log" 2>&1 || { cat "$out/purge.log" >&2; step "dpkg --purge failed"; exit 1; }
-left=$(ls -d /usr/share/ngi /usr/lib/cmake/ngi /usr/include/ngi /usr/lib/python3/dist-packages/ngi /usr/bin/ngi \
-          /usr/lib/libngi_c.so* 2> /dev/null || true)
+left=$(ls -d /usr/share/ngi /usr/lib/cmake/ngi /usr/include/ngi /usr/lib/python3/dist-packages/ngi \
+          /usr/lib/python3/dist-packages/ngi_train /usr/bin/ngi /usr/lib/libngi_c.so* 2> /dev/null || true)
 [ -z "$left" ] || { step "left behind after purging: $left"; exit 1; }
 step "purged ($((SECONDS - start)) s)"
 
@@ -72,5 +72,10 @@ print("package: pip: ngi", ngi.__version__, "from", ngi.__file__, "model surroun
 out_cli=$(env -u NGI_MODEL_PATH "$out/venv/bin/ngi" generate --model single_view --input "$out/x.npy" --output "$out/y.npy")
 echo "$out_cli" | grep -q "^model *$site/ngi/models/single_view.safetensors:" ||
   { echo "$out_cli" >&2; step "the pip-installed ngi command did not find its models"; exit 1; }
-step "pip install . into a fresh venv, ngi.Model(dev, 'surround') and the ngi entry point: $((SECONDS - start)) s"
-echo $((checks + 4))
+# `ngi adapt` of the pip installation: the venv's interpreter and its own ngi_train (ngi_train.adapt's usage line).
+(cd "$out" && env -u PYTHONPATH "$out/venv/bin/ngi" adapt --help | grep -q "^usage: ngi adapt ") ||
+  { step "the pip-installed ngi adapt --help does not run ngi_train.adapt"; exit 1; }
+env -u PYTHONPATH "$out/venv/bin/python" -c 'import sys, ngi_train.adapt as a; assert a.__file__.startswith(sys.argv[1] + "/"), a.__file__' "$site" ||
+  { step "the pip installation has no ngi_train of its own"; exit 1; }
+step "pip install . into a fresh venv, ngi.Model(dev, 'surround'), the ngi entry point and ngi adapt: $((SECONDS - start)) s"
+echo $((checks + 5))

@@ -1,8 +1,13 @@
 #!/usr/bin/python3
 """ngi adapt: fit a GI network to one scene within a time budget (issue 46, docs/ADAPT.md).
 
-    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.adapt --scene F.vox --out M.safetensors \\
-        [--budget-minutes 10] [--base adapt_base_ssgi_residual_n64] [--work runs/adapt/NAME] [--times 8,12,16]
+    ngi adapt --scene F.vox --out M.safetensors [--budget-minutes 10] [--base adapt_base_ssgi_residual_n64] \\
+        [--work DIR] [--times 8,12,16]
+    PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.adapt ...    (the same, from a checkout)
+
+`ngi adapt` (samples/ngi/cmd_adapt.cpp) runs this module with its installation's Python package and itself as the
+ngi binary; the work folder defaults to runs/adapt/<scene> in a checkout, ~/.cache/ngi/adapt/<scene> (under
+$XDG_CACHE_HOME if set) for an installed package.
 
 What it does, all inside the budget (wall clock, render + train + export; a run resumed after an interruption
 counts the time spent before it):
@@ -32,6 +37,7 @@ same command again resumes. The model is written last, atomically: an interrupte
 
 import argparse
 import datetime
+import importlib.util
 import json
 import math
 import os
@@ -213,7 +219,7 @@ def run_training(cfg_path, work, steps, deadline, ngi_bin):
     cmd = [sys.executable, "-m", "ngi_train.generator.train", "--config", cfg_path, "--dataset", work / "data",
            "--run", work / "run", "--ngi", ngi_bin, "--steps", steps]
     env = dict(ngi_paths.ngi_env())
-    env["PYTHONPATH"] = os.pathsep.join([str(ngi_paths.REPO / "training")] + sys.path)
+    env["PYTHONPATH"] = os.pathsep.join([str(ngi_paths.PACKAGE_PARENT)] + sys.path)
     # Its own session: a Ctrl-C at the terminal reaches adapt only, which then sends the child exactly one SIGTERM
     # (train.py saves after the step it is in; a second signal would cut that short).
     proc = subprocess.Popen([str(c) for c in cmd], env=env, start_new_session=True)
@@ -292,6 +298,8 @@ def check_inputs(args):
     if "config" not in config.get("training", {}):
         raise AdaptError(f"--base {args.base}: its file holds no training config (not exported by "
                          "ngi_train.generator.export), so its recipe is unknown")
+    if importlib.util.find_spec("tqdm") is None:  # the training child's progress bar (ngi_train.generator.train)
+        raise AdaptError("the training needs the Python package tqdm (Debian: python3-tqdm; pip install tqdm)")
     out = Path(args.out)
     if out.suffix != ".safetensors":
         raise AdaptError(f"--out {out}: must end in .safetensors")
@@ -305,15 +313,26 @@ def file_digest(path):
     return zoo_mod.sha256(path)[:16] if Path(path).is_file() else str(path)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def default_work(scene):
+    """The work folder of a scene without --work: runs/adapt/<stem> in a checkout, else the user's cache."""
+    stem = Path(scene).stem if Path(scene).suffix else scene.replace(":", "_").replace("=", "")
+    root = ngi_paths.REPO / "runs" if ngi_paths.REPO is not None else ngi_paths.user_cache_dir()
+    return root / "adapt" / stem
+
+
+def main(argv=None, prog=None):
+    """The command (`prog`: its name in the usage line, `ngi adapt` when the CLI runs it); returns the exit code:
+    0 written, 2 refused before any work (bad option, scene, base, budget), 130 interrupted (resumable)."""
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", required=True, help="a .vox or mesh file, or a procedural spec (room:seed=3)")
     ap.add_argument("--out", required=True, help="the adapted model (.safetensors; a card .md is written beside it)")
     ap.add_argument("--base", default=DEFAULT_BASE, help=f"the network to fine-tune (default {DEFAULT_BASE})")
     ap.add_argument("--budget-minutes", type=float, default=10.0, help="wall-clock budget, render + train (default 10)")
     ap.add_argument("--lr", type=float, default=FINE_TUNE_LR, help=f"fine-tuning learning rate (default {FINE_TUNE_LR:g})")
-    ap.add_argument("--work", help="working folder (frames, checkpoints; default runs/adapt/<scene>)")
-    ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN or build*/ngi)")
+    ap.add_argument("--work", help="working folder (frames, checkpoints; default runs/adapt/<scene> in a checkout, "
+                                   "else $XDG_CACHE_HOME/ngi/adapt/<scene> or ~/.cache/ngi/adapt/<scene>)")
+    ap.add_argument("--ngi", help="ngi binary (default: $NGI_BIN, which `ngi adapt` sets to itself; else build*/ngi "
+                                  "in a checkout, else the installation's bin/ngi, else PATH)")
     ap.add_argument("--device", help="OpenCL device of the renders (ngi --device)")
     ap.add_argument("--times", default="",
                     help="comma-separated times of day in hours (as ngi render --time, 0-48): the training and "
@@ -351,8 +370,7 @@ def _interrupt(signum, frame):
 def adapt(args):
     scene, base, base_tensors, base_config = check_inputs(args)
     ngi_bin = ngi_paths.find_ngi(args.ngi)
-    stem = Path(args.scene).stem if Path(args.scene).suffix else args.scene.replace(":", "_").replace("=", "")
-    work = Path(args.work or ngi_paths.REPO / "runs" / "adapt" / stem)
+    work = Path(args.work) if args.work else default_work(args.scene)
     work.mkdir(parents=True, exist_ok=True)
     identity = {"scene": scene.name, "scene_file": file_digest(args.scene), "base": file_digest(base),
                 "budget_s": args.budget_minutes * 60.0, "lr": args.lr}

@@ -1,10 +1,14 @@
-"""Where things are: the repository and the ngi command-line tool (and running it); how the training commands
-report progress.
+"""Where things are: the repository (when run from a checkout), this package, the user's cache and the ngi
+command-line tool (and running it); how the training commands report progress.
 
 The training commands are modules of this package (`python3 -m ngi_train.generator.train ...`). What they share
 with the converter and the parity tests (the model-file writer, the PyTorch reference networks) is the Python
 package `ngi` (bindings/python/ngi), importable once a build has assembled it in <build>/python:
 `PYTHONPATH=training:build/python /usr/bin/python3 -m ngi_train.generator.train ...`.
+
+Installed (`cmake --install`, the python3-ngi package, `pip install .`: the modules `ngi adapt` needs, listed in
+installed.txt, beside the package `ngi`), there is no repository: REPO is None, and what adapt would put under it
+goes to the user's cache (user_cache_dir()).
 """
 
 import os
@@ -14,19 +18,54 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]  # training/ngi_train/ngi_paths.py
+# The folder that holds this package: <checkout>/training, or an installation's Python folder
+# (<prefix>/lib/python3/dist-packages, a virtual environment's site-packages). A child Python process that runs a
+# module of this package gets it on its PYTHONPATH.
+PACKAGE_PARENT = Path(__file__).resolve().parents[1]
+
+
+def _checkout():
+    """The repository this package is run from (training/ngi_train/ngi_paths.py of a tree with CMakeLists.txt), or
+    None for an installed package."""
+    root = PACKAGE_PARENT.parent
+    return root if PACKAGE_PARENT.name == "training" and (root / "CMakeLists.txt").is_file() else None
+
+
+REPO = _checkout()
+
+
+def user_cache_dir():
+    """$XDG_CACHE_HOME/ngi, else ~/.cache/ngi: the folder of ngi's own caches (the C++ program cache's default,
+    ngi::program_cache_dir, without $NGI_CACHE_DIR)."""
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "ngi"
+
+
+def installed_ngi():
+    """The ngi binary of the installation this package is part of, if there is one: <prefix>/bin/ngi beside
+    <prefix>/lib/python3/dist-packages (cmake --install, the Debian packages), ngi/ngi-cli beside this package
+    (pip install .)."""
+    if REPO is not None:
+        return None
+    for c in (PACKAGE_PARENT.parents[2] / "bin" / "ngi", PACKAGE_PARENT / "ngi" / "ngi-cli"):
+        if c.is_file() and os.access(c, os.X_OK):
+            return str(c)
+    return None
 
 
 def find_ngi(explicit=None):
-    """The ngi binary: `explicit`, else $NGI_BIN, else the first of build*/ngi in the repository, else PATH."""
+    """The ngi binary: `explicit`, else $NGI_BIN (`ngi adapt` sets it to itself), else the first of build*/ngi in
+    the repository, else the installation's own (installed_ngi()), else PATH."""
     candidates = [explicit, os.environ.get("NGI_BIN")]
-    candidates += [str(p) for p in sorted(REPO.glob("build*/ngi"))]
-    candidates.append(shutil.which("ngi"))
+    if REPO is not None:
+        candidates += [str(p) for p in sorted(REPO.glob("build*/ngi"))]
+    candidates += [installed_ngi(), shutil.which("ngi")]
     for c in candidates:
         if c and os.path.isfile(c) and os.access(c, os.X_OK):
             return os.path.abspath(c)
     raise FileNotFoundError("cannot find the ngi binary: pass --ngi PATH or set NGI_BIN (build it with "
-                            "cmake -S . -B build -G Ninja && ninja -C build ngi_cli)")
+                            "cmake -S . -B build -G Ninja && ninja -C build ngi_cli; an installation has it as "
+                            "<prefix>/bin/ngi)")
 
 
 def ngi_env():

@@ -16,7 +16,7 @@ import pytest
 import ngi
 import ngi.model_file as model_file
 
-from ngi_train import adapt
+from ngi_train import adapt, ngi_paths
 
 SCENE = "knot:seed=1"
 
@@ -61,6 +61,19 @@ def test_budget_too_small_is_refused_before_rendering(tmp_path, capsys, monkeypa
     nothing_written(tmp_path)
     # The same folder then takes another budget (nothing was recorded).
     assert not (tmp_path / "work" / "adapt.json").exists()
+
+
+def test_default_work_folder_in_the_checkout_and_in_the_user_cache(tmp_path, monkeypatch):
+    # A checkout: runs/adapt/<scene> (as before issue 46's installation); an installed package (no repository): the
+    # user's cache, $XDG_CACHE_HOME/ngi/adapt/<scene> else ~/.cache/ngi/adapt/<scene>.
+    assert adapt.default_work("scenes/level.vox") == ngi_paths.REPO / "runs" / "adapt" / "level"
+    assert adapt.default_work("room:seed=3") == ngi_paths.REPO / "runs" / "adapt" / "room_seed3"
+    monkeypatch.setattr(ngi_paths, "REPO", None)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert adapt.default_work("/a/level.vox") == tmp_path / "xdg" / "ngi" / "adapt" / "level"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert adapt.default_work("room:seed=3") == tmp_path / "home" / ".cache" / "ngi" / "adapt" / "room_seed3"
 
 
 def test_bad_options(tmp_path):

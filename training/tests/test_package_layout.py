@@ -8,11 +8,15 @@
    edits (issue 30: five files did, and which `data` module won depended on it).
 2. Every module of ngi_train imports from the package (no module relies on a script's own folder on the path).
 3. Each family's commands are modules under ngi_train, and no loose training script is left beside the package.
+4. What an installation ships of ngi_train (installed.txt: cmake --install, python3-ngi, pip install .) is exactly
+   what `ngi adapt` imports (ngi_train.adapt and its training child ngi_train.generator.train, in a fresh
+   interpreter), and run from the checkout the package knows its repository (ngi_paths.REPO).
 """
 
 import importlib
 import pkgutil
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -55,6 +59,18 @@ def main():
     check(all(name in names for name in COMMANDS), "every training command is a module: " + ", ".join(COMMANDS))
     loose = sorted(str(p.relative_to(REPO)) for p in (REPO / "training").glob("*.py"))
     check(not loose, f"no loose scripts in training/ beside the package {loose}")
+
+    from ngi_train import ngi_paths
+    check(ngi_paths.REPO == REPO, f"ngi_paths.REPO is the checkout ({ngi_paths.REPO})")
+    listed = {line.strip() for line in (package_dir / "installed.txt").read_text().splitlines()
+              if line.strip() and not line.startswith("#")}
+    files = subprocess.run([sys.executable, "-c", "import sys, ngi_train.adapt, ngi_train.generator.train\n"
+                            "for n, m in sorted(sys.modules.items()):\n"
+                            "    if n.split('.')[0] == 'ngi_train': print(m.__file__)"],
+                           capture_output=True, text=True, check=True).stdout.split()
+    imported = {Path(f).resolve().relative_to(package_dir).as_posix() for f in files}
+    check(listed == imported, "installed.txt lists what ngi adapt imports (missing: "
+          f"{sorted(imported - listed)}, not imported: {sorted(listed - imported)})")
     return 0
 
 

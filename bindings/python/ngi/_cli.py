@@ -12,6 +12,8 @@ def main():
     if not os.access(exe, os.X_OK):
         sys.exit(f"ngi: the native command-line tool {exe} is not part of this installation (pip install . builds "
                  f"it; a CMake build has it as <build>/ngi)")
+    # `ngi adapt` runs the Python adaptation with this interpreter (the one the package is installed for).
+    os.environ.setdefault("NGI_PYTHON", sys.executable)
     os.execv(exe, ["ngi", *sys.argv[1:]])
 
 
