@@ -19,7 +19,7 @@
 
 #include "frame_folder_format.hpp"
 #include "fuzz_common.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/image_io.hpp"
 
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// NumPy .npy reader (host/src/io/npy.cpp): header dict parsing, shapes, dtypes, size checks.
+// NumPy .npy reader (host/src/base/npy.cpp): header dict parsing, shapes, dtypes, size checks.
 #include "fuzz_common.hpp"
 #include "io/decode.hpp"
 

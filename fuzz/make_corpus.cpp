@@ -24,7 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "frame_folder_format.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "models/safetensors.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/tensor.hpp"

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/decode.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "io_test_support.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"

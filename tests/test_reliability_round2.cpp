@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "io_test_support.hpp"
 #include "test_support.hpp"
 #include "models/safetensors.hpp"

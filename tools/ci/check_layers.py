@@ -3,14 +3,13 @@
 
 The rules, with CMakeLists.txt as the source of truth for which library compiles what and links what:
   1. Libraries: a file of library L includes private headers (host/src/...) only of L and of the libraries L links
-     (target_link_libraries). A .cpp belongs to the library whose source list has it (most by directory: runtime,
-     ops, graph, models -> ngi_core; io -> ngi_io; pipeline -> ngi_pipeline; render -> ngi_render; the files
-     CMakeLists.txt appends to NGI_CORE_SOURCES from other directories -> ngi_core; base holds header-only
-     helpers of every library -> ngi_core); a header to the library of the .cpp with its stem, else to its
-     directory's.
+     (target_link_libraries). A file belongs to the library of its directory: base, runtime, ops, graph, models
+     -> ngi_core; io -> ngi_io; pipeline -> ngi_pipeline; render -> ngi_render. CMakeLists.txt must build each
+     library from its directories' globs alone (a source list that adds or removes single files is a violation:
+     the directories are the libraries).
   2. Inside ngi_core, directories are ordered base < runtime < ops < graph < models (an op knows kernels, not
-     graphs; a graph knows ops, not model files); core's files in other directories (file access, the host-memory
-     limit, .npy, camera and feature conventions) sit with base, below the four.
+     graphs; a graph knows ops, not model files; base holds conventions, file access, .npy and the host-memory
+     limit).
   3. Public headers (host/include/ngi) include only public headers; the applications and bindings (samples/,
      bindings/) include only public headers (ngi/*.hpp, ngi.h) and their own.
   4. docs/ARCHITECTURE.md's map names every directory `git ls-files` has (top level; host/src, bindings, samples
@@ -32,32 +31,26 @@ CLIENT_EXEMPT = {"bindings/python/constants/gen_constants.cpp"}
 
 
 def cmake_facts(root):
-    """(files appended to ngi_core from other directories, {library: libraries it may include from})."""
+    """({library: libraries it may include from}, [problems]): the link lists, and any source list of CMakeLists.txt
+    that names single files of host/src instead of globbing directories."""
     text = (root / "CMakeLists.txt").read_text()
-    m = re.search(r"list\(APPEND NGI_CORE_SOURCES(.*?)\)", text, re.S)
-    if not m:
-        sys.exit("check_layers: no list(APPEND NGI_CORE_SOURCES ...) in CMakeLists.txt")
-    core_extra = set(re.findall(r"\$\{NGI_SRC\}/([\w/]+\.cpp)", m.group(1)))
+    problems = []
+    for m in re.finditer(r"list\((APPEND|REMOVE_ITEM) NGI_\w+_SOURCES(.*?)\)", text, re.S):
+        for f in re.findall(r"\$\{NGI_SRC\}/([\w/]+\.cpp)", m.group(2)):
+            problems.append(f"CMakeLists.txt: list({m.group(1)} ...) moves host/src/{f} between libraries: "
+                            "a library is its directories (move the file instead)")
     links = {lib: {lib} for lib in set(DIR_LIBRARY.values())}
     for lib, args in re.findall(r"target_link_libraries\((ngi_core|ngi_io|ngi_pipeline|ngi_render)\b(.*?)\)", text, re.S):
         links[lib] |= set(re.findall(r"\bngi_(?:core|io|pipeline|render)\b", args))
-    return core_extra, links
+    return links, problems
 
 
-def library_of(rel, src, core_extra):
-    """rel: a path under host/src ("io/npy.cpp", "io/npy.hpp")."""
-    stem_cpp = str(Path(rel).with_suffix(".cpp"))
-    if stem_cpp in core_extra:
-        return "ngi_core"
-    top = rel.split("/")[0]
-    if top not in DIR_LIBRARY:
-        return None
-    return DIR_LIBRARY[top]
+def library_of(rel):
+    """rel: a path under host/src ("io/exr.cpp", "base/npy.hpp")."""
+    return DIR_LIBRARY.get(rel.split("/")[0])
 
 
-def core_rank(rel, core_extra):
-    if str(Path(rel).with_suffix(".cpp")) in core_extra:
-        return 0
+def core_rank(rel):
     return CORE_DIR_RANK.get(rel.split("/")[0], 0)
 
 
@@ -99,13 +92,12 @@ def includes(path):
 def main():
     root = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[2]).resolve()
     src = root / "host" / "src"
-    core_extra, links = cmake_facts(root)
-    problems = []
+    links, problems = cmake_facts(root)
     for f in sorted(src.rglob("*")):
         if f.suffix not in (".cpp", ".hpp"):
             continue
         rel = f.relative_to(src).as_posix()
-        lib = library_of(rel, src, core_extra)
+        lib = library_of(rel)
         if lib is None:
             problems.append(f"host/src/{rel}: in no library's directory ({', '.join(sorted(DIR_LIBRARY))})")
             continue
@@ -114,11 +106,11 @@ def main():
                 continue
             if not (src / inc).exists():
                 continue  # generated or a sibling's relative include: not a layer question
-            target = library_of(inc, src, core_extra)
+            target = library_of(inc)
             where = f"host/src/{rel}:{line}: #include \"{inc}\""
             if target not in links[lib]:
                 problems.append(f"{where}: {lib} does not link {target} (CMakeLists.txt target_link_libraries)")
-            elif lib == target == "ngi_core" and core_rank(inc, core_extra) > core_rank(rel, core_extra):
+            elif lib == target == "ngi_core" and core_rank(inc) > core_rank(rel):
                 problems.append(f"{where}: {rel.split('/')[0]} is below {inc.split('/')[0]} inside ngi_core "
                                 "(runtime < ops < graph < models)")
     for f in sorted((root / "host" / "include" / "ngi").glob("*.hpp")):

@@ -12,8 +12,7 @@ initializer. Type aliases do not (`using Clock = ...` twice for one type is lega
 parameters are legal in one translation unit too, but they are reported: one name per concept per library also
 reads more clearly.
 Libraries (CMakeLists.txt): host/src/<dir> by directory (base, runtime, ops, graph, models -> ngi_core; io, pipeline,
-render -> their own), bindings/c -> ngi_c; files that CMakeLists.txt appends to ngi_core from other directories count
-for ngi_core.
+render -> their own), bindings/c -> ngi_c.
 Usage: check_unity_names.py [REPO_ROOT]   (prints every clash; exit 1 if any)
 """
 import re
@@ -102,14 +101,11 @@ def anonymous_names(path):
 
 
 def library_files(root):
-    text = (root / "CMakeLists.txt").read_text()
-    m = re.search(r"list\(APPEND NGI_CORE_SOURCES(.*?)\)", text, re.S)
-    core_extra = set(re.findall(r"\$\{NGI_SRC\}/([\w/]+\.cpp)", m.group(1))) if m else set()
     libs = defaultdict(list)
     src = root / "host" / "src"
     for f in sorted(src.rglob("*.cpp")):
         rel = f.relative_to(src).as_posix()
-        lib = "ngi_core" if rel in core_extra else DIR_LIBRARY.get(rel.split("/")[0])
+        lib = DIR_LIBRARY.get(rel.split("/")[0])
         if lib:
             libs[lib].append(f)
     libs["ngi_c"] = sorted((root / "bindings" / "c").glob("*.cpp"))

@@ -52,7 +52,7 @@ class ConversionError(ValueError):
 
 
 # --------------------------------------------------------------------------
-# The file rule of ngi's Python tools, the C++ side's (host/src/io/file_util.cpp): only regular files are read or
+# The file rule of ngi's Python tools, the C++ side's (host/src/base/file_util.cpp): only regular files are read or
 # written. A FIFO blocks open() until a writer comes, /dev/zero never ends, and renaming a finished file over
 # /dev/null (as root) replaces the device node with a regular file.
 # --------------------------------------------------------------------------

@@ -8,7 +8,7 @@
 #include "ngi/image.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/tensor.hpp"
-#include "io/npy.hpp"  // decode_npy: in ngi_core with read_npy
+#include "base/npy.hpp"  // decode_npy: in ngi_core with read_npy
 
 namespace ngi::detail {
 

@@ -19,7 +19,7 @@
 #include <set>
 
 #include "io/decode.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/decode.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/output_folder.hpp"

@@ -1,5 +1,5 @@
 // read_image / write_image: one entry point for the three formats, chosen by extension.
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
 #include "ngi/tensor.hpp"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "io/decode.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/image_io.hpp"

@@ -9,7 +9,7 @@
 
 #include "base/checked_size.hpp"
 #include "base/half.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/tensor.hpp"
 

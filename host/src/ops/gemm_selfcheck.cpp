@@ -1,6 +1,6 @@
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/gemm_tuning.hpp"
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 
 #include <cmath>

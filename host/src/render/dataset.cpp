@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "base/json_strict.hpp"
 #include "render/rand.hpp"
 #include "ngi/error.hpp"

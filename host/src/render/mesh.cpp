@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/mesh.hpp"
 #include "render/finite.hpp"

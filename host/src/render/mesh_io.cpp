@@ -26,7 +26,7 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/material.hpp"

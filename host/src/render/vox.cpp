@@ -10,7 +10,7 @@
 #include <map>
 #include <stdexcept>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
 

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <vector>
 
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 #include "ngi/host_memory.hpp"
 #include "runtime/programs.hpp"
 

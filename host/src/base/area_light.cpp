@@ -1,5 +1,5 @@
-// Validation of the rectangular area light (ngi/area_light.hpp). In ngi_io: frame folders record the light, and
-// ngi_io is below ngi_render (which checks it before every frame).
+// Validation of the rectangular area light (ngi/area_light.hpp). In core's base/: frame folders (ngi_io) record the
+// light, the renderer checks it before every frame and the pipeline reads neural GI frames that carry it.
 #include "ngi/area_light.hpp"
 #include "ngi/material.hpp"
 

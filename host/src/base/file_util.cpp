@@ -1,4 +1,4 @@
-#include "io/file_util.hpp"
+#include "base/file_util.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -6,8 +6,8 @@
 
 #include "base/checked_size.hpp"
 #include "base/half.hpp"
-#include "io/file_util.hpp"
-#include "io/npy.hpp"
+#include "base/file_util.hpp"
+#include "base/npy.hpp"
 #include "ngi/error.hpp"
 #include "ngi/host_memory.hpp"
 #include "ngi/tensor.hpp"
