@@ -10,7 +10,8 @@ with the ladder's one recipe on the same frames, then exported as an ngi model f
         --work runs/ladder --lane 1
 
 A lane runs its rungs one after the other (train.py with the rung's config in WORK/configs, run folder
-WORK/runs/<rung>; export.py --half --bn-mode auto). Shipped rungs go to models/ladder/<rung>.safetensors, the
+WORK/runs/<rung>; export.py --half --bn-mode B, B = the ladder file's "bn_mode", default auto: chosen on the recipe's
+eval_split). Shipped rungs go to models/ladder/<rung>.safetensors, the
 others to WORK/models/; every rung is also exported with F32 weights to WORK/fp32/ (the fp32-vs-fp16 rung of the
 evaluation). Interrupting is safe: train.py resumes from its last checkpoint (every 500 steps) and a rung whose
 exports are newer than its checkpoint is skipped.
@@ -116,7 +117,7 @@ def main(argv=None):
         for out, extra in ((half, ["--half"]), (fp32, [])):
             out.parent.mkdir(parents=True, exist_ok=True)
             cmd = [py, "-m", "ngi_train.generator.export", "--run", str(run), "--out", str(out), "--bn-mode",
-                   "auto"] + extra
+                   ladder.get("bn_mode", "auto")] + extra
             if args.device:
                 cmd += ["--device", args.device]
             subprocess.run(cmd, check=True)
