@@ -1,6 +1,7 @@
 // Model files (host/src/models): the safetensors container, then what Model::load does before it needs an OpenCL
 // device: the __metadata__["ngi"] config (parse_model_config) and the tensor names/shapes (validate_unet_tensors).
 #include "fuzz_common.hpp"
+#include "models/family.hpp"
 #include "models/safetensors.hpp"
 #include "models/unet.hpp"
 

@@ -13,7 +13,7 @@
 #include "base/file_util.hpp"
 #include "io_test_support.hpp"
 #include "models/safetensors.hpp"
-#include "models/unet.hpp"
+#include "models/family.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"

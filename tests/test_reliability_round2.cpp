@@ -20,7 +20,7 @@
 #include "io_test_support.hpp"
 #include "test_support.hpp"
 #include "models/safetensors.hpp"
-#include "models/unet.hpp"
+#include "models/family.hpp"
 #include "ngi/area_light.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/device_buffer.hpp"

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
+#include "models/config_fields.hpp"
 #include "models/graph_model.hpp"
-#include "models/unet.hpp"
 #include "models/voxel_sh_model.hpp"
 #include "ops/luminance.hpp"
 #include "ngi/render.hpp"
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
          py_float(detail::kRec709Luma[2]) + ")\n";
     s += "# host/include/ngi/render.hpp kEngineFeatureSpp: direct-light samples per pixel of an engine's (converged) input.\n";
     s += "ENGINE_FEATURE_SPP = " + std::to_string(kEngineFeatureSpp) + "\n";
-    s += "# host/src/models/graph_model.hpp, unet.hpp: the graph loader's limits (ngi.convert refuses beyond them).\n";
+    s += "# host/src/models/graph_model.hpp, config_fields.hpp: the graph loader's limits (ngi.convert refuses beyond them).\n";
     s += "GRAPH_MAX_NODES = " + std::to_string(detail::kMaxGraphNodes) + "\n";
     s += "GRAPH_MAX_NAME_BYTES = " + std::to_string(detail::kMaxGraphNameLength) + "\n";
     s += "GRAPH_MAX_NODE_INPUTS = " + std::to_string(detail::kMaxGraphNodeInputs) + "\n";

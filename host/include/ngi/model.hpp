@@ -161,7 +161,6 @@ public:
 
 private:
     friend struct detail::ModelAccess;
-    Tensor run_items(const Tensor& input, RunInfo* info);  // family "graph", layout "nc": [N, C]
     struct Impl;
     explicit Model(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;

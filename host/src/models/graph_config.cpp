@@ -1,16 +1,14 @@
-// The config of a family "graph" file (docs/MODEL_FORMAT.md "graph"): parse_graph_config and parse_graph_desc, the
-// node list checked as hostile input. graph_model.cpp checks the weights and builds the graph.
+// The node list of a family "graph" file (docs/MODEL_FORMAT.md "graph"): parse_graph_desc, checked as hostile input.
+// graph_family.cpp parses the rest of the config, graph_model.cpp checks the weights and builds the graph.
 #include "models/graph_model.hpp"
 
-#include <cfloat>
-#include <climits>
 #include <cmath>
 #include <map>
 #include <set>
 
+#include "models/config_fields.hpp"
 #include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
-#include "models/unet.hpp"
 
 namespace ngi::detail {
 
@@ -20,13 +18,6 @@ constexpr int kMaxKernel = kMaxGraphKernel, kMaxStride = kMaxGraphStride, kMaxPa
               kMaxNameLength = kMaxGraphNameLength;
 
 const std::set<std::string> kActivations = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp", "softplus", "erf"};
-
-bool is_int_in(const nlohmann::json& v, long long lo, long long hi) {
-    if (!v.is_number_integer()) return false;
-    if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(LLONG_MAX)) return false;
-    const long long x = v.get<long long>();
-    return x >= lo && x <= hi;
-}
 
 bool is_name(const nlohmann::json& v) {
     return v.is_string() && !v.get<std::string>().empty() && v.get<std::string>().size() <= kMaxNameLength;
@@ -50,7 +41,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
     }
     if (!g.contains("input") || !is_name(g["input"])) throw fail("graph.input", "a tensor name (1..512 characters)");
     if (!g.contains("output") || !is_name(g["output"])) throw fail("graph.output", "a tensor name (1..512 characters)");
-    if (!j.contains("input_nc") || !is_int_in(j["input_nc"], 1, kMaxChannels))
+    if (!j.contains("input_nc") || !is_integer_in(j["input_nc"], 1, kMaxChannels))
         throw fail("input_nc", "an integer in 1.." + std::to_string(kMaxChannels));
     d.input_name = g["input"].get<std::string>();
     d.input_nc = j["input_nc"].get<int>();
@@ -150,7 +141,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             if (!is_name(n[key])) throw bad(std::string("'") + key + "' must be a tensor name");
         };
         auto int_field = [&](const char* key, long long lo, long long hi) {
-            if (!n.contains(key) || !is_int_in(n[key], lo, hi))
+            if (!n.contains(key) || !is_integer_in(n[key], lo, hi))
                 throw bad(std::string("'") + key + "' must be an integer in " + std::to_string(lo) + ".." +
                           std::to_string(hi));
             return int(n[key].get<long long>());
@@ -166,7 +157,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             if (node.kind != NodeKind::dense) {
                 const std::string rule = "[kh, kw], integers in 1.." + std::to_string(kMaxKernel);
                 if (!n.contains("kernel") || !n["kernel"].is_array() || n["kernel"].size() != 2 ||
-                    !is_int_in(n["kernel"][0], 1, kMaxKernel) || !is_int_in(n["kernel"][1], 1, kMaxKernel))
+                    !is_integer_in(n["kernel"][0], 1, kMaxKernel) || !is_integer_in(n["kernel"][1], 1, kMaxKernel))
                     throw bad("'kernel' must be " + rule);
                 const int stride = int_field("stride", 1, kMaxStride), pad = int_field("pad", 0, kMaxPad);
                 if (nc && (n["kernel"][0] != 1 || n["kernel"][1] != 1 || stride != 1 || pad != 0))
@@ -190,8 +181,8 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             auto pair = [&](const char* key, int lo, int hi) {
                 const std::string rule = std::string("'") + key + "' must be [h, w], integers in " + std::to_string(lo) +
                                          ".." + std::to_string(hi);
-                if (!n.contains(key) || !n[key].is_array() || n[key].size() != 2 || !is_int_in(n[key][0], lo, hi) ||
-                    !is_int_in(n[key][1], lo, hi))
+                if (!n.contains(key) || !n[key].is_array() || n[key].size() != 2 || !is_integer_in(n[key][0], lo, hi) ||
+                    !is_integer_in(n[key][1], lo, hi))
                     throw bad(rule);
                 return std::pair<int, int>{n[key][0].get<int>(), n[key][1].get<int>()};
             };
@@ -201,7 +192,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
                                      std::to_string(kMaxPad) + ", each below its kernel side";
             if (!n.contains("pads") || !n["pads"].is_array() || n["pads"].size() != 4) throw bad(rule);
             for (int s = 0; s < 4; ++s)
-                if (!is_int_in(n["pads"][s], 0, kMaxPad) || n["pads"][s].get<int>() >= (s % 2 ? kw : kh)) throw bad(rule);
+                if (!is_integer_in(n["pads"][s], 0, kMaxPad) || n["pads"][s].get<int>() >= (s % 2 ? kw : kh)) throw bad(rule);
             node.out_channels = cin;
         } else if (node.kind == NodeKind::pad2d) {
             if (nc) throw bad("layout \"nc\" has no spatial axes to pad");
@@ -209,7 +200,7 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
                                      std::to_string(kMaxPad) + ".." + std::to_string(kMaxPad) + " (negative: a crop)";
             if (!n.contains("pads") || !n["pads"].is_array() || n["pads"].size() != 4) throw bad(rule);
             for (const auto& p : n["pads"])
-                if (!is_int_in(p, -kMaxPad, kMaxPad)) throw bad(rule);
+                if (!is_integer_in(p, -kMaxPad, kMaxPad)) throw bad(rule);
             if (!n.contains("mode") || !n["mode"].is_string() ||
                 (n["mode"] != "constant" && n["mode"] != "reflect" && n["mode"] != "edge"))
                 throw bad("'mode' must be \"constant\", \"reflect\" or \"edge\"");
@@ -227,8 +218,8 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
                     if (!s.is_number() || !(s.get<double>() >= 1.0 / 64) || !(s.get<double>() <= 64)) throw bad(rule);
             } else {
                 const std::string rule = "'sizes' must be [h, w], integers in 1..65536";
-                if (!n["sizes"].is_array() || n["sizes"].size() != 2 || !is_int_in(n["sizes"][0], 1, 65536) ||
-                    !is_int_in(n["sizes"][1], 1, 65536))
+                if (!n["sizes"].is_array() || n["sizes"].size() != 2 || !is_integer_in(n["sizes"][0], 1, 65536) ||
+                    !is_integer_in(n["sizes"][1], 1, 65536))
                     throw bad(rule);
             }
             static const std::set<std::string> kCoords = {"half_pixel", "pytorch_half_pixel", "align_corners",
@@ -278,66 +269,6 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
     if (out->second == 0) throw fail("graph.output", "a node's output, not the graph input itself");
     d.output = out->second;
     return d;
-}
-
-ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path) {
-    const std::string what = "load model " + path + ": metadata 'ngi': ";
-    auto fail = [&](const std::string& key, const std::string& rule) {
-        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
-        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
-    };
-    ModelConfig c;
-    c.family = "graph";
-    if (j.contains("format_version")) {
-        if (j["format_version"].is_number_integer() && j["format_version"].get<long long>() > kModelFormatVersion)
-            throw InputError(what + "field 'format_version' is " + j["format_version"].dump() +
-                             ", newer than the newest this reader knows (" + std::to_string(kModelFormatVersion) +
-                             "): update ngi");
-        if (!is_int_in(j["format_version"], 1, kModelFormatVersion))
-            throw fail("format_version", "an integer in 1.." + std::to_string(kModelFormatVersion));
-    }
-    const GraphDesc d = parse_graph_desc(j, what);
-    c.input_nc = d.input_nc;
-    c.output_nc = d.nodes[d.output - 1].out_channels;
-    c.graph.layout = d.layout;
-    if (j.contains("output_nc") && !(is_int_in(j["output_nc"], 1, kMaxChannels) && j["output_nc"] == c.output_nc))
-        throw fail("output_nc", "the graph output's channel count (" + std::to_string(c.output_nc) + ")");
-    // An imported network's inputs have no known range: the guard replaces only NaN (-> 0) and +-Inf.
-    c.input_range[0] = -FLT_MAX;
-    c.input_range[1] = FLT_MAX;
-    for (const char* key : {"input_range", "output_range"}) {
-        if (!j.contains(key)) continue;
-        const nlohmann::json& v = j[key];
-        const std::string rule = std::string("[lo, hi], two numbers with lo < hi, both ") + kFloat32Rule;
-        if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number()) throw fail(key, rule);
-        const double lo = v[0].get<double>(), hi = v[1].get<double>();
-        if (!float32_representable(lo) || !float32_representable(hi) || !(float(lo) < float(hi))) throw fail(key, rule);
-        float* out = std::string(key) == "input_range" ? c.input_range : c.output_range;
-        out[0] = float(lo);
-        out[1] = float(hi);
-    }
-    if (j.contains("input_layout") && !read_input_layout(j["input_layout"], c.input_nc, c.input_layout))
-        throw fail("input_layout", input_layout_rule(c.input_nc));
-    if (j.contains("source")) {
-        if (!j["source"].is_string()) throw fail("source", "a string");
-        c.source = j["source"].get<std::string>();
-    }
-    if (j.contains("output_mode") && j["output_mode"] != "lightmap")
-        throw fail("output_mode", "\"lightmap\" (only family pix2pix_unet has another output mode)");
-    if (j.contains("training") && !j["training"].is_object()) throw fail("training", "an object");
-    static const std::set<std::string> kKnown = {"format_version", "family", "input_nc", "output_nc", "graph",
-                                                 "input_range", "output_range", "input_layout", "source",
-                                                 "training", "required", "onnx", "output_mode"};
-    if (j.contains("required")) {
-        if (!j["required"].is_array()) throw fail("required", "a list of field names");
-        for (const auto& name : j["required"]) {
-            if (!name.is_string()) throw fail("required", "a list of field names");
-            if (!kKnown.count(name.get<std::string>()))
-                throw InputError(what + "field 'required' lists '" + name.get<std::string>().substr(0, 80) +
-                                 "', which this reader does not know: the file needs a newer ngi");
-        }
-    }
-    return c;
 }
 
 }  // namespace ngi::detail

@@ -2,8 +2,9 @@
 // as python3 -m ngi.convert writes it from an ONNX file. Each node is one of the node kinds of graph/node_kind.hpp
 // (conv2d, conv_transpose2d, dense, concat, activation, affine, add, mul, ...); the loader checks the list as hostile
 // input (unknown op or field, a tensor used before it is made or never made, channel counts that do not chain,
-// weights missing, misshaped or unused) and names the node in every error. graph_config.cpp parses the config and
-// the node list, graph_model.cpp checks the weights and builds the ops (graph/nodes.hpp) and the graph.
+// weights missing, misshaped or unused) and names the node in every error. graph_family.cpp is the family's
+// front-end (config, runner), graph_config.cpp parses the node list, graph_model.cpp checks the weights and builds the
+// ops (graph/nodes.hpp) and the graph.
 #pragma once
 #include <memory>
 #include <optional>
@@ -45,10 +46,8 @@ struct GraphDesc {
     int output = 0;  // tensor index
 };
 
-// The whole config of a family "graph" file (common fields + "graph"); InputError naming the file, the field and,
-// for node problems, the node. `j` is the parsed metadata.
-ModelConfig parse_graph_config(const nlohmann::json& j, const std::string& path);
-// The node list of a config parse_graph_config accepted; `what` prefixes errors.
+// The node list of a family "graph" config (graph_family.cpp parses the rest); InputError starting with `what` and
+// naming the field and, for node problems, the node.
 GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what);
 
 // The weight tensors of one node (nullptr where the node names none), pointing into the file.

@@ -1,16 +1,10 @@
 #include "models/mlp_model.hpp"
 
-#include "models/float_field.hpp"
-
-#include <cmath>
 #include <set>
 
 namespace ngi::detail {
 
 namespace {
-
-constexpr int kMaxMlpLayers = 64;
-constexpr int kMaxMlpWidth = 65536;
 
 Act activation_of(const ModelConfig::Layer& l) {
     if (l.activation == "none") return Act::none();
@@ -19,48 +13,10 @@ Act activation_of(const ModelConfig::Layer& l) {
     if (l.activation == "tanh") return Act::tanh();
     if (l.activation == "sigmoid") return Act::sigmoid();
     if (l.activation == "exp") return Act::exp();
-    throw InputError("mlp: unknown activation '" + l.activation + "'");  // parse_mlp_fields already refused it
+    throw InputError("mlp: unknown activation '" + l.activation + "'");  // the front-end's parser already refused it
 }
 
 }  // namespace
-
-void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
-    auto fail = [&](const std::string& key, const std::string& rule) {
-        return InputError(what + "field '" + key + "' must be " + rule);
-    };
-    if (!j.contains("layers") || !j["layers"].is_array() || j["layers"].empty() || j["layers"].size() > kMaxMlpLayers)
-        throw fail("layers", "a list of 1.." + std::to_string(kMaxMlpLayers) + " layers {\"out\": n, \"activation\": a}");
-    static const std::set<std::string> kActs = {"none", "relu", "leaky_relu", "tanh", "sigmoid", "exp"};
-    for (std::size_t i = 0; i < j["layers"].size(); ++i) {
-        const nlohmann::json& l = j["layers"][i];
-        const std::string key = "layers[" + std::to_string(i) + "]";
-        if (!l.is_object()) throw fail(key, "an object {\"out\": n, \"activation\": a}");
-        ModelConfig::Layer layer;
-        if (!l.contains("out") || !l["out"].is_number_integer() || l["out"].get<long long>() < 1 ||
-            l["out"].get<long long>() > kMaxMlpWidth)
-            throw fail(key + ".out", "an integer in 1.." + std::to_string(kMaxMlpWidth));
-        layer.out = l["out"].get<int>();
-        if (l.contains("activation")) {
-            if (!l["activation"].is_string() || !kActs.count(l["activation"].get<std::string>()))
-                throw fail(key + ".activation", "one of none, relu, leaky_relu, tanh, sigmoid, exp");
-            layer.activation = l["activation"].get<std::string>();
-        }
-        if (l.contains("slope")) {
-            if (!l["slope"].is_number() || !std::isfinite(l["slope"].get<double>()) ||
-                std::abs(l["slope"].get<double>()) > 1.0 || !float32_representable(l["slope"].get<double>()))
-                throw fail(key + ".slope", std::string("a number in [-1, 1] ") + kFloat32Rule + ", got " +
-                                               l["slope"].dump().substr(0, 40));
-            layer.slope = l["slope"].get<float>();
-        }
-        c.layers.push_back(layer);
-    }
-    c.output_nc = c.layers.back().out;
-    // An MLP's inputs (normals, positions, radiance) have no common range: unless the file says otherwise, the
-    // guard replaces only NaN (-> 0) and +-Inf (-> +-FLT_MAX).
-    c.input_range[0] = -3.402823466e38f;
-    c.input_range[1] = 3.402823466e38f;
-    parse_encoding_fields(j, c, what);
-}
 
 void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
     auto fail = [&](const std::string& key, const std::string& rule) {

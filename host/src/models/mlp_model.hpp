@@ -1,5 +1,6 @@
-// The "mlp" model family (docs/MODEL_FORMAT.md): its metadata fields, its tensors, and the runner Model uses for
-// it (the fused kernel when the network fits it and the device, else the dense GEMM path).
+// The "mlp" model family's network (docs/MODEL_FORMAT.md): the frequency encoding fields (also read by neural_gi and
+// graph nodes), its tensors, and the runner its front-end (models/mlp_family.cpp) wraps: the fused kernel when the
+// network fits it and the device, else the dense GEMM path.
 #pragma once
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -12,8 +13,6 @@
 
 namespace ngi::detail {
 
-// Fills c.layers, the encoding fields and c.output_nc from the metadata `j`; `what` prefixes errors.
-void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
 // The optional "encoding" object into c.encoding_* (docs/MODEL_FORMAT.md; absent: no encoding).
 void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
 // c.encoding_* as the ops take it.

@@ -1,18 +1,15 @@
 #include "models/neural_gi_model.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <set>
 
 #include "graph/nodes.hpp"
-#include "models/float_field.hpp"
 #include "models/mlp_model.hpp"
 
 namespace ngi::detail {
 
 namespace {
 
-constexpr int kMaxBufferChannels = 4096, kMaxNeuralGiMlpWidth = 4096, kMaxMlpDepth = 64;
 const std::string kBufferPrefix = "buffer.";
 
 // The U-Net part of the config: a pix2pix generator whose output is the neural buffer (dropout never applies).
@@ -57,53 +54,6 @@ std::vector<std::pair<std::string, std::vector<int>>> mlp_tensors(const ModelCon
 }
 
 }  // namespace
-
-void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
-    auto fail = [&](const std::string& key, const std::string& rule) {
-        return InputError(what + "field '" + key + "' must be " + rule);
-    };
-    if (c.output_nc != 3) throw fail("output_nc", "3 (RGB indirect light) for family neural_gi");
-    if (c.dropout != "off") throw fail("dropout", "\"off\" for family neural_gi (its U-Net has no dropout)");
-    parse_encoding_fields(j, c, what);
-    if (!j.contains("neural_gi") || !j["neural_gi"].is_object())
-        throw fail("neural_gi", "an object {buffer_channels, mlp_width, mlp_depth, skip_layer, decode}");
-    const nlohmann::json& n = j["neural_gi"];
-    auto integer = [&](const char* k, long long lo, long long hi) {
-        if (!n.contains(k) || !n[k].is_number_integer() ||
-            (n[k].is_number_unsigned() && n[k].get<std::uint64_t>() > std::uint64_t(hi)) || n[k].get<long long>() < lo ||
-            n[k].get<long long>() > hi)
-            throw fail(std::string("neural_gi.") + k, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi));
-        return int(n[k].get<long long>());
-    };
-    ModelConfig::NeuralGi& g = c.neural_gi;
-    g.buffer_channels = integer("buffer_channels", 1, kMaxBufferChannels);
-    g.mlp_width = integer("mlp_width", 1, kMaxNeuralGiMlpWidth);
-    g.mlp_depth = integer("mlp_depth", 1, kMaxMlpDepth);
-    // 0: no re-injection (layer 0 takes the input anyway).
-    g.skip_layer = integer("skip_layer", 0, g.mlp_depth - 1);
-    if (n.contains("scene_box")) {
-        const nlohmann::json& b = n["scene_box"];
-        const std::string rule = std::string("{\"min\": [x, y, z], \"max\": [x, y, z]}, finite (|v| <= 1e30), ") +
-                                 kFloat32Rule + ", min <= max";
-        auto vec3 = [&](const char* k, float* out) {
-            if (!b.is_object() || !b.contains(k) || !b[k].is_array() || b[k].size() != 3) throw fail("neural_gi.scene_box", rule);
-            for (int i = 0; i < 3; ++i) {
-                if (!b[k][i].is_number()) throw fail("neural_gi.scene_box", rule);
-                const double v = b[k][i].get<double>();
-                if (!std::isfinite(v) || std::abs(v) > 1e30 || !float32_representable(v))
-                    throw fail("neural_gi.scene_box", rule);
-                out[i] = float(v);
-            }
-        };
-        vec3("min", g.scene_min);
-        vec3("max", g.scene_max);
-        for (int i = 0; i < 3; ++i)
-            if (g.scene_min[i] > g.scene_max[i]) throw fail("neural_gi.scene_box", rule);
-        g.has_scene_box = true;
-    }
-    if (!n.contains("decode") || n["decode"] != "exp")
-        throw fail("neural_gi.decode", "\"exp\" (indirect = exp(min(x, 88)), never negative)");
-}
 
 void validate_neural_gi_tensors(const ModelConfig& cfg, const SafetensorsFile& file) {
     validate_unet_tensors(buffer_config(cfg), buffer_tensors(file));  // names the U-Net's own problems

@@ -23,10 +23,6 @@
 
 namespace ngi::detail {
 
-// Fills c.neural_gi and the encoding from the metadata (parse_model_config has read the U-Net's fields: ngf,
-// num_downs, bn_mode, ...); InputError naming the file and the field.
-void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
-
 struct NeuralGiOps {
     UNetOps buffer;
     std::shared_ptr<Op> encode, skip_copy, output;

@@ -1,19 +1,18 @@
+// The gather's settings of family ssgi and of a network that corrects it (models/ssgi_config.hpp).
 #include "models/ssgi_config.hpp"
 
-#include <set>
-
 #include "models/float_field.hpp"
-#include "models/unet.hpp"
 #include "ngi/error.hpp"
 
 namespace ngi::detail {
 
 namespace {
 
-const char* const kGatherFields = "view, cluster_level, bounces, near_factor, min_distance, visibility_steps, thickness";
+const char* const kGatherFieldNames = "view, cluster_level, bounces, near_factor, min_distance, visibility_steps, thickness";
 
-// Reads the gather's settings present in `j` into `s` (absent ones keep their defaults); `what` starts every error.
-void read_gather_fields(const nlohmann::json& j, const std::string& what, ModelConfig::Ssgi& s) {
+}  // namespace
+
+void read_ssgi_gather_fields(const nlohmann::json& j, const std::string& what, ModelConfig::Ssgi& s) {
     auto fail = [&](const std::string& key, const std::string& rule) {
         const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
         return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
@@ -47,60 +46,22 @@ void read_gather_fields(const nlohmann::json& j, const std::string& what, ModelC
     s.thickness = number("thickness", 0.0, 1e3, s.thickness);
 }
 
-}  // namespace
+const char* ssgi_gather_field_names() { return kGatherFieldNames; }
 
 ModelConfig::Ssgi parse_ssgi_gather(const nlohmann::json& j, const std::string& what) {
     if (!j.is_object())
-        throw InputError(what + "field 'ssgi' must be an object of the gather's settings (" + kGatherFields + ")");
+        throw InputError(what + "field 'ssgi' must be an object of the gather's settings (" + kGatherFieldNames + ")");
     const std::string inner = what + "'ssgi': ";
     for (const auto& item : j.items()) {
         const std::string& k = item.key();
         if (k != "view" && k != "cluster_level" && k != "bounces" && k != "near_factor" && k != "min_distance" &&
             k != "visibility_steps" && k != "thickness")
             throw InputError(inner + "field '" + k.substr(0, 80) + "' is not a setting of the gather (" +
-                             kGatherFields + ")");
+                             kGatherFieldNames + ")");
     }
     ModelConfig::Ssgi s;
-    read_gather_fields(j, inner, s);
+    read_ssgi_gather_fields(j, inner, s);
     return s;
-}
-
-ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path) {
-    const std::string what = "load model " + path + ": metadata 'ngi': ";
-    auto fail = [&](const std::string& key, const std::string& rule) {
-        const std::string got = j.contains(key) ? ", got " + j[key].dump() : " (missing)";
-        return InputError(what + "field '" + key + "' must be " + rule + got.substr(0, 120));
-    };
-    ModelConfig c;
-    c.family = "ssgi";
-    if (j.contains("format_version")) {
-        const nlohmann::json& v = j["format_version"];
-        if (v.is_number_integer() && v.get<long long>() > kModelFormatVersion)
-            throw InputError(what + "field 'format_version' is " + v.dump() + ", newer than the newest this reader "
-                             "knows (" + std::to_string(kModelFormatVersion) + "): update ngi");
-        if (!v.is_number_integer() || v.get<long long>() < 1)
-            throw fail("format_version", "an integer in 1.." + std::to_string(kModelFormatVersion));
-    }
-    read_gather_fields(j, what, c.ssgi);
-    // No network: nothing is read from or written to a tensor. The pipeline's output is 3 channels of light; an
-    // indirect part is added to the frame's direct light, as an "indirect" generator's is.
-    c.input_nc = 0;
-    c.output_nc = 3;
-    c.output_mode = "indirect";
-    if (j.contains("output_mode") && j["output_mode"] != "indirect")
-        throw fail("output_mode", "\"indirect\" (ssgi adds its light to the frame's direct light)");
-    if (j.contains("source")) {
-        if (!j["source"].is_string()) throw fail("source", "a string");
-        c.source = j["source"].get<std::string>();
-    }
-    static const std::set<std::string> kKnown = {"format_version", "family", "view", "cluster_level", "bounces",
-                                                 "near_factor", "min_distance", "visibility_steps", "thickness",
-                                                 "output_mode", "source", "comment"};
-    for (const auto& item : j.items())
-        if (!kKnown.count(item.key()))
-            throw InputError(what + "field '" + item.key().substr(0, 80) + "' is not a field of family ssgi (" +
-                             kGatherFields + ", output_mode, source, comment)");
-    return c;
 }
 
 }  // namespace ngi::detail

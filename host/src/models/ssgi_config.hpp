@@ -1,5 +1,6 @@
 // Family "ssgi" (docs/MODEL_FORMAT.md "ssgi"): a rung with no network and no tensors. Its file holds the gather's
-// settings; the surround pipeline computes the light (host/src/pipeline/ssgi.cpp). Library-internal.
+// settings (read here; the family's front-end is models/ssgi_family.cpp); the surround pipeline computes the light
+// (host/src/pipeline/ssgi.cpp). Library-internal.
 #pragma once
 #include <string>
 
@@ -18,9 +19,11 @@ constexpr int kSsgiMaxVisibilitySteps = 64;
 // ngi::ssgi_residual_input_channels() (the pipeline checks that list against this count).
 constexpr int kSsgiResidualInputs = 13;
 
-// The config of an ssgi file from its parsed metadata object; every field range-checked. InputError naming the file
-// and field otherwise.
-ModelConfig parse_ssgi_config(const nlohmann::json& j, const std::string& path);
+// Reads the gather's settings present in `j` into `s` (absent ones keep their defaults), each range-checked; `what`
+// starts every error. Family ssgi's front-end (models/ssgi_family.cpp) reads its config's top level with it.
+void read_ssgi_gather_fields(const nlohmann::json& j, const std::string& what, ModelConfig::Ssgi& s);
+// "view, cluster_level, bounces, near_factor, min_distance, visibility_steps, thickness": what messages list.
+const char* ssgi_gather_field_names();
 
 // The gather's settings of a network that corrects SSGI (pix2pix_unet, output_mode "ssgi_residual"): its metadata
 // field "ssgi", an object of the fields above (view, cluster_level, bounces, near_factor, min_distance,

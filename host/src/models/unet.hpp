@@ -1,13 +1,12 @@
 // The U-Net generators (pix2pix UnetGenerator, DeepIllumination G) as one level-by-level description, so both
-// families share the same graph builder and differ only in names, bias, norm placement and concat order.
+// families share the same graph builder and differ only in names, bias, norm placement and concat order. Their
+// front-end (config, runner) is models/unet_family.cpp; neural_gi builds its neural buffer here too.
 #pragma once
 #include <functional>
 #include <optional>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "graph/graph.hpp"
 #include "models/safetensors.hpp"
@@ -30,15 +29,6 @@ struct UNetSpec {
     bool decoder_first = false;  // concat order: pix2pix cat(skip, decoder); DeepIllumination cat(decoder, skip)
 };
 
-// The newest docs/MODEL_FORMAT.md version this reader understands; files of a newer version are refused.
-inline constexpr int kModelFormatVersion = 1;
-// Channel counts (input_nc, output_nc, 8 * ngf) above this are refused as corrupt configs.
-inline constexpr int kMaxChannels = 65536;
-
-// Parses and validates __metadata__["ngi"] (every field's type and range, docs/MODEL_FORMAT.md). Throws InputError
-// naming the file and the field. `ao`, if given, receives an mlp's "ao" value (null when it has none), which
-// ModelAccess::ao reads (models/ao_metadata.hpp): the JSON is parsed once, here.
-ModelConfig parse_model_config(const std::string& json, const std::string& path, nlohmann::json* ao = nullptr);
 UNetSpec unet_spec(const ModelConfig& cfg);
 // Expected tensor name -> shape, derived from the spec (used to report missing / unexpected / misshaped tensors).
 std::vector<std::pair<std::string, std::vector<int>>> expected_tensors(const UNetSpec& spec);

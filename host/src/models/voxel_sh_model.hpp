@@ -1,5 +1,6 @@
-// The "voxel_sh" model family (seed 004, docs/MODEL_FORMAT.md "voxel_sh"): its metadata fields, its tensors, and
-// the runner Model uses for it. Per occupied voxel of one scene: 10 raw attributes in, 27 SH coefficients out.
+// The "voxel_sh" model family's network (seed 004, docs/MODEL_FORMAT.md "voxel_sh"): its tensors and the runner its
+// front-end (models/voxel_sh_family.cpp, which also parses the config) wraps. Per occupied voxel of one scene: 10 raw
+// attributes in, 27 SH coefficients out.
 //
 // Everything runs on the device in the planar [C, V] layout of the packed GEMM: the input standardization (a
 // per-channel affine, transposing a point list on the way) and the guard, the dense layers (im2col pack + GEMM,
@@ -9,8 +10,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "models/safetensors.hpp"
 #include "ngi/model.hpp"
@@ -28,10 +27,6 @@ constexpr int kVoxelShOutputs = 27;  // SH bands 0-2 x RGB, [3][9]
 // input, and small enough that the first layer's sums stay finite (docs/MODEL_FORMAT.md "voxel_sh"). Python reads
 // it from the generated ngi._constants (ngi.voxel_sh.INPUT_BOUND, bindings/python/ngi/voxel_sh.py).
 constexpr float kVoxelShInputBound = 1e6f;
-
-// The config of a voxel_sh file from its parsed metadata object (parse_model_config parses the JSON once and hands
-// the "voxel_sh" family here); InputError naming the file and the field for every violation.
-ModelConfig parse_voxel_sh_config(const nlohmann::json& j, const std::string& path);
 
 // One dense layer over planar items (ops/dense.hpp, its input read in place): y = act(scale * (W x) + shift)
 // (+ residual), x [in][n] with row stride n, y planar [out][n] or item-major [n][out]. W in nn.Linear's [out][in]
