@@ -76,9 +76,7 @@ def anonymous_names(path):
             stmt = raw.strip()
             line = text.count("\n", 0, stmt_start + len(raw) - len(raw.lstrip())) + 1
             name = None
-            if stmt.startswith("using "):
-                continue
-            for rx in (TYPE, FUNC, VAR):
+            for rx in (TYPE, FUNC, VAR) if not stmt.startswith("using ") else ():
                 mm = rx.match(stmt)
                 if mm and mm.group(1) not in KEYWORDS:
                     name = mm.group(1)

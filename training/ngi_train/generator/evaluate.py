@@ -34,11 +34,12 @@ import numpy as np
 import torch
 
 import ngi.reference_models as reference_models
+from ngi import _constants
 
 from ngi_train import distributed, ngi_paths
 from ngi_train.generator import data, gan, lightmap_loss, networks
 
-LIGHT_MAX = 65504.0
+LIGHT_MAX = _constants.LIGHT_MAX  # compose.cl's cap of decoded light
 
 
 def decode(v):

@@ -12,10 +12,11 @@ Output modes (the model file's `output_mode`, docs/MODEL_FORMAT.md):
 
 import torch
 
+from ngi import _constants
 from ngi_train.generator import data
 
 OUTPUT_MODES = ("lightmap", "indirect")
-LIGHT_MAX = 65504.0  # compose.cl LIGHT_MAX: the decoded output stops at the largest half float
+LIGHT_MAX = _constants.LIGHT_MAX  # compose.cl LIGHT_MAX: the decoded output stops at the largest half float
 FLT_MAX = 3.4028234663852886e38
 # y is clamped below 1 (exactly representable in float32) so that y / (1 - y) stays finite, as does its gradient;
 # the cap at LIGHT_MAX then applies as in the kernel.

@@ -1,0 +1,42 @@
+"""The source checks of tools/ci on small synthetic trees: each finds what it exists for and passes clean code."""
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).parent
+CONSTANTS = 'LIGHT_MAX = 65504.0\nREC709_LUMA = (0.2126, 0.7152, 0.0722)\nENGINE_FEATURE_SPP = 1024\n'
+
+
+def run(script, *args):
+    return subprocess.run([sys.executable, str(HERE / script), *map(str, args)], capture_output=True, text=True)
+
+
+def test_constant_copies_by_value_and_name(tmp_path):
+    (tmp_path / "c.py").write_text(CONSTANTS)
+    (tmp_path / "training").mkdir()
+    (tmp_path / "kernels").mkdir()
+    (tmp_path / "training" / "ok.py").write_text("from ngi import _constants\nCAP = _constants.LIGHT_MAX\nN = 1024\n")
+    (tmp_path / "kernels" / "ok.cl").write_text("#define TILE 16\n")
+    clean = run("check_constant_copies.py", tmp_path, tmp_path / "c.py")
+    assert clean.returncode == 0, clean.stdout
+    (tmp_path / "training" / "copy.py").write_text("CAP = 65504.0\nLUMA = (0.2126, 0.7152, 0.0722)\n"
+                                                   "ENGINE_FEATURE_SPP = 1024\n")
+    (tmp_path / "kernels" / "copy.cl").write_text("#define HALF_MAX 65504.0f\n")
+    found = run("check_constant_copies.py", tmp_path, tmp_path / "c.py")
+    assert found.returncode == 1
+    for what in ("copy.py:1: CAP", "copy.py:2: LUMA", "copy.py:3: ENGINE_FEATURE_SPP", "copy.cl:1: HALF_MAX"):
+        assert what in found.stdout, found.stdout
+
+
+def test_unity_names_clash_across_files_of_one_library(tmp_path):
+    render = tmp_path / "host" / "src" / "render"
+    render.mkdir(parents=True)
+    (tmp_path / "bindings" / "c").mkdir(parents=True)
+    (render / "a.cpp").write_text("namespace {\n// struct Builder in a comment\nusing Clock = int;\n"
+                                  "struct Builder { int x; };\nint helper(int v) { return v; }\n}\n")
+    (render / "b.cpp").write_text('namespace {\nusing Clock = int;\nconst char* s = "struct Builder {";\n'
+                                  "int other(int v);\nint other(int v) { return v; }\n}\n")
+    assert run("check_unity_names.py", tmp_path).returncode == 0
+    (render / "c.cpp").write_text("namespace ngi {\nnamespace {\nstruct Builder {\n};\n}\n}\n")
+    found = run("check_unity_names.py", tmp_path)
+    assert found.returncode == 1 and "'Builder'" in found.stdout and "a.cpp:4" in found.stdout and "c.cpp:3" in found.stdout
