@@ -1,8 +1,9 @@
-// libFuzzer target for the mesh loader (host/src/render/mesh_io.cpp, mesh_precheck.cpp, and assimp behind them):
-// the first byte picks the format (0 OBJ, 1 PLY, 2 glTF, 3 GLB: its value mod 4), the rest is the file. Runs
-// parse_mesh, the same path as load_mesh after its file read (parse_mesh reads no other file: an OBJ's .mtl and
-// a glTF's external buffers are not opened). ngi::Error (InputError for a bad file) is the expected outcome of most
-// inputs; anything else -- a crash, a sanitizer report, std::bad_alloc, a hang, an allocation over
+// libFuzzer target for the mesh loader (host/src/render/mesh_io.cpp and the one reader per format behind it:
+// mesh_obj.cpp, mesh_ply.cpp, and mesh_gltf.cpp with tinygltf, whose header-only implementation is compiled into the
+// instrumented library): the first byte picks the format (0 OBJ, 1 PLY, 2 glTF, 3 GLB: its value mod 4), the rest is
+// the file. Runs parse_mesh, the same path as load_mesh after its file read (parse_mesh reads no other file: an OBJ's
+// .mtl and a glTF's external buffers are not opened). ngi::Error (InputError for a bad file) is the expected outcome
+// of most inputs; anything else -- a crash, a sanitizer report, std::bad_alloc, a hang, an allocation over
 // -malloc_limit_mb -- is a bug, and so is a loaded mesh the renderer would refuse. Seeds: fuzz/corpus/mesh/
 // (fuzz/make_mesh_seeds.py), dictionary: fuzz/mesh.dict.
 #include <cstddef>

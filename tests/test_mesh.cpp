@@ -1,5 +1,5 @@
 // Triangle meshes (issue 27, the input side): the mesh basics of ngi/mesh.hpp, OBJ / PLY / glTF files written here
-// and loaded through assimp (counts, normals, colours, transforms), bad and hostile files refused with an
+// and loaded through their readers (counts, normals, colours, transforms), bad and hostile files refused with an
 // InputError naming the file (quickly: a 1 KB file claiming 10^9 faces must not allocate for them), the procedural
 // mesh families (deterministic, closed, outward, inside their grid), the scene specs and the camera orbit around
 // a mesh.
@@ -355,7 +355,7 @@ TEST_CASE("glTF and GLB: node transforms (and a mirror), linear base colour x CO
 
 TEST_CASE("mesh materials: glTF emissive strength applied, negative colours, emission past the bound and a missing "
           ".mtl refused", "[mesh]") {
-    // Issue 51: KHR_materials_emissive_strength was ignored (assimp 5.2.5 does not read it) and 1e30 accepted;
+    // Issue 51: KHR_materials_emissive_strength was ignored (the loader of the time did not read it) and 1e30 accepted;
     // negative Kd / baseColor / Ke became 0 and a missing .mtl default grey, silently.
     test::TempDir dir("mesh-materials");
     auto with_material = [&](bool glb, const std::function<void(nlohmann::json&)>& edit) {
@@ -397,11 +397,11 @@ TEST_CASE("mesh materials: glTF emissive strength applied, negative colours, emi
         spit(dir / "t.mtl", mtl);
         CHECK_THAT(mesh_error(dir / "t.obj"), Contains("t.obj") && Contains("negative component"));
     }
-    // A usemtl of a name the library does not define: assimp went on with its default material (issue 51).
+    // A usemtl of a name the library does not define: its faces would lose their colour, silently (issue 51).
     spit(dir / "t.mtl", "newmtl b\nKd 0.5 0.5 0.5\nnewmtl c d\nKd 1 1 1\n");
     CHECK_THAT(mesh_error(dir / "t.obj"), Contains("t.obj") && Contains("OBJ line 5: usemtl 'a'") &&
                                               Contains("t.mtl defines b, c d") && Contains("lose their colour"));
-    // Names as assimp reads them: the rest of the line, blanks and a CR trimmed; a name may hold a space.
+    // Names are the rest of the line, blanks and a CR trimmed (newmtl and usemtl alike); a name may hold a space.
     spit(dir / "t2.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl  c d \r\nf 1 2 3\n");
     CHECK(load_mesh(dir / "t2.obj").mesh.triangle_count() == 1);
     std::filesystem::remove(dir / "t.mtl");
@@ -664,7 +664,7 @@ TEST_CASE("the camera orbits a mesh scene: its blocks stand for the mesh in the 
 
 TEST_CASE("mesh: every file of the fuzz corpus loads or is refused cleanly", "[mesh]") {
     // fuzz/corpus/mesh/: the seeds of fuzz_mesh (first byte: 0 OBJ, 1 PLY, 2 glTF, 3 GLB) and the inputs it found
-    // that once crashed (e.g. a PLY whose mesh assimp flagged as polygons without any: an assertion abort).
+    // over its campaigns (e.g. a PLY face of no index, which once aborted the library that read PLY then).
     static const char* names[4] = {"seed.obj", "seed.ply", "seed.gltf", "seed.glb"};
     int files = 0, loaded = 0;
     for (const auto& e : std::filesystem::directory_iterator(std::string(NGI_SOURCE_DIR) + "/fuzz/corpus/mesh")) {
@@ -683,40 +683,43 @@ TEST_CASE("mesh: every file of the fuzz corpus loads or is refused cleanly", "[m
     CHECK(loaded >= 10);  // the seeds are valid files
 }
 
-TEST_CASE("mesh: an OBJ line element of one vertex is refused before assimp reads it", "[mesh]") {
-    // fuzz_mesh's 807,213th input of the round-two campaign (fuzz/corpus/mesh/line_of_one_vertex_after_usemtl.obj):
-    // after a material switch, assimp 5.2.5 leaked the meshes it had built when it met "l 2".
+TEST_CASE("mesh: an OBJ line element of one vertex is no triangle: refused when the file has none", "[mesh]") {
+    // fuzz_mesh's 807,213th input of the round-two campaign (fuzz/corpus/mesh/line_of_one_vertex_after_usemtl.obj)
+    // leaked inside the library that read OBJ then. ngi's reader (mesh_obj.cpp) counts a line of k vertices as k - 1
+    // segments, so a line of one is nothing: the file is refused because it has no triangle, and loads with one.
     using namespace ngi;
     CHECK_THROWS_WITH(parse_mesh("v 0 1 0\nv 0 1 1\nusemtl 4\nl 2 1\nusemtl 1\nl 2\n", "bad.obj"),
-                      Catch::Contains("OBJ line 6") && Catch::Contains("a line element needs 2 or more vertices, this one has 1"));
+                      Catch::Contains("no triangle with an area (0 degenerate, 1 points or lines)"));
+    const LoadedMesh l = parse_mesh("v 0 1 0\nv 0 1 1\nv 1 1 0\nusemtl 4\nl 2 1\nusemtl 1\nl 2\nf 1 2 3\n", "ok.obj");
+    CHECK(l.mesh.triangle_count() == 1);
+    CHECK(l.dropped_primitives == 1);
 }
 
-TEST_CASE("mesh: an OBJ index with a number past its v/vt/vn parts is refused before assimp reads it", "[mesh]") {
-    // assimp 5.2.5 drops the rest of a face, line or point statement at a number past the third part, so
-    // "l 1/1/1/1 2" became a line of one vertex; two such lines before "l 1 2 3" made createVertexArray write 12 bytes
-    // past its vertex array (valgrind: "Invalid write of size 8 ... 0 bytes after a block of size 48"): the write
-    // into freed memory behind fuzz_mesh's unexplained ASan report (fuzz/corpus/mesh/line_index_with_four_parts.obj).
+TEST_CASE("mesh: OBJ index tokens: more than three parts refused, every index checked, leading zeros read", "[mesh]") {
+    // "l 1/1/1/1 2" once made the library that read OBJ then write past its vertex array (valgrind, behind
+    // fuzz_mesh's unexplained ASan report; fuzz/corpus/mesh/line_index_with_four_parts.obj). The input class now:
+    // an index of more than three parts is refused, naming the line and the token.
     using namespace ngi;
     const std::string head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
     CHECK_THROWS_WITH(parse_mesh(head + "l 1/1/1/1 2\nl 1/1/1/1 3\nl 1 2 3\n", "bad.obj"),
-                      Catch::Contains("OBJ line 6") && Catch::Contains("'1/1/1/1' has a number past"));
-    CHECK_THROWS_WITH(parse_mesh(head + "f 1 2 3/1/1/1\n", "bad.obj"), Catch::Contains("'3/1/1/1' has a number past"));
-    // With normals but no texture coordinates, assimp reads a second part as the normal: a third is one too many.
+                      Catch::Contains("OBJ line 6") && Catch::Contains("'1/1/1/1' has more than three parts"));
+    CHECK_THROWS_WITH(parse_mesh(head + "f 1 2 3/1/1/1\n", "bad.obj"), Catch::Contains("'3/1/1/1' has more than three"));
+    // A second part is a texture coordinate index, whatever else the file has: none here, so it is out of range.
     CHECK_THROWS_WITH(parse_mesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1/1/1 2 3\n", "bad.obj"),
-                      Catch::Contains("'1/1/1' has a number past"));
-    // What assimp takes as written still loads: v//vn with only normals, v/vt/vn, and a trailing slash.
+                      Catch::Contains("OBJ line 5: texture coordinate index 1 is out of range (the file has 0)"));
+    // v//vn, v/vt/vn and a trailing slash load.
     CHECK_NOTHROW(parse_mesh("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n", "ok.obj"));
     CHECK_NOTHROW(parse_mesh(head + "f 1/1/1 2/1/1 3/1/1\nl 1/1/1/ 2\n", "ok.obj"));
-    // Leading zeros: assimp steps over a number by its value's digits, so "010" would read as 10 and then 0.
-    CHECK_THROWS_WITH(parse_mesh(head + "f 010 2 3\n", "bad.obj"), Catch::Contains("'010' is not a vertex index"));
-    CHECK_THROWS_WITH(parse_mesh(head + "f 1 2 -01\n", "bad.obj"), Catch::Contains("'-01' is not a vertex index"));
+    // Leading zeros are read as numbers (refused before only because that library misread them): "010" is vertex
+    // 10, out of range here; "-01" is -1, the last vertex so far.
+    CHECK_THROWS_WITH(parse_mesh(head + "f 010 2 3\n", "bad.obj"), Catch::Contains("vertex index 10 is out of range"));
+    CHECK(parse_mesh(head + "f 1 2 -01\n", "ok.obj").mesh.triangle_count() == 1);
 }
 
-TEST_CASE("mesh: a PLY with a second vertex or face element is refused before assimp reads it", "[mesh]") {
-    // assimp 5.2.5 sizes the vertex array by the first vertex element and writes the second's into it: past the end
-    // when the second is longer (valgrind: an invalid write 0 bytes after a block of 12; through parse_mesh glibc
-    // aborted with "malloc(): corrupted top size"). Found reading assimp's PLY loader for issue 31's unexplained
-    // report (fuzz/corpus/mesh/ply_second_vertex_element.ply).
+TEST_CASE("mesh: a PLY with a second vertex or face element is refused", "[mesh]") {
+    // Such a file once made the library that read PLY then write past its vertex array (valgrind; through parse_mesh
+    // glibc aborted with "malloc(): corrupted top size"; fuzz/corpus/mesh/ply_second_vertex_element.ply). ngi's
+    // reader (mesh_ply.cpp) reads one vertex and one face element and refuses a second, naming the header line.
     using namespace ngi;
     const std::string props = "property float x\nproperty float y\nproperty float z\n";
     const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
@@ -730,31 +733,84 @@ TEST_CASE("mesh: a PLY with a second vertex or face element is refused before as
                       Catch::Contains("a second 'face' element"));
 }
 
-TEST_CASE("mesh: a texture statement before any newmtl is refused before assimp's material reader sees it", "[mesh]") {
+TEST_CASE("mesh: a texture statement before any newmtl applies to nothing and is skipped", "[mesh]") {
     // fuzz_mesh's 811,578th input of the round-two campaign (fuzz/corpus/mesh/texture_before_newmtl_in_self_mtllib.obj):
-    // an OBJ naming itself as its mtllib, with a bare "map_ns" line. assimp 5.2.5 writes a texture statement
-    // into the current material without checking there is one: a SEGV, through parse_mesh and load_mesh alike.
-    CHECK_THROWS_WITH(parse_mesh("map_ns\nmtllib fuzz.obj", "fuzz.obj"),
-                      Contains("OBJ line 1") && Contains("texture statement 'map_ns' before any newmtl"));
+    // an OBJ naming itself as its mtllib, with a bare "map_ns" line, crashed the library that read OBJ then (it wrote
+    // the texture into a material that did not exist). ngi's reader reads no texture and skips every statement
+    // before the first newmtl: that input is now refused only because it has no triangle.
+    CHECK_THROWS_WITH(parse_mesh("map_ns\nmtllib fuzz.obj", "fuzz.obj"), Contains("fuzz.obj") && Contains("no triangles"));
     test::TempDir dir("mesh-mtl");
     const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
-    // A material library beside the OBJ: each statement that crashed assimp (map_*, bump, disp, norm, options
-    // before the name), on a line after others and after leading blanks as assimp reads them.
-    for (const std::string mtl : {"map_Kd x.png\nnewmtl a\n", "# c\n  bump x.png\nnewmtl a\n", "disp x.png\n",
-                                  "norm x.png\r\nnewmtl a\n", "map_Kd -bm 2 x.png\n", "Kd 1 1 1\fmap_Kd -type sphere x\n"}) {
+    // A library whose texture lines come first: loads when it then defines the material the OBJ uses (a material
+    // without Kd keeps the 0.6 sRGB grey such files always got), and is refused, naming the usemtl, when it does not.
+    for (const std::string mtl : {"map_Kd x.png\nnewmtl a\n", "# c\n  bump x.png\nnewmtl a\n", "norm x.png\r\nnewmtl a\n"}) {
         INFO(mtl);
         spit(dir / "t.mtl", mtl);
         spit(dir / "t.obj", "mtllib t.mtl\n" + tri);
-        CHECK_THAT(mesh_error(dir / "t.obj"), Contains("material library") && Contains("t.mtl line") &&
-                                                  Contains("before any newmtl"));
+        const LoadedMesh l = load_mesh(dir / "t.obj");
+        REQUIRE(l.materials.size() == 1);
+        CHECK(l.materials[0].albedo.x == Approx(srgb(0.6f)));
     }
+    for (const std::string mtl : {"disp x.png\n", "map_Kd -bm 2 x.png\n"}) {
+        spit(dir / "t.mtl", mtl);
+        CHECK_THAT(mesh_error(dir / "t.obj"), Contains("usemtl 'a' names no material") && Contains("t.mtl defines none"));
+    }
+    // A form feed is no line break: refused as a control character, naming the library and its line.
+    spit(dir / "t.mtl", "Kd 1 1 1\fmap_Kd -type sphere x\n");
+    CHECK_THAT(mesh_error(dir / "t.obj"), Contains("material library t.mtl line 1: control character 12"));
     // After a newmtl the same statements are a material's textures: the mesh loads with the library's colour.
     spit(dir / "t.mtl", "# c\nnewmtl a\nKd 0.5 0.5 0.5\nmap_Kd -bm 2 x.png\nbump x.png\nnorm y.png\nmap_ns z.png\n");
     const LoadedMesh l = load_mesh(dir / "t.obj");
     CHECK(l.mesh.triangle_count() == 1);
     REQUIRE(l.materials.size() == 1);
     CHECK_THAT(l.materials[0].albedo.x, Catch::Matchers::WithinAbs(0.214, 0.01));  // sRGB 0.5 -> linear 0.214
-    // Statements assimp guards itself (colours, scalars) before a newmtl are left to it: the file loads.
+    // Colours and scalars before a newmtl are skipped too: the file loads.
     spit(dir / "t.mtl", "Kd 1 1 1\nNs 3\nd 0.5\nillum 2\nnewmtl a\nKd 0.5 0.5 0.5\n");
     CHECK_NOTHROW(load_mesh(dir / "t.obj"));
+}
+
+TEST_CASE("mesh readers: what each refuses that a lenient reader would misread, naming the line or element", "[mesh]") {
+    // One parser per format (mesh_obj.cpp, mesh_ply.cpp, mesh_gltf.cpp with tinygltf): each input below would load
+    // as a different mesh than the file states through a lenient reader (tinyobjloader 2.0.0rc10 reads "x" and "nan"
+    // as 0 and 4294967295 as -1, a relative index), so it is refused.
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    CHECK_THROWS_WITH(parse_mesh("v 1 x 3\n" + tri + "f 1 2 3\n", "a.obj"), Contains("a.obj: OBJ line 1: 'x' is not a number"));
+    CHECK_THROWS_WITH(parse_mesh("v 0 nan 0\n" + tri + "f 2 3 4\n", "a.obj"), Contains("OBJ line 1: position is not finite"));
+    CHECK_THROWS_WITH(parse_mesh(tri + "f 4294967295 1 2\n", "a.obj"), Contains("vertex index 4294967295 is out of range"));
+    CHECK_THROWS_WITH(parse_mesh(tri + "v 0 0 0 1 0\nf 1 2 3\n", "a.obj"), Contains("OBJ line 4: 5 numbers for a v"));
+    CHECK_THROWS_WITH(parse_mesh("v 0 0 0 1 0 0\n" + tri.substr(8) + "f 1 2 3\n", "a.obj"),
+                      Contains("1 of its 3 vertices have a colour (x y z r g b): all or none"));
+    CHECK_THROWS_WITH(parse_mesh("v 0 0 0 0\n" + tri + "f 2 3 4\n", "a.obj"), Contains("OBJ line 1: w is 0"));
+    CHECK_THROWS_WITH(parse_mesh("v 0 0 0\rv 1 0 0\n" + tri + "f 3 4 5\n", "a.obj"), Contains("OBJ line 1: control character 13"));
+    CHECK_THROWS_WITH(parse_mesh(tri + "f 1 2 \\\n3\n", "a.obj"), Contains("OBJ line 4: a line continued with a backslash"));
+    CHECK(parse_mesh("v 0 0 0 1\nv 2 0 0 2\nv 0 3 0 3\nf 1 2 3\n", "w.obj").mesh.positions[1] == glm::vec3(1, 0, 0));
+
+    const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    CHECK_THROWS_WITH(parse_mesh(head + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n", "a.ply"),
+                      Contains("PLY vertex 0: 4 values on its line, its properties take 3"));
+    CHECK_THROWS_WITH(parse_mesh(head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", "a.ply"),
+                      Contains("PLY face 0: vertex index -1 is out of range (3 vertices)"));
+    CHECK_THROWS_WITH(parse_mesh(head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "a.ply"), Contains("PLY face 0: '2.5' is not a int"));
+
+    auto [j, bin] = gltf_quad(true);
+    nlohmann::json q = j;
+    q["accessors"][0]["componentType"] = 5123;  // KHR_mesh_quantization's unsigned short positions
+    CHECK_THROWS_WITH(parse_mesh(glb_file(q, bin), "q.glb"), Contains("q.glb: glTF mesh 0 primitive 0 POSITION (accessor 0) "
+                                                                     "is not of a type read here (componentType 5123"));
+    q = j;
+    q["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"] = {{"bufferView", 0}};
+    CHECK_THROWS_WITH(parse_mesh(glb_file(q, bin), "d.glb"), Contains("Draco-compressed"));
+    // A GLB whose bytes after the JSON chunk are 4, too few for a chunk header: refused before tinygltf sees it.
+    std::string glb = glb_file(j, bin);
+    std::uint32_t json_len = 0;
+    std::memcpy(&json_len, glb.data() + 12, 4);
+    glb.resize(20 + json_len + 4);
+    const std::uint32_t length = std::uint32_t(glb.size());
+    std::memcpy(glb.data() + 8, &length, 4);
+    CHECK_THROWS_WITH(parse_mesh(glb, "j.glb"), Contains("j.glb: GLB: bytes after the JSON chunk are no chunk"));
+    q = j;
+    q.erase("scene");
+    q.erase("scenes");
+    CHECK_THROWS_WITH(parse_mesh(glb_file(q, bin), "s.glb"), Contains("glTF has no scene"));
 }

@@ -58,22 +58,23 @@ struct LoadedMesh {
 // external buffers). A 16 Mi-triangle binary PLY is ~0.3 GiB, as text OBJ ~0.7 GiB.
 constexpr std::uint64_t kMaxMeshFileBytes = std::uint64_t(1) << 30;
 
-// OBJ (+ .mtl), PLY (ASCII and binary) and glTF 2.0 (.gltf with embedded or external buffers, .glb) through assimp:
-// triangulated, identical vertices joined, node transforms applied (normals by the inverse transpose, winding
-// flipped under a mirroring transform), per-vertex normals (the file's, else area-weighted ones from
-// compute_vertex_normals). Albedo per triangle: the material's diffuse colour (OBJ Kd: sRGB -> linear; glTF
-// baseColorFactor: linear, as its specification says); where the file gives no material colour (an OBJ without
-// .mtl, any PLY) the mean of the triangle's vertex colours (sRGB -> linear), else ngi's default (Material{});
-// glTF's COLOR_0 multiplies its base colour (the specification's rule). Albedo is capped at 0.95 like every
-// scene's. Emissive colours (OBJ Ke, glTF emissiveFactor x KHR_materials_emissive_strength) become
-// Material::emission, as linear radiance; negative colour components, emission past kMaxEmission and an OBJ whose
-// mtllib names a missing library are refused. Zero-area triangles, points and lines are dropped and counted: they can
-// never be hit, and real scans contain them; a mesh left with no triangle is an error.
-// Throws InputError naming the file (and the element, where known) for unreadable, malformed or truncated files,
-// NaN/Inf vertices or normals, indices out of range, empty meshes and anything over the limits above. Sizes the
-// format states up front (a PLY header's element counts, an OBJ's vertex and face lines, glTF accessors, buffers
-// and its node tree) are checked against the limits and against the bytes present before assimp sees the file,
-// so a 1 KB file claiming 10^9 faces never allocates for them. Nothing is returned half-built.
+// OBJ (+ .mtl), PLY (ASCII and binary) and glTF 2.0 (.gltf with embedded or external buffers, .glb), one reader per
+// format (OBJ and PLY: ngi's own; glTF: tinygltf): polygons triangulated, identical vertices joined, node transforms
+// applied (normals by the inverse transpose, winding flipped under a mirroring transform), per-vertex normals (the
+// file's, else area-weighted ones from compute_vertex_normals). Albedo per triangle: the material's diffuse colour
+// (OBJ Kd: sRGB -> linear; glTF baseColorFactor: linear, as its specification says); where the file gives no
+// material colour (an OBJ without .mtl, any PLY) the mean of the triangle's vertex colours (sRGB -> linear), else
+// ngi's default (Material{}); glTF's COLOR_0 multiplies its base colour (the specification's rule). Albedo is capped
+// at 0.95 like every scene's. Emissive colours (OBJ Ke, glTF emissiveFactor x KHR_materials_emissive_strength) become
+// Material::emission, as linear radiance; negative colour components, emission past kMaxEmission, an OBJ whose
+// mtllib names a missing library and a usemtl its libraries do not define are refused. Zero-area triangles, points
+// and lines are dropped and counted: they can never be hit, and real scans contain them; a mesh left with no
+// triangle is an error.
+// Throws InputError naming the file (and the line, element or accessor, where known) for unreadable, malformed or
+// truncated files, NaN/Inf vertices or normals, indices out of range, empty meshes and anything over the limits
+// above. Sizes the format states up front (a PLY header's element counts, glTF accessors, buffers and its node tree)
+// are checked against the limits and against the bytes present before anything is allocated for them, so a 1 KB
+// file claiming 10^9 faces never allocates for them. Nothing is returned half-built.
 // The path is opened like every ngi input (directories, FIFOs and devices are refused).
 LoadedMesh load_mesh(const std::string& path);
 // The same from a file's bytes; the extension of `name` picks the format and `name` stands for the path in errors.

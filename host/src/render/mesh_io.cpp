@@ -1,30 +1,18 @@
-// Mesh files through assimp: OBJ (+ .mtl), PLY, glTF 2.0 (.gltf, .glb) -> LoadedMesh (ngi/mesh.hpp says what
-// comes out). The file is read once, checked by mesh_precheck.cpp, and handed to assimp from memory through an
-// IOSystem that serves only those bytes and, for load_mesh, the files the mesh names (read by ngi's own rule:
-// regular files only, within kMaxMeshFileBytes in all). assimp's logging stays off: ngi never creates its
-// DefaultLogger, so assimp writes to its NullLogger, and everything it has to say reaches the user as the InputError.
-#include <assimp/IOStream.hpp>
-#include <assimp/IOSystem.hpp>
-#include <assimp/Importer.hpp>
-#include <assimp/material.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
+// Mesh files -> LoadedMesh (ngi/mesh.hpp says what comes out). The file is read once and handed to the reader of its
+// format (mesh_source.hpp: one parser per format); what they return is triangulated, its identical vertices joined,
+// its instances placed, checked against the limits and turned into ngi's mesh here, the same for every format.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <functional>
 #include <map>
-#include <set>
 #include <string>
-#include <string_view>
 #include <tuple>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/gtc/matrix_inverse.hpp>
-#include <glm/gtc/type_ptr.hpp>
 
 #include "base/file_util.hpp"
 #include "ngi/error.hpp"
@@ -32,155 +20,74 @@
 #include "ngi/material.hpp"
 #include "ngi/mesh.hpp"
 #include "render/finite.hpp"
-#include "render/mesh_precheck.hpp"
+#include "render/mesh_source.hpp"
 
 namespace ngi {
+namespace detail {
+
+void mesh_fail(const std::string& name, const std::string& what) { throw InputError("load mesh " + name + ": " + what); }
+
+std::string mesh_number(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return b;
+}
+
+std::string mesh_printable(const std::string& s) {
+    std::string out;
+    for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
+        const unsigned char c = static_cast<unsigned char>(s[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += char(c);
+        } else {
+            static const char* hex = "0123456789abcdef";
+            out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+        }
+    }
+    return s.size() > 40 ? out + "..." : out;
+}
+
+static std::string mesh_rgb(glm::vec3 c) {
+    return mesh_number(c.r) + ", " + mesh_number(c.g) + ", " + mesh_number(c.b);
+}
+
+// Negative colours and emission above kMaxEmission are refused: a file that states them is broken, and clamping them
+// would light the scene otherwise than it says, silently.
+void check_colour(const std::string& name, const std::string& what, glm::vec3 c) {
+    if (!finite(c)) mesh_fail(name, what + " is not finite");
+    if (glm::any(glm::lessThan(c, glm::vec3(0.0f))))
+        mesh_fail(name, what + " (" + mesh_rgb(c) + ") has a negative component");
+}
+
+glm::vec3 checked_emission(const std::string& name, const std::string& where, glm::vec3 emission, double strength) {
+    check_colour(name, where + " emissive colour", emission);
+    const glm::dvec3 e = glm::dvec3(emission) * strength;  // 1e30 x 1e30 stays finite here
+    if (!(std::max({e.x, e.y, e.z}) <= double(kMaxEmission)) || !(strength >= 0.0))
+        mesh_fail(name, where + " emission (" + mesh_rgb(emission) + ") x strength " + mesh_number(strength) +
+                            " exceeds the bound of " + std::to_string(int(kMaxEmission)) + " (ngi/material.hpp)");
+    return glm::vec3(e);
+}
+
+const std::string& MeshSidecars::read(const std::string& path) {
+    if (!enabled_) mesh_fail(mesh_name_, "'" + path + "' (only the file's own bytes are read here)");
+    const std::string key = std::filesystem::path(path).lexically_normal().string();
+    const auto it = files_.find(key);
+    if (it != files_.end()) return it->second;
+    require_readable_file(path);
+    std::string bytes = read_file(path, "load mesh " + mesh_name_ + ": read", kMaxMeshFileBytes - used_);
+    used_ += bytes.size();
+    return files_.emplace(key, std::move(bytes)).first->second;
+}
+
+}  // namespace detail
+
 namespace {
 
-// ---- assimp I/O: the bytes already read and checked, plus the files they name ----------------------------------
-
-class BytesStream : public Assimp::IOStream {
-public:
-    explicit BytesStream(const std::string& b) : b_(b) {}
-    size_t Read(void* out, size_t size, size_t count) override {
-        if (size == 0) return 0;
-        const size_t n = std::min(count, (b_.size() - pos_) / size);
-        if (n > 0) std::memcpy(out, b_.data() + pos_, n * size);
-        pos_ += n * size;
-        return n;
-    }
-    size_t Write(const void*, size_t, size_t) override { return 0; }
-    aiReturn Seek(size_t offset, aiOrigin origin) override {
-        const size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? pos_ : b_.size();
-        if (origin == aiOrigin_END) {  // assimp's own streams count the offset back from the end
-            if (offset > b_.size()) return AI_FAILURE;
-            pos_ = b_.size() - offset;
-            return AI_SUCCESS;
-        }
-        if (offset > b_.size() - base) return AI_FAILURE;
-        pos_ = base + offset;
-        return AI_SUCCESS;
-    }
-    size_t Tell() const override { return pos_; }
-    size_t FileSize() const override { return b_.size(); }
-    void Flush() override {}
-
-private:
-    const std::string& b_;
-    size_t pos_ = 0;
-};
-
-class GuardedIO : public Assimp::IOSystem {
-public:
-    // `main` is served under `main_name`; other names are read from disk only when `sidecars` (load_mesh).
-    // `obj`: the mesh is an OBJ, whose importer opens no other file than its material libraries.
-    GuardedIO(std::string main_name, const std::string& main, bool sidecars, bool obj)
-        : main_name_(std::move(main_name)), main_(main), sidecars_(sidecars), obj_(obj), used_(main.size()) {}
-
-    bool Exists(const char* file) const override {
-        if (file == main_name_) return true;
-        std::error_code ec;
-        return sidecars_ && std::filesystem::exists(file, ec);
-    }
-    char getOsSeparator() const override { return '/'; }
-    Assimp::IOStream* Open(const char* file, const char* mode) override {
-        if (mode && std::strchr(mode, 'w')) return nullptr;
-        if (file == main_name_) return new BytesStream(main_);
-        if (!sidecars_) return nullptr;
-        std::error_code ec;
-        if (!std::filesystem::exists(file, ec)) {  // assimp goes on without it (import() decides)
-            missing_.push_back(file);
-            return nullptr;
-        }
-        try {
-            const std::string& bytes = read(file);
-            if (obj_) detail::precheck_material_library(bytes, main_name_, file);
-            return new BytesStream(bytes);
-        } catch (const InputError& e) {  // assimp would swallow it: kept, and thrown after ReadFile
-            if (error_.empty()) error_ = e.what();
-            return nullptr;
-        }
-    }
-    void Close(Assimp::IOStream* f) override { delete f; }
-
-    // A file the mesh names, read once (the precheck's external buffers are the bytes assimp then gets):
-    // directories, FIFOs and devices refused as for every ngi input, the budget spanning all files.
-    const std::string& read(const std::string& file) {
-        const std::string key = std::filesystem::path(file).lexically_normal().string();
-        const auto it = files_.find(key);
-        if (it != files_.end()) return it->second;
-        detail::require_readable_file(file);
-        std::string bytes = detail::read_file(file, "load mesh " + main_name_ + ": read", kMaxMeshFileBytes - used_);
-        used_ += bytes.size();
-        return files_.emplace(key, std::move(bytes)).first->second;
-    }
-    const std::string& error() const { return error_; }
-    std::size_t files_read() const { return files_.size(); }
-    // The bytes of every file read besides the mesh itself (an OBJ's material libraries), by path.
-    const std::map<std::string, std::string>& files() const { return files_; }
-    const std::vector<std::string>& missing() const { return missing_; }
-
-private:
-    std::string main_name_;
-    const std::string& main_;
-    bool sidecars_;
-    bool obj_;
-    std::uint64_t used_;
-    std::map<std::string, std::string> files_;  // node-based: stable addresses for the streams
-    std::string error_;
-    std::vector<std::string> missing_;  // files assimp asked for that do not exist
-};
-
-// ---- OBJ material names -------------------------------------------------------------------------------------
-// `usemtl NAME` of a name no material library defines: assimp logs "Unsupported material requested" and goes on with
-// its default material, so the faces after it lost their colour silently (issue 51). Refused, naming the line, the
-// name and the names the libraries define. Names as assimp reads them: the rest of the line, blanks trimmed.
-
-std::string_view trimmed(std::string_view v) {
-    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
-    while (!v.empty() && (v.back() == ' ' || v.back() == '\t' || v.back() == '\r')) v.remove_suffix(1);
-    return v;
-}
-
-// (line number, rest of the line) of every line that starts with `keyword` and a blank.
-std::vector<std::pair<std::size_t, std::string_view>> statements(const std::string& b, std::string_view keyword) {
-    std::vector<std::pair<std::size_t, std::string_view>> out;
-    std::size_t pos = 0;
-    for (std::size_t line_no = 1; pos < b.size(); ++line_no) {
-        const std::size_t nl = b.find('\n', pos);
-        std::string_view line = trimmed(std::string_view(b).substr(pos, (nl == std::string::npos ? b.size() : nl) - pos));
-        pos = nl == std::string::npos ? b.size() : nl + 1;
-        if (line.size() > keyword.size() && line.substr(0, keyword.size()) == keyword &&
-            (line[keyword.size()] == ' ' || line[keyword.size()] == '\t'))
-            out.emplace_back(line_no, trimmed(line.substr(keyword.size())));
-    }
-    return out;
-}
-
-void check_usemtl_names(const std::string& obj, const std::map<std::string, std::string>& libraries,
-                        const std::string& name) {
-    std::set<std::string_view> defined;
-    std::string files;
-    for (const auto& [path, bytes] : libraries) {
-        files += (files.empty() ? "" : ", ") + std::filesystem::path(path).filename().string();
-        for (const auto& [line, material] : statements(bytes, "newmtl")) defined.insert(material);
-    }
-    for (const auto& [line, material] : statements(obj, "usemtl")) {
-        if (defined.count(material)) continue;
-        std::string known;
-        for (std::string_view d : defined) {
-            if (known.size() > 200) { known += ", ..."; break; }
-            known += (known.empty() ? "" : ", ") + std::string(d);
-        }
-        throw InputError("load mesh " + name + ": OBJ line " + std::to_string(line) + ": usemtl '" +
-                         std::string(material).substr(0, 80) + "' names no material of its material library (" + files +
-                         " defines " + (known.empty() ? "none" : known) + "): its faces would lose their colour");
-    }
-}
-
-// ---- colours -----------------------------------------------------------------------------------------------
-
-enum class Format { Obj, Ply, Gltf };
+using detail::finite;
+using detail::MeshFile;
+using detail::MeshFormat;
+using detail::MeshMaterial;
+using detail::MeshPart;
 
 float srgb_to_linear(float c) {
     c = std::clamp(c, 0.0f, 1.0f);
@@ -191,67 +98,161 @@ float linear_to_srgb(float c) {
     c = std::clamp(c, 0.0f, 1.0f);
     return c <= 0.0031308f ? c * 12.92f : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
-using detail::finite;
-std::string num(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    return b;
-}
-std::string rgb(glm::vec3 c) { return num(c.r) + ", " + num(c.g) + ", " + num(c.b); }
 
-// What one assimp material gives a triangle: an albedo of its own (or none: the vertex colours or the default
-// decide), a glTF base colour the vertex colours multiply, and its emission.
-struct MaterialInfo {
-    bool has_colour = false;
-    glm::vec3 albedo{0.8f};  // linear
-    glm::vec3 emission{0.0f};
+// ---- polygons -> triangles ----------------------------------------------------------------------------------
+// The rule of the loader before these readers (assimp's Triangulate step), so that a file splits as it did: a quad
+// is fanned from its concave corner, if any, else from its first; a larger polygon is projected onto the plane of
+// its largest Newell-normal component and ear-clipped, starting after the last ear found (a convex polygon gives
+// (n-1, 0, 1), (n-1, 1, 2), ...). A polygon without an ear (not simple) is fanned (assimp dropped its rest). Where a
+// polygon's triangles begin at the corner the previous polygon's began at, they are rotated to begin elsewhere (the
+// same triangles, the same winding: only the vertex numbering follows from it).
+struct PolygonSplitter {
+    const std::vector<glm::vec3>& pos;
+    std::vector<glm::uvec3>& out;
+    std::uint32_t last_first = UINT32_MAX;
+    std::vector<glm::vec2> flat;
+    std::vector<char> done;
+
+    void emit(glm::uvec3 t) {
+        if (t.x == last_first) t = {t.z, t.x, t.y};
+        last_first = t.x;
+        out.push_back(t);
+    }
+    static glm::vec3 unit(glm::vec3 v) { return v / std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+    static float area2(glm::vec2 a, glm::vec2 b, glm::vec2 c) {
+        return 0.5f * (a.x * (c.y - b.y) + b.x * (a.y - c.y) + c.x * (b.y - a.y));
+    }
+    static bool inside(glm::vec2 p0, glm::vec2 p1, glm::vec2 p2, glm::vec2 pp) {  // barycentric, strict
+        const glm::vec2 v0 = p1 - p0, v1 = p2 - p0, v2 = pp - p0;
+        float d00 = v0.x * v0.x + v0.y * v0.y, d01 = v0.x * v1.x + v0.y * v1.y, d02 = v0.x * v2.x + v0.y * v2.y;
+        float d11 = v1.x * v1.x + v1.y * v1.y, d12 = v1.x * v2.x + v1.y * v2.y;
+        const float inv = 1.0f / (d00 * d11 - d01 * d01);
+        d11 = (d11 * d02 - d01 * d12) * inv;
+        d00 = (d00 * d12 - d01 * d02) * inv;
+        return d11 > 0 && d00 > 0 && d11 + d00 < 1;
+    }
+
+    void add(const std::uint32_t* idx, std::uint32_t n) {
+        if (n == 3) return emit({idx[0], idx[1], idx[2]});
+        if (n == 4) {
+            std::uint32_t s = 0;
+            for (std::uint32_t i = 0; i < 4; ++i) {
+                const glm::vec3 v = pos[idx[i]];
+                const glm::vec3 left = unit(pos[idx[(i + 3) % 4]] - v), diag = unit(pos[idx[(i + 2) % 4]] - v),
+                                right = unit(pos[idx[(i + 1) % 4]] - v);
+                const float angle = std::acos(glm::dot(left, diag)) + std::acos(glm::dot(right, diag));
+                if (angle > 3.1415926538f) {
+                    s = i;
+                    break;
+                }
+            }
+            glm::uvec3 a(idx[s], idx[(s + 1) % 4], idx[(s + 2) % 4]), b(idx[s], idx[(s + 2) % 4], idx[(s + 3) % 4]);
+            if (a.x == last_first) {  // fan from the opposite corner: the same diagonal
+                a = {a.z, a.x, a.y};
+                b = {b.y, b.z, b.x};
+            }
+            last_first = a.x;
+            out.push_back(a);
+            out.push_back(b);
+            return;
+        }
+        glm::vec3 nn(0.0f);  // Newell normal
+        for (std::uint32_t k = 0; k < n; ++k) {
+            const glm::vec3 lo = pos[idx[k]], c = pos[idx[(k + 1) % n]], hi = pos[idx[(k + 2) % n]];
+            nn.z += c.x * (hi.y - lo.y);
+            nn.x += c.y * (hi.z - lo.z);
+            nn.y += c.z * (hi.x - lo.x);
+        }
+        const float ax = std::abs(nn.x), ay = std::abs(nn.y), az = std::abs(nn.z);
+        int ac = 0, bc = 1;
+        float inv = nn.z;
+        if (ax > ay) {
+            if (ax > az) ac = 1, bc = 2, inv = nn.x;
+        } else if (ay > az) {
+            ac = 2, bc = 0, inv = nn.y;
+        }
+        if (inv < 0.0f) std::swap(ac, bc);
+        flat.resize(n);
+        done.assign(n, 0);
+        for (std::uint32_t k = 0; k < n; ++k) flat[k] = {pos[idx[k]][ac], pos[idx[k]][bc]};
+        const int max = int(n);
+        int num = max, ear = 0, prev = max - 1, next = 0;
+        std::vector<glm::uvec3> local;
+        while (num > 3) {
+            int found = 0;
+            for (ear = next;; prev = ear, ear = next) {
+                for (next = ear + 1; done[std::size_t(next >= max ? next = 0 : next)]; ++next) {}
+                if (next < ear && ++found == 2) break;
+                const glm::vec2 p0 = flat[std::size_t(prev)], p1 = flat[std::size_t(ear)], p2 = flat[std::size_t(next)];
+                if (area2(p0, p1, p2) > 0) continue;  // not convex
+                int t = 0;
+                for (; t < max; ++t) {
+                    const glm::vec2 v = flat[std::size_t(t)];
+                    if (v != p1 && v != p2 && v != p0 && inside(p0, p1, p2, v)) break;
+                }
+                if (t == max) break;
+            }
+            if (found == 2) break;
+            local.push_back(glm::uvec3(std::uint32_t(prev), std::uint32_t(ear), std::uint32_t(next)));
+            done[std::size_t(ear)] = 1;
+            --num;
+        }
+        std::vector<std::uint32_t> rest;
+        for (std::uint32_t k = 0; k < n; ++k)
+            if (!done[k]) rest.push_back(k);
+        for (std::size_t k = 1; k + 1 < rest.size(); ++k) local.push_back({rest[0], rest[k], rest[k + 1]});
+        for (const glm::uvec3 t : local) emit({idx[t.x], idx[t.y], idx[t.z]});
+    }
 };
 
-// `gltf_strength`: the material's KHR_materials_emissive_strength (read by the precheck: assimp 5.2.5 ignores it).
-// Negative colours and emission above kMaxEmission are refused: a file that states them is broken, and clamping
-// them would light the scene otherwise than it says, silently.
-MaterialInfo material_info(const aiMaterial* m, Format format, bool no_material_colours, float gltf_strength,
-                           const std::string& where, const std::function<void(const std::string&)>& fail) {
-    MaterialInfo info;
-    aiString name;
-    m->Get(AI_MATKEY_NAME, name);
-    aiColor4D c;
-    if (format == Format::Gltf) {
-        // glTF colour factors are linear (glTF 2.0 §3.9.2); a material without one has base colour 1.
-        info.has_colour = true;
-        info.albedo = glm::vec3(1.0f);
-        if (m->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || m->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS)
-            info.albedo = {c.r, c.g, c.b};
-    } else if (format == Format::Obj && !no_material_colours &&
-               std::strcmp(name.C_Str(), AI_DEFAULT_MATERIAL_NAME) != 0 &&
-               m->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) {
-        // An .mtl's Kd; assimp's own default material (no usemtl / no .mtl) is not the file's colour.
-        info.has_colour = true;
-        info.albedo = {c.r, c.g, c.b};
-        if (!finite(info.albedo)) fail(where + " diffuse colour is not finite");
-        if (glm::any(glm::lessThan(info.albedo, glm::vec3(0.0f))))
-            fail(where + " diffuse colour (Kd " + rgb(info.albedo) + ") has a negative component");
-        info.albedo = srgb_to_linear(info.albedo);
+// ---- a part -> triangles over its distinct vertices ---------------------------------------------------------
+
+// A part triangulated, with its identical vertices (position, normal, colour and texture coordinate alike, bit for
+// bit) joined: `vertex` holds the part's index of each distinct vertex, `triangles` index into `vertex`.
+struct JoinedPart {
+    std::vector<std::uint32_t> vertex;
+    std::vector<glm::uvec3> triangles;
+};
+
+JoinedPart join_part(const MeshPart& p) {
+    JoinedPart j;
+    std::vector<glm::uvec3> tris;
+    tris.reserve(p.corners.size());
+    PolygonSplitter split{p.positions, tris, UINT32_MAX, {}, {}};
+    std::size_t at = 0;
+    const bool polygons = std::any_of(p.sizes.begin(), p.sizes.end(), [](std::uint32_t s) { return s > 3; });
+    for (const std::uint32_t n : p.sizes) {
+        if (polygons) split.add(p.corners.data() + at, n);
+        else tris.push_back({p.corners[at], p.corners[at + 1], p.corners[at + 2]});
+        at += n;
     }
-    // A PLY's material is always assimp's invention (PLY files colour their vertices): no colour of its own.
-    if (!finite(info.albedo)) fail(where + " base colour is not finite");
-    if (glm::any(glm::lessThan(info.albedo, glm::vec3(0.0f))))
-        fail(where + " base colour (" + rgb(info.albedo) + ") has a negative component");
-    if (m->Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS) {
-        info.emission = {c.r, c.g, c.b};
-        if (!finite(info.emission)) fail(where + " emissive colour is not finite");
-        if (glm::any(glm::lessThan(info.emission, glm::vec3(0.0f))))
-            fail(where + " emissive colour (" + rgb(info.emission) + ") has a negative component");
-        float strength = 1.0f;
-        if (format == Format::Gltf) strength = gltf_strength;
-        else if (m->Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) != AI_SUCCESS) strength = 1.0f;
-        const glm::dvec3 e = glm::dvec3(info.emission) * double(strength);  // 1e30 x 1e30 stays finite here
-        if (!(std::max({e.x, e.y, e.z}) <= double(kMaxEmission)) || !(strength >= 0.0f))
-            fail(where + " emission (" + rgb(info.emission) + ") x strength " + num(strength) +
-                 " exceeds the bound of " + std::to_string(int(kMaxEmission)) + " (ngi/material.hpp)");
-        info.emission = glm::vec3(e);
+    struct Key {
+        float v[11];
+        bool operator==(const Key& o) const { return std::memcmp(v, o.v, sizeof v) == 0; }
+    };
+    struct KeyHash {
+        std::size_t operator()(const Key& k) const {
+            std::uint64_t h = 1469598103934665603ull;
+            const unsigned char* c = reinterpret_cast<const unsigned char*>(k.v);
+            for (std::size_t i = 0; i < sizeof k.v; ++i) h = (h ^ c[i]) * 1099511628211ull;
+            return std::size_t(h);
+        }
+    };
+    std::unordered_map<Key, std::uint32_t, KeyHash> seen;
+    std::vector<std::uint32_t> joined(p.positions.size());
+    for (std::size_t i = 0; i < p.positions.size(); ++i) {
+        Key k{};
+        std::memcpy(k.v, &p.positions[i], 12);
+        if (!p.normals.empty()) std::memcpy(k.v + 3, &p.normals[i], 12);
+        if (!p.colours.empty()) std::memcpy(k.v + 6, &p.colours[i], 12);
+        if (!p.texcoords.empty()) std::memcpy(k.v + 9, &p.texcoords[i], 8);
+        const auto [it, fresh] = seen.emplace(k, std::uint32_t(j.vertex.size()));
+        if (fresh) j.vertex.push_back(std::uint32_t(i));
+        joined[i] = it->second;
     }
-    return info;
+    j.triangles.reserve(tris.size());
+    for (const glm::uvec3 t : tris) j.triangles.push_back({joined[t.x], joined[t.y], joined[t.z]});
+    return j;
 }
 
 // Per-triangle materials -> at most 255 palette entries. Exact duplicates share an entry. When more remain, colours
@@ -316,11 +317,11 @@ void check_extent(const TriangleMesh& m, const std::string& name) {
                                   std::abs(hi.z)});
     const float spacing = std::nextafter(reach, INFINITY) - reach;
     if (!(extent >= kMinMeshExtent))
-        throw InputError("load mesh " + name + ": it is " + num(extent) + " m across, smaller than " +
-                         num(kMinMeshExtent) + " m (mesh files are read as metres: is it in kilometres?)");
+        throw InputError("load mesh " + name + ": it is " + detail::mesh_number(extent) + " m across, smaller than " +
+                         detail::mesh_number(kMinMeshExtent) + " m (mesh files are read as metres: is it in kilometres?)");
     if (spacing > extent / 4096.0f)
-        throw InputError("load mesh " + name + ": it is " + num(extent) + " m across at up to " + num(reach) +
-                         " m from the origin, where float32 positions step by " + num(spacing) +
+        throw InputError("load mesh " + name + ": it is " + detail::mesh_number(extent) + " m across at up to " + detail::mesh_number(reach) +
+                         " m from the origin, where float32 positions step by " + detail::mesh_number(spacing) +
                          " m: its detail would be lost (move it near the origin)");
 }
 
@@ -332,33 +333,19 @@ void check_extent(const TriangleMesh& m, const std::string& name) {
 constexpr std::uint64_t kLoadBytesPerVertex = sizeof(glm::vec3) * 2 + 1 + sizeof(glm::dvec3);
 constexpr std::uint64_t kLoadBytesPerTriangle = 84;
 
-LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours, const std::vector<float>& gltf_strength,
-                   const std::string& name) {
-    auto fail = [&](const std::string& what) { throw InputError("load mesh " + name + ": " + what); };
-    if (!scene->mRootNode) fail("no scene graph");
-    std::vector<MaterialInfo> infos;
-    for (unsigned i = 0; i < scene->mNumMaterials; ++i)  // glTF: assimp's material i is the file's (its default last)
-        infos.push_back(material_info(scene->mMaterials[i], format, no_material_colours,
-                                      i < gltf_strength.size() ? gltf_strength[i] : 1.0f,
-                                      "material " + std::to_string(i), fail));
+LoadedMesh convert(const MeshFile& file, const std::string& name) {
+    auto fail = [&](const std::string& what) { detail::mesh_fail(name, what); };
+    std::vector<JoinedPart> joined;
+    joined.reserve(file.parts.size());
+    for (const MeshPart& p : file.parts) joined.push_back(join_part(p));
 
     // Instances first, allocations after: a small file may place one mesh under many nodes (a 400 KB .glb with one
     // 20,000-triangle primitive under 838 nodes is 16.8 M triangles). The counts meet the mesh limits and the
     // host-memory budget before anything grows with them, and the arrays are reserved to size (no doubling).
     std::uint64_t instanced_vertices = 0, instanced_faces = 0;
-    {
-        std::vector<const aiNode*> nodes{scene->mRootNode};
-        while (!nodes.empty()) {
-            const aiNode* node = nodes.back();
-            nodes.pop_back();
-            for (unsigned c = 0; c < node->mNumChildren; ++c)
-                if (node->mChildren[c]) nodes.push_back(node->mChildren[c]);
-            for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-                if (node->mMeshes[k] >= scene->mNumMeshes) fail("node refers to a mesh that does not exist");
-                instanced_vertices += scene->mMeshes[node->mMeshes[k]]->mNumVertices;
-                instanced_faces += scene->mMeshes[node->mMeshes[k]]->mNumFaces;
-            }
-        }
+    for (const detail::MeshInstance& in : file.instances) {
+        instanced_vertices += joined[in.part].vertex.size();
+        instanced_faces += joined[in.part].triangles.size();
     }
     if (instanced_vertices > kMaxMeshVertices)
         fail(std::to_string(instanced_vertices) + " vertices, more than the limit of " +
@@ -379,78 +366,57 @@ LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours
     has_normal.reserve(std::size_t(instanced_vertices));
     m.triangles.reserve(std::size_t(instanced_faces));
     tri_material.reserve(std::size_t(instanced_faces));
-    // Depth-first over the node tree with an explicit stack (assimp's tree came from a checked file, but a walk
-    // that cannot overflow the stack needs no argument).
-    std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{scene->mRootNode, scene->mRootNode->mTransformation}};
-    while (!stack.empty()) {
-        const auto [node, xf] = stack.back();
-        stack.pop_back();
-        for (unsigned c = node->mNumChildren; c-- > 0;)
-            if (node->mChildren[c]) stack.push_back({node->mChildren[c], xf * node->mChildren[c]->mTransformation});
-        const glm::mat4 M = glm::transpose(glm::make_mat4(&xf.a1));  // assimp is row-major
+    for (std::size_t k = 0; k < file.instances.size(); ++k) {
+        const detail::MeshInstance& in = file.instances[k];
+        const MeshPart& part = file.parts[in.part];
+        const JoinedPart& jp = joined[in.part];
+        const glm::mat4& M = in.transform;
         const glm::mat3 L(M);
         const glm::mat3 N = glm::inverseTranspose(L);
         const bool mirrored = glm::determinant(L) < 0.0f;
-        for (unsigned k = 0; k < node->mNumMeshes; ++k) {  // mesh indices and counts: checked by the count above
-            const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
-            const std::string where = "mesh " + std::to_string(node->mMeshes[k]);
-            const std::uint32_t base = std::uint32_t(m.positions.size());
-            for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-                const aiVector3D& p = mesh->mVertices[v];
-                const glm::vec3 w = glm::vec3(M * glm::vec4(p.x, p.y, p.z, 1.0f));
-                if (!finite(glm::vec3(p.x, p.y, p.z)) || !finite(w))
-                    fail(where + " vertex " + std::to_string(v) + ": position is not finite");
-                m.positions.push_back(w);
-                glm::vec3 n(0.0f);
-                bool ok = false;
-                if (mesh->HasNormals()) {
-                    const aiVector3D& q = mesh->mNormals[v];
-                    if (!finite(glm::vec3(q.x, q.y, q.z)))
-                        fail(where + " vertex " + std::to_string(v) + ": normal is not finite");
-                    n = N * glm::vec3(q.x, q.y, q.z);
-                    const float len = glm::length(n);
-                    ok = len > 1e-20f && std::isfinite(len);  // a zero normal says nothing: computed below
-                    if (ok) n /= len;
-                }
-                m.normals.push_back(n);
-                has_normal.push_back(ok);
+        const std::uint32_t base = std::uint32_t(m.positions.size());
+        for (const std::uint32_t v : jp.vertex) {
+            const glm::vec3 p = part.positions[v];
+            const glm::vec3 w = glm::vec3(M * glm::vec4(p.x, p.y, p.z, 1.0f));
+            if (!finite(w))
+                fail("instance " + std::to_string(k) + " vertex " + std::to_string(v) +
+                     ": position is not finite after its node's transform");
+            m.positions.push_back(w);
+            glm::vec3 n(0.0f);
+            bool ok = false;
+            if (!part.normals.empty()) {
+                n = N * part.normals[v];
+                const float len = glm::length(n);
+                ok = len > 1e-20f && std::isfinite(len);  // a zero normal says nothing: computed below
+                if (ok) n /= len;
             }
-            const MaterialInfo info =
-                mesh->mMaterialIndex < infos.size() ? infos[mesh->mMaterialIndex] : MaterialInfo{};
-            const aiColor4D* colours = mesh->HasVertexColors(0) ? mesh->mColors[0] : nullptr;
-            for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-                const aiFace& face = mesh->mFaces[f];
-                if (face.mNumIndices != 3) {
-                    ++out.dropped_primitives;
-                    continue;
+            m.normals.push_back(n);
+            has_normal.push_back(ok);
+        }
+        out.dropped_primitives += part.dropped_primitives;
+        MeshMaterial info = part.material >= 0 ? file.materials[std::size_t(part.material)] : file.default_material;
+        if (file.format == MeshFormat::Obj) info.albedo = srgb_to_linear(info.albedo);  // an .mtl's Kd is sRGB
+        const bool gltf = file.format == MeshFormat::Gltf;
+        for (glm::uvec3 t : jp.triangles) {
+            Material mat;
+            mat.emission = info.emission;
+            glm::vec3 vc(1.0f);
+            if (!part.colours.empty()) {
+                glm::vec3 sum(0.0f);
+                for (int j = 0; j < 3; ++j) {
+                    const glm::vec3 c = part.colours[jp.vertex[t[j]]];
+                    sum += gltf ? glm::clamp(c, 0.0f, 1.0f) : srgb_to_linear(c);
                 }
-                glm::uvec3 t(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
-                for (int j = 0; j < 3; ++j)
-                    if (t[j] >= mesh->mNumVertices)
-                        fail(where + " face " + std::to_string(f) + ": vertex index " + std::to_string(t[j]) +
-                             " is out of range (" + std::to_string(mesh->mNumVertices) + " vertices)");
-                Material mat;
-                mat.emission = info.emission;
-                glm::vec3 vc(1.0f);
-                if (colours) {
-                    glm::vec3 sum(0.0f);
-                    for (int j = 0; j < 3; ++j) {
-                        const aiColor4D& c = colours[t[j]];
-                        const glm::vec3 rgb(c.r, c.g, c.b);
-                        if (!finite(rgb)) fail(where + " vertex " + std::to_string(t[j]) + ": colour is not finite");
-                        sum += format == Format::Gltf ? glm::clamp(rgb, 0.0f, 1.0f) : srgb_to_linear(rgb);
-                    }
-                    vc = sum / 3.0f;
-                }
-                if (format == Format::Gltf) mat.albedo = info.albedo * vc;  // COLOR_0 multiplies the base colour
-                else if (info.has_colour) mat.albedo = info.albedo;
-                else if (colours) mat.albedo = vc;
-                else mat.albedo = Material{}.albedo;
-                mat.albedo = glm::clamp(mat.albedo, glm::vec3(0.0f), glm::vec3(0.95f));
-                if (mirrored) std::swap(t.y, t.z);  // keep counter-clockwise seen from the front
-                m.triangles.push_back(t + base);
-                tri_material.push_back(mat);
+                vc = sum / 3.0f;
             }
+            if (gltf) mat.albedo = info.albedo * vc;  // COLOR_0 multiplies the base colour
+            else if (info.has_colour) mat.albedo = info.albedo;
+            else if (!part.colours.empty()) mat.albedo = vc;
+            else mat.albedo = Material{}.albedo;
+            mat.albedo = glm::clamp(mat.albedo, glm::vec3(0.0f), glm::vec3(0.95f));
+            if (mirrored) std::swap(t.y, t.z);  // keep counter-clockwise seen from the front
+            m.triangles.push_back(t + base);
+            tri_material.push_back(mat);
         }
     }
 
@@ -505,51 +471,12 @@ LoadedMesh convert(const aiScene* scene, Format format, bool no_material_colours
 }
 
 LoadedMesh import(const std::string& bytes, const std::string& name, bool sidecars) {
+    if (bytes.empty()) detail::mesh_fail(name, "the file is empty");
     const std::string ext = detail::lower_extension(name);
-    const std::filesystem::path dir = std::filesystem::path(name).parent_path();
-    Assimp::Importer importer;
-    auto* io = new GuardedIO(name, bytes, sidecars, ext == ".obj");
-    importer.SetIOHandler(io);  // owned by the importer from here
-    detail::MeshPrecheckFacts facts;
-    detail::precheck_mesh(bytes, name, ext, [&](const std::string& uri) -> const std::string& {
-        if (!sidecars)
-            throw InputError("load mesh " + name + ": external buffer '" + uri + "' (only the file's own bytes are "
-                             "read here)");
-        return io->read((dir / uri).string());
-    }, &facts);
-    const Format format = ext == ".obj" ? Format::Obj : ext == ".ply" ? Format::Ply : Format::Gltf;
-    // Two steps: import and validate (indices in range, counts consistent), then post-process. In between, each
-    // mesh's primitive-type flags are recomputed from its faces: importers set them themselves, and
-    // TriangulateProcess asserts -- aborting the process, in Debian's build -- when a mesh flagged as holding
-    // polygons holds none (fuzz_mesh found a PLY doing that).
-    const aiScene* scene = importer.ReadFile(name, aiProcess_ValidateDataStructure);
-    if (!io->error().empty()) throw InputError(io->error());
-    if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
-    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
-        aiMesh* mesh = scene->mMeshes[i];
-        unsigned types = 0;
-        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-            const unsigned n = mesh->mFaces[f].mNumIndices;
-            types |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE : n == 3 ? aiPrimitiveType_TRIANGLE
-                                                                                            : aiPrimitiveType_POLYGON;
-        }
-        mesh->mPrimitiveTypes = types;
-    }
-    // Points and lines reach convert() as 1- and 2-index faces: counted and dropped there.
-    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                         aiProcess_ValidateDataStructure);
-    if (!io->error().empty()) throw InputError(io->error());
-    if (!scene) throw InputError("load mesh " + name + ": " + importer.GetErrorString());
-    if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError("load mesh " + name + ": the file is incomplete");
-    // An OBJ naming a material library that is not there would load in ngi's default grey, silently (assimp only
-    // logs it, after also trying <name>.mtl): refused, saying what to do. parse_mesh reads no material library.
-    if (format == Format::Obj && io->files_read() == 0 && !io->missing().empty())
-        throw InputError("load mesh " + name + ": its material library " + io->missing().front() + " does not "
-                         "exist: its colours would be lost (put the .mtl beside it, or remove the mtllib line to "
-                         "load it in the default colour)");
-    if (format == Format::Obj && io->files_read() > 0) check_usemtl_names(bytes, io->files(), name);
-    // An OBJ's materials have colours of the file's only when its .mtl was read (assimp invents the rest).
-    return convert(scene, format, format == Format::Obj && io->files_read() == 0, facts.gltf_emissive_strength, name);
+    detail::MeshSidecars files(name, sidecars, bytes.size());
+    if (ext == ".obj") return convert(detail::read_obj(bytes, name, files), name);
+    if (ext == ".ply") return convert(detail::read_ply(bytes, name), name);
+    return convert(detail::read_gltf(bytes, name, ext == ".glb", files), name);
 }
 
 }  // namespace
