@@ -15,7 +15,7 @@ inline std::string bytes(const std::uint8_t* data, std::size_t size) {
 }
 
 // With NGI_FUZZ_RING=DIR, every input is also written to DIR/input-<k mod 256> (DIR must exist) before it runs: the
-// last 256 inputs survive a report that names the wrong one. Why: code built without ASan (assimp, OpenEXR) can
+// last 256 inputs survive a report that names the wrong one. Why: code built without ASan (OpenEXR, libpng) can
 // write into freed memory unseen; ASan finds the damage only when that chunk leaves its quarantine, inputs later,
 // and libFuzzer saves the input running then. Replaying the ring under valgrind finds the one that did it.
 inline void remember_input(const std::uint8_t* data, std::size_t size) {

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs what ngi needs on Debian 12 (as root), skipping packages that are already there.
 # Build: cmake, ninja, g++, OpenCL headers + ICD loader, PoCL (the CPU OpenCL device every test runs on),
-# Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser), assimp (mesh files: OBJ, PLY, glTF;
-# the path tracer's ngi_render links it). Python side (parity oracle,
+# Catch2, nlohmann-json, OpenEXR, libpng, GLM, CLI11 (the ngi CLI's parser), tinygltf (glTF mesh files: header-only,
+# compiled into ngi_render; OBJ and PLY are read by ngi's own readers). Python side (parity oracle,
 # training, perf baseline): Debian's python3-torch/numpy/skimage/matplotlib/tqdm, and OpenBLAS so PyTorch's BLAS is
 # not the reference one. Python bindings: pybind11, the Python headers, pyopencl (interop tests), pytest, onnx (the
 # ONNX import, python3 -m ngi.convert model.onnx).
@@ -17,7 +17,7 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
-  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev libassimp-dev
+  catch2 nlohmann-json3-dev libopenexr-dev libpng-dev libglm-dev libcli11-dev libtinygltf-dev
   python3-torch python3-numpy python3-skimage python3-matplotlib python3-tqdm libopenblas0-pthread
   pybind11-dev python3-dev python3-pyopencl python3-pytest python3-onnx
   libopenmpi-dev openmpi-bin

@@ -2,7 +2,7 @@
 # Out-of-tree consumers of an installed ngi, one per exported target, built against the installed files only:
 #   C99 through pkg-config (plus every samples/c/*.c, all -std=c99 -Wall -Wextra -pedantic -Werror), linked with
 #   the rpath the README documents; C through find_package(ngi COMPONENTS c); C++ through find_package for
-#   ngi::core (which must not look for OpenEXR, libpng or assimp), ngi::io, ngi::pipeline (the default components;
+#   ngi::core (which must not look for OpenEXR or libpng), ngi::io, ngi::pipeline (the default components;
 #   the application owns its OpenCL context) and ngi::render; the ngi CLI and the Python package finding the
 #   shipped models by name; the READMEs' C++ and Python snippets (tools/ci/readme_snippets.py); `ngi adapt` with the
 #   installed Python packages (--help, a missing scene refused, and from a temporary prefix a whole tiny adaptation).
@@ -78,20 +78,20 @@ cmake_consumer() {  # folder: configure and build tests/consumers/<folder>
 cmake_consumer c_find_package
 env -u LD_LIBRARY_PATH "$work/c_find_package/c_cmake_consumer" "$models/single_view.safetensors" >&2
 checks=$((checks + 1))
-# ngi::core: the configure step itself fails if find_package looked for OpenEXR, libpng or assimp; the program
+# ngi::core: the configure step itself fails if find_package looked for OpenEXR or libpng; the program
 # finds a shipped model by name, and it must be the installed one.
 cmake_consumer cxx_core
 got=$(env -u LD_LIBRARY_PATH "${model_env[@]}" "$work/cxx_core/cxx_core_consumer" single_view)
 [ "$got" = "$models/single_view.safetensors" ] || { step "ngi::core: 'single_view' resolved to $got, not $models"; exit 1; }
-grep -q -i -E 'openexr|imath|assimp' "$work/cxx_core/CMakeCache.txt" &&
-  { step "ngi::core consumer: its CMake cache names an image-file or mesh library"; exit 1; }
+grep -q -i -E 'openexr|imath' "$work/cxx_core/CMakeCache.txt" &&
+  { step "ngi::core consumer: its CMake cache names an image-file library"; exit 1; }
 checks=$((checks + 1))
 cmake_consumer cxx_io
 "$work/cxx_io/cxx_io_consumer" "$work" >&2
 checks=$((checks + 1))
 cmake_consumer cxx_find_package   # ngi::pipeline through the default components (core, pipeline, c)
-grep -q -i -E 'openexr|imath|assimp' "$work/cxx_find_package/CMakeCache.txt" &&
-  { step "ngi::pipeline consumer: find_package(ngi) without components looked for OpenEXR or assimp"; exit 1; }
+grep -q -i -E 'openexr|imath' "$work/cxx_find_package/CMakeCache.txt" &&
+  { step "ngi::pipeline consumer: find_package(ngi) without components looked for OpenEXR"; exit 1; }
 "$work/cxx_find_package/cxx_consumer" "$models/surround.safetensors" >&2
 checks=$((checks + 1))
 cmake_consumer cxx_render

@@ -13,7 +13,7 @@ namespace ngi::detail {
 // by stat(), which never blocks: a FIFO would block an open() forever waiting for a writer, a device such as
 // /dev/zero never ends, a directory opens but cannot be read. Absent files pass: the reader's own open reports them.
 // read_file applies the same rule to the descriptor it opened (O_NONBLOCK, fstat), so a file swapped for a FIFO
-// between the two checks cannot block either. A reader that hands a path to a library (assimp, OpenEXR) calls
+// between the two checks cannot block either. A reader that hands a path to a library (OpenEXR) calls
 // this first.
 void require_readable_file(const std::string& path, const std::string& op = "read");
 

@@ -100,10 +100,10 @@ float linear_to_srgb(float c) {
 }
 
 // ---- polygons -> triangles ----------------------------------------------------------------------------------
-// The rule of the loader before these readers (assimp's Triangulate step), so that a file splits as it did: a quad
+// The rule of the loader ngi used before issue 49, so that a file splits as it did: a quad
 // is fanned from its concave corner, if any, else from its first; a larger polygon is projected onto the plane of
 // its largest Newell-normal component and ear-clipped, starting after the last ear found (a convex polygon gives
-// (n-1, 0, 1), (n-1, 1, 2), ...). A polygon without an ear (not simple) is fanned (assimp dropped its rest). Where a
+// (n-1, 0, 1), (n-1, 1, 2), ...). A polygon without an ear (not simple) is fanned (that loader dropped its rest). Where a
 // polygon's triangles begin at the corner the previous polygon's began at, they are rotated to begin elsewhere (the
 // same triangles, the same winding: only the vertex numbering follows from it).
 struct PolygonSplitter {
