@@ -114,8 +114,48 @@ def gltf_seeds():
     put("strip.gltf", 2, json.dumps(doc))
 
 
+def reader_seeds():
+    """Issue 49: what the three readers read beyond the cube seeds -- polygons of 5+ corners (ear clipping), groups,
+    points and lines, homogeneous vertices; a PLY with texture coordinates, an element it skips and double positions;
+    a glTF with a sparse accessor, TEXCOORD_0, a fan, two primitives and nested nodes."""
+    put("polygons_groups.obj", 0, "o a\ng g1\nv 0 0 0\nv 4 0 0\nv 4 3 0\nv 2 1 0 1\nv 0 3 0\nv -1 1.5 0\n"
+        "vt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1 4/1/1 5/1/1 6/1/1\ng g2\ns off\nf -6 -5 -4 -3 -2\nl 1 2 3\np 4\nf 2 3\n")
+    b = ("ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
+         "property float u\nproperty float v\nproperty ushort red\nproperty ushort green\nproperty ushort blue\n"
+         "element face 2\nproperty list uchar uint vertex_index\nproperty uchar flags\nelement edge 1\n"
+         "property int vertex1\nproperty int vertex2\nend_header\n")
+    for i, p in enumerate([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 0.5, 1)]):
+        b += "%g %g %g %g %g %d %d %d\n" % (p + (p[0], p[1], 9000 * i, 65535 - 9000 * i, 30000))
+    b += "4 0 1 2 3 7\n3 0 1 4 0\n0 1\n"
+    put("uv_edges.ply", 1, b)
+    pos = b"".join(struct.pack("<3f", *p) for p in [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0.5, 0.5, 1)])
+    uv = b"".join(struct.pack("<2f", p[0], p[1]) for p in [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5)])
+    sidx = struct.pack("<2H", 1, 4)
+    sval = struct.pack("<6f", 2, 0, 0, 0.5, 0.5, 2)
+    binary = pos + uv + sidx + sval
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"children": [1], "translation": [1, 2, 3], "scale": [2, 2, 2]},
+                  {"mesh": 0, "rotation": [0, 0, 0.3826834, 0.9238795]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "mode": 6, "material": 0},
+                                   {"attributes": {"POSITION": 2}, "mode": 5}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.3, 0.6, 0.9, 1]}}],
+        "buffers": [{"byteLength": len(binary),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(binary).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 60}, {"buffer": 0, "byteOffset": 60, "byteLength": 40},
+                        {"buffer": 0, "byteOffset": 100, "byteLength": 4}, {"buffer": 0, "byteOffset": 104, "byteLength": 24}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]},
+                      {"bufferView": 1, "componentType": 5126, "count": 5, "type": "VEC2"},
+                      {"bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3",
+                       "sparse": {"count": 2, "indices": {"bufferView": 2, "componentType": 5123},
+                                  "values": {"bufferView": 3}}}],
+    }
+    put("fan_sparse_nodes.gltf", 2, json.dumps(doc))
+
+
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     obj_seeds()
     ply_seeds()
     gltf_seeds()
+    reader_seeds()
