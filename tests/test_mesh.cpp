@@ -814,3 +814,36 @@ TEST_CASE("mesh readers: what each refuses that a lenient reader would misread, 
     q.erase("scenes");
     CHECK_THROWS_WITH(parse_mesh(glb_file(q, bin), "s.glb"), Contains("glTF has no scene"));
 }
+
+TEST_CASE("mesh readers: hostile sizes stay bounded (indices, shared accessors, repeated roots, huge polygons)", "[mesh][limits]") {
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    // A relative index of the most negative int64 (its negation would overflow): refused, naming it.
+    CHECK_THROWS_WITH(parse_mesh(tri + "f 1 2 -9223372036854775808\n", "a.obj"),
+                      Contains("relative vertex index -9223372036854775808 reaches before the first of the 3"));
+    // PLY indices of a float type are no indices.
+    CHECK_THROWS_WITH(parse_mesh("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n"
+                                 "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "a.ply"),
+                      Contains("PLY face list 'vertex_indices' holds floats"));
+    // 250 primitives naming one accessor of 80,000 vertices without a buffer view (zeros, allowed up to 16 x the
+    // file): refused before any is read, not read 250 times.
+    auto [j, bin] = gltf_quad(true);
+    j["accessors"].push_back({{"componentType", 5126}, {"count", 80000}, {"type", "VEC3"}});
+    for (int k = 0; k < 250; ++k) j["meshes"][0]["primitives"].push_back({{"attributes", {{"POSITION", 4}}}});
+    CHECK_THROWS_WITH(parse_mesh(glb_file(j, bin), "shared.glb"),
+                      Contains("shared.glb: glTF primitives hold 20000004 vertices") && Contains("more than the limits"));
+    // A scene listing its root 2^20 + 1 times (a 2 MB file): the walk stops at 2^20 placements.
+    std::tie(j, bin) = gltf_quad(true);
+    j["scenes"][0]["nodes"] = std::vector<int>((1 << 20) + 1, 1);
+    CHECK_THROWS_WITH(parse_mesh(glb_file(j, bin), "roots.glb"), Contains("places more than 1048576 nodes"));
+    // A polygon of 20,000 corners on a comb (every other corner a notch): ear clipping within its budget, then fanned.
+    std::string comb, face = "f";
+    for (int i = 0; i < 10000; ++i) {
+        comb += "v " + std::to_string(i) + " 0 0\nv " + std::to_string(i) + ".5 " + (i % 2 ? "1" : "3") + " 0\n";
+        face += " " + std::to_string(2 * i + 1) + " " + std::to_string(2 * i + 2);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const LoadedMesh l = parse_mesh(comb + face + "\n", "comb.obj");
+    CHECK(l.mesh.triangle_count() + l.dropped_degenerate == 19998);
+    CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 10.0);
+}

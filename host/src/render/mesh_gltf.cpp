@@ -379,7 +379,21 @@ MeshFile read_gltf(const std::string& b, const std::string& name, bool binary, M
         out.materials.push_back({true, albedo, checked_emission(name, where, glm::vec3(float(em[0]), float(em[1]),
                                                                                      float(em[2])), strength)});
     }
-    // Primitives: checked, each read once however many nodes place it.
+    // Primitives: checked, each read once however many nodes place it; all of them together within the limits before
+    // any is read (many primitives may name one large accessor).
+    std::uint64_t all_vertices = 0, all_indices = 0;
+    for (const tinygltf::Mesh& mesh : model.meshes)
+        for (const tinygltf::Primitive& p : mesh.primitives) {
+            const auto pos = p.attributes.find("POSITION");
+            if (pos != p.attributes.end() && pos->second >= 0 && std::size_t(pos->second) < model.accessors.size())
+                all_vertices += model.accessors[std::size_t(pos->second)].count;
+            if (p.indices >= 0 && std::size_t(p.indices) < model.accessors.size())
+                all_indices += model.accessors[std::size_t(p.indices)].count;
+        }
+    if (all_vertices > kMaxMeshVertices || all_indices > 3 * std::uint64_t(kMaxMeshTriangles))
+        fail("glTF primitives hold " + std::to_string(all_vertices) + " vertices and " + std::to_string(all_indices) +
+             " indices in all, more than the limits of " + std::to_string(kMaxMeshVertices) + " and " +
+             std::to_string(3 * std::uint64_t(kMaxMeshTriangles)));
     std::vector<std::vector<std::size_t>> part_of(model.meshes.size());
     for (std::size_t i = 0; i < model.meshes.size(); ++i)
         for (std::size_t k = 0; k < model.meshes[i].primitives.size(); ++k) {
@@ -434,9 +448,14 @@ MeshFile read_gltf(const std::string& b, const std::string& name, bool binary, M
         r.check_index(*it, model.nodes.size(), "glTF scene node", "nodes");
         stack.push_back({*it, glm::mat4(1.0f)});
     }
+    // A node may be listed as a root more than once: the walk is bounded (a placement per node visit at most).
+    constexpr std::size_t kMaxGltfVisits = std::size_t(1) << 20;
+    std::size_t visits = 0;
     while (!stack.empty()) {
         const auto [k, parent_xf] = stack.back();
         stack.pop_back();
+        if (++visits > kMaxGltfVisits)
+            fail("glTF scene " + std::to_string(scene) + " places more than " + std::to_string(kMaxGltfVisits) + " nodes");
         const tinygltf::Node& node = model.nodes[std::size_t(k)];
         const glm::mat4 xf = parent_xf * gltf_local_transform(node, "glTF node " + std::to_string(k), r);
         if (node.mesh >= 0)

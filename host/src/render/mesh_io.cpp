@@ -112,6 +112,9 @@ struct PolygonSplitter {
     std::uint32_t last_first = UINT32_MAX;
     std::vector<glm::vec2> flat;
     std::vector<char> done;
+    // Point-in-triangle tests one polygon may spend before the rest of it is fanned: ear clipping is O(n^2) per ear on
+    // a hostile polygon, and a face line may hold millions of corners.
+    static constexpr std::uint64_t kEarBudget = std::uint64_t(1) << 26;
 
     void emit(glm::uvec3 t) {
         if (t.x == last_first) t = {t.z, t.x, t.y};
@@ -178,21 +181,25 @@ struct PolygonSplitter {
         const int max = int(n);
         int num = max, ear = 0, prev = max - 1, next = 0;
         std::vector<glm::uvec3> local;
-        while (num > 3) {
+        std::uint64_t spent = 0;
+        while (num > 3 && spent < kEarBudget) {
             int found = 0;
             for (ear = next;; prev = ear, ear = next) {
+                if (++spent >= kEarBudget) break;
                 for (next = ear + 1; done[std::size_t(next >= max ? next = 0 : next)]; ++next) {}
                 if (next < ear && ++found == 2) break;
                 const glm::vec2 p0 = flat[std::size_t(prev)], p1 = flat[std::size_t(ear)], p2 = flat[std::size_t(next)];
                 if (area2(p0, p1, p2) > 0) continue;  // not convex
                 int t = 0;
+                spent += std::uint64_t(max);
+                if (spent >= kEarBudget) break;
                 for (; t < max; ++t) {
                     const glm::vec2 v = flat[std::size_t(t)];
                     if (v != p1 && v != p2 && v != p0 && inside(p0, p1, p2, v)) break;
                 }
                 if (t == max) break;
             }
-            if (found == 2) break;
+            if (found == 2 || spent >= kEarBudget) break;
             local.push_back(glm::uvec3(std::uint32_t(prev), std::uint32_t(ear), std::uint32_t(next)));
             done[std::size_t(ear)] = 1;
             --num;

@@ -191,7 +191,7 @@ MeshFile read_obj(const std::string& b, const std::string& name, MeshSidecars& s
                     if (r.ec != std::errc() || r.ptr != s.data() + s.size() || x == 0)
                         mesh_fail(name, at + "'" + mesh_printable(std::string(s)) + "' is not a " + kinds[part] + " index");
                     if (x < 0) {
-                        if (-x > counts[part])
+                        if (x < -counts[part])
                             mesh_fail(name, at + "relative " + kinds[part] + " index " + std::to_string(x) +
                                                 " reaches before the first of the " + std::to_string(counts[part]) +
                                                 " so far");

@@ -267,6 +267,8 @@ MeshFile read_ply(const std::string& b, const std::string& name) {
             (face_element->props[k].name == "vertex_indices" || face_element->props[k].name == "vertex_index"))
             index_list = int(k);
     if (index_list < 0) fail("PLY has no face element with a vertex_indices list (a point cloud has no triangles)");
+    if (kPlyTypes[face_element->props[std::size_t(index_list)].type].is_float)
+        fail("PLY face list '" + face_element->props[std::size_t(index_list)].name + "' holds floats, not vertex indices");
 
     // The least the body can hold: each scalar once, each list's count (binary), or one character and a separator
     // per value (text). Checked first, so a short file claiming millions of elements is refused without a walk.
