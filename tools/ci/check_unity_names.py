@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Fails when two .cpp files of one library define the same name in an anonymous namespace (ctest unity_names).
+"""Fails when two .cpp files of one library define the same name with internal linkage (ctest unity_names).
 
 Why: the sanitize stage builds the libraries as unity batches (NGI_UNITY_BUILD), where several .cpp files become one
 translation unit; two `namespace { struct Builder ... }` in files that land in one batch are then a redefinition.
@@ -7,8 +7,8 @@ Which files share a batch depends on the file list, so a clash can sleep until a
 twice). This check does not depend on batches: each library's anonymous-namespace names must be unique.
 
 What counts as a name: at the top level of an anonymous namespace, a struct / class / enum / union, a function
-definition (a name followed by "(" whose declaration ends in "{" rather than ";") and a variable definition with an
-initializer. Type aliases do not (`using Clock = ...` twice for one type is legal). Overloads that differ in
+definition (a name followed by "(" whose declaration ends in "{" rather than ";") and a variable (with or without an
+initializer); in any namespace (the file scope too), a `static` function or variable. Type aliases do not (`using Clock = ...` twice for one type is legal). Overloads that differ in
 parameters are legal in one translation unit too, but they are reported: one name per concept per library also
 reads more clearly.
 Libraries (CMakeLists.txt): host/src/<dir> by directory (base, runtime, ops, graph, models -> ngi_core; io, pipeline,
@@ -24,6 +24,7 @@ DIR_LIBRARY = {"base": "ngi_core", "runtime": "ngi_core", "ops": "ngi_core", "gr
                "io": "ngi_io", "pipeline": "ngi_pipeline", "render": "ngi_render"}
 TYPE = re.compile(r"^(?:template\s*<[^;{]*>\s*)?(?:struct|class|union|enum(?:\s+class)?)\s+(\w+)\s*[:{]")
 FUNC = re.compile(r"^(?:template\s*<[^;{]*>\s*)?[\w:<>,\s\*&\[\]]*?\b(\w+)\s*\([^;]*?\)[^;()]*?\{", re.S)
+VAR_DECL = re.compile(r"^(?:static\s+|inline\s+|thread_local\s+|const\s+|constexpr\s+)*[\w:<>,\s\*&]+?\b(\w+)\s*(?:\[[^\]]*\]\s*)*;$")
 VAR = re.compile(r"^(?:static\s+|inline\s+|thread_local\s+)*(?:constexpr\s+|const\s+)*[\w:<>,\s\*&]+?\b(\w+)\s*(?:\[[^\]]*\]\s*)*(?:=|\{)")
 KEYWORDS = {"if", "for", "while", "switch", "return", "operator", "sizeof", "static_assert"}
 
@@ -56,27 +57,30 @@ def strip(text):
     return "".join(out)
 
 
-def anonymous_names(path):
-    """(name, line) of every definition at the top level of an anonymous namespace in one file."""
+def internal_names(path):
+    """(name, line) of every definition with internal linkage at namespace scope in one file: anything at the top
+    level of an anonymous namespace, and `static` functions and variables of any namespace (the file scope
+    included)."""
     text = strip(path.read_text(errors="replace"))
     text = re.sub(r"^[ \t]*#.*$", lambda m: " " * len(m.group(0)), text, flags=re.M)  # preprocessor lines
     names = []
-    depth, anon = 0, []          # anon: depths at which an anonymous namespace's body starts
-    stmt_start = 0               # where the current top-level statement of an anonymous namespace began
-    for m in re.finditer(r"namespace\s*\{|[{};]", text):
+    scopes = []        # per open brace: "anon", "ns" (a named namespace) or "other" (class, function, extern, ...)
+    stmt_start = 0     # where the current statement of the innermost namespace scope began
+    for m in re.finditer(r"\bnamespace\s*(?:[\w:]+\s*)?\{|[{};]", text):
         tok, pos = m.group(0), m.start()
-        at_anon_top = bool(anon) and depth == anon[-1]
+        at_ns_scope = not scopes or scopes[-1] != "other"
         if tok.startswith("namespace"):
-            depth += 1
-            anon.append(depth)
+            scopes.append("ns" if re.match(r"namespace\s*[\w:]", tok) else "anon")
             stmt_start = m.end()
             continue
-        if at_anon_top and tok in "{;":
+        if at_ns_scope and tok in "{;":
             raw = text[stmt_start:pos + 1]
             stmt = raw.strip()
             line = text.count("\n", 0, stmt_start + len(raw) - len(raw.lstrip())) + 1
+            internal = "anon" in scopes or stmt.startswith("static ")
             name = None
-            for rx in (TYPE, FUNC, VAR) if not stmt.startswith("using ") else ():
+            rules = (TYPE, FUNC, VAR, VAR_DECL) if "anon" in scopes else (FUNC, VAR, VAR_DECL)
+            for rx in rules if internal and not stmt.startswith(("using ", "typedef ")) else ():
                 mm = rx.match(stmt)
                 if mm and mm.group(1) not in KEYWORDS:
                     name = mm.group(1)
@@ -86,14 +90,13 @@ def anonymous_names(path):
             if name:
                 names.append((name, line))
         if tok == "{":
-            depth += 1
+            scopes.append("other")
         elif tok == "}":
-            if anon and depth == anon[-1]:
-                anon.pop()
-            depth -= 1
-            if anon and depth == anon[-1]:
+            if scopes:
+                scopes.pop()
+            if not scopes or scopes[-1] != "other":
                 stmt_start = pos + 1
-        elif tok == ";" and at_anon_top:
+        elif tok == ";" and at_ns_scope:
             stmt_start = pos + 1
     return names
 
@@ -117,7 +120,7 @@ def main():
         seen = defaultdict(list)
         for p in paths:
             files += 1
-            for name, line in anonymous_names(p):
+            for name, line in internal_names(p):
                 seen[name].append(f"{p.relative_to(root).as_posix()}:{line}")
         for name, where in sorted(seen.items()):
             if len({w.split(':')[0] for w in where}) > 1:

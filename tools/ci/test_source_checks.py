@@ -40,3 +40,20 @@ def test_unity_names_clash_across_files_of_one_library(tmp_path):
     (render / "c.cpp").write_text("namespace ngi {\nnamespace {\nstruct Builder {\n};\n}\n}\n")
     found = run("check_unity_names.py", tmp_path)
     assert found.returncode == 1 and "'Builder'" in found.stdout and "a.cpp:4" in found.stdout and "c.cpp:3" in found.stdout
+
+
+def test_unity_names_static_functions_and_uninitialized_variables(tmp_path):
+    io = tmp_path / "host" / "src" / "io"
+    io.mkdir(parents=True)
+    (tmp_path / "bindings" / "c").mkdir(parents=True)
+    (io / "a.cpp").write_text("static int format(int v) { return v; }\nnamespace ngi {\nnamespace {\n"
+                              "thread_local int g_last;\n}\nstatic const char* kName = \"a\";\n"
+                              "struct Local { static int count(int v) { return v; } };\n}\n")
+    (io / "b.cpp").write_text("namespace ngi {\nint count(int v) { return v; }\n}\n")
+    assert run("check_unity_names.py", tmp_path).returncode == 0  # members and external functions do not count
+    (io / "c.cpp").write_text("namespace ngi::detail {\nstatic int format(int v);\nstatic int format(int v) { return v; }\n}\n"
+                              "namespace {\nthread_local int g_last;\n}\nnamespace ngi { static const char* kName = \"c\"; }\n")
+    found = run("check_unity_names.py", tmp_path)
+    assert found.returncode == 1
+    for name in ("'format'", "'g_last'", "'kName'"):
+        assert name in found.stdout, found.stdout
