@@ -35,9 +35,11 @@ def cmake_facts(root):
     that names single files of host/src instead of globbing directories."""
     text = (root / "CMakeLists.txt").read_text()
     problems = []
-    for m in re.finditer(r"list\((APPEND|REMOVE_ITEM) NGI_\w+_SOURCES(.*?)\)", text, re.S):
-        for f in re.findall(r"\$\{NGI_SRC\}/([\w/]+\.cpp)", m.group(2)):
-            problems.append(f"CMakeLists.txt: list({m.group(1)} ...) moves host/src/{f} between libraries: "
+    for m in re.finditer(r"(?:list\((APPEND|REMOVE_ITEM) NGI_\w+_SOURCES|(target_sources)\(ngi_(?:core|io|pipeline|render)\b)(.*?)\)",
+                         text, re.S):
+        for f in re.findall(r"(?:\$\{NGI_SRC\}|host/src)/([\w/]+\.cpp)", m.group(3)):
+            how = f"list({m.group(1)} ...)" if m.group(1) else "target_sources(...)"
+            problems.append(f"CMakeLists.txt: {how} moves host/src/{f} between libraries: "
                             "a library is its directories (move the file instead)")
     links = {lib: {lib} for lib in set(DIR_LIBRARY.values())}
     for lib, args in re.findall(r"target_link_libraries\((ngi_core|ngi_io|ngi_pipeline|ngi_render)\b(.*?)\)", text, re.S):
