@@ -57,3 +57,26 @@ def test_unity_names_static_functions_and_uninitialized_variables(tmp_path):
     assert found.returncode == 1
     for name in ("'format'", "'g_last'", "'kName'"):
         assert name in found.stdout, found.stdout
+
+
+def test_layers_refuse_single_file_source_lists(tmp_path):
+    src = tmp_path / "host" / "src"
+    for d in ("base", "io"):
+        (src / d).mkdir(parents=True)
+    (src / "base" / "npy.cpp").write_text('#include "base/npy.hpp"\n')
+    (src / "base" / "npy.hpp").write_text("")
+    (src / "io" / "exr.cpp").write_text('#include "base/npy.hpp"\n')
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "ARCHITECTURE.md").write_text("## Map\n```\npath\ndocs/\nhost/src/base/\nhost/src/io/\n```\n")
+    cmake = ("file(GLOB NGI_CORE_SOURCES ${NGI_SRC}/base/*.cpp)\nfile(GLOB NGI_IO_SOURCES ${NGI_SRC}/io/*.cpp)\n"
+             "target_link_libraries(ngi_io PUBLIC ngi_core)\n")
+    (tmp_path / "CMakeLists.txt").write_text(cmake)
+    subprocess.run(["git", "init", "-q", str(tmp_path)], check=True)
+    subprocess.run(["git", "-C", str(tmp_path), "add", "-A"], check=True)
+    clean = run("check_layers.py", tmp_path)
+    assert clean.returncode == 0, clean.stdout
+    for extra in ("list(APPEND NGI_CORE_SOURCES ${NGI_SRC}/io/exr.cpp)\n",
+                  "target_sources(ngi_core PRIVATE ${NGI_SRC}/io/exr.cpp)\n"):
+        (tmp_path / "CMakeLists.txt").write_text(cmake + extra)
+        found = run("check_layers.py", tmp_path)
+        assert found.returncode == 1 and "io/exr.cpp between libraries" in found.stdout, found.stdout
