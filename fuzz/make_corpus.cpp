@@ -342,6 +342,14 @@ int main(int argc, char** argv) {
                          {{"name", "d1"}, {"op", "dense"}, {"inputs", {"h"}}, {"output", "out"}, {"in", 8}, {"out", 2},
                           {"weight", "d1.w"}, {"activation", "exp"}}})}}}};
     put("model_config", "graph_nc", std::string(1, char(5)) + graph_nc.dump());
+    // No pixel_cnn model is shipped either: a hand-written one, reached as written (byte 6).
+    const json pixel_cnn = {
+        {"format_version", 1}, {"family", "pixel_cnn"}, {"input_nc", 5}, {"output_nc", 2},
+        {"layers", json::array({{{"out", 7}, {"kernel", 3}, {"activation", "leaky_relu"}, {"slope", 0.15}},
+                                {{"out", 9}, {"kernel", 5}, {"activation", "sigmoid"}},
+                                {{"out", 2}, {"kernel", 1}, {"activation", "none"}}})},
+        {"input_range", {-1, 1}}, {"source", "fuzz seed"}};
+    put("model_config", "pixel_cnn_as_written", std::string(1, char(6)) + pixel_cnn.dump());
     std::cout << "wrote the seed corpora under " << root << "\n";
     return 0;
 }

@@ -20,7 +20,8 @@
     X(kVoxelShFamily)          \
     X(kNeuralGiFamily)         \
     X(kGraphFamily)            \
-    X(kSsgiFamily)
+    X(kSsgiFamily)             \
+    X(kPixelCnnFamily)
 
 namespace ngi::detail {
 
