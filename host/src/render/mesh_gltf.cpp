@@ -171,16 +171,18 @@ struct GltfReader {
             default: { float x; std::memcpy(&x, p, 4); return x; }
         }
     }
-    // Accessor `index` as `n`-component values (`n` <= its type's), the sparse substitutions applied.
-    std::vector<double> values(int index, int n) const {
+    // Accessor `index` as `n`-component values (`n` <= its type's), the sparse substitutions applied; integers
+    // normalized when `normalize` (colours) or the accessor says so.
+    std::vector<double> values(int index, int n, bool normalize = false) const {
         const tinygltf::Accessor& a = m.accessors[std::size_t(index)];
+        const bool normalized = normalize || a.normalized;
         const int csize = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType));
         const int have = tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
         const std::uint64_t elem = std::uint64_t(csize) * std::uint64_t(have);
         std::vector<double> out(a.count * std::size_t(n), 0.0);
         auto put = [&](std::size_t i, const unsigned char* p) {
             for (int c = 0; c < n && c < have; ++c)
-                out[i * std::size_t(n) + std::size_t(c)] = component(p + c * csize, a.componentType, a.normalized);
+                out[i * std::size_t(n) + std::size_t(c)] = component(p + c * csize, a.componentType, normalized);
         };
         if (a.bufferView >= 0)
             for (std::size_t i = 0; i < a.count; ++i) put(i, at_element(a.bufferView, a.byteOffset, elem, i));
@@ -206,12 +208,13 @@ struct GltfReader {
             if (it == p.attributes.end()) return {};
             const tinygltf::Accessor& a = m.accessors[std::size_t(it->second)];
             const int have = tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
-            const bool ok_type = a.componentType == 5126 || (!float_only && a.normalized &&
-                                                              (a.componentType == 5121 || a.componentType == 5123));
+            // Colours of unsigned bytes or shorts are normalized (glTF requires the flag; a file without it is read
+            // as the specification means it, as before).
+            const bool ok_type = a.componentType == 5126 || (!float_only && (a.componentType == 5121 || a.componentType == 5123));
             if (!ok_type || have < n || have > 4)
                 fail(where + " " + key + " (accessor " + std::to_string(it->second) + ") is not of a type read here "
                      "(componentType " + std::to_string(a.componentType) + ", " + std::to_string(have) + " components)");
-            return values(it->second, n);
+            return values(it->second, n, !float_only);
         };
         const std::vector<double> pos = attribute("POSITION", 3, true), nrm = attribute("NORMAL", 3, true),
                                   col = attribute("COLOR_0", 3, false);

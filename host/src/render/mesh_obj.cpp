@@ -88,6 +88,7 @@ struct ObjCorner {
 struct ObjPartDraft {
     std::string material;  // usemtl name ("" = none)
     std::uint64_t usemtl_line = 0;
+    std::string group;     // the o or g name it began with
     std::vector<ObjCorner> corners;
     std::vector<std::uint32_t> sizes;
     std::size_t dropped = 0;
@@ -209,14 +210,18 @@ MeshFile read_obj(const std::string& b, const std::string& name, MeshSidecars& s
             return;
         }
         if (key == "usemtl" || key == "o" || key == "g") {
-            const std::string material = key == "usemtl" ? std::string(obj_trim(line.substr(6))) : drafts.back().material;
-            if (drafts.back().sizes.empty() && key == "usemtl") {  // nothing under the old name yet: renamed
-                drafts.back().material = material;
-                drafts.back().usemtl_line = line_no;
+            // A new part at a change of material, or of object or group name (the same name again continues it).
+            const std::string rest(obj_trim(line.substr(key.size())));
+            ObjPartDraft& d = drafts.back();
+            const std::string material = key == "usemtl" ? rest : d.material, group = key == "usemtl" ? d.group : rest;
+            if (material == d.material && group == d.group) return;
+            if (d.sizes.empty() && d.dropped == 0) {  // nothing in it yet: renamed
+                d.material = material;
+                d.group = group;
+                if (key == "usemtl") d.usemtl_line = line_no;
                 return;
             }
-            if (key == "usemtl" && material == drafts.back().material) return;
-            drafts.push_back({material, key == "usemtl" ? line_no : drafts.back().usemtl_line, {}, {}, 0});
+            drafts.push_back({material, key == "usemtl" ? line_no : d.usemtl_line, group, {}, {}, 0});
             return;
         }
         if (key == "mtllib") libraries.emplace_back(std::string(obj_trim(line.substr(6))), line_no);
