@@ -76,6 +76,21 @@ def train_modules():
     return {line.strip() for line in lines if line.strip() and not line.startswith("#")}
 
 
+def train_packages():
+    """The packages of ngi_train an installation ships: those that hold installed.txt's modules (ngi_train,
+    ngi_train.generator, ...), each with its __init__.py listed too."""
+    modules = train_modules()
+    packages = set()
+    for m in modules:
+        folders = Path(m).parent.parts
+        packages.update(("ngi_train",) + folders[:i] for i in range(len(folders) + 1))
+    for package in sorted(packages):
+        init = Path(*package[1:], "__init__.py").as_posix()
+        if init not in modules:
+            sys.exit(f"setup.py: training/ngi_train/installed.txt lists modules of {'.'.join(package)}, not its {init}")
+    return sorted(".".join(package) for package in packages)
+
+
 class BuildWithCMake(build_py):
     """build_py, then the native module, the CLI and the models from the CMake tree into the staged package."""
 
@@ -127,7 +142,7 @@ class NativeDistribution(Distribution):
 
 setup(
     version=version(),
-    packages=["ngi", "ngi_train", "ngi_train.generator"],
+    packages=["ngi", *train_packages()],
     package_dir={"ngi": "bindings/python/ngi", "ngi_train": "training/ngi_train"},
     package_data={"ngi": ["py.typed", "*.pyi"]},
     cmdclass={"build_py": BuildWithCMake},

@@ -11,13 +11,20 @@
 4. What an installation ships of ngi_train (installed.txt: cmake --install, python3-ngi, pip install .) is exactly
    what `ngi adapt` imports (ngi_train.adapt and its training child ngi_train.generator.train, in a fresh
    interpreter), and run from the checkout the package knows its repository (ngi_paths.REPO).
+5. pip's list of packages (setup.py, run with setuptools.setup captured) is installed.txt's: the folders of its
+   modules, also for a list with a subpackage more (a copy of setup.py beside another installed.txt); a subpackage
+   listed without its __init__.py is refused.
 """
 
 import importlib
+import json
+import os
 import pkgutil
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -40,6 +47,46 @@ def python_files():
         for path in sorted((REPO / top).rglob("*.py")):
             if "__pycache__" not in path.parts:
                 yield path
+
+
+# Runs setup.py (argv[1]) with setuptools.setup replaced by a recorder; prints the packages it was given.
+SETUP_PACKAGES = ("import json, runpy, sys, setuptools\n"
+                  "given = {}\n"
+                  "setuptools.setup = lambda **kw: given.update(kw)\n"
+                  "runpy.run_path(sys.argv[1], run_name='__main__')\n"
+                  "print(json.dumps(given['packages']))\n")
+
+
+def setup_packages(root, scratch):
+    """(exit code, packages or the error) of `root`/setup.py; setuptools' staging folder under `scratch`."""
+    env = dict(os.environ, NGI_PIP_BUILD_DIR=str(scratch))
+    proc = subprocess.run([sys.executable, "-c", SETUP_PACKAGES, str(root / "setup.py")], capture_output=True,
+                          text=True, env=env, cwd=scratch)
+    return proc.returncode, json.loads(proc.stdout) if proc.returncode == 0 else proc.stderr
+
+
+def packages_of(modules):
+    """ngi and the ngi_train packages that hold `modules` (paths relative to training/ngi_train)."""
+    return sorted({"ngi", "ngi_train"} | {".".join(("ngi_train",) + Path(m).parent.parts) for m in modules})
+
+
+def check_pip_packages(listed):
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        got = setup_packages(REPO, tmp)
+        check(got == (0, packages_of(listed)), f"setup.py's packages are installed.txt's folders ({got})")
+        copy = tmp / "copy"
+        (copy / "training" / "ngi_train").mkdir(parents=True)
+        shutil.copy(REPO / "setup.py", copy)
+        shutil.copy(REPO / "CMakeLists.txt", copy)  # its version
+        more = sorted(listed) + ["ao/__init__.py", "ao/train.py"]
+        (copy / "training" / "ngi_train" / "installed.txt").write_text("# one subpackage more\n" + "\n".join(more))
+        got = setup_packages(copy, tmp)
+        check(got == (0, packages_of(more)) and "ngi_train.ao" in got[1],
+              f"setup.py follows installed.txt: a subpackage listed there is a package for pip ({got})")
+        (copy / "training" / "ngi_train" / "installed.txt").write_text("\n".join(sorted(listed) + ["vox/x.py"]))
+        code, err = setup_packages(copy, tmp)
+        check(code != 0 and "vox/__init__.py" in err, f"a subpackage without its __init__.py is refused ({err!r})")
 
 
 def main():
@@ -71,6 +118,7 @@ def main():
     imported = {Path(f).resolve().relative_to(package_dir).as_posix() for f in files}
     check(listed == imported, "installed.txt lists what ngi adapt imports (missing: "
           f"{sorted(imported - listed)}, not imported: {sorted(listed - imported)})")
+    check_pip_packages(listed)
     return 0
 
 
