@@ -224,6 +224,9 @@ typedef NGI_ENUM(ngi_family) {
     NGI_FAMILY_VOXEL_SH = 3,         /* seed 004: [V, 10] voxel attributes -> [V, 27] SH (see ngi_voxels_predict_sh) */
     NGI_FAMILY_NEURAL_GI = 4,        /* seed 002: [1, 18, H, W] -> [1, 3, H, W] (see ngi_neural_gi_run) */
     NGI_FAMILY_GRAPH = 5,            /* a converted graph (python3 -m ngi.convert; docs/MODEL_FORMAT.md "graph") */
+    NGI_FAMILY_SSGI = 6,             /* a screen-space GI rung: no network, runs on frames (ngi_pipeline_*) */
+    NGI_FAMILY_OTHER = 7,            /* a family this header does not name (added to the library after it, e.g.
+                                        pixel_cnn): a new family reaches the C ABI as this first */
     NGI_FAMILY_MAX_ENUM = 0x7FFFFFFF
 } ngi_family;
 NGI_API ngi_status ngi_model_family(const ngi_model* model, ngi_family* family);

@@ -147,6 +147,8 @@ static void test_model(ngi_device* dev, const char* models) {
         CHECK(ngi_model_resolve("ssgi_surround", file, sizeof file, &need) == NGI_OK &&
               strstr(file, "ssgi_surround.safetensors") != NULL && need == strlen(file) + 1);
         CHECK(ngi_model_load(dev, "ssgi_surround", &by_name) == NGI_OK);
+        ngi_family rung_family = NGI_FAMILY_OTHER;
+        CHECK(ngi_model_family(by_name, &rung_family) == NGI_OK && rung_family == NGI_FAMILY_SSGI);
         CHECK(ngi_model_release(by_name) == NGI_OK);
         CHECK_FAILS(ngi_model_load(dev, "no_such_model", &m), NGI_ERROR_INPUT, "ngi_model_load:", "known names");
         CHECK_FAILS(ngi_model_resolve(NULL, file, sizeof file, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_resolve",
