@@ -3,9 +3,11 @@
 // arguments exactly as given, in place of this process (exec), so that its exit code is the command's and Ctrl-C or
 // SIGTERM reaches it directly (it stops after the step it is in, keeps what it has and resumes when run again).
 // What it adds over `python3 -m ngi_train.adapt`: the interpreter ($NGI_PYTHON, else the one ngi's Python module was
-// built for), the Python packages of this installation or build tree first on PYTHONPATH, this binary as the ngi
-// the adaptation renders with (NGI_BIN), and a clear message when Python, NumPy, PyTorch, tqdm, ngi or ngi_train
-// cannot be found.
+// built for), the folders of this installation's or build tree's Python packages ngi and ngi_train (handed over in
+// NGI_ADAPT_PYTHON_DIRS, put first on sys.path by the bootstrap only where Python does not search them already, so
+// that a site folder such as /usr/lib/python3/dist-packages keeps its place behind /usr/local and ~/.local), this
+// binary as the ngi the adaptation renders with (NGI_BIN), and a clear message when Python, NumPy, PyTorch, tqdm,
+// ngi or ngi_train cannot be found. PYTHONPATH is left as the caller set it.
 //
 // Compile definitions (CMakeLists.txt): NGI_ADAPT_PYTHON (the default interpreter), NGI_ADAPT_PYTHON_REL_DIR (the
 // installed Python packages relative to the installed bin/), NGI_ADAPT_TRAINING_SOURCE_DIR (a build tree's
@@ -42,8 +44,28 @@ namespace fs = std::filesystem;
 
 // Run as `PYTHON -c kBootstrap ARGS...`: what `python3 -m ngi_train.adapt ARGS...` does, after checking that every
 // package the adaptation (and its training child) imports can be found, so that a missing one is named with where
-// to get it instead of a traceback halfway through. Exit code 1 when one is missing.
+// to get it instead of a traceback halfway through. Exit code 1 when one is missing. Before that, sys.path:
+// - without PYTHONSAFEPATH (Python < 3.11 ignores it) the current folder ('' for -c) is dropped from its front: a
+//   folder named ngi there, e.g. bindings/python of a checkout, would hide the installed package;
+// - each folder of NGI_ADAPT_PYTHON_DIRS (os.pathsep-separated, in order) goes to the front unless sys.path has it
+//   already: a build tree's <build>/python and the source training/ come first, while an installation's site
+//   folder (/usr/lib/python3/dist-packages) stays where Python's site put it, behind the user's packages.
 const char kBootstrap[] = R"PY(import importlib.util, os, sys
+def _real(p):
+    try:
+        return os.path.realpath(p or os.curdir)
+    except OSError:
+        return None
+_cwd = _real("")
+if not getattr(sys.flags, "safe_path", False) and sys.path and (sys.path[0] == "" or
+                                                                 (_cwd and _real(sys.path[0]) == _cwd)):
+    del sys.path[0]
+_known, _ours = {_real(p) for p in sys.path if p}, []
+for d in os.environ.get("NGI_ADAPT_PYTHON_DIRS", "").split(os.pathsep):
+    if d and _real(d) not in _known:
+        _known.add(_real(d))
+        _ours.append(d)
+sys.path[:0] = _ours
 needed = (("numpy", "NumPy (Debian: python3-numpy; pip install numpy)"),
           ("torch", "PyTorch (Debian: python3-torch; pip install torch)"),
           ("tqdm", "tqdm (Debian: python3-tqdm; pip install tqdm)"),
@@ -61,8 +83,8 @@ for name, what in needed:
         missing.append(what)
 if missing:
     sys.stderr.write("ngi adapt: the adaptation runs in Python (ngi_train.adapt), and %s cannot import:\n%s"
-                     "(PYTHONPATH=%s; $NGI_PYTHON picks another interpreter)\n"
-                     % (sys.executable, "".join("  %s\n" % m for m in missing), os.environ.get("PYTHONPATH", "")))
+                     "(searched: %s; $NGI_PYTHON picks another interpreter)\n"
+                     % (sys.executable, "".join("  %s\n" % m for m in missing), os.pathsep.join(sys.path)))
     sys.exit(1)
 from ngi_train import adapt
 sys.exit(adapt.main(sys.argv[1:], prog="ngi adapt"))
@@ -111,15 +133,19 @@ int run_adapt(const std::vector<std::string>& args) {
     const char* chosen = std::getenv("NGI_PYTHON");
     const std::string python = chosen && *chosen ? chosen : NGI_ADAPT_PYTHON;
     const fs::path self = self_path();
-    if (!self.empty()) {
-        std::string path;
-        for (const fs::path& d : python_dirs(self.parent_path())) path += (path.empty() ? "" : ":") + d.string();
-        if (const char* old = std::getenv("PYTHONPATH"); old && *old) path += (path.empty() ? "" : ":") + std::string(old);
-        if (!path.empty()) setenv("PYTHONPATH", path.c_str(), 1);
+    // The folders for the bootstrap (kBootstrap), never PYTHONPATH: there they would come before everything, the
+    // standard library included, and an installation's site folder would hide the user's own packages.
+    std::string dirs;
+    if (!self.empty())
+        for (const fs::path& d : python_dirs(self.parent_path())) dirs += (dirs.empty() ? "" : ":") + d.string();
+    if (dirs.empty())
+        unsetenv("NGI_ADAPT_PYTHON_DIRS");  // a copied binary: Python's own path decides, not a caller's value
+    else
+        setenv("NGI_ADAPT_PYTHON_DIRS", dirs.c_str(), 1);
+    if (!self.empty())
         setenv("NGI_BIN", self.c_str(), 1);  // the adaptation renders with this ngi (ngi_train.ngi_paths.find_ngi)
-    }
     // Python 3.11+: the current folder is not put first on sys.path (a folder named ngi there, e.g.
-    // bindings/python of a checkout, would hide the installed package); older interpreters ignore it.
+    // bindings/python of a checkout, would hide the installed package); the bootstrap drops it for older ones.
     setenv("PYTHONSAFEPATH", "1", 0);
 
     std::vector<std::string> argv_strings = {python, "-c", kBootstrap};
@@ -150,7 +176,8 @@ Run add_adapt(CLI::App& app) {
         "that does not load, a base that cannot be adapted, a budget too small; 130 interrupted: the same command "
         "resumes; 1 another failure, also Python, NumPy, PyTorch, tqdm or ngi's Python packages missing) and "
         "Ctrl-C or SIGTERM reaches it. The interpreter is $NGI_PYTHON, else " NGI_ADAPT_PYTHON "; the Python "
-        "packages of this installation (or build tree) come first on its PYTHONPATH, and NGI_BIN names this ngi.");
+        "packages ngi and ngi_train of this installation (or build tree) come first on its sys.path unless it "
+        "searches their folder already (NGI_ADAPT_PYTHON_DIRS), and NGI_BIN names this ngi.");
     // Everything after `adapt` is the adaptation's, --help included: no options of its own, nothing parsed. main()
     // hands `ngi adapt ARGS...` to run_adapt before CLI11 sees it (which would drop a leading "--"); this is for
     // the help and the command list.

@@ -141,29 +141,51 @@ step "README snippets: $n built or run against the installed ngi"
 checks=$((checks + n))
 
 # 7. `ngi adapt` (issue 46) from the installation alone: no PYTHONPATH, NGI_BIN or NGI_MODEL_PATH from outside, run
-# from a folder without ngi sources. A stand-in interpreter records what the CLI hands over (its PYTHONPATH must start
-# with the installed Python folder, NGI_BIN must be the installed ngi), then runs the real one. --help is the
-# adaptation's; a missing scene is refused before any work (exit 2, nothing written, not even a work folder in the
-# cache). From a temporary prefix also a whole tiny adaptation through PREFIX/bin/ngi adapt (the stand-in shrinks
-# ngi_train.adapt's frames and steps as training/tests/test_adapt.py does: 16 spp, 2 + 2 frames, 20-step chunks, a
-# 30-second budget; about 40 s here): the base found by name among the installed models, the work folder in the
-# user's cache, a model the installed ngi runs.
+# from a folder without ngi sources. A stand-in interpreter records what the CLI hands over (NGI_ADAPT_PYTHON_DIRS
+# must be the installed Python folder, NGI_BIN the installed ngi, PYTHONPATH not set), then runs the real one, which
+# records at exit where ngi and ngi_train came from (the installed folder) and the sys.path the CLI's bootstrap left:
+# the interpreter's own, with the installed folder first for a temporary prefix and in its own place for /usr (a
+# site folder, behind /usr/local and ~/.local). --help is the adaptation's; a missing scene is refused before any
+# work (exit 2, nothing written, not even a work folder in the cache). From a temporary prefix also a whole tiny
+# adaptation through PREFIX/bin/ngi adapt (the stand-in shrinks ngi_train.adapt's frames and steps as
+# training/tests/test_adapt.py does: 16 spp, 2 + 2 frames, 20-step chunks, a 30-second budget; about 40 s here): the
+# base found by name among the installed models, the work folder in the user's cache, a model the installed ngi runs.
 adapt_env=$work/adapt_env.txt
 cat > "$work/adapt_tiny.py" << 'EOF'
 import sys
+code = sys.argv[2]  # python3 adapt_tiny.py -c BOOTSTRAP ARGS...: the CLI's bootstrap, run with ARGS
+del sys.argv[1:3]
+# The bootstrap's sys.path and checks, then ngi_train.adapt shrunk, then its run.
+prepare, run = code.split("from ngi_train import adapt\n")
+exec(prepare)
 from ngi_train import adapt
 for name, value in (("FEATURE_SPP", 16), ("REFERENCE_SPP", 16), ("VAL_FRAMES", (12, 62)), ("CHUNK_STEPS", 20),
                     ("MIN_TRAIN_SECONDS", 5.0), ("EXPORT_RESERVE_S", 5.0), ("MAX_TRAIN_FRAMES", 2)):
     setattr(adapt, name, value)
-code = sys.argv[2]  # python3 adapt_tiny.py -c BOOTSTRAP ARGS...: the CLI's bootstrap, run with ARGS
+exec(run)
+EOF
+adapt_paths=$work/adapt_paths.txt
+cat > "$work/adapt_paths.py" << EOF
+import atexit, sys
+
+
+def record():  # at exit: where ngi and ngi_train came from, and sys.path
+    with open("$adapt_paths", "w") as f:
+        for name in ("ngi", "ngi_train"):
+            f.write("%s=%s\\n" % (name, getattr(sys.modules.get(name), "__file__", None)))
+        f.write("".join("path=%s\\n" % p for p in sys.path))
+
+
+atexit.register(record)
+code = sys.argv[2]  # python3 adapt_paths.py -c BOOTSTRAP ARGS...: the CLI's bootstrap, run with ARGS
 del sys.argv[1:3]
 exec(code)
 EOF
 cat > "$work/adapt-python" << EOF
 #!/bin/sh
-printf '%s\n' "\${PYTHONPATH-}" "\${NGI_BIN-}" > "$adapt_env"
+printf '%s\n' "\${NGI_ADAPT_PYTHON_DIRS-}" "\${NGI_BIN-}" "\${PYTHONPATH-(unset)}" > "$adapt_env"
 if [ -n "\${ADAPT_TINY-}" ]; then exec /usr/bin/python3 "$work/adapt_tiny.py" "\$@"; fi
-exec /usr/bin/python3 "\$@"
+exec /usr/bin/python3 "$work/adapt_paths.py" "\$@"
 EOF
 chmod +x "$work/adapt-python"
 adapt_run() { (cd "$work" && env -u PYTHONPATH -u NGI_BIN -u NGI_MODEL_PATH NGI_PYTHON="$work/adapt-python" \
@@ -172,8 +194,29 @@ real_pydir=$(realpath "$pydir") real_ngi=$(realpath "$prefix/bin/ngi")
 adapt_run "$prefix/bin/ngi" adapt --help > "$work/adapt_help.out" || { step "ngi adapt --help failed"; exit 1; }
 grep -q "^usage: ngi adapt " "$work/adapt_help.out" && grep -q -- "--budget-minutes" "$work/adapt_help.out" ||
   { head -5 "$work/adapt_help.out" >&2; step "ngi adapt --help is not ngi_train.adapt's"; exit 1; }
-[ "$(head -1 "$adapt_env" | cut -d: -f1)" = "$real_pydir" ] && [ "$(sed -n 2p "$adapt_env")" = "$real_ngi" ] ||
-  { cat "$adapt_env" >&2; step "ngi adapt: PYTHONPATH does not start with $real_pydir, or NGI_BIN is not $real_ngi"; exit 1; }
+[ "$(sed -n 1p "$adapt_env")" = "$real_pydir" ] && [ "$(sed -n 2p "$adapt_env")" = "$real_ngi" ] &&
+  [ "$(sed -n 3p "$adapt_env")" = "(unset)" ] ||
+  { cat "$adapt_env" >&2
+    step "ngi adapt: NGI_ADAPT_PYTHON_DIRS is not $real_pydir, NGI_BIN not $real_ngi, or PYTHONPATH set"; exit 1; }
+# The interpreter's own sys.path, run as the stand-in runs it (from $work, PYTHONSAFEPATH set by the CLI, no
+# PYTHONPATH); the installed folder in front of it only where it is not on it already. ngi and ngi_train then come
+# from the installed folder; for /usr from where the interpreter itself finds them (a folder before the site folder,
+# such as the ngi.pth tools/build.sh registers in /usr/local, is left before it).
+own_python() { (cd "$work" && env -u PYTHONPATH PYTHONSAFEPATH=1 /usr/bin/python3 -c "$1"); }
+own=$(own_python 'import sys; print("\n".join(sys.path))')
+real_own=$(while IFS= read -r p; do [ -n "$p" ] && realpath -m "$p"; done <<< "$own")
+expected=$(grep -qx -- "$real_pydir" <<< "$real_own" || echo "$real_pydir"; echo "$own")
+expected_from=("ngi=$real_pydir/ngi/__init__.py" "ngi_train=$real_pydir/ngi_train/__init__.py")
+if grep -qx -- "$real_pydir" <<< "$real_own"; then
+  mapfile -t expected_from < <(own_python 'import importlib.util as u
+for n in ("ngi", "ngi_train"): print("%s=%s" % (n, u.find_spec(n).origin))')
+fi
+grep -qx -- "${expected_from[0]}" "$adapt_paths" && grep -qx -- "${expected_from[1]}" "$adapt_paths" ||
+  { cat "$adapt_paths" >&2; step "ngi adapt: ngi or ngi_train not imported as ${expected_from[*]}"; exit 1; }
+[ "$(sed -n 's/^path=//p' "$adapt_paths")" = "$expected" ] ||
+  { diff <(echo "$expected") <(sed -n 's/^path=//p' "$adapt_paths") >&2
+    step "ngi adapt: sys.path is not the interpreter's own with $real_pydir first only where it is missing"; exit 1; }
+pydir_at=$(sed -n 's/^path=//p' "$adapt_paths" | grep -nx -- "$real_pydir" | cut -d: -f1 | head -1)
 set +e
 adapt_run "$prefix/bin/ngi" adapt --scene "$work/missing.vox" --out "$work/adapted.safetensors" 2> "$work/adapt_missing.err"
 rc=$?
@@ -182,7 +225,8 @@ set -e
   { cat "$work/adapt_missing.err" >&2; step "ngi adapt: a missing scene gave exit code $rc"; exit 1; }
 [ ! -e "$work/adapted.safetensors" ] && [ ! -e "$work/cache/ngi/adapt" ] ||
   { step "ngi adapt: a missing scene left files behind"; exit 1; }
-step "ngi adapt: --help and a missing scene refused (exit 2, nothing written), with $real_pydir and $real_ngi"
+step "ngi adapt: --help and a missing scene refused (exit 2, nothing written), with $real_pydir" \
+  "(sys.path[$((pydir_at - 1))]) and $real_ngi"
 checks=$((checks + 1))
 if [ $system = 0 ]; then
   start_adapt=$SECONDS

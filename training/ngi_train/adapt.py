@@ -213,13 +213,25 @@ def train_config(base_path, base_config, work, lr):
     return cfg
 
 
+def child_pythonpath(path=None):
+    """The training child's PYTHONPATH: this process's sys.path (`path`), so that it imports what this one does
+    (a build tree's folders that `ngi adapt` put first included), in the same order; ngi_paths.PACKAGE_PARENT in
+    front only when it is not on it already -- an installation's site folder (/usr/lib/python3/dist-packages) put
+    first would hide the user's own packages (/usr/local, ~/.local) from the child."""
+    path = [p for p in (sys.path if path is None else path) if p]
+    parent = ngi_paths.PACKAGE_PARENT
+    if not any(Path(p).resolve() == parent for p in path):
+        path.insert(0, str(parent))
+    return os.pathsep.join(path)
+
+
 def run_training(cfg_path, work, steps, deadline, ngi_bin):
     """train.py up to `steps` steps (resuming the run folder); SIGTERM at the monotonic `deadline` (train.py then
     saves and exits). Returns the steps done."""
     cmd = [sys.executable, "-m", "ngi_train.generator.train", "--config", cfg_path, "--dataset", work / "data",
            "--run", work / "run", "--ngi", ngi_bin, "--steps", steps]
     env = dict(ngi_paths.ngi_env())
-    env["PYTHONPATH"] = os.pathsep.join([str(ngi_paths.PACKAGE_PARENT)] + sys.path)
+    env["PYTHONPATH"] = child_pythonpath()
     # Its own session: a Ctrl-C at the terminal reaches adapt only, which then sends the child exactly one SIGTERM
     # (train.py saves after the step it is in; a second signal would cut that short).
     proc = subprocess.Popen([str(c) for c in cmd], env=env, start_new_session=True)
@@ -314,9 +326,13 @@ def file_digest(path):
 
 
 def default_work(scene):
-    """The work folder of a scene without --work: runs/adapt/<stem> in a checkout, else the user's cache."""
+    """The work folder of a scene without --work: runs/adapt/<stem> in a checkout, else the user's cache
+    (AdaptError when there is none: no absolute $XDG_CACHE_HOME or $HOME)."""
     stem = Path(scene).stem if Path(scene).suffix else scene.replace(":", "_").replace("=", "")
-    root = ngi_paths.REPO / "runs" if ngi_paths.REPO is not None else ngi_paths.user_cache_dir()
+    try:
+        root = ngi_paths.REPO / "runs" if ngi_paths.REPO is not None else ngi_paths.user_cache_dir()
+    except ngi_paths.CacheDirError as e:
+        raise AdaptError(str(e)) from None
     return root / "adapt" / stem
 
 

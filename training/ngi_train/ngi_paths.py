@@ -34,20 +34,36 @@ def _checkout():
 REPO = _checkout()
 
 
+class CacheDirError(RuntimeError):
+    """The user's cache folder cannot be found (user_cache_dir()): no absolute $XDG_CACHE_HOME and no $HOME."""
+
+
 def user_cache_dir():
-    """$XDG_CACHE_HOME/ngi, else ~/.cache/ngi: the folder of ngi's own caches (the C++ program cache's default,
-    ngi::program_cache_dir, without $NGI_CACHE_DIR)."""
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "ngi"
+    """$XDG_CACHE_HOME/ngi, else $HOME/.cache/ngi: the folder of ngi's own caches (the C++ program cache's default,
+    ngi::program_cache_dir, without $NGI_CACHE_DIR). A relative $XDG_CACHE_HOME is ignored (the XDG Base Directory
+    specification: such a value is invalid); CacheDirError when $HOME is not an absolute path either."""
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    if os.path.isabs(xdg):
+        return Path(xdg) / "ngi"
+    home = os.environ.get("HOME", "")
+    if not os.path.isabs(home):
+        raise CacheDirError("cannot find the user's cache folder: neither $XDG_CACHE_HOME nor $HOME is an absolute "
+                            f"path (XDG_CACHE_HOME={xdg!r}, HOME={home!r}); set one of them, or pass a folder "
+                            "explicitly (ngi adapt --work DIR)")
+    return Path(home) / ".cache" / "ngi"
 
 
 def installed_ngi():
-    """The ngi binary of the installation this package is part of, if there is one: <prefix>/bin/ngi beside
-    <prefix>/lib/python3/dist-packages (cmake --install, the Debian packages), ngi/ngi-cli beside this package
-    (pip install .)."""
+    """The ngi binary of the installation this package is part of, if there is one: ngi/ngi-cli beside this
+    package (pip install .: the real binary, before <venv>/bin/ngi, the entry point that runs it), else
+    <prefix>/bin/ngi beside <prefix>/lib/python3/dist-packages (cmake --install, the Debian packages). None in a
+    checkout, and for a package too shallow to have a <prefix> (/app/ngi_train)."""
     if REPO is not None:
         return None
-    for c in (PACKAGE_PARENT.parents[2] / "bin" / "ngi", PACKAGE_PARENT / "ngi" / "ngi-cli"):
+    candidates = [PACKAGE_PARENT / "ngi" / "ngi-cli"]
+    if len(PACKAGE_PARENT.parents) > 2:
+        candidates.append(PACKAGE_PARENT.parents[2] / "bin" / "ngi")
+    for c in candidates:
         if c.is_file() and os.access(c, os.X_OK):
             return str(c)
     return None
