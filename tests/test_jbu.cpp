@@ -144,17 +144,20 @@ test::JbuRefImage low_view(const Scene& s, int w, int h, int channels, std::vect
     return {w, h, channels, std::move(values), g.normal, g.position};
 }
 
-// Largest |a - b| over pixels that are not borderline in the reference, relative to `scale`.
-double worst_error(const Run& got, const test::JbuRefResult& ref, int channels, std::size_t plane, double scale) {
-    double worst = 0;
-    for (int c = 0; c < channels; ++c)
-        for (std::size_t i = 0; i < plane; ++i) {
-            if (ref.borderline[i]) continue;
-            const double d = std::abs(double(got.out[c * plane + i]) - ref.out[c * plane + i]);
-            worst = std::max(worst, std::isfinite(d) ? d / scale : INFINITY);
-        }
-    return worst;
+// The reference's borderline pixels (a fallback decision within 1% of the threshold: the float kernel may decide
+// the other way there), flagged in every channel: the elements a comparison skips.
+std::vector<char> borderline_mask(const test::JbuRefResult& ref, int channels) {
+    std::vector<char> mask;
+    for (int c = 0; c < channels; ++c) mask.insert(mask.end(), ref.borderline.begin(), ref.borderline.end());
+    return mask;
 }
+
+// Float weights (exp, pow of up to 36 taps) against double: observed < 1e-5 of the value range.
+test::Tol weights(double range) {
+    return test::Tol::scaled(1e-4, "float exp/pow weights of up to 36 taps, observed < 1e-5").of(range);
+}
+// Where a saturated tap (FLT_MAX) takes part the sums are near FLT_MAX: relative to the largest magnitude.
+const test::Tol kSaturated = test::Tol::scaled(1e-5, "sums of taps near FLT_MAX").of(FLT_MAX);
 
 int borderline_count(const test::JbuRefResult& ref) {
     int n = 0;
@@ -198,11 +201,10 @@ TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]")
         INFO("trial " << trial << ": " << w << "x" << h << " -> " << W << "x" << H << ", " << channels
                       << " channels, radius " << params.radius << ", normal power " << params.normal_power
                       << ", kernel " << int(params.kernel));
-        // Tolerance: float weights (exp, pow of up to 36 taps) against double; values in [0, 4]. Observed: < 1e-5.
-        const double e = worst_error(got, ref, channels, std::size_t(W) * H, 4.0);
-        CHECK(e < 1e-4);
+        // Values in [0, 4].
+        const test::Comparison e = test::check_close(got.out, ref.out, weights(4.0), borderline_mask(ref, channels));
         CHECK(std::abs(got.fallbacks - ref.fallbacks) <= borderline_count(ref));
-        worst = std::max(worst, e);
+        worst = std::max(worst, e.max_abs / 4.0);
         pixels += W * H;
         fallbacks += ref.fallbacks;
     }
@@ -232,15 +234,13 @@ TEST_CASE("JBU: no light crosses a depth step or a crease, bilinear does", "[jbu
     const Run bilinear = run_jbu(low, away, hi.position, W, H);
     CHECK(bilinear.fallbacks == W * H);
 
-    double jbu_err = 0, bilinear_err = 0;
-    for (std::size_t i = 0; i < std::size_t(W) * H; ++i) {
-        const double want = light[hi.region[i]];
-        jbu_err = std::max(jbu_err, std::abs(got.out[i] - want) / want);
-        bilinear_err = std::max(bilinear_err, std::abs(bilinear.out[i] - want) / want);
-    }
+    std::vector<double> want(std::size_t(W) * H);
+    for (std::size_t i = 0; i < want.size(); ++i) want[i] = light[hi.region[i]];
     CHECK(got.fallbacks == 0);
-    CHECK(jbu_err < 1e-5);
-    CHECK(bilinear_err > 0.5);  // the same test fails for plain bilinear: it bleeds across both edges
+    // Each output pixel sees taps of its own region only: their normalized weights sum to 1 within rounding.
+    test::check_close(got.out, want, test::Tol::relative(1e-5, "a normalized sum of equal values"));
+    // The same test fails for plain bilinear: it bleeds across both edges, by more than half the light somewhere.
+    CHECK_FALSE(test::compare(bilinear.out, want, test::Tol::relative(0.5, "bilinear bleeds across the edges")).ok);
 }
 
 TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear, no surface gives 0", "[jbu]") {
@@ -267,7 +267,8 @@ TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear
     }
     CHECK(wall > 0);
     CHECK(got.fallbacks == wall);
-    CHECK(worst_error(got, ref, channels, std::size_t(W) * H, 2.0) < 1e-5);
+    test::check_close(got.out, ref.out, test::Tol::scaled(1e-5, "bilinear and planar taps, values <= 2").of(2.0),
+                      borderline_mask(ref, channels));
 }
 
 TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away", "[jbu]") {
@@ -286,7 +287,8 @@ TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away"
             const Run got = run_jbu(low, hi.normal, hi.position, W, H);
             INFO("constant " << value);
             CHECK(got.fallbacks == 0);
-            for (float v : got.out) CHECK(std::abs(double(v) - value) <= 2e-6 * value);  // 16 normalized weights' rounding
+            test::check_close(got.out, std::vector<float>(got.out.size(), value),
+                              test::Tol::relative(2e-6, "16 normalized weights' rounding"));
         }
     }
     // Hostile values: NaN -> 0, +-Inf -> +-FLT_MAX, HDR beyond half precision; outputs finite and as the reference.
@@ -303,8 +305,7 @@ TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away"
     const Run got = run_jbu(low, hi.normal, hi.position, W, H);
     const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, {});
     CHECK(test::all_finite(got.out));
-    // Where a saturated tap takes part the sums are near FLT_MAX: compare relative to the largest magnitude.
-    CHECK(worst_error(got, ref, 1, std::size_t(W) * H, FLT_MAX) < 1e-5);
+    test::check_close(got.out, ref.out, kSaturated, borderline_mask(ref, 1));
     // Non-finite guides: a NaN normal or position makes a tap (or a pixel) surfaceless, never a NaN output.
     test::JbuRefImage broken = low;
     broken.normal[1] = std::numeric_limits<float>::quiet_NaN();
@@ -315,7 +316,7 @@ TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away"
     const test::JbuRefResult ref2 = test::jbu_reference(broken, hi_normal, hi.position, W, H, {});
     CHECK(test::all_finite(got2.out));
     CHECK(got2.out[5] == 0.0f);
-    CHECK(worst_error(got2, ref2, 1, std::size_t(W) * H, FLT_MAX) < 1e-5);
+    test::check_close(got2.out, ref2.out, kSaturated, borderline_mask(ref2, 1));
 }
 
 TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
@@ -334,7 +335,7 @@ TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
         JbuParams p;
         p.kernel = k;
         const Run got = run_jbu(low, hi.normal, hi.position, W, H, p);
-        CHECK(worst_error(got, ref, channels, std::size_t(W) * H, 1.0) < 1e-4);
+        test::check_close(got.out, ref.out, weights(1.0), borderline_mask(ref, channels));
         CHECK(got.fallbacks == ref.fallbacks);
     }
 }

@@ -46,19 +46,8 @@ std::vector<float> run_pool(const Case& k, const std::vector<float>& x, Shape& o
     return test::run_guarded(x, in, out, [&](Context& c, const View& xv, const View& yv) { op.enqueue(c, xv, yv); });
 }
 
-// Elements that differ (a NaN equals a NaN), the first reported.
-int mismatches(const std::vector<float>& got, const std::vector<float>& want) {
-    if (got.size() != want.size()) {
-        UNSCOPED_INFO("sizes differ: " << got.size() << " vs " << want.size());
-        return -1;
-    }
-    int bad = 0;
-    for (std::size_t i = 0; i < got.size(); ++i) {
-        const bool same = (std::isnan(got[i]) && std::isnan(want[i])) || got[i] == want[i];
-        if (!same && bad++ == 0) UNSCOPED_INFO("first difference at " << i << ": got " << got[i] << ", want " << want[i]);
-    }
-    return bad;
-}
+// Every output is one of the inputs: exact, and NaN wherever the reference's window holds one.
+const test::Tol kPoolExact = test::Tol::exact().nan_where_want_nan();
 
 // The op against ref::max_pool2d on x; returns y.
 std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
@@ -70,7 +59,7 @@ std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
     const std::vector<float> want = ref::max_pool2d(x, k.c, k.h, k.w, g.kh, g.kw, g.stride_h, g.stride_w, g.pad_top,
                                                     g.pad_left, g.pad_bottom, g.pad_right, oh, ow);
     REQUIRE(out == Shape{k.c, oh, ow});
-    CHECK(mismatches(y, want) == 0);
+    test::check_close(y, want, kPoolExact);
     return y;
 }
 
@@ -181,7 +170,7 @@ TEST_CASE("max_pool2d keeps infinities and HDR values exactly", "[max_pool][extr
     // 65504 (the fp16 limit) and its next float, and FLT_MAX next to +-Inf, come out unrounded.
     const std::vector<float> y =
         check_case({3, 1, 2, {1, 2, 1, 2, 0, 0, 0, 0}}, {65504.0f, std::nextafter(65504.0f, kInf), -kInf, big, -big, -kInf});
-    CHECK(y == std::vector<float>{std::nextafter(65504.0f, kInf), big, -big});
+    test::check_close(y, std::vector<float>{std::nextafter(65504.0f, kInf), big, -big}, test::Tol::exact());
 }
 
 TEST_CASE("max_pool2d on a 1x1 spatial input gives the input back", "[max_pool]") {
@@ -193,7 +182,7 @@ TEST_CASE("max_pool2d on a 1x1 spatial input gives the input back", "[max_pool]"
         const Case k{7, 1, 1, g};
         Shape out;
         INFO(describe(k));
-        CHECK(run_pool(k, x, out) == x);
+        test::check_close(run_pool(k, x, out), x, test::Tol::exact());
         CHECK(out == Shape{7, 1, 1});
         check_case(k, x);
     }

@@ -34,7 +34,7 @@ void run_rows(std::initializer_list<const char*> ops, bool tiny) {
             std::printf("op_harness %-44s %-44s %-40s error %.3g tolerance %.3g\n", c.op.c_str(), c.name.c_str(),
                         o.shape.c_str(), o.error, c.tolerance);
         INFO(c.id() << " [" << o.shape << "]: normalized error " << o.error << ", tolerance " << c.tolerance
-                    << (o.failure.empty() ? "" : "; " + o.failure));
+                    << (o.failure.empty() ? "" : "; " + o.failure) << "; " << o.worst);
         CHECK(o.failure.empty());
         CHECK(o.error <= c.tolerance);
     }

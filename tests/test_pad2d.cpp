@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -48,19 +47,6 @@ std::vector<float> run_pad(const Case& k, const std::vector<float>& x, Shape& ou
     return test::run_guarded(x, in, out, [&](Context& c, const View& xv, const View& yv) { op.enqueue(c, xv, yv); });
 }
 
-// Elements whose bits differ (a copy keeps every bit: NaN payloads, the sign of zero), the first reported.
-int mismatches(const std::vector<float>& got, const std::vector<float>& want) {
-    if (got.size() != want.size()) {
-        UNSCOPED_INFO("sizes differ: " << got.size() << " vs " << want.size());
-        return -1;
-    }
-    int bad = 0;
-    for (std::size_t i = 0; i < got.size(); ++i)
-        if (std::memcmp(&got[i], &want[i], sizeof(float)) != 0 && bad++ == 0)
-            UNSCOPED_INFO("first difference at " << i << ": got " << got[i] << ", want " << want[i]);
-    return bad;
-}
-
 // The op against ref::pad2d on x; returns y.
 std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
     INFO(describe(k));
@@ -68,7 +54,9 @@ std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
     const std::vector<float> y = run_pad(k, x, out);
     const PadGeometry& g = k.g;
     REQUIRE(out == Shape{k.c, k.h + g.top + g.bottom, k.w + g.left + g.right});
-    CHECK(mismatches(y, ref::pad2d(x, k.c, k.h, k.w, g.top, g.left, g.bottom, g.right, int(g.mode), g.value)) == 0);
+    // A copy keeps every bit: NaN payloads, the sign of zero.
+    test::check_close(y, ref::pad2d(x, k.c, k.h, k.w, g.top, g.left, g.bottom, g.right, int(g.mode), g.value),
+                      test::Tol::bits());
     return y;
 }
 
@@ -151,10 +139,10 @@ TEST_CASE("pad2d agrees with PyTorch's F.pad on a fixed plane", "[pad2d]") {
         0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0, 0, 1, 2, 3, 0, 0,
         0, 0, 0, 4, 5, 6, 7, 0, 0,  0, 0, 0, 8, 9, 10, 11, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     Shape out;
-    CHECK(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Reflect, 0.0f}}, x, out) == reflect);
+    test::check_close(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Reflect, 0.0f}}, x, out), reflect, test::Tol::bits());
     CHECK(out == Shape{1, 6, 9});
-    CHECK(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Edge, 0.0f}}, x, out) == edge);
-    CHECK(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Constant, 0.0f}}, x, out) == constant);
+    test::check_close(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Edge, 0.0f}}, x, out), edge, test::Tol::bits());
+    test::check_close(run_pad({1, 3, 4, {2, 3, 1, 2, PadMode::Constant, 0.0f}}, x, out), constant, test::Tol::bits());
     for (PadMode mode : kModes) check_case({1, 3, 4, {2, 3, 1, 2, mode, 0.0f}}, x);
 }
 
@@ -175,7 +163,7 @@ TEST_CASE("pad2d copies NaN, infinities, HDR values and the constant bit for bit
     for (float value : {kNaN, kInf, -kInf, -0.0f, 65504.0f}) {
         const Case k{2, 3, 2, {1, 2, 1, 0, PadMode::Constant, value}};
         const std::vector<float> y = check_case(k, test::random_vector(12, rng));
-        CHECK(std::memcmp(&y[0], &value, sizeof(float)) == 0);
+        test::check_close(std::span<const float>(y).first(1), std::span<const float>(&value, 1), test::Tol::bits());
     }
 }
 
@@ -186,11 +174,12 @@ TEST_CASE("pad2d on a 1x1 spatial input", "[pad2d]") {
     // Edge: every cell of the padded plane is the one input value.
     const std::vector<float> y = run_pad({7, 1, 1, {3, 2, 1, 4, PadMode::Edge, 0.0f}}, x, out);
     REQUIRE(out == Shape{7, 5, 7});
-    for (int c = 0; c < 7; ++c)
-        for (int i = 0; i < 35; ++i) CHECK(y[std::size_t(c) * 35 + i] == x[c]);
+    std::vector<float> everywhere;
+    for (int c = 0; c < 7; ++c) everywhere.insert(everywhere.end(), 35, x[c]);
+    test::check_close(y, everywhere, test::Tol::bits());
     check_case({7, 1, 1, {3, 2, 1, 4, PadMode::Constant, 9.0f}}, x);
     // Reflect allows no padding at all on a 1 x 1 plane: a copy.
-    CHECK(run_pad({7, 1, 1, {0, 0, 0, 0, PadMode::Reflect, 0.0f}}, x, out) == x);
+    test::check_close(run_pad({7, 1, 1, {0, 0, 0, 0, PadMode::Reflect, 0.0f}}, x, out), x, test::Tol::bits());
 }
 
 TEST_CASE("pad2d refuses bad geometry and shapes with errors naming the op", "[pad2d]") {

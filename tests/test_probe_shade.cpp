@@ -173,8 +173,7 @@ TEST_CASE("probe shading = the reference on random cameras and faces (both field
             REQUIRE(counts.no_voxel == want.no_voxel);
             REQUIRE(counts.non_finite == want.non_finite);
             REQUIRE(returned == want.no_voxel + want.non_finite);
-            std::vector<float> wantf(want.lighting.begin(), want.lighting.end());
-            REQUIRE(test::worst_ratio(got, wantf, 1e-5, 1e-5) <= 1.0);
+            test::require_close(got, want.lighting, test::tol::short_sum());
         }
     }
 }
@@ -367,7 +366,6 @@ TEST_CASE("probe shading at a small shape (oclgrind: bounds, races, uninitialize
         CAPTURE(sh);
         REQUIRE(counts.no_voxel == want.no_voxel);
         REQUIRE(want.no_voxel > 0);
-        std::vector<float> wantf(want.lighting.begin(), want.lighting.end());
-        REQUIRE(test::worst_ratio(got, wantf, 1e-5, 1e-5) <= 1.0);
+        test::require_close(got, want.lighting, test::tol::short_sum());
     }
 }

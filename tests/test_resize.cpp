@@ -69,29 +69,9 @@ double finite_max(const std::vector<float>& x) {
     return m;
 }
 
-// Elements outside the tolerance: a NaN where want is NaN, the same infinity where want is infinite, else within
-// kTolResize * scale. The first reported.
-int mismatches(const std::vector<float>& got, const std::vector<double>& want, double scale) {
-    if (got.size() != want.size()) {
-        UNSCOPED_INFO("sizes differ: " << got.size() << " vs " << want.size());
-        return -1;
-    }
-    int bad = 0;
-    for (std::size_t i = 0; i < got.size(); ++i) {
-        bool ok;
-        if (std::isnan(want[i]))
-            ok = std::isnan(got[i]);
-        else if (std::isinf(want[i]))
-            ok = double(got[i]) == want[i];
-        else {
-            ok = std::isfinite(got[i]) && std::abs(double(got[i]) - want[i]) <= kTolResize * scale;
-        }
-        if (!ok && bad++ == 0)
-            UNSCOPED_INFO("first difference at " << i << ": got " << got[i] << ", want " << want[i] << " (max |x| "
-                                                 << scale << ")");
-    }
-    return bad;
-}
+// The file's tolerance (its derivation above), NaN where the reference is NaN, the same infinity where it is
+// infinite; scaled by max |x| with .of().
+const test::Tol kResize = test::Tol::scaled(kTolResize, "the weights' rounding, derived above").nan_where_want_nan();
 
 // The op against ref::resize_bilinear on x; returns y.
 std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
@@ -100,7 +80,7 @@ std::vector<float> check_case(const Case& k, const std::vector<float>& x) {
     const ResizeGeometry& g = k.g;
     const std::vector<double> want =
         ref::resize_bilinear(x, k.c, k.h, k.w, g.out_h, g.out_w, g.scale_h, g.scale_w, int(g.mode));
-    CHECK(mismatches(y, want, finite_max(x)) == 0);
+    test::check_close(y, want, kResize.of(finite_max(x)));
     return y;
 }
 
@@ -120,7 +100,7 @@ void check_fixed(const Case& k, const std::vector<float>& want) {
     INFO(describe(k) << " against the fixed vector");
     const std::vector<float> x = fixed_input(k.c * k.h * k.w);
     const std::vector<float> y = run_resize(k, x);
-    CHECK(mismatches(y, std::vector<double>(want.begin(), want.end()), finite_max(x)) == 0);
+    test::check_close(y, want, kResize.of(finite_max(x)));
     check_case(k, x);
 }
 
@@ -175,8 +155,8 @@ TEST_CASE("resize_bilinear with explicit scales, as ONNX Resize given 'scales'",
     }
     // Scale 1 on an unchanged axis copies it exactly (weights 1 and 0 on one pixel).
     const std::vector<float> x = test::random_vector(3 * 6 * 5, rng, -2.0f, 2.0f);
-    for (ResizeCoord mode : kModes) CHECK(run_resize({3, 6, 5, {6, 5, 1.0f, 1.0f, mode}}, x) == x);
-    for (ResizeCoord mode : kModes) CHECK(run_resize({3, 6, 5, {6, 5, 0.0f, 0.0f, mode}}, x) == x);
+    for (ResizeCoord mode : kModes) test::check_close(run_resize({3, 6, 5, {6, 5, 1.0f, 1.0f, mode}}, x), x, test::Tol::exact());
+    for (ResizeCoord mode : kModes) test::check_close(run_resize({3, 6, 5, {6, 5, 0.0f, 0.0f, mode}}, x), x, test::Tol::exact());
 }
 
 TEST_CASE("resize_bilinear agrees with PyTorch's F.interpolate and ONNX's numpy reference", "[resize]") {
@@ -233,16 +213,7 @@ TEST_CASE("resize_bilinear propagates NaN from every tap it multiplies, as PyTor
     // the 2 x 2 taps is multiplied, weight 0 included, so 0 * NaN = NaN and 0 * Inf = NaN; an unchanged axis reads
     // one row; past the last pixel the tap is the last pixel twice.
     auto same = [](const std::vector<float>& got, const std::vector<float>& want) {
-        REQUIRE(got.size() == want.size());
-        for (std::size_t i = 0; i < got.size(); ++i) {
-            INFO("element " << i << ": got " << got[i] << ", want " << want[i]);
-            if (std::isnan(want[i]))
-                CHECK(std::isnan(got[i]));
-            else if (std::isinf(want[i]))
-                CHECK(got[i] == want[i]);
-            else
-                CHECK(std::abs(got[i] - want[i]) <= 1e-6f * 9.0f);
-        }
+        test::check_close(got, want, kResize.of(9.0));  // the inputs' largest |x| is at most 9
     };
     const std::vector<float> center = {1, 2, 3, 4, kNaN, 6, 7, 8, 9};
     same(run_resize({1, 3, 3, {3, 4, 0, 0, ResizeCoord::AlignCorners}}, center),
@@ -298,7 +269,7 @@ TEST_CASE("resize_bilinear with infinities and HDR values", "[resize][extremes]"
     // weight is 0 (0 * Inf = NaN elsewhere), as the reference says.
     for (ResizeCoord mode : kModes) {
         const std::vector<float> y = check_case({2, 5, 7, {9, 4, 0, 0, mode}}, std::vector<float>(70, 65504.0f));
-        for (float v : y) CHECK(std::abs(v - 65504.0f) <= 65504.0f * kTolResize);
+        test::check_close(y, std::vector<float>(y.size(), 65504.0f), kResize.of(65504.0));
         check_case({2, 5, 7, {9, 4, 0, 0, mode}}, std::vector<float>(70, kInf));
         // HDR planes with smooth content: radiance up to 1e4 next to 1e-3.
         check_random({3, 11, 9, {7, 17, 0, 0, mode}}, rng, 1.0e-3f, 1.0e4f);
@@ -314,10 +285,9 @@ TEST_CASE("resize_bilinear on a 1x1 spatial input gives the value everywhere", "
             const Case k{7, 1, 1, g};
             INFO(describe(k));
             const std::vector<float> y = check_case(k, x);
-            const int n = g.out_h * g.out_w;
-            for (int c = 0; c < 7; ++c)
-                for (int i = 0; i < n; ++i)
-                    CHECK(std::abs(y[std::size_t(c) * n + i] - x[c]) <= kTolResize * 2.0);
+            std::vector<float> everywhere;
+            for (int c = 0; c < 7; ++c) everywhere.insert(everywhere.end(), std::size_t(g.out_h) * g.out_w, x[c]);
+            test::check_close(y, everywhere, kResize.of(2.0));  // |x| < 2
         }
 }
 

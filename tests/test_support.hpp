@@ -7,9 +7,12 @@
 #include <filesystem>
 #include <optional>
 #include <random>
+#include <source_location>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "compare.hpp"
 #include "ngi/device.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "runtime/context.hpp"
@@ -67,7 +70,49 @@ inline std::vector<float> download(const detail::Buffer& b, std::size_t n, std::
     return v;
 }
 
-// Largest |a-b| / (atol + rtol*|b|); <= 1 means every element is within tolerance.
+// Checks got against want under tol (tests/compare.hpp: the one comparison of the suite, its tolerance kinds and
+// their NaN / Inf rules). On failure Catch prints the caller's file and line, the worst element (index, both values,
+// the bound) and the tolerance's name and reason. Returns the comparison (ratio, max_abs: for WARNs and reports).
+template <class Got, class Want>
+Comparison check_close(const Got& got, const Want& want, const Tol& tol, std::span<const char> skip = {},
+                       std::source_location at = std::source_location::current()) {
+    const Comparison r = compare(got, want, tol, skip);
+    INFO(at.file_name() << ":" << at.line() << ": " << r.report());
+    CHECK(r.ok);
+    return r;
+}
+// The same, ending the test case on failure.
+template <class Got, class Want>
+Comparison require_close(const Got& got, const Want& want, const Tol& tol, std::span<const char> skip = {},
+                         std::source_location at = std::source_location::current()) {
+    const Comparison r = compare(got, want, tol, skip);
+    INFO(at.file_name() << ":" << at.line() << ": " << r.report());
+    REQUIRE(r.ok);
+    return r;
+}
+// A comparison made elsewhere (a helper that also ran the op), checked here.
+inline void check_comparison(const Comparison& r, std::source_location at = std::source_location::current()) {
+    INFO(at.file_name() << ":" << at.line() << ": " << r.report());
+    CHECK(r.ok);
+}
+// One value against its reference.
+inline Comparison check_value(double got, double want, const Tol& tol,
+                              std::source_location at = std::source_location::current()) {
+    const Comparison r = compare_value(got, want, tol);
+    INFO(at.file_name() << ":" << at.line() << ": " << r.report());
+    CHECK(r.ok);
+    return r;
+}
+inline Comparison require_value(double got, double want, const Tol& tol,
+                                std::source_location at = std::source_location::current()) {
+    const Comparison r = compare_value(got, want, tol);
+    INFO(at.file_name() << ":" << at.line() << ": " << r.report());
+    REQUIRE(r.ok);
+    return r;
+}
+
+// The older forms, still used by the model, pipeline and renderer tests (the op tests use check_close):
+// largest |a-b| / (atol + rtol*|b|) (<= 1 means every element is within tolerance), and the largest |a-b|.
 inline double worst_ratio(const std::vector<float>& a, const std::vector<float>& b, double atol, double rtol) {
     double worst = 0;
     for (std::size_t i = 0; i < a.size(); ++i) {

@@ -5,7 +5,6 @@
 #include <ctime>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 
 #include "ops/voxel_ltf.hpp"
 #include "reference_voxel.hpp"
@@ -91,13 +90,10 @@ std::vector<float> run_ltf(VoxelLtf& op, const DeviceScene& ds, int bounces, Ltf
     return test::download(out, std::size_t(4) * ds.inputs.voxels);
 }
 
-std::vector<float> to_float(const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); }
-
-double max_abs(const std::vector<double>& v) {
-    double m = 0;
-    for (double x : v) m = std::max(m, std::abs(x));
-    return m;
-}
+// The LTF's sums over V senders per bounce: 2e-5 of each value, or 1e-6 of the largest (values near zero).
+const test::Tol kLtf = test::Tol::relative(2e-5, "float sums over V senders, bounce after bounce").or_scaled(1e-6);
+// A two-voxel exchange: a few roundings per bounce.
+const test::Tol kClosedForm = test::Tol::relative(1e-6, "two voxels, a few roundings per bounce");
 
 const char* name_of(LtfVariant v) { return v == LtfVariant::Physical ? "physical" : "as written"; }
 const char* shape_name(LtfKernelShape s) {
@@ -121,17 +117,14 @@ TEST_CASE("voxel LTF: both variants, every kernel shape = the double reference (
                     std::vector<double> want_energy;
                     const std::vector<double> want = test::ltf_reference(s, bounces, variant == LtfVariant::Physical,
                                                                          use_mask ? &mask : nullptr, &want_energy);
-                    const double scale = max_abs(want);
                     for (VoxelLtf* op : {&plain, &tiled, &vector}) {
                         CAPTURE(V, name_of(variant), use_mask, bounces, int(op->shape()));
                         std::vector<double> energy;
                         const std::vector<float> got =
                             run_ltf(*op, ds, bounces, variant, use_mask ? &mask_buffer : nullptr, &energy);
-                        REQUIRE(test::worst_ratio(got, to_float(want), 1e-6 * scale, 2e-5) <= 1.0);
+                        test::require_close(got, want, kLtf);
                         REQUIRE(energy.size() == want_energy.size());
-                        const double escale = std::abs(want_energy[0]) + 1e-12;
-                        for (std::size_t k = 0; k < energy.size(); ++k)
-                            REQUIRE(energy[k] == Approx(want_energy[k]).epsilon(2e-5).margin(1e-6 * escale));
+                        test::require_close(energy, want_energy, kLtf.of(std::abs(want_energy[0])));
                     }
                 }
     }
@@ -161,7 +154,7 @@ TEST_CASE("voxel LTF: any split of the senders over launches gives bit-identical
                 CAPTURE(int(shape), name_of(variant), cap);
                 op.set_max_senders_per_launch(cap);
                 const std::vector<float> split = run_ltf(op, ds, 2, variant, m);
-                REQUIRE(std::memcmp(split.data(), whole.data(), whole.size() * sizeof(float)) == 0);
+                test::require_close(split, whole, test::Tol::bits());
             }
         }
     }
@@ -195,7 +188,7 @@ TEST_CASE("voxel LTF as written: the energy of E^t never grows when every albedo
                 total += test::ref_luminance(c);
             }
             for (double e : energy) sum += e;
-            REQUIRE(total == Approx(sum).epsilon(1e-5));
+            test::require_value(total, sum, test::Tol::relative(1e-5, "float luminances of V voxels summed in double"));
             REQUIRE(total <= (bounces + 1) * energy[0] * (1 + 1e-5));
         }
     }
@@ -232,12 +225,10 @@ TEST_CASE("voxel LTF physical: two facing voxels exchange light with the closed-
                     }
                 const std::vector<float> got = run_ltf(op, ds, bounces, LtfVariant::Physical, nullptr);
                 CAPTURE(D, facing, bounces);
-                for (int c = 0; c < 3; ++c) {
-                    REQUIRE(got[c] == Approx(L0[c]).epsilon(1e-6));
-                    REQUIRE(got[4 + c] == Approx(L1[c]).epsilon(1e-6));
-                }
+                test::require_close(std::span<const float>(got).first(3), L0, kClosedForm);
+                test::require_close(std::span<const float>(got).subspan(4, 3), L1, kClosedForm);
                 if (bounces == 1 && facing)  // the first bounce spelled out: d_0 + rho_1 d_1 / (pi r^2)
-                    REQUIRE(got[0] == Approx(d0[0] + rho1[0] * d1[0] / (M_PI * std::max(D * D, 0.25))).epsilon(1e-6));
+                    test::require_value(got[0], d0[0] + rho1[0] * d1[0] / (M_PI * std::max(D * D, 0.25)), kClosedForm);
             }
         }
     }
@@ -260,8 +251,7 @@ TEST_CASE("voxel LTF: extreme values (d = 1e6, rho = 0, coincident voxels) stay 
         const std::vector<double> want = test::ltf_reference(s, 3, variant == LtfVariant::Physical, nullptr);
         const std::vector<float> got = run_ltf(op, ds, 3, variant, nullptr);
         CAPTURE(name_of(variant));
-        REQUIRE(test::all_finite(got));
-        REQUIRE(test::worst_ratio(got, to_float(want), 1e-6 * max_abs(want), 2e-5) <= 1.0);
+        test::require_close(got, want, kLtf);  // a NaN or Inf in got fails it
     }
     // Every albedo 0: no light is reflected, both variants return d exactly.
     for (std::size_t k = 0; k < s.albedo.size(); ++k) s.albedo[k] = 0.0f;
@@ -269,7 +259,7 @@ TEST_CASE("voxel LTF: extreme values (d = 1e6, rho = 0, coincident voxels) stay 
     for (LtfVariant variant : {LtfVariant::Physical, LtfVariant::AsWritten}) {
         const std::vector<float> got = run_ltf(op, black, 3, variant, nullptr);
         CAPTURE(name_of(variant));
-        REQUIRE(std::memcmp(got.data(), s.direct.data(), got.size() * sizeof(float)) == 0);
+        test::require_close(got, s.direct, test::Tol::bits());
     }
 }
 
@@ -327,8 +317,8 @@ TEST_CASE("voxel LTF at a small shape (oclgrind: bounds, races, uninitialized re
             const std::vector<double> want = test::ltf_reference(s, 2, physical, physical ? &mask : nullptr, &want_energy);
             const std::vector<float> got = run_ltf(op, ds, 2, variant, physical ? &mask_buffer : nullptr, &energy);
             CAPTURE(int(shape), name_of(variant));
-            REQUIRE(test::worst_ratio(got, to_float(want), 1e-6 * max_abs(want), 2e-5) <= 1.0);
-            for (std::size_t k = 0; k < energy.size(); ++k) REQUIRE(energy[k] == Approx(want_energy[k]).epsilon(1e-5));
+            test::require_close(got, want, kLtf);
+            test::require_close(energy, want_energy, test::Tol::relative(1e-5, "the energy of a 5-voxel scene"));
         }
     }
 }
@@ -403,7 +393,8 @@ TEST_CASE("voxel LTF timing: ms per bounce at V = 10,000", "[.][ltf-perf]") {
                 for (int c = 0; c < 3; ++c) want[c] += one[c];  // receiver 0 of the pair: d = 0 there
             }
             CAPTURE(i);
-            for (int c = 0; c < 3; ++c) CHECK(got[std::size_t(4) * i + c] == Approx(want[c]).epsilon(1e-4));
+            test::check_close(std::span<const float>(got).subspan(std::size_t(4) * i, 3), want,
+                              test::Tol::relative(1e-4, "70,000 senders summed in float over launches"));
         }
     }
 }

@@ -21,6 +21,7 @@
 #include "ops/resize.hpp"
 #include "ops/set_pool.hpp"
 #include "ops/sh.hpp"
+#include "compare.hpp"
 #include "ops/voxel_ltf.hpp"
 #include "reference.hpp"
 #include "reference_image_desc.hpp"
@@ -31,20 +32,6 @@ namespace ngi::harness {
 
 using namespace ngi::detail;
 using BufferPtr = std::shared_ptr<GuardedBuffer>;
-
-double normalized_error(const std::vector<float>& got, const std::vector<double>& want, const std::vector<char>& skip) {
-    if (got.size() != want.size()) return INFINITY;
-    double scale = 0, worst = 0;
-    for (std::size_t i = 0; i < want.size(); ++i)
-        if (skip.empty() || !skip[i]) scale = std::max(scale, std::abs(want[i]));
-    scale = std::max(scale, 1e-30);
-    for (std::size_t i = 0; i < want.size(); ++i) {
-        if (!skip.empty() && skip[i]) continue;
-        if (!std::isfinite(got[i])) return INFINITY;
-        worst = std::max(worst, std::abs(double(got[i]) - want[i]) / scale);
-    }
-    return worst;
-}
 
 namespace {
 
@@ -1391,7 +1378,11 @@ Outcome run_case(Context& ctx, const OpCase& c, Size size) {
         if (std::string damaged = b->check(ctx, c.id()); !damaged.empty() && o.failure.empty()) o.failure = damaged;
     const Comparison cmp = p.compare(ctx);
     if (o.failure.empty() && !cmp.mismatch.empty()) o.failure = c.id() + ": " + cmp.mismatch;
-    o.error = normalized_error(cmp.got, cmp.want, cmp.skip);
+    // The normalized error (op_cases.hpp): |got - want| over max |want|, infinite where got is not finite.
+    const test::Comparison r =
+        test::compare(cmp.got, cmp.want, test::Tol::scaled(c.tolerance, "the op's row, op_cases.cpp"), cmp.skip);
+    o.error = !r.problem.empty() || r.nonfinite ? INFINITY : r.max_abs / r.scale;
+    o.worst = r.report();
     return o;
 }
 

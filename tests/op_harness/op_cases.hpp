@@ -25,9 +25,8 @@ enum class Size { Test, Perf };
 // squares over the whole output): an out-of-bounds or indexing bug damages a few elements, which a mean over
 // 10^5 elements would dilute below any useful tolerance, while one wrong element sets the max. Dividing by the
 // output's largest magnitude makes it unit-free, so one tolerance holds across input scales; fp32 rounding then
-// shows up as a few ulp of the largest output (~1e-7), accumulation over K as ~sqrt(K) ulp.
-double normalized_error(const std::vector<float>& got, const std::vector<double>& want,
-                        const std::vector<char>& skip = {});
+// shows up as a few ulp of the largest output (~1e-7), accumulation over K as ~sqrt(K) ulp. It is tests/compare.hpp's
+// scaled kind: run_case compares with Tol::scaled(tolerance), and the error is that comparison's max_abs / scale.
 
 // What the case compares after one run: the op's output and its reference, element for element; elements the
 // reference marks as ambiguous (e.g. JBU's fallback decisions within 1% of the threshold) in `skip`; anything that
@@ -67,7 +66,8 @@ std::vector<detail::GemmParams> gemm_variants();
 
 struct Outcome {
     std::string shape;
-    double error = 0;     // normalized_error
+    double error = 0;     // the normalized error
+    std::string worst;    // the comparison's report: the worst element, both values, the bound (tests/compare.hpp)
     std::string failure;  // a damaged guard, a written input or an exact mismatch; empty when none
     bool passed(double tolerance) const { return failure.empty() && error <= tolerance; }
 };
