@@ -19,7 +19,7 @@ ngi_status ngi_ao_load(ngi_device* device, const char* path, ngi_ao** out) {
         *out = nullptr;
         const ngi_device& d = live(device, "device");
         require(path, "path is NULL");
-        *out = track(new ngi_ao(ngi::AoNetwork::load(d.device, path)));
+        *out = track(std::make_unique<ngi_ao>(ngi::AoNetwork::load(d.device, path)));
     });
 }
 

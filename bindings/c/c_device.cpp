@@ -76,7 +76,7 @@ ngi_status ngi_device_open(const char* spec, ngi_device** out) {
     return guarded(__func__, [&] {
         require(out, "out is NULL");
         *out = nullptr;
-        *out = track(new ngi_device(ngi::Device::open(spec ? spec : "")));
+        *out = track(std::make_unique<ngi_device>(ngi::Device::open(spec ? spec : "")));
     });
 }
 
@@ -86,7 +86,7 @@ ngi_status ngi_device_from_opencl(struct _cl_context* context, struct _cl_device
         require(out, "out is NULL");
         *out = nullptr;
         require(context && device && queue, "context, device and queue must not be NULL");
-        *out = track(new ngi_device(ngi::Device::from_opencl(context, device, queue)));
+        *out = track(std::make_unique<ngi_device>(ngi::Device::from_opencl(context, device, queue)));
     });
 }
 
@@ -156,7 +156,7 @@ ngi_status ngi_buffer_new(ngi_device* device, size_t bytes, ngi_buffer** out) {
         *out = nullptr;
         const ngi_device& d = live(device, "device");
         require(bytes > 0, "bytes is 0");
-        *out = track(new ngi_buffer(ngi::DeviceBuffer::allocate(d.device, bytes)));
+        *out = track(std::make_unique<ngi_buffer>(ngi::DeviceBuffer::allocate(d.device, bytes)));
     });
 }
 
@@ -170,7 +170,7 @@ ngi_status ngi_buffer_wrap(ngi_device* device, struct _cl_mem* mem, size_t offse
         std::size_t mem_size = 0;  // an invalid mem is left to the wrap, which names the CL error
         if (clGetMemObjectInfo(mem, CL_MEM_SIZE, sizeof mem_size, &mem_size, nullptr) == CL_SUCCESS)
             require_range(offset, bytes, mem_size);
-        *out = track(new ngi_buffer(ngi::DeviceBuffer::wrap(d.device, mem, offset, bytes)));
+        *out = track(std::make_unique<ngi_buffer>(ngi::DeviceBuffer::wrap(d.device, mem, offset, bytes)));
     });
 }
 

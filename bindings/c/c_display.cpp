@@ -17,7 +17,7 @@ ngi_status ngi_display_new(ngi_device* device, int size, ngi_display_upsampler u
         ngi::DisplaySettings s;
         s.upsampler = upsampler == NGI_DISPLAY_JBU ? ngi::DisplayUpsampler::Jbu : ngi::DisplayUpsampler::Bilinear;
         s.temporal = temporal != 0;
-        *out = track(new ngi_display(d.device, size, s));
+        *out = track(std::make_unique<ngi_display>(d.device, size, s));
     });
 }
 

@@ -2,6 +2,8 @@
 // process-wide error callback (the state behind guarded() in c_handles.hpp).
 #include <CL/cl.h>
 
+#include <mutex>
+
 #include "c_handles.hpp"
 
 namespace c_abi {

@@ -31,7 +31,7 @@ ngi_status ngi_frame_read(const char* folder, ngi_frame** out) {
         require(out, "out is NULL");
         *out = nullptr;
         require(folder, "folder is NULL");
-        *out = track(new ngi_frame(ngi::read_frame(folder)));
+        *out = track(std::make_unique<ngi_frame>(ngi::read_frame(folder)));
     });
 }
 
@@ -53,7 +53,7 @@ ngi_status ngi_frame_from_planes(int n, const float* planes, size_t planes_bytes
         desc.look = vec3_arg(look, "look");
         desc.up = vec3_arg(up, "up");
         require_camera(desc.look, desc.up);
-        *out = track(new ngi_frame(ngi::unpack_frame_planes(planes, n, desc)));
+        *out = track(std::make_unique<ngi_frame>(ngi::unpack_frame_planes(planes, n, desc)));
     });
 }
 

@@ -1,7 +1,9 @@
 // What every file of the C ABI shares (private to libngi_c): the handles -- opaque, typed, reference-counted, checked
 // against a registry of live handles and their types -- the call wrapper that turns exceptions into status codes and
 // the thread-local last error, and the argument checks and conversions more than one area uses. The rules:
-// bindings/c/README.md. The entry points are in c_<area>.cpp, one file per family of handles.
+// bindings/c/README.md. The entry points are in c_<area>.cpp: one file per family of handles (c_device.cpp holds
+// devices and buffers), plus c_files.cpp (files without a handle) and c_errors.cpp (version, status names, the last
+// error and the error callback); the registry itself in c_handles.cpp.
 #pragma once
 #include "ngi.h"
 
@@ -12,10 +14,9 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <mutex>
+#include <memory>
 #include <new>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 #include "ngi/ao.hpp"
@@ -104,22 +105,6 @@ inline const char* kind_name(HandleKind k) {
     return "unknown handle type";
 }
 
-// The handles alive now, by the value the application holds, with their types and objects (c_handles.cpp). That
-// value is not the object's address but a number never given out twice in the process (g_next_handle), so a released
-// handle stays refused even when a new object is allocated at its old address (round three of reliability: with
-// addresses, the first handle made after a release reused it, the stale handle then worked on the new object, and a
-// second release destroyed it). A handle is looked up here before every use, so one released and used again is
-// refused, and so is one of another type.
-struct LiveHandle {
-    HandleKind kind;
-    ngi_handle* object;
-};
-extern std::mutex g_live_mutex;
-extern std::unordered_map<const void*, LiveHandle> g_live;
-// Handle values: multiples of 16 from 0x10000 (never NULL, never a small integer a bug might pass); 2^60 of them with
-// 64-bit pointers (2^28 on a 32-bit build).
-extern std::uintptr_t g_next_handle;
-
 // A failure with its status, thrown inside a call and turned into the return value by guarded().
 struct ApiError {
     ngi_status status;
@@ -128,57 +113,56 @@ struct ApiError {
 
 [[noreturn]] inline void fail(ngi_status status, const std::string& message) { throw ApiError{status, message}; }
 
-// Registers a new object; returns the handle the application gets for it (an opaque value, never dereferenced).
-template <class H>
-H* track(H* h) {
-    std::lock_guard<std::mutex> lock(g_live_mutex);
-    const std::uintptr_t value = g_next_handle;
-    g_next_handle += 16;
-    H* handle = reinterpret_cast<H*>(value);
-    g_live[static_cast<const void*>(handle)] = {H::kKind, h};
-    return handle;
-}
+// The registry of the handles alive now (c_handles.cpp; its table, lock and counter are private to that file), by
+// the value the application holds, with their types and objects. That value is not the object's address but a
+// number never given out twice in the process, so a released handle stays refused even when a new object is
+// allocated at its old address (round three of reliability: with addresses, the first handle made after a release
+// reused it, the stale handle then worked on the new object, and a second release destroyed it). A handle is looked
+// up here before every use, so one released and used again is refused, and so is one of another type. Handle
+// values: multiples of 16 from 0x10000 (never NULL, never a small integer a bug might pass); 2^60 of them with
+// 64-bit pointers, 2^28 on a 32-bit build. They are never reused: once all are given out, creating a handle fails
+// with NGI_ERROR_OUT_OF_MEMORY (the counter does not wrap to 0 and start again).
 
-// The kind of live handle `h` (argument `arg`), checked to be H's: INVALID_HANDLE when it is NULL or not live,
-// INVALID_ARGUMENT naming both types when it is another type's handle. Must be called with g_live_mutex held.
+// Registers `object` (of type `kind`) and returns its handle value. ApiError when no handle value is left,
+// std::bad_alloc when the table cannot grow; either way nothing is registered and the caller still owns `object`.
+const void* register_handle(HandleKind kind, ngi_handle* object);
+// The object of live handle `h` (argument `arg`), checked to be of type `kind`: INVALID_HANDLE when it is not live,
+// INVALID_ARGUMENT naming both types when it is another type's handle.
+ngi_handle* find_handle(const void* h, HandleKind kind, const char* arg);
+// Checked as find_handle, then one more reference (under the registry's lock: a concurrent last release cannot
+// delete the object between the lookup and the increment).
+void retain_registered(const void* h, HandleKind kind, const char* arg);
+// Checked as find_handle, then one reference less; on the last one the handle is unregistered and its object
+// returned for the caller to delete (outside the lock), else nullptr. A refused release releases nothing.
+ngi_handle* release_registered(const void* h, HandleKind kind, const char* arg);
+
+// Registers a new object; returns the handle the application gets for it (an opaque value, never dereferenced).
+// The object is the registry's only once registered: if registering throws, `h` deletes it (and what it holds,
+// device memory included) on the way out.
 template <class H>
-H* check_locked(const H* h, const char* arg) {
-    const auto it = g_live.find(static_cast<const void*>(h));
-    if (it == g_live.end())
-        fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is not a live handle (released, or never created)");
-    if (it->second.kind != H::kKind)
-        fail(NGI_ERROR_INVALID_ARGUMENT, std::string(arg) + " is an " + kind_name(it->second.kind) +
-                                             " handle, not an " + kind_name(H::kKind));
-    return static_cast<H*>(it->second.object);
+H* track(std::unique_ptr<H> h) {
+    H* handle = static_cast<H*>(const_cast<void*>(register_handle(H::kKind, h.get())));
+    h.release();
+    return handle;
 }
 
 // The handle `h` (argument `arg` of the call) if it is alive and of type H, else an ApiError.
 template <class H>
 H& live(const H* h, const char* arg) {
     if (!h) fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is NULL");
-    std::lock_guard<std::mutex> lock(g_live_mutex);
-    return *check_locked(h, arg);
+    return *static_cast<H*>(find_handle(h, H::kKind, arg));
 }
 
 template <class H>
 void retain_handle(H* h, const char* arg) {
     if (!h) fail(NGI_ERROR_INVALID_HANDLE, std::string(arg) + " is NULL");
-    // Under the lock: a concurrent last release cannot delete the object between the lookup and the increment.
-    std::lock_guard<std::mutex> lock(g_live_mutex);
-    check_locked(h, arg)->refs.fetch_add(1);
+    retain_registered(h, H::kKind, arg);
 }
 
 template <class H>
 void release_handle(H* h, const char* arg) {
     if (!h) return;  // like free(NULL)
-    H* object = nullptr;
-    {
-        std::lock_guard<std::mutex> lock(g_live_mutex);
-        object = check_locked(h, arg);
-        if (object->refs.fetch_sub(1) != 1) return;
-        g_live.erase(static_cast<const void*>(h));
-    }
-    delete object;
+    delete static_cast<H*>(release_registered(h, H::kKind, arg));
 }
 
 // The last error and the error callback (c_errors.cpp).

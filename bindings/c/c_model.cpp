@@ -28,7 +28,7 @@ ngi_status load_model(const char* call, ngi_device* device, const char* path, ng
             case NGI_DROPOUT_SEEDED: options.dropout = "seeded"; break;
             default: fail(NGI_ERROR_INVALID_ARGUMENT, "dropout " + std::to_string(int(dropout)) + " is not an ngi_dropout");
         }
-        *out = track(new ngi_model(ngi::Model::load(d.device, ngi::resolve_model(path), options)));
+        *out = track(std::make_unique<ngi_model>(ngi::Model::load(d.device, ngi::resolve_model(path), options)));
     });
 }
 

@@ -12,7 +12,7 @@ ngi_status ngi_neural_gi_new(ngi_device* device, ngi_neural_gi** out) {
     return guarded(__func__, [&] {
         require(out, "out is NULL");
         *out = nullptr;
-        *out = track(new ngi_neural_gi(live(device, "device").device));
+        *out = track(std::make_unique<ngi_neural_gi>(live(device, "device").device));
     });
 }
 

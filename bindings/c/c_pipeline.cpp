@@ -151,7 +151,8 @@ ngi_status ngi_pipeline_new(ngi_device* device, int n, ngi_global_view_mode mode
                 "mode " + std::to_string(int(mode)) + " is not an ngi_global_view_mode");
         require(transfer == NGI_TRANSFER_REINHARD || transfer == NGI_TRANSFER_CLAMP,
                 "transfer " + std::to_string(int(transfer)) + " is not an ngi_lumination_transfer");
-        *out = track(new ngi_pipeline(d.device, n, ngi::GlobalViewMode(int(mode)), ngi::LuminationTransfer(int(transfer))));
+        *out = track(std::make_unique<ngi_pipeline>(d.device, n, ngi::GlobalViewMode(int(mode)),
+                                                    ngi::LuminationTransfer(int(transfer))));
     });
 }
 

@@ -26,7 +26,7 @@ ngi_status ngi_voxels_new(ngi_device* device, const char* scene, float hours, ng
         require(scene, "scene is NULL");
         require(!std::isnan(hours) && hours <= 24.0f, "hours " + std::to_string(hours) +
                                                           " is not a time of day (0..24, negative = the scene's)");
-        *out = track(new ngi_voxels(ngi::SceneVoxels(d.device, ngi::make_scene(scene), hours)));
+        *out = track(std::make_unique<ngi_voxels>(ngi::SceneVoxels(d.device, ngi::make_scene(scene), hours)));
     });
 }
 
@@ -139,7 +139,7 @@ ngi_status ngi_voxels_render_frame(ngi_voxels* voxels, const float position[3], 
         rs.feature_spp = feature_spp;
         rs.reference = false;
         rs.seed = seed;
-        *out = track(new ngi_frame(v.voxels.render(pose, rs)));
+        *out = track(std::make_unique<ngi_frame>(v.voxels.render(pose, rs)));
     });
 }
 
