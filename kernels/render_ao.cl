@@ -1,4 +1,4 @@
-// Ray-traced ambient occlusion of one camera face (Renderer::render_ao, host/src/render/renderer.cpp). The program
+// Ray-traced ambient occlusion of one camera face (Renderer::render_ao, host/src/render/ao_geometry.cpp). The program
 // "ao_geometry" is the scene (scene.cl, with rng.cl and geometry.cl for the cosine-sampled rays), this file and
 // render_geometry.cl, without the path tracer's lighting: seed 001's data (ngi ao-data) renders both per view, and
 // one program compiles faster than two on PoCL (each program pays a fixed cost).

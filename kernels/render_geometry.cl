@@ -1,5 +1,5 @@
 // Geometry of one camera face from its primary rays (Renderer::render_geometry and render_surface,
-// host/src/render/renderer.cpp), in the program "ao_geometry" after render_ao.cl: no lighting, no random numbers.
+// host/src/render/ao_geometry.cpp), in the program "ao_geometry" after render_ao.cl: no lighting, no random numbers.
 // Build option, the host's: SKY_DEPTH (depth reported where the primary ray escapes), render/tracer_constants.hpp.
 #ifndef SKY_DEPTH
 #error "render_geometry.cl needs SKY_DEPTH: build it with renderer.cpp's pathtrace_defines()"

@@ -25,16 +25,17 @@ typedef struct {
     int nlights;
     float inv_total;               // 1 / sum of the luminance of all emissive faces
     __global const float* light;   // L_* parameters
-    // Sky portals (renderer.cpp): region id per block (>= 0: covered air, i.e. a block somewhere above it), and
-    // per region the range of its portal faces in `portals` (covered cell xyz, face id). 0 portals: no portal
-    // sampling anywhere.
+    // Sky portals (found in light_regions.cpp): region id per block (>= 0: covered air, i.e. a block somewhere above
+    // it), and per region the range of its portal faces in `portals` (covered cell xyz, face id). 0 portals: no
+    // portal sampling anywhere.
     __global const int* region;
     __global const int4* portals;
     __global const int2* portal_range;  // per region: first index, count
     int use_regions, use_portals;
-    // Sunlit patches (renderer.cpp): block faces bordering covered air, grouped by region; per frame the
-    // probability of picking each within its region (proportional to the sunlight it reflects) and the running
-    // sum. Lookup of a face's index: face_slot[block] >= 0 -> face_index[6 * slot + face].
+    // Sunlit patches (found in light_regions.cpp, weighted per frame in renderer.cpp): block faces bordering covered
+    // air, grouped by region; per frame the probability of picking each within its region (proportional to the
+    // sunlight it reflects) and the running sum. Lookup of a face's index: face_slot[block] >= 0 ->
+    // face_index[6 * slot + face].
     __global const int4* patches;       // cell xyz, face id
     __global const float* patch_prob;
     __global const float* patch_cdf;

@@ -1,4 +1,4 @@
-// Voxel radiance field (seed 004): docs/VOXEL_FIELD.md; host side renderer.cpp (render_voxel_field). The program
+// Voxel radiance field (seed 004): docs/VOXEL_FIELD.md; host side voxel_field.cpp (render_voxel_field). The program
 // "voxel_field" puts the scene (scene.cl), its lighting (lighting.cl, patch_weights.cl) and the SH basis
 // (sh_basis.cl) before this file.
 // Per surface voxel (kernels/voxel_compact.cl made the list): probe[V][3] the probe point, shade_normal[V][3] the

@@ -1,4 +1,4 @@
-// Voxel-pair visibility of seed 004's voxel field (Renderer::voxel_visibility, host/src/render/renderer.cpp;
+// Voxel-pair visibility of seed 004's voxel field (Renderer::voxel_visibility, host/src/render/voxel_field.cpp;
 // docs/VOXEL_FIELD.md): a 3D DDA over the block grid alone (no mesh, no lighting), so the program
 // "voxel_visibility" is geometry.cl and this file. No build options.
 

@@ -80,7 +80,7 @@ struct ModelConfig {
 
     // family "graph" (docs/MODEL_FORMAT.md "graph"; python3 -m ngi.convert writes it from an ONNX file): a list of
     // nodes (conv2d, conv_transpose2d, dense, concat, activation, affine, add, mul, frequency_encode, nan_to_num) over
-    // named tensors, built on the graph ops; the loader validates the list (models/graph_model.cpp).
+    // named tensors, built on the graph ops; the loader validates the list (models/graph_config.cpp).
     // layout "nchw": Model::run takes [1, input_nc, H, W]; "nc": [N, input_nc] items (or [1, input_nc, H, W], per
     // pixel), as the mlp family.
     struct GraphFamily {

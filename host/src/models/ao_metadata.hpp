@@ -9,7 +9,7 @@
 namespace ngi::detail {
 
 // Ring points of the AO network's input ("ao.neighbours"; ngi::AoNetwork::kRingPoints).
-constexpr int kAoNeighbours = 16;
+inline constexpr int kAoNeighbours = 16;
 
 struct AoMetadata {
     float radius_px = 0;             // the ring radius of the training data, in its pixels (0..1024)

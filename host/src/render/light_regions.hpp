@@ -14,7 +14,7 @@ namespace ngi::detail {
 // regions (rooms, tunnels, the space under a roof). A portal is a face between a covered block and open air or the
 // outside of the grid. Every ray that escapes to the sky from inside a region first crosses one of that region's
 // portals, so sampling points on the portals is a valid (MIS-weighted) sky-sampling strategy there.
-constexpr std::size_t kMaxPortalGrid = std::size_t(1) << 24;  // region ids cost 4 bytes per block
+inline constexpr std::size_t kMaxPortalGrid = std::size_t(1) << 24;  // region ids cost 4 bytes per block
 
 struct Portals {
     std::vector<std::int32_t> region;  // per block: region id, -1 = solid or open air
