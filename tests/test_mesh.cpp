@@ -859,6 +859,12 @@ TEST_CASE("mesh readers: the inputs of fuzz_mesh's corpus that load otherwise th
     // not found yet.
     const LoadedMesh fan = parse_mesh("v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 1 3 0\nf 1 2 3 1 4 5\n", "fan.obj");
     CHECK(fan.mesh.triangle_count() + fan.dropped_degenerate == 4);
+    // A statement after leading blanks is read (the old loader skipped " f 1 2 3").
+    CHECK(parse_mesh(tri + "f 1 2 3\n f 1 3 2\n", "b.obj").mesh.triangle_count() == 2);
+    // A face mixing corners with and without a normal: the others get computed ones (the old loader gave them the
+    // file's first vn, here -z).
+    const LoadedMesh mixed = parse_mesh(tri + "vn 0 0 -1\nvn 0 0 1\nf 1//2 2 3\n", "n.obj");
+    for (const glm::vec3& n : mixed.mesh.normals) CHECK(n == glm::vec3(0, 0, 1));
     // glTF COLOR_0 of unsigned bytes without the `normalized` flag the specification requires: normalized anyway.
     auto [j, bin] = gltf_quad(true);
     std::string b = bin;
