@@ -1,5 +1,7 @@
 // conv2d and conv_transpose2d (im2col / pack + packed GEMM + epilogue / col2im) against the naive reference,
 // over random shapes: odd sizes, 1x1 spatial, channel counts and pixel counts that are not tile multiples.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -91,6 +93,7 @@ void check_both_paths(const Case& k, bool transposed, std::mt19937& rng, const G
 
 }  // namespace
 
+// Outside the harness: the path each random geometry takes (implicit_expected; kernels 1-5, strides 1-3, 1x1 inputs).
 TEST_CASE("conv2d matches the naive reference on random shapes", "[conv2d]") {
     std::mt19937 rng(42);
     const GemmParams gp = gemm_params_for(test::device().info());
@@ -112,6 +115,7 @@ TEST_CASE("conv2d matches the naive reference on random shapes", "[conv2d]") {
     }
 }
 
+// Outside the harness: the path each random geometry takes (implicit_expected: K - 2P = S), both paths.
 TEST_CASE("conv_transpose2d matches the naive reference on random shapes", "[conv_transpose2d]") {
     std::mt19937 rng(7);
     const GemmParams gp = gemm_params_for(test::device().info());
@@ -133,6 +137,7 @@ TEST_CASE("conv_transpose2d matches the naive reference on random shapes", "[con
     }
 }
 
+// Outside the harness: knob sets beyond the tuning table (the harness convolves with the device set).
 TEST_CASE("every GEMM parameter set in the tuning space gives the same convolution", "[gemm]") {
     std::mt19937 rng(3);
     const Case k{19, 9, 13, 21, 4, 4, 2, 1, 0, 2};
@@ -145,6 +150,7 @@ TEST_CASE("every GEMM parameter set in the tuning space gives the same convoluti
 // Small enough for the oclgrind stage (tools/ci/oclgrind.sh): odd channel and pixel counts (C 5, 7x9) through the
 // GEMM knob sets the table picks for a GPU and for a CPU, each with its fallback chain. Oclgrind presents one
 // device (a GPU), so the CPU sets are chosen by describing a CPU to gemm_params_for, not by the device.
+// Outside the harness: every table knob set through the convolutions under oclgrind (rows: device set).
 TEST_CASE("conv2d and conv_transpose2d at small odd shapes, GPU and CPU knob sets and their fallback chains",
           "[conv2d][conv_transpose2d][oclgrind]") {
     std::mt19937 rng(17);
@@ -177,6 +183,7 @@ TEST_CASE("conv2d and conv_transpose2d at small odd shapes, GPU and CPU knob set
 // The implicit GEMM's geometries (ops/conv_implicit.hpp): every stride that divides the kernel, polyphase splits of
 // 2, 3 and 4, 1 to 9 taps, odd sizes, spatial sizes below a tile (the junk columns of one partial tile), a 1 x 1
 // input, channel counts below and above MR, and outputs at an offset inside a bigger buffer (run_conv).
+// Outside the harness: the implicit path's geometries and the automatic choice of path (NGI_CONV).
 TEST_CASE("implicit-GEMM convolution: exact geometries at odd sizes, against the naive reference",
           "[conv2d][conv_transpose2d][implicit]") {
     std::mt19937 rng(23);
@@ -217,6 +224,7 @@ TEST_CASE("implicit-GEMM convolution: exact geometries at odd sizes, against the
 
 // Extremes through the implicit path: HDR inputs (>= 65504, the fp16 limit), a constant input, and a saturating
 // output activation. The padded copy must not turn any of them into NaN, and the junk columns must stay out.
+// Outside the harness: extremes (HDR and constant inputs, a saturating activation).
 TEST_CASE("implicit-GEMM convolution: HDR and constant inputs stay finite and exact", "[conv2d][implicit]") {
     auto& c = test::ctx();
     GemmParams gp = gemm_params_for(test::device().info());
@@ -245,6 +253,7 @@ TEST_CASE("implicit-GEMM convolution: HDR and constant inputs stay finite and ex
 // tiles over a planar one, forced through NGI_CONV_TILES at widths below, at and above a tile, so each tiling meets
 // rows of one partial tile, exact multiples and a remainder (junk lanes read the neighbouring row or the slack).
 // Small enough for the oclgrind stage with the GPU set (NR 4), which reports any read past the zeroed slack.
+// Outside the harness: a knob (NGI_CONV_TILES) the rows leave at its default.
 TEST_CASE("implicit-GEMM convolution: row and linear tilings agree with the reference",
           "[conv2d][conv_transpose2d][implicit][oclgrind]") {
     std::mt19937 rng(29);
@@ -277,6 +286,7 @@ const test::Tol kActivationOnce = test::Tol::relative(1e-6, "one activation, a f
 // pack_panels (PackB): the B operand of 1 x 1 convolutions, the im2col path's transposed convolutions and dense
 // layers, against the host pack with the activation applied, for every activation (the slope fast path and the
 // general one), K and N that are not multiples of KU and NR, at an offset on both sides.
+// Outside the harness: every activation, three knob sets (the PackB rows: the device set, ReLU, LeakyReLU).
 TEST_CASE("pack_panels matches the host pack for every activation", "[conv_transpose2d][gemm][oclgrind]") {
     auto& c = test::ctx();
     std::mt19937 rng(31);

@@ -2,6 +2,8 @@
 // reference: random widths and item counts (fewer than a tile, not a tile multiple, odd), a row stride beyond n,
 // planar and item-major outputs, a residual, every activation, and every GPU and CPU knob set; guard words around
 // each buffer stay untouched (the last tile is kept inside the input, nothing is written past the output).
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <catch2/catch.hpp>
 
 #include "ops/dense.hpp"
@@ -84,6 +86,7 @@ Act act_of(int a) {
 
 }  // namespace
 
+// Outside the harness: a random sweep (40 shapes) and every activation (Dense rows: none, ReLU, tanh).
 TEST_CASE("dense layer: random widths and item counts, planar and item-major, residual, every activation",
           "[dense]") {
     std::mt19937 rng(29);
@@ -102,6 +105,7 @@ TEST_CASE("dense layer: random widths and item counts, planar and item-major, re
         run_case(p, c, rng);
 }
 
+// Outside the harness: every table knob set (the Dense rows use the device set).
 TEST_CASE("dense layer: every GPU and CPU knob set at small odd shapes", "[dense][oclgrind]") {
     std::mt19937 rng(31);
     for (const GemmParams& p : test::gpu_and_cpu_gemm_variants())

@@ -4,6 +4,8 @@
 // The realistic shapes matter: on Mesa rusticl (llvmpipe) the loop form of the kernel is silently truncated
 // beyond K ~ 1,000-3,000 (a 65,535-iteration loop limiter, docs/RELIABILITY.md), which shapes of a few dozen
 // never showed.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <algorithm>
 #include <array>
 #include <cstdlib>
@@ -108,6 +110,7 @@ std::vector<GemmParams> test_variants() {
 
 }  // namespace
 
+// Outside the harness: knob sets beyond the table (each knob at its extremes, the loop form).
 TEST_CASE("GEMM: every knob set matches the reference on random small shapes", "[gemm][small]") {
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> D(1, 70), A(0, 4);
@@ -119,6 +122,7 @@ TEST_CASE("GEMM: every knob set matches the reference on random small shapes", "
         }
 }
 
+// Outside the harness: K up to 8192, where loop limiters show (the rows' largest K is 512).
 TEST_CASE("GEMM: every knob set matches the reference at the generators' layer shapes", "[gemm][realistic]") {
     std::mt19937 rng(12);
     // (M, N, K) of the ngf 32 surround generator at 128x256 and of ngf 64 layers, cut in N so each stays fast:
@@ -142,6 +146,7 @@ TEST_CASE("GEMM: every knob set matches the reference at the generators' layer s
         }
 }
 
+// Outside the harness: the self-check's selection and fallback (fault injection, refusal).
 TEST_CASE("GEMM self-check: the device's selection passes, a rejected variant falls back down the chain",
           "[gemm][selfcheck]") {
     auto& c = test::ctx();
@@ -181,6 +186,7 @@ TEST_CASE("GEMM self-check: the device's selection passes, a rejected variant fa
     CHECK(v.ok);
 }
 
+// Outside the harness: a driver's loop limit and the self-check's verdict on it.
 TEST_CASE("GEMM self-check: the loop form is rejected exactly where the driver limits loops", "[gemm][selfcheck]") {
     // Regression for issue 13 (the shipped model off by up to 0.25 on rusticl): the loop form of the kernel runs
     // 1 + NV + MR (1 + NV) loop iterations per k step; at K = 8192 that is far beyond llvmpipe's 65,535.
@@ -199,6 +205,7 @@ TEST_CASE("GEMM self-check: the loop form is rejected exactly where the driver l
     }
 }
 
+// Outside the harness: a runtime probe, not an op.
 TEST_CASE("loop-limit probe: 0 on drivers without a limiter, the limit where there is one", "[runtime][oclgrind]") {
     const long limit = test::ctx().loop_limit();
     const auto& info = test::device().info();
@@ -210,6 +217,7 @@ TEST_CASE("loop-limit probe: 0 on drivers without a limiter, the limit where the
 // Small enough for the oclgrind stage (tools/ci/oclgrind.sh): the GEMM at odd shapes that leave a remainder in
 // every tile dimension, through the table's GPU and CPU knob sets and each one's fallback chain. Oclgrind
 // presents one device (a GPU), so the CPU sets are chosen by describing a CPU to gemm_params_for.
+// Outside the harness: every table knob set under oclgrind (the tiny rows hold two), M = N = K = 1.
 TEST_CASE("GEMM: the GPU and CPU knob sets and their fallback chains at small odd shapes", "[gemm][oclgrind]") {
     std::mt19937 rng(19);
     const std::vector<GemmParams> sets = test::gpu_and_cpu_gemm_variants();
@@ -223,6 +231,7 @@ TEST_CASE("GEMM: the GPU and CPU knob sets and their fallback chains at small od
 }
 
 // NGI_SELFCHECK=small (simulators only) keeps just the first check problem; the default is every problem.
+// Outside the harness: an environment knob of the self-check.
 TEST_CASE("GEMM self-check: NGI_SELFCHECK chooses the full or the small problem set", "[gemm][selfcheck][oclgrind]") {
     const char* old = std::getenv("NGI_SELFCHECK");
     const std::string saved = old ? old : "";
@@ -271,6 +280,7 @@ std::vector<std::array<int, 3>> local_edge_shapes(const GemmParams& p) {
 
 }  // namespace
 
+// Outside the harness: gemm_local knob sets beyond the table, at shapes around their blocks.
 TEST_CASE("GEMM local-memory variant: matches the reference at random, odd, tiny and skinny shapes",
           "[gemm][local]") {
     std::mt19937 rng(23);
@@ -287,6 +297,7 @@ TEST_CASE("GEMM local-memory variant: matches the reference at random, odd, tiny
     }
 }
 
+// Outside the harness: K up to 8192 through gemm_local knob sets beyond the table.
 TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192", "[gemm][local][realistic]") {
     // K = 8192 is where a loop limiter shows (llvmpipe: 65,535 iterations per work-item; the UNROLL=1 kernel runs
     // ~10,000 there, kernels/gemm.cl); the UNROLL=0 set may exceed it, which the self-check must then catch.
@@ -300,6 +311,7 @@ TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192
         }
 }
 
+// Outside the harness: parsing and refusals.
 TEST_CASE("GEMM local-memory variant: knobs parse and print, sets the device cannot run are refused with numbers",
           "[gemm][local]") {
     const GemmParams p = parse_gemm_params("4,4,1,1,16,16,1,16");
@@ -338,6 +350,7 @@ TEST_CASE("GEMM local-memory variant: knobs parse and print, sets the device can
     CHECK_THAT(v.reason, Catch::Contains("CL_DEVICE_LOCAL_MEM_SIZE"));
 }
 
+// Outside the harness: the tuning space and the fallback chain (no kernel runs).
 TEST_CASE("GEMM local-memory variant: in the tuning space where it fits, the fallback chain ends on gemm_packed",
           "[gemm][local]") {
     const GemmParams pref = parse_gemm_params("4,4,1,1,16,16,0,16");
@@ -381,6 +394,7 @@ TEST_CASE("GEMM local-memory variant: in the tuning space where it fits, the fal
     for (const GemmParams& p : gemm_tuning_space(cpu)) CHECK(p.kwg == 0);
 }
 
+// Outside the harness: a launch under a reported work-group limit below the kernel's fixed shape.
 TEST_CASE("GEMM local-memory variant: a fixed-shape kernel, launched at L0 x L1 whatever limit is reported",
           "[gemm][local]") {
     // gemm_local's local arrays are sized for exactly L0 x L1 work-items (reqd_work_group_size), so Context::launch
@@ -411,6 +425,7 @@ TEST_CASE("GEMM local-memory variant: a fixed-shape kernel, launched at L0 x L1 
 // N edges (panels past the last one), a partial last K chunk and K = 1, through both UNROLL forms, KU 2 and the GPU
 // starting set (16 x 16 work-items). Barrier divergence, a local-memory race between the copy and the micro-kernel,
 // or a read of a local slot no work-item wrote are diagnostics there.
+// Outside the harness: gemm_local's edge work-groups under oclgrind, knob sets beyond the table.
 TEST_CASE("GEMM local-memory variant: edge work-groups and a partial K chunk at small shapes",
           "[gemm][local][oclgrind]") {
     std::mt19937 rng(26);

@@ -2,6 +2,8 @@
 // sizes and ratios (odd, non-integer, 1x), synthetic scenes of planar regions seen at both resolutions, the property
 // the op exists for (no light bleeds across a depth step or a crease where bilinear does), the bilinear fallback,
 // surfaceless pixels, HDR and non-finite values, surfaces 10^5 m away, and bad input.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <array>
 #include <cfloat>
 #include <cmath>
@@ -167,6 +169,7 @@ int borderline_count(const test::JbuRefResult& ref) {
 
 }  // namespace
 
+// Outside the harness: random scenes, both kernels (a knob) and normal_power values (the rows: one scene).
 TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]") {
     std::mt19937 rng(20261126);
     double worst = 0;
@@ -212,6 +215,7 @@ TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]")
                                           << " bilinear fallbacks)");
 }
 
+// Outside the harness: the property the op exists for, with plain bilinear failing the same check.
 TEST_CASE("JBU: no light crosses a depth step or a crease, bilinear does", "[jbu]") {
     // A floor (y = 0, normal +y) with a one-block platform (y = 1, also +y: a depth step only the plane term
     // separates) and a wall (x = 0, normal +x: a crease the normal term separates), at 4x, edges off the grid.
@@ -243,6 +247,7 @@ TEST_CASE("JBU: no light crosses a depth step or a crease, bilinear does", "[jbu
     CHECK_FALSE(test::compare(bilinear.out, want, test::Tol::relative(0.5, "bilinear bleeds across the edges")).ok);
 }
 
+// Outside the harness: the fallback and surfaceless pixels, pixel by pixel, on a hand-built scene.
 TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear, no surface gives 0", "[jbu]") {
     // Low: floor only. High: the floor, a wall facing -z the low image never saw (fallback), and sky (0).
     Scene low_scene, hi_scene;
@@ -271,6 +276,7 @@ TEST_CASE("JBU: a surface the low resolution does not see falls back to bilinear
                       borderline_mask(ref, channels));
 }
 
+// Outside the harness: extremes (HDR and non-finite values and guides, surfaces 1e5 m away).
 TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away", "[jbu]") {
     std::mt19937 rng(11);
     Scene s;
@@ -319,6 +325,7 @@ TEST_CASE("JBU: HDR and non-finite values, constant images, surfaces 1e5 m away"
     test::check_close(got2.out, ref2.out, kSaturated, borderline_mask(ref2, 1));
 }
 
+// Outside the harness: the Rows8 kernel (a knob) under oclgrind; the tiny row takes the default.
 TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
     std::mt19937 rng(3);
     const Scene scene = random_scene(rng);
@@ -340,6 +347,7 @@ TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
     }
 }
 
+// Outside the harness: refusals.
 TEST_CASE("JBU: bad input names the parameter or buffer", "[jbu]") {
     auto& ctx = test::ctx();
     JointBilateralUpsample op(ctx);

@@ -1,5 +1,7 @@
 // The MLP family's ops (ops/mlp.*): frequency encoding, the fused per-item MLP and the dense (GEMM) path, against
 // naive double-precision references over random architectures, odd widths and item counts, both layouts.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include "ops/gemm_selfcheck.hpp"
 #include "ops/mlp.hpp"
 #include "reference.hpp"
@@ -56,6 +58,7 @@ FrequencyEncoding random_encoding(std::mt19937& rng) {
 
 }  // namespace
 
+// Outside the harness: a random sweep of architectures (depth 1-4, no bias, every encoding setting).
 TEST_CASE("fused MLP and dense MLP match the reference: random architectures, odd widths, both layouts", "[mlp]") {
     std::mt19937 rng(11);
     auto& ctx = test::ctx();
@@ -115,6 +118,7 @@ TEST_CASE("fused MLP and dense MLP match the reference: random architectures, od
     }
 }
 
+// Outside the harness: the items-per-work-item knob and the widest fused width.
 TEST_CASE("fused MLP at the seed 001 sizes and the widest fused width", "[mlp]") {
     std::mt19937 rng(12);
     auto& ctx = test::ctx();
@@ -174,6 +178,7 @@ TEST_CASE("fused MLP at the seed 001 sizes and the widest fused width", "[mlp]")
     }
 }
 
+// Outside the harness: refusals.
 TEST_CASE("MLP specs that do not fit are refused, naming the layer", "[mlp]") {
     std::mt19937 rng(13);
     auto& ctx = test::ctx();
@@ -201,6 +206,7 @@ TEST_CASE("MLP specs that do not fit are refused, naming the layer", "[mlp]") {
     REQUIRE_THROWS_WITH(FusedMlp(ctx, huge), Catch::Contains("exponents"));
 }
 
+// Outside the harness: the two conventions' definitions: the reference itself against the formulas.
 TEST_CASE("frequency encoding: Neural GI's Eq. 3 and tiny-cuda-nn's Frequency as two settings", "[mlp]") {
     // Eq. 3 with L = 9: 10 bands from 2^-1 pi, raw input kept, band-major: 34 inputs -> 714 features.
     FrequencyEncoding eq3{10, -1, true, true, FrequencyEncoding::Order::BandMajor};
@@ -249,9 +255,10 @@ TEST_CASE("frequency encoding: Neural GI's Eq. 3 and tiny-cuda-nn's Frequency as
     }
 }
 
+// Outside the harness: an ulp bound over a dense sweep at every VEC (a knob).
 TEST_CASE("the shape-specialized MLP's vector tanh is within 2 ulp of float64 at every VEC", "[mlp][extremes]") {
     // One layer, one input, weight 1, no bias: the network is tanh itself, evaluated by mlp_tanh_v on VEC lanes
-    // (kernels/mlp.cl; the same form as activation.cl's ngi_tanh, whose scalar test is in test_norm_elementwise).
+    // (kernels/mlp.cl; the same form as activation.cl's ngi_tanh, whose scalar test is in test_elementwise.cpp).
     auto& c = test::ctx();
     MlpSpec spec;
     spec.inputs = 1;
@@ -276,6 +283,7 @@ TEST_CASE("the shape-specialized MLP's vector tanh is within 2 ulp of float64 at
     }
 }
 
+// Outside the harness: the ENC_VEC knob, and Neural GI's highest band (arguments up to 2^9 pi).
 TEST_CASE("the materialized frequency encoding matches the reference at every items-per-work-item", "[mlp]") {
     // FrequencyEncodePlanar's knob ENC_VEC: items per work-item in vector lanes (the CPU form) or 1 (the GPU form);
     // item counts that are not multiples of it take the scalar tail. Arguments up to 2^9 pi x 1.5 (Neural GI's

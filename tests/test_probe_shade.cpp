@@ -1,6 +1,8 @@
 // Probe shading (ops/probe_shade.*) against the double-precision reference (tests/reference_voxel.hpp): random
 // cameras and synthetic depth/normal faces whose pixels land on known voxels, both field modes, odd and even faces,
 // hit points exactly on block edges and corners, and the miss counts.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -89,6 +91,7 @@ bool near_lattice(double x, double margin) {
 
 }  // namespace
 
+// Outside the harness: random camera orientations and NaN/Inf pixels; the rows look down -z.
 TEST_CASE("probe shading = the reference on random cameras and faces (both fields, odd and even n)", "[probe]") {
     std::mt19937 rng(4101);
     auto& ctx = test::ctx();
@@ -178,6 +181,7 @@ TEST_CASE("probe shading = the reference on random cameras and faces (both field
     }
 }
 
+// Outside the harness: hand-placed hit points on block edges and corners, every kind of miss counted.
 TEST_CASE("probe shading: hit points exactly on block edges and corners find the block, misses are counted",
           "[probe]") {
     auto& ctx = test::ctx();
@@ -292,6 +296,7 @@ TEST_CASE("probe shading: hit points exactly on block edges and corners find the
         for (int c = 0; c < 3; ++c) REQUIRE(got[std::size_t(c) * 9 + pix] == (pix == 4 ? float(c + 1) : 0.0f));
 }
 
+// Outside the harness: refusals.
 TEST_CASE("probe shading: bad input is an InputError naming it", "[probe]") {
     auto& ctx = test::ctx();
     ProbeShade op(ctx);
@@ -340,6 +345,7 @@ TEST_CASE("probe shading: bad input is an InputError naming it", "[probe]") {
     fails(good, normal.get(), "output buffer is also an input");
 }
 
+// Outside the harness: the per-voxel field under oclgrind (the tiny row is SH-27).
 TEST_CASE("probe shading at a small shape (oclgrind: bounds, races, uninitialized reads)", "[oclgrind][probe]") {
     std::mt19937 rng(4104);
     auto& ctx = test::ctx();

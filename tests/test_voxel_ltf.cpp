@@ -1,6 +1,8 @@
 // Seed 004's light-transition function (ops/voxel_ltf.*) against the double-precision reference
 // (tests/reference_voxel.hpp): both variants, with and without a visibility mask, odd voxel counts, any split of
 // the senders over launches, energy bounds, a closed-form pair, extreme values and bad input.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <chrono>
 #include <ctime>
 #include <cstdint>
@@ -102,6 +104,7 @@ const char* shape_name(LtfKernelShape s) {
 
 }  // namespace
 
+// Outside the harness: the energy diagnostic, bounces 0 and 3, V 1 to 513 (the rows: V 97, 2 bounces).
 TEST_CASE("voxel LTF: both variants, every kernel shape = the double reference (odd V, bounces 0/1/3, mask)", "[ltf]") {
     std::mt19937 rng(4001);
     auto& ctx = test::ctx();
@@ -130,6 +133,7 @@ TEST_CASE("voxel LTF: both variants, every kernel shape = the double reference (
     }
 }
 
+// Outside the harness: bit-exactness across splits of the senders (a knob).
 TEST_CASE("voxel LTF: any split of the senders over launches gives bit-identical results", "[ltf]") {
     std::mt19937 rng(4002);
     auto& ctx = test::ctx();
@@ -160,6 +164,7 @@ TEST_CASE("voxel LTF: any split of the senders over launches gives bit-identical
     }
 }
 
+// Outside the harness: a property (the energy never grows) over 8 bounces.
 TEST_CASE("voxel LTF as written: the energy of E^t never grows when every albedo <= 1", "[ltf]") {
     std::mt19937 rng(4003);
     auto& ctx = test::ctx();
@@ -194,6 +199,7 @@ TEST_CASE("voxel LTF as written: the energy of E^t never grows when every albedo
     }
 }
 
+// Outside the harness: an external oracle (the closed form).
 TEST_CASE("voxel LTF physical: two facing voxels exchange light with the closed-form G = 1 / (pi r^2)", "[ltf]") {
     auto& ctx = test::ctx();
     VoxelLtf op(ctx);
@@ -234,6 +240,7 @@ TEST_CASE("voxel LTF physical: two facing voxels exchange light with the closed-
     }
 }
 
+// Outside the harness: extremes (d = 1e6, rho = 0, coincident voxels).
 TEST_CASE("voxel LTF: extreme values (d = 1e6, rho = 0, coincident voxels) stay finite and exact", "[ltf]") {
     std::mt19937 rng(4005);
     auto& ctx = test::ctx();
@@ -263,6 +270,7 @@ TEST_CASE("voxel LTF: extreme values (d = 1e6, rho = 0, coincident voxels) stay 
     }
 }
 
+// Outside the harness: refusals.
 TEST_CASE("voxel LTF: bad input is an InputError naming it", "[ltf]") {
     std::mt19937 rng(4006);
     auto& ctx = test::ctx();
@@ -300,6 +308,7 @@ TEST_CASE("voxel LTF: bad input is an InputError naming it", "[ltf]") {
     fails(in, 1, LtfVariant::Physical, nullptr, out.get(), "exposed");
 }
 
+// Outside the harness: the energy diagnostic and the plain kernel under oclgrind.
 TEST_CASE("voxel LTF at a small shape (oclgrind: bounds, races, uninitialized reads)", "[oclgrind][ltf]") {
     std::mt19937 rng(4007);
     auto& ctx = test::ctx();
@@ -325,6 +334,7 @@ TEST_CASE("voxel LTF at a small shape (oclgrind: bounds, races, uninitialized re
 
 // Timing (not part of the suite): ms per bounce at V = 10,000 random voxels for both variants and shapes, and on a
 // driver with a loop limit, a run beyond it (V = 70,000 senders split over launches) checked on sampled receivers.
+// Outside the harness: timing (not run by the suite).
 TEST_CASE("voxel LTF timing: ms per bounce at V = 10,000", "[.][ltf-perf]") {
     std::mt19937 rng(4008);
     auto& ctx = test::ctx();
