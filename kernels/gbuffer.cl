@@ -10,7 +10,7 @@
 //   COUNT_SKY, COUNT_FAR, COUNT_SLOTS   then sky normals and far depths; the number of slots
 //   PREPROCESS_LOCAL                    the largest work-group size (per-work-item counts are summed in local memory)
 //   MAX_DEPTH_M                         depth beyond which a texel is no surface, the depth feature's scale
-//                                       (kMaxSurfaceDepth, host/src/pipeline/frame_planes.hpp)
+//                                       (kMaxSurfaceDepth, host/src/base/surface_depth.hpp)
 // Output: 10 planes of npix = faces * face_texels values, faces in order inside each plane (the layout the merge
 // table indexes): albedo 0-2, normal 3-5, depth 6, lumination 7-9.
 #if !defined(TRANSFER_REINHARD) || !defined(TRANSFER_CLAMP) || !defined(F_CHANNELS) || !defined(F_ENV) || \

@@ -8,7 +8,8 @@
 // this file.
 
 // Build options, the host's (probe_shade_defines(), host/src/ops/probe_shade.hpp):
-//   PROBE_SKY_DEPTH       planar depth at or beyond this is "no surface" (the tracer writes 1e4 there)
+//   PROBE_MAX_DEPTH       the farthest planar depth that is a surface (kMaxSurfaceDepth; the tracer writes 1e4
+//                         where there is none)
 //   PROBE_NEIGHBOUR_STEP  offset of the fallback lookups (metres): a hit point on a block edge or corner can round
 //                         to the empty side
 //   PROBE_NEIGHBOURS      the 27 lookup offsets (x, y, z in {-1, 0, 1}), in the order they are tried: the cell
@@ -17,7 +18,7 @@
 //   FIELD_SH, FIELD_PER_VOXEL   the field layouts (ngi::detail::ProbeField): [V][3][9] SH coefficients of incident
 //                         radiance (docs/CONVENTIONS.md section 14), or [V] float4 lighting (w unused)
 //   COUNT_NO_VOXEL, COUNT_NON_FINITE   the slots of the miss counters (ProbeShade::counts)
-#if !defined(PROBE_SKY_DEPTH) || !defined(PROBE_NEIGHBOUR_STEP) || !defined(PROBE_NEIGHBOURS) || \
+#if !defined(PROBE_MAX_DEPTH) || !defined(PROBE_NEIGHBOUR_STEP) || !defined(PROBE_NEIGHBOURS) || \
     !defined(FIELD_SH) || !defined(FIELD_PER_VOXEL) || !defined(COUNT_NO_VOXEL) || !defined(COUNT_NON_FINITE)
 #error "probe_shade.cl needs the host's constants: build it with probe_shade_defines() (host/src/ops/probe_shade.hpp)"
 #endif
@@ -57,7 +58,7 @@ __kernel void probe_shade(__global const float* restrict depth, __global const f
     float3 lighting = (float3)(0.0f);
     if (!isfinite(t) || !isfinite(nr.x) || !isfinite(nr.y) || !isfinite(nr.z)) {
         atomic_inc(&counts[COUNT_NON_FINITE]);  // treated as sky, but counted: the frame is damaged
-    } else if (t < PROBE_SKY_DEPTH) {
+    } else if (t <= PROBE_MAX_DEPTH) {
         const float u = 2.0f * ((float)col + 0.5f) / (float)n - 1.0f;
         const float v = 1.0f - 2.0f * ((float)row + 0.5f) / (float)n;
         const float3 dir = normalize(look + u * right + v * up);

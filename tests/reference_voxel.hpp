@@ -1,6 +1,6 @@
 // Naive double-precision references for the voxel ops: seed 004's light-transition function (ops/voxel_ltf.*) and
 // probe shading (ops/probe_shade.*). Straight loops over the definitions in docs/VOXEL_LTF.md, no shared code
-// with the kernels beyond the constants they must agree on, which are the host's (kLtfRMin, kProbeSkyDepth,
+// with the kernels beyond the constants they must agree on, which are the host's (kLtfRMin, kMaxSurfaceDepth,
 // probe_neighbour_offsets(): the values the kernels are built with).
 #pragma once
 #include <algorithm>
@@ -136,7 +136,7 @@ inline ProbeRefResult probe_shade_reference(const ProbeRefInputs& in) {
             ++r.non_finite;
             continue;
         }
-        if (t >= ngi::detail::kProbeSkyDepth) continue;  // sky
+        if (t > ngi::detail::kMaxSurfaceDepth) continue;  // no surface (sky)
         const double u = 2.0 * (col + 0.5) / n - 1.0, v = 1.0 - 2.0 * (row + 0.5) / n;
         double dir[3], dl = 0;
         for (int c = 0; c < 3; ++c) { dir[c] = in.look[c] + u * in.right[c] + v * in.up[c]; dl += dir[c] * dir[c]; }

@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
     s += "NEURAL_GI_RADIANCE_MAX = " + py_float(detail::kNeuralGiRadianceMax) + "\n";
     s += "# host/src/ops/op_types.hpp kActExpMax: the \"exp\" activation is exp(min(x, ACT_EXP_MAX)).\n";
     s += "ACT_EXP_MAX = " + py_float(kActExpMax) + "\n";
-    s += "# host/src/pipeline/frame_planes.hpp kMaxSurfaceDepth: depth (metres) beyond which a texel is no surface.\n";
+    s += "# host/src/base/surface_depth.hpp kMaxSurfaceDepth: depth (metres) beyond which a texel is no surface.\n";
     s += "MAX_SURFACE_DEPTH = " + py_float(ngi::detail::kMaxSurfaceDepth) + "\n";
     s += "# host/src/models/voxel_sh_model.hpp kVoxelShInputBound: the voxel_sh input guard's bound.\n";
     s += "VOXEL_SH_INPUT_BOUND = " + py_float(detail::kVoxelShInputBound) + "\n";

@@ -25,7 +25,7 @@ import numpy as np
 from . import _constants
 from .scoring import luminance
 
-SKY_DEPTH = _constants.MAX_SURFACE_DEPTH  # beyond it a texel is no surface (host/src/pipeline/frame_planes.hpp)
+SKY_DEPTH = _constants.MAX_SURFACE_DEPTH  # beyond it a texel is no surface (host/src/base/surface_depth.hpp)
 
 
 def mabd(images):

@@ -3,15 +3,11 @@
 #pragma once
 #include <cstddef>
 
+#include "base/surface_depth.hpp"
 #include "ngi/image_desc.hpp"
 #include "runtime/context.hpp"
 
 namespace ngi::detail {
-
-// Planar depth (metres) a frame holds where there is no surface -- the tracer's escaped rays, a perspective depth
-// attachment's cleared pixels: finite on purpose (docs/CONVENTIONS.md section 3). render/tracer_constants.hpp's
-// kSkyDepth is this value.
-constexpr float kNoSurfaceDepth = 1.0e4f;
 
 // Where the pixels are and how they are stored; strides resolved (no zero "default" left), checked by the caller
 // (validate_image_desc: aligned, in bounds).

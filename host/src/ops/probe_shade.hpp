@@ -6,14 +6,13 @@
 #include <array>
 #include <string>
 
+#include "base/surface_depth.hpp"
 #include "runtime/context.hpp"
 #include "runtime/kernel_defines.hpp"
 
 namespace ngi::detail {
 
 // Every constant below reaches kernels/probe_shade.cl as a build option (probe_shade_defines()).
-// Planar depth at or beyond this is "no surface" (the path tracer writes 1e4).
-constexpr float kProbeSkyDepth = 5.0e3f;
 // Offset (metres) of the 26 fallback lookups around the block behind a face.
 constexpr float kProbeNeighbourStep = 0.25f;
 // Face sizes accepted (n x n pixels).
@@ -48,7 +47,7 @@ inline std::string probe_shade_defines() {
     const auto o = probe_neighbour_offsets();
     for (std::size_t k = 0; k < o.size(); ++k)
         for (std::size_t a = 0; a < 3; ++a) flat[3 * k + a] = o[k][a];
-    return join_defines({define("PROBE_SKY_DEPTH", kProbeSkyDepth), define("PROBE_NEIGHBOUR_STEP", kProbeNeighbourStep),
+    return join_defines({define("PROBE_MAX_DEPTH", kMaxSurfaceDepth), define("PROBE_NEIGHBOUR_STEP", kProbeNeighbourStep),
                          define_list("PROBE_NEIGHBOURS", flat), define("FIELD_SH", int(ProbeField::Sh)),
                          define("FIELD_PER_VOXEL", int(ProbeField::PerVoxel)), define("COUNT_NO_VOXEL", kProbeCountNoVoxel),
                          define("COUNT_NON_FINITE", kProbeCountNonFinite)});
@@ -65,7 +64,7 @@ struct ProbeCamera {
 
 struct ProbeShadeInputs {
     int n = 0;                 // face size
-    cl_mem depth = nullptr;    // float [n*n]: planar depth along look; >= kProbeSkyDepth = no surface
+    cl_mem depth = nullptr;    // float [n*n]: planar depth along look; beyond kMaxSurfaceDepth = no surface
     cl_mem normal = nullptr;   // float [3][n*n]: the visible face's unit normal; zero for sky
     ProbeCamera camera;
     int grid[3] = {0, 0, 0};   // X, Y, Z blocks; block (x, y, z) covers [x, x+1) x [y, y+1) x [z, z+1) metres

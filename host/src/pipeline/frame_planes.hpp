@@ -4,15 +4,11 @@
 #pragma once
 #include <string>
 
+#include "base/surface_depth.hpp"
 #include "ngi/pipeline.hpp"
 #include "runtime/kernel_defines.hpp"
 
 namespace ngi::detail {
-
-// Depth (metres) beyond which a texel is no surface (docs/CONVENTIONS.md sections 6, 19, 20; the tracer writes 1e4 m
-// there): the preprocessing's depth scale, SSGI's and the display view's surface test, ngi.temporal's (Python:
-// ngi._constants.MAX_SURFACE_DEPTH). Build option MAX_SURFACE_DEPTH of the kernels that read it.
-constexpr float kMaxSurfaceDepth = 1000.0f;
 
 // F_ALBEDO, F_NORMAL, F_DEPTH, F_DIRECT, F_EMISSION, F_ENV (first plane of each feature), F_CHANNELS (planes per face).
 inline std::string frame_plane_defines() {

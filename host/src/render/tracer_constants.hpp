@@ -13,7 +13,7 @@ constexpr float kRayOffset = 1.0e-3f;
 // Depth (metres) the tracer writes where the primary ray escapes: finite on purpose, the frame's no-surface depth
 // that image descriptors' perspective depth also writes (ops/gather_image.hpp). Build option SKY_DEPTH.
 constexpr float kSkyDepth = kNoSurfaceDepth;
-// Probe shading reads depths at or beyond kProbeSkyDepth as sky: the tracer's sky must be among them.
-static_assert(kSkyDepth >= kProbeSkyDepth, "probe shading would take the tracer's sky for a surface");
+// Every reader takes depths beyond kMaxSurfaceDepth as no surface: the tracer's sky must be among them.
+static_assert(kSkyDepth > kMaxSurfaceDepth, "the tracer's sky would read as a surface");
 
 }  // namespace ngi::detail
