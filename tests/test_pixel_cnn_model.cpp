@@ -153,7 +153,7 @@ TEST_CASE("pixel_cnn model files match a naive reference over random odd shapes,
     WARN("pixel_cnn: largest |ngi - reference| over 8 random models: " << worst);
 }
 
-TEST_CASE("pixel_cnn: NaN and Inf inputs are replaced and counted; a given input_range bounds them",
+TEST_CASE("pixel_cnn: NaN and Inf inputs are replaced and counted, and a given input_range bounds them",
           "[model][pixel_cnn][extremes]") {
     std::mt19937 rng(4902);
     CnnCase c = random_case(rng, 3, {{5, 3, "tanh", 0.0f, true}, {2, 1, "none", 0.0f, true}});

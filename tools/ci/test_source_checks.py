@@ -80,3 +80,13 @@ def test_layers_refuse_single_file_source_lists(tmp_path):
         (tmp_path / "CMakeLists.txt").write_text(cmake + extra)
         found = run("check_layers.py", tmp_path)
         assert found.returncode == 1 and "io/exr.cpp between libraries" in found.stdout, found.stdout
+
+
+def test_test_names_refuse_semicolons(tmp_path):
+    (tmp_path / "tests").mkdir()
+    (tmp_path / "tests" / "a.cpp").write_text('TEST_CASE("fine, with [brackets] and commas", "[x]") {}\n'
+                                              'TEST_CASE("split "\n          "over lines", "[x]") {}\n')
+    assert run("check_test_names.py", tmp_path).returncode == 0
+    (tmp_path / "tests" / "b.cpp").write_text('TEST_CASE("one; two", "[x]") {}\nTEST_CASE(" padded", "[x]") {}\n')
+    found = run("check_test_names.py", tmp_path)
+    assert found.returncode == 1 and "b.cpp:1" in found.stdout and "b.cpp:2" in found.stdout, found.stdout
