@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "ngi/error.hpp"
+#include "runtime/context.hpp"
 #include "runtime/embedded_kernels.hpp"
 #include "runtime/programs.hpp"
 
@@ -69,4 +71,33 @@ TEST_CASE("programs: every kernel file in the tree is in a program", "[runtime]"
 TEST_CASE("programs: an unknown program is an error naming it", "[runtime]") {
     CHECK_THROWS_WITH(program_sources("pathtrace+bvh"), Catch::Contains("pathtrace+bvh"));
     CHECK_THROWS_AS(program_source("no_such_program"), Error);
+}
+
+TEST_CASE("program cache folder: NGI_CACHE_DIR, else an absolute XDG_CACHE_HOME, else an absolute HOME", "[runtime]") {
+    // Saved and restored: the suite itself runs with NGI_CACHE_DIR set.
+    struct Saved {
+        std::string name, value;
+        bool set;
+    };
+    std::vector<Saved> saved;
+    for (const char* name : {"NGI_CACHE_DIR", "XDG_CACHE_HOME", "HOME"}) {
+        const char* v = std::getenv(name);
+        saved.push_back({name, v ? v : "", v != nullptr});
+    }
+    const auto put = [](const char* name, const char* value) {
+        if (value) setenv(name, value, 1);
+        else unsetenv(name);
+    };
+    put("NGI_CACHE_DIR", "/cache/explicit");
+    put("XDG_CACHE_HOME", "/xdg");
+    put("HOME", "/home/u");
+    CHECK(cache_dir() == std::filesystem::path("/cache/explicit"));
+    put("NGI_CACHE_DIR", nullptr);
+    CHECK(cache_dir() == std::filesystem::path("/xdg/ngi"));
+    put("XDG_CACHE_HOME", "relative/xdg");  // invalid by the XDG spec: ignored
+    CHECK(cache_dir() == std::filesystem::path("/home/u/.cache/ngi"));
+    put("XDG_CACHE_HOME", "");
+    put("HOME", "relative-home");
+    CHECK(cache_dir() == std::filesystem::temp_directory_path() / "ngi-cache");
+    for (const Saved& s : saved) put(s.name.c_str(), s.set ? s.value.c_str() : nullptr);
 }

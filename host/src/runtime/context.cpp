@@ -108,8 +108,11 @@ std::string build_log(cl_program prog, cl_device_id dev) {
 
 std::filesystem::path cache_dir() {
     if (const char* d = std::getenv("NGI_CACHE_DIR"); d && *d) return d;
-    if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return std::filesystem::path(d) / "ngi";
-    if (const char* d = std::getenv("HOME"); d && *d) return std::filesystem::path(d) / ".cache" / "ngi";
+    // The XDG base directory spec: a relative XDG_CACHE_HOME is invalid and ignored (it would name a folder under
+    // whatever the current directory is); a relative HOME likewise (ngi_train.ngi_paths.user_cache_dir agrees).
+    const auto absolute = [](const char* d) { return d && *d && std::filesystem::path(d).is_absolute(); };
+    if (const char* d = std::getenv("XDG_CACHE_HOME"); absolute(d)) return std::filesystem::path(d) / "ngi";
+    if (const char* d = std::getenv("HOME"); absolute(d)) return std::filesystem::path(d) / ".cache" / "ngi";
     return std::filesystem::temp_directory_path() / "ngi-cache";
 }
 
