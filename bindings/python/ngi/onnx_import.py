@@ -308,6 +308,17 @@ def _attrs(onnx, node):
     return {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
 
 
+def _integers(value):
+    """The values of a constant read as sizes or indices, as Python ints; None when one is not a finite whole number
+    (a float tensor there holds NaN or 2.5 as easily as 2: such a pattern does not match, and the reader refuses it)."""
+    flat = np.asarray(value).reshape(-1)
+    if flat.dtype.kind in "iub":
+        return [int(v) for v in flat]
+    if flat.dtype.kind != "f" or not np.all(np.isfinite(flat)) or np.any(flat != np.round(flat)):
+        return None
+    return [int(v) for v in flat]
+
+
 # --------------------------------------------------------------------------
 # Mapping
 # --------------------------------------------------------------------------
@@ -904,27 +915,30 @@ class _Importer:
             return None  # scales given
         sizes = self.const(node.input[3])
         if sizes is not None:
-            s = [int(v) for v in np.asarray(sizes).reshape(-1)]
-            return (s[2:], []) if len(s) == 4 and s[0] == 1 else None
+            s = _integers(sizes)
+            return (s[2:], []) if s is not None and len(s) == 4 and s[0] == 1 else None
         cat = self.producer.get(node.input[3])
         if cat is None or cat.op_type != "Concat" or len(cat.input) != 2 or self._only_reader(cat.output[0]) is not node:
             return None
         hw = self.const(cat.input[1])
         sl = self.producer.get(cat.input[0])
-        if hw is None or np.asarray(hw).size != 2 or sl is None or sl.op_type != "Slice" \
+        hw = None if hw is None else _integers(hw)
+        if hw is None or len(hw) != 2 or sl is None or sl.op_type != "Slice" \
                 or self._only_reader(sl.output[0]) is not cat:
             return None
-        bounds = [self.const(i) if i else None for i in sl.input[1:]]
-        if len(bounds) < 2 or any(b is None for b in bounds[:2]) \
-                or [int(np.asarray(b).reshape(-1)[0]) for b in bounds[:2]] != [0, 2] \
-                or (len(bounds) > 2 and bounds[2] is not None and int(np.asarray(bounds[2]).reshape(-1)[0]) != 0) \
-                or (len(bounds) > 3 and bounds[3] is not None and int(np.asarray(bounds[3]).reshape(-1)[0]) != 1):
+        # starts, ends, axes, steps: [0], [2] and, when given, [0] and [1] (a bound given but not constant, or not
+        # a whole number, reads as [] and fails the match)
+        given = [i for i in sl.input[1:]]
+        bounds = [(_integers(self.const(i)) or []) if self.const(i) is not None else [] if i else None for i in given]
+        wanted = ([0], [2], [0], [1])
+        if len(bounds) < 2 or any(b is not None and b[:1] != w for b, w in zip(bounds, wanted)) \
+                or bounds[0] is None or bounds[1] is None:
             return None
         shape = self.producer.get(sl.input[0])
         if shape is None or shape.op_type != "Shape" or shape.input[0] != node.input[0] \
                 or self._only_reader(shape.output[0]) is not sl:
             return None
-        return [int(v) for v in np.asarray(hw).reshape(-1)], [shape, sl, cat]
+        return hw, [shape, sl, cat]
 
     def _resize_linear(self, node, attrs, x, ctm, sc, sizes=None):
         # Bilinear resize by constant scales (F.interpolate(mode="bilinear", scale_factor=s)): resize_bilinear, the
@@ -1214,8 +1228,8 @@ class _Importer:
         shape = self.const(first.input[1]) if len(first.input) > 1 else None
         if shape is None:
             return None
-        shape = [int(v) for v in np.asarray(shape).reshape(-1)]
-        if len(shape) != 3 or shape[0] not in (0, 1) or shape[1] < 1 or shape[2] != -1:
+        shape = _integers(shape)
+        if shape is None or len(shape) != 3 or shape[0] not in (0, 1) or shape[1] < 1 or shape[2] != -1:
             return None
         second = self._only_reader(inorm.output[0])
         if second is None or second.op_type != "Reshape" or len(second.input) < 2:

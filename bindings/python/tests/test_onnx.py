@@ -1033,3 +1033,22 @@ def test_review_findings_of_the_new_ops_are_refused_or_mapped(tmp_path, dev):
     data = small_model([helper.make_node("Shape", ["x"], ["y"], name="p")]).SerializeToString()
     (tmp_path / "shape").mkdir()
     assert_refused(tmp_path / "shape", data, "node 'p' (Shape): supported only as part of GroupNorm")
+
+
+def test_shape_constants_that_are_not_whole_numbers_are_refused(tmp_path):
+    # Found by the CI's fuzz stage (stop 60): GroupNorm's Reshape read a float shape holding NaN with int(), a
+    # ValueError instead of a refusal. Shape-like constants that are not finite whole numbers now fail the pattern, and
+    # the node is refused in one line; the same for a Resize whose sizes are floats.
+    s, b = (numpy_helper.from_array(np.ones(2, np.float32), n) for n in ("s", "b"))
+    for k, bad in enumerate(([0, 2, float("nan")], [0, 2.5, -1])):
+        shape = numpy_helper.from_array(np.array(bad, np.float32), "shape")
+        nodes = [helper.make_node("Reshape", ["x", "shape"], ["r"], name="reshape"),
+                 helper.make_node("InstanceNormalization", ["r", "s", "b"], ["n"], name="norm"),
+                 helper.make_node("Shape", ["x"], ["xs"], name="xshape"),
+                 helper.make_node("Reshape", ["n", "xs"], ["y"], name="back")]
+        (tmp_path / f"gn{k}").mkdir()
+        assert_refused(tmp_path / f"gn{k}", small_model(nodes, [shape, s, b]).SerializeToString(), "ngi.convert: error:")
+    sizes = numpy_helper.from_array(np.array([1, 2, float("nan"), 16], np.float32), "sizes")
+    nodes = [helper.make_node("Resize", ["x", "", "", "sizes"], ["y"], name="resize", mode="nearest")]
+    (tmp_path / "resize").mkdir()
+    assert_refused(tmp_path / "resize", small_model(nodes, [sizes]).SerializeToString(), "node 'resize' (Resize)")
