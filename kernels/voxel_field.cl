@@ -48,9 +48,12 @@ __kernel void vf_sun_visibility(SCENE_ARGS, __global const float* probe, __globa
 // radiance (sun disc excluded) on a miss, 0 on the voxel itself, emission + albedo * (one lighting_sample with
 // max_bounces - 1 further bounces) on another block. sh[i][c][k] accumulates L_c(w_j) Y_k(w_j); the last launch
 // scales by 4 pi / M and adds the sun as a delta, E_sun * vis[i] * Y_k(sun direction).
+// indirect_only = 1 keeps only light that has bounced at least once (what a probe bake adds to an engine's own
+// direct light): a miss (sky), a block's emission and the sun give 0, a block gives albedo * (lighting_sample),
+// drawn from the same random numbers as in the full projection, so full(B) - full(0) = indirect(B) up to rounding.
 __kernel void vf_sh(SCENE_ARGS, __global const float* probe, __global const int4* cells, int nvox, int m,
-                    int first, int last, int max_bounces, int rr_start, uint seed, __global const float* sun_vis,
-                    __global float* sh, __global uint* rays_out) {
+                    int first, int last, int max_bounces, int rr_start, int indirect_only, uint seed,
+                    __global const float* sun_vis, __global float* sh, __global uint* rays_out) {
     const int i = get_global_id(0);
     if (i >= nvox) return;
     MAKE_SCENE(s);
@@ -78,9 +81,9 @@ __kernel void vf_sh(SCENE_ARGS, __global const float* probe, __global const int4
         const Hit h = trace(&s, p, w, T_INF, &rays);
         float3 L = (float3)(0.0f);
         if (h.mat == 0) {
-            L = sky_radiance(light, w);
+            if (!indirect_only) L = sky_radiance(light, w);
         } else if (block_id((int4)(h.cell, 0), sx, sy) != id) {
-            L = mats[2 * h.mat + 1].xyz;
+            if (!indirect_only) L = mats[2 * h.mat + 1].xyz;
             if (max_bounces > 0)
                 L += mats[2 * h.mat].xyz * lighting_sample(&s, hit_origin(&s, p, w, &h), hit_normal(&s, w, &h),
                                                            max_bounces - 1, inner_rr, &r, &rays);
@@ -93,7 +96,7 @@ __kernel void vf_sh(SCENE_ARGS, __global const float* probe, __global const int4
         }
     }
     if (last >= total) {
-        const float3 sd = lv(light, L_SUN_DIR), E = lv(light, L_SUN_E) * sun_vis[i];
+        const float3 sd = lv(light, L_SUN_DIR), E = indirect_only ? (float3)(0.0f) : lv(light, L_SUN_E) * sun_vis[i];
         const float scale = 4.0f * M_PI_F / (float)total;
         sh9(sd.x, sd.y, sd.z, Y);
         for (int k = 0; k < 9; ++k) {

@@ -528,6 +528,143 @@ TEST_CASE("voxel field and visibility at a tiny shape (oclgrind)", "[voxel_field
     CHECK(test::all_finite(f.face_lighting));
     const std::vector<std::uint32_t> mask = r.voxel_visibility(sv);
     CHECK(mask.size() == sv.size() * ((sv.size() + 31) / 32));
+    for (const bool indirect : {false, true})
+        CHECK(test::all_finite(r.project_points_sh({{0.5f, 1.5f, 0.5f}, {3.2f, 2.7f, 1.1f}}, l, vs, indirect).sh));
+}
+
+namespace {
+
+// Naive reference of a probe's indirect SH over an open floor lit by a uniform sky: every surface the probe can see
+// is the floor slab [0, W] x [0, 1] x [0, W] (top and sides), whose lighting is L everywhere (its top sees only
+// sky, a side sees sky above and the sky's ground colour below, both L), so one bounce sends a L toward the probe
+// and c_k = a L * integral over the directions that meet the slab of Y_k. The integral by the midpoint rule over
+// (z = cos theta, phi) cells of equal solid angle, each direction tested against the slab with a slab ray test.
+std::vector<double> floor_integral(glm::dvec3 p, double W, int cells) {
+    std::vector<double> out(9, 0.0);
+    const double dA = 4 * kPi / (double(cells) * 2 * cells);
+    for (int a = 0; a < cells; ++a)
+        for (int b = 0; b < 2 * cells; ++b) {
+            const double z = 1 - 2 * (a + 0.5) / cells, phi = 2 * kPi * (b + 0.5) / (2 * cells);
+            const double r = std::sqrt(std::max(0.0, 1 - z * z));
+            const glm::dvec3 w(r * std::cos(phi), r * std::sin(phi), z);
+            double t0 = 0, t1 = 1e30;
+            const glm::dvec3 lo(0, 0, 0), hi(W, 1, W);
+            bool hit = true;
+            for (int k = 0; k < 3 && hit; ++k) {
+                if (w[k] == 0) {
+                    hit = p[k] >= lo[k] && p[k] <= hi[k];
+                    continue;
+                }
+                double ta = (lo[k] - p[k]) / w[k], tb = (hi[k] - p[k]) / w[k];
+                if (ta > tb) std::swap(ta, tb);
+                t0 = std::max(t0, ta);
+                t1 = std::min(t1, tb);
+                hit = t0 <= t1;
+            }
+            if (!hit) continue;
+            double Y[9];
+            sh9(w.x, w.y, w.z, Y);
+            for (int k = 0; k < 9; ++k) out[std::size_t(k)] += Y[k] * dA;
+        }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("point SH: indirect light of a floor under a uniform sky equals the naive integral; the sky itself is "
+          "not in it",
+          "[voxel_field][point_sh]") {
+    const int W = 24;
+    VoxelScene s({W, 6, W}, "floor");
+    const float albedo = 0.6f;
+    s.fill({0, 0, 0}, {W, 1, W}, s.add_material({glm::vec3(albedo), glm::vec3(0.0f), false}));
+    const glm::vec3 L(0.2f, 0.5f, 1.0f);
+    const Lighting l = uniform_sky(L);
+    Renderer r(test::device(), s);
+    VoxelFieldSettings vs;
+    vs.directions = 4096;
+    vs.max_bounces = 1;
+    vs.seed = 3;
+    // Probes at several heights and one off-centre (the slab's edge in view at grazing angles).
+    const std::vector<glm::vec3> points = {{12.0f, 1.5f, 12.0f}, {12.3f, 3.0f, 11.6f}, {5.5f, 2.25f, 18.0f}};
+    const PointSh got = r.project_points_sh(points, l, vs, true);
+    REQUIRE(got.sh.size() == points.size() * 27);
+    CHECK(got.rays > 0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const std::vector<double> I = floor_integral(glm::dvec3(points[i]), W, 1024);
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 9; ++k) {
+                const double want = albedo * L[c] * I[std::size_t(k)];
+                // 4 standard deviations of the unstratified estimator with radiance at most a L (the stratified one
+                // is never worse), plus the midpoint rule's error along the slab's outline (< 1e-3 of a L here).
+                const double tol = 4 * albedo * L[c] * std::sqrt(4 * kPi / vs.directions) + 1e-3 * albedo * L[c];
+                INFO("point " << i << " channel " << c << " coefficient " << k);
+                CHECK(std::abs(got.sh[i * 27 + std::size_t(c) * 9 + std::size_t(k)] - want) < tol);
+            }
+    }
+    // Without bounces there is no indirect light at all.
+    vs.max_bounces = 0;
+    const PointSh none = r.project_points_sh(points, l, vs, true);
+    for (float v : none.sh) REQUIRE(v == 0.0f);
+}
+
+TEST_CASE("point SH: full(B) - full(0) = indirect(B) on random grids with sun, sky, lamps and emitters; "
+          "deterministic under any split of the directions",
+          "[voxel_field][point_sh]") {
+    std::mt19937 rng(4601);
+    for (int trial = 0; trial < 4; ++trial) {
+        const glm::ivec3 size(5 + trial * 3, 4 + trial, 7 - trial);
+        VoxelScene s = random_grid(size, 0.25, rng);
+        Lighting l = lighting_at(8.0f + 3.0f * float(trial), 0.7f * float(trial));
+        l.lamp_level = 0.75f;
+        Renderer r(test::device(), s);
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        std::vector<glm::vec3> points;
+        for (int i = 0; i < 13 + trial; ++i)
+            points.push_back(glm::vec3(u(rng), u(rng), u(rng)) * glm::vec3(size));
+        points.push_back(glm::vec3(size));  // the grid's far corner belongs to its last block
+        VoxelFieldSettings vs;
+        vs.directions = (3 + trial) * (3 + trial);
+        vs.sun_rays = 5;
+        vs.max_bounces = 2 + trial;
+        vs.seed = std::uint32_t(11 + trial);
+        INFO("trial " << trial << ", grid " << size.x << "x" << size.y << "x" << size.z);
+        const PointSh full = r.project_points_sh(points, l, vs, false);
+        const PointSh indirect = r.project_points_sh(points, l, vs, true);
+        VoxelFieldSettings v0 = vs;
+        v0.max_bounces = 0;
+        const PointSh direct = r.project_points_sh(points, l, v0, false);
+        REQUIRE(test::all_finite(full.sh));
+        double peak = 0, worst = 0;
+        for (std::size_t j = 0; j < full.sh.size(); ++j) {
+            peak = std::max(peak, double(std::abs(full.sh[j])));
+            worst = std::max(worst, std::abs(double(full.sh[j]) - direct.sh[j] - indirect.sh[j]));
+        }
+        INFO("worst |full - direct - indirect| " << worst << " of peak " << peak);
+        // Float sums of the same terms in another grouping: rounding of the directions' sum, 1e-5 of the peak.
+        CHECK(worst <= 1e-5 * std::max(peak, 1e-3));
+        VoxelFieldSettings split = vs;
+        split.max_samples_per_launch = 2;
+        CHECK(r.project_points_sh(points, l, split, true).sh == indirect.sh);
+    }
+}
+
+TEST_CASE("point SH: bad points and settings are refused by name", "[voxel_field][point_sh]") {
+    VoxelScene s({6, 4, 5}, "small");
+    s.fill({0, 0, 0}, {6, 1, 5}, s.add_material({}));
+    Renderer r(test::device(), s);
+    VoxelFieldSettings vs;
+    vs.directions = 4;
+    CHECK_THROWS_WITH(r.project_points_sh({}, dark(), vs, true), Catch::Contains("no points"));
+    CHECK_THROWS_WITH(r.project_points_sh({{1, 2, 3}, {1, std::nanf(""), 3}}, dark(), vs, true),
+                      Catch::Contains("point 1") && Catch::Contains("6x4x5"));
+    CHECK_THROWS_WITH(r.project_points_sh({{6.5f, 2, 3}}, dark(), vs, true), Catch::Contains("point 0"));
+    CHECK_THROWS_WITH(r.project_points_sh({{1, -0.01f, 3}}, dark(), vs, true), Catch::Contains("not inside"));
+    CHECK_THROWS_WITH(r.project_points_sh(std::vector<glm::vec3>(kMaxFieldVoxels + 1, glm::vec3(1.0f)), dark(), vs,
+                                          true),
+                      Catch::Contains(std::to_string(kMaxFieldVoxels + 1)));
+    vs.directions = 5;
+    CHECK_THROWS_WITH(r.project_points_sh({{1, 2, 3}}, dark(), vs, true), Catch::Contains("directions 5"));
 }
 
 // Timing and noise on a seed-scale scene (not part of the suite: minutes on a CPU). Run with

@@ -23,6 +23,7 @@ namespace ngi {
 struct SurfaceVoxels;
 struct VoxelFieldSettings;
 struct VoxelField;
+struct PointSh;
 
 // A distant sun: a disc of uniform radiance subtending `angular_radius` around `direction`.
 struct Sun {
@@ -140,6 +141,14 @@ public:
     // settings.seed. Throws InputError for voxels of another grid size and for settings out of range.
     VoxelField render_voxel_field(const SurfaceVoxels& voxels, const Lighting& lighting,
                                   const VoxelFieldSettings& settings);
+
+    // The same SH projection at arbitrary points of the scene's grid box (an irradiance-probe grid's bake, docs/ADAPT.md
+    // "probe grid"), settings.directions directions per point (point_samples unused). indirect_only: only light that
+    // has bounced at least once (no sky, no emission seen directly, no sun), what a bake adds to an engine's direct
+    // light. A point inside a solid block sees its own block as black. Throws InputError for no points, more than
+    // kMaxFieldVoxels, a point that is not finite or outside [0, size], settings out of range, an area light.
+    PointSh project_points_sh(const std::vector<glm::vec3>& points, const Lighting& lighting,
+                              const VoxelFieldSettings& settings, bool indirect_only);
 
     // Visibility between the voxels' probe points: uint32 words [V][ceil(V / 32)], bit j % 32 of word j / 32 of row i
     // set when the segment from probe i to probe j crosses no solid block other than voxels i and j themselves.

@@ -75,4 +75,11 @@ struct VoxelField {
     std::uint64_t rays = 0;            // rays traced
 };
 
+// The SH projection at arbitrary points (Renderer::project_points_sh): a probe grid's bake.
+struct PointSh {
+    std::vector<float> sh;  // [P][3][9], as VoxelField::sh
+    double ms = 0;          // wall time of the call (device work and read-back)
+    std::uint64_t rays = 0; // rays traced
+};
+
 }  // namespace ngi

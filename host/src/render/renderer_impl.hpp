@@ -100,6 +100,13 @@ struct Renderer::Impl {
     // normalized per region on the host.
     void update_patches(const float* L, const std::vector<float>& m, const RenderSettings& rs, const char* program);
 
+    // The SH projection (kernels/voxel_field.cl vf_sh, with the sun's visibility first unless indirect_only) at V
+    // uploaded probe points and cells, after upload_frame: the [V][27] buffer; the rays traced are added to
+    // rays_total (`rays`: a [V] uint scratch buffer). Shared by render_voxel_field and project_points_sh.
+    detail::Buffer project_sh(const detail::Buffer& probe, const detail::Buffer& cells, std::size_t V,
+                              const Lighting& lighting, const VoxelFieldSettings& s, bool indirect_only,
+                              const detail::Buffer& rays, std::uint64_t& rays_total);
+
     // Samples one launch of a kernel may take when each work-item loops `fixed` times plus `per_sample` times per
     // sample (llvmpipe's loop limit, as samples_per_launch), at most `cap` when cap > 0.
     int items_per_launch(long fixed, long per_sample, int cap, const char* what) const;

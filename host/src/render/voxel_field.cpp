@@ -199,34 +199,83 @@ SurfaceVoxels surface_voxels(const Device& device, const VoxelScene& scene, cons
     return out;
 }
 
-VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Lighting& lighting,
-                                        const VoxelFieldSettings& s) {
-    Impl& m = *impl_;
-    check_voxels(voxels, m.size, "voxel field", kMaxFieldVoxels);
-    check_field_settings(s);
-    // vf_sh projects the radiance its rays meet; rays never meet the area light (it is not geometry), so its SH
-    // would miss the light's direct part while the other outputs include it. Refused rather than inconsistent.
-    if (lighting.area_light.enabled())
-        throw InputError("voxel field: the lighting has an area light, which the voxel field does not support");
-    const auto t0 = std::chrono::steady_clock::now();
-    detail::Context& ctx = *m.ctx;
-    m.kernel(m.k_vf_sun, "voxel_field", "vf_sun_visibility");
-    m.kernel(m.k_vf_sh, "voxel_field", "vf_sh");
-    m.kernel(m.k_vf_probe, "voxel_field", "vf_probe_lighting");
-    m.kernel(m.k_vf_face, "voxel_field", "vf_face_lighting");
-    const std::size_t local_sun = Impl::local_size(m.k_vf_sun), local_sh = Impl::local_size(m.k_vf_sh),
-                      local_probe = Impl::local_size(m.k_vf_probe), local_face = Impl::local_size(m.k_vf_face);
+namespace {
+
+// The settings of the tracer's frame upload that a voxel field or point SH call shares with RenderSettings.
+RenderSettings field_render_settings(const VoxelFieldSettings& s) {
     RenderSettings rs;
     rs.max_bounces = s.max_bounces;
     rs.rr_start = s.rr_start;
     rs.seed = s.seed;
     rs.sky_portals = s.sky_portals;
     rs.sunlit_patches = s.sunlit_patches;
+    return rs;
+}
+
+// vf_sh projects the radiance its rays meet; rays never meet the area light (it is not geometry), so its SH would
+// miss the light's direct part while every other output includes it. Refused rather than inconsistent.
+void refuse_area_light(const Lighting& lighting, const std::string& what) {
+    if (lighting.area_light.enabled())
+        throw InputError(what + ": the lighting has an area light, which the voxel field does not support");
+}
+
+}  // namespace
+
+// The SH projection at V points (probe points and cells uploaded, the frame uploaded): the sun's visibility first
+// (vf_sh's last launch adds the sun with it; skipped for indirect light, which has no sun term), then vf_sh.
+// Returns the [V][27] buffer; adds the rays traced to `rays_total`.
+detail::Buffer Renderer::Impl::project_sh(const detail::Buffer& probe, const detail::Buffer& cells, std::size_t V,
+                                          const Lighting& lighting, const VoxelFieldSettings& s, bool indirect_only,
+                                          const detail::Buffer& rays, std::uint64_t& rays_total) {
+    detail::Context& c = *ctx;
+    kernel(k_vf_sun, "voxel_field", "vf_sun_visibility");
+    kernel(k_vf_sh, "voxel_field", "vf_sh");
+    const std::size_t local_sun = local_size(k_vf_sun), local_sh = local_size(k_vf_sh), global = V;
+    const RenderSettings rs = field_render_settings(s);
+    const int nvox = int(V), cap = s.max_samples_per_launch;
+    const long walk = trace_loops(), bounce = bounce_loops();
+    detail::Buffer vis = c.alloc(V * 4, "voxel field: sun visibility");
+    detail::Buffer sh = c.alloc(V * 27 * 4, "voxel field: SH");
+    const glm::vec3 E = lighting.sun.irradiance;
+    if (E.r + E.g + E.b > 0.0f && !indirect_only) {
+        const int chunk = items_per_launch(64, walk + 8, cap, "voxel field: sun visibility");
+        for (int first = 0; first < s.sun_rays; first += chunk) {
+            const int last = int(std::min<long>(s.sun_rays, long(first) + chunk));
+            set_scene_args(k_vf_sun, rs, probe, cells, nvox, s.sun_rays, first, last, s.seed, vis, rays);
+            c.launch(k_vf_sun, 1, &global, &local_sun);
+        }
+        rays_total += sum_rays(rays, V);
+    } else {
+        c.fill_zero(vis, 0, V * 4, "voxel field: sun visibility");
+    }
+    const int side = int(std::lround(std::sqrt(double(s.directions))));
+    const long per_direction = walk + long(s.max_bounces) * bounce + 32;
+    const int chunk = items_per_launch(4 * 27 + 64, per_direction, cap, "voxel field: SH projection");
+    for (int first = 0; first < s.directions; first += chunk) {
+        const int last = int(std::min<long>(s.directions, long(first) + chunk));
+        set_scene_args(k_vf_sh, rs, probe, cells, nvox, side, first, last, s.max_bounces, s.rr_start,
+                       int(indirect_only), s.seed, vis, sh, rays);
+        c.launch(k_vf_sh, 1, &global, &local_sh);
+    }
+    rays_total += sum_rays(rays, V);
+    return sh;
+}
+
+VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Lighting& lighting,
+                                        const VoxelFieldSettings& s) {
+    Impl& m = *impl_;
+    check_voxels(voxels, m.size, "voxel field", kMaxFieldVoxels);
+    check_field_settings(s);
+    refuse_area_light(lighting, "voxel field");
+    const auto t0 = std::chrono::steady_clock::now();
+    detail::Context& ctx = *m.ctx;
+    m.kernel(m.k_vf_probe, "voxel_field", "vf_probe_lighting");
+    m.kernel(m.k_vf_face, "voxel_field", "vf_face_lighting");
+    const std::size_t local_probe = Impl::local_size(m.k_vf_probe), local_face = Impl::local_size(m.k_vf_face);
+    const RenderSettings rs = field_render_settings(s);
     m.upload_frame(CameraPose{}, lighting, rs, "voxel_field");
     const std::size_t V = voxels.size();
     const VoxelBuffers in = upload_voxels(ctx, voxels, true);
-    detail::Buffer vis = ctx.alloc(V * 4, "voxel field: sun visibility");
-    detail::Buffer sh = ctx.alloc(V * 27 * 4, "voxel field: SH");
     detail::Buffer direct = ctx.alloc(V * 3 * 4, "voxel field: direct lighting");
     detail::Buffer full = ctx.alloc(V * 3 * 4, "voxel field: lighting");
     detail::Buffer face = ctx.alloc(V * 18 * 4, "voxel field: face lighting");
@@ -235,35 +284,9 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
     const std::uint32_t seed = s.seed;
     const std::size_t global = V, global6 = 6 * V;
     VoxelField out;
-    const long walk = m.trace_loops(), bounce = m.bounce_loops();
+    const long bounce = m.bounce_loops();
     const int cap = s.max_samples_per_launch;
-
-    // The sun's visibility first: vf_sh's last launch adds the sun with it.
-    const glm::vec3 E = lighting.sun.irradiance;
-    if (E.r + E.g + E.b > 0.0f) {
-        const int chunk = m.items_per_launch(64, walk + 8, cap, "voxel field: sun visibility");
-        for (int first = 0; first < s.sun_rays; first += chunk) {
-            const int last = int(std::min<long>(s.sun_rays, long(first) + chunk));
-            m.set_scene_args(m.k_vf_sun, rs, in.probe, in.cells, nvox, s.sun_rays, first, last, seed, vis, rays);
-            ctx.launch(m.k_vf_sun, 1, &global, &local_sun);
-        }
-        out.rays += m.sum_rays(rays, V);
-    } else {
-        ctx.fill_zero(vis, 0, V * 4, "voxel field: sun visibility");
-    }
-
-    const int side = int(std::lround(std::sqrt(double(s.directions))));
-    {
-        const long per_direction = walk + long(s.max_bounces) * bounce + 32;
-        const int chunk = m.items_per_launch(4 * 27 + 64, per_direction, cap, "voxel field: SH projection");
-        for (int first = 0; first < s.directions; first += chunk) {
-            const int last = int(std::min<long>(s.directions, long(first) + chunk));
-            m.set_scene_args(m.k_vf_sh, rs, in.probe, in.cells, nvox, side, first, last, s.max_bounces, s.rr_start,
-                             seed, vis, sh, rays);
-            ctx.launch(m.k_vf_sh, 1, &global, &local_sh);
-        }
-        out.rays += m.sum_rays(rays, V);
-    }
+    const detail::Buffer sh = m.project_sh(in.probe, in.cells, V, lighting, s, false, rays, out.rays);
 
     for (const bool is_direct : {true, false}) {
         const int bounces = is_direct ? 0 : s.max_bounces;
@@ -299,6 +322,51 @@ VoxelField Renderer::render_voxel_field(const SurfaceVoxels& voxels, const Light
     ctx.read(direct, 0, out.direct.size() * 4, out.direct.data(), "voxel field: read direct lighting");
     ctx.read(full, 0, out.lighting.size() * 4, out.lighting.data(), "voxel field: read lighting");
     ctx.read(face, 0, out.face_lighting.size() * 4, out.face_lighting.data(), "voxel field: read face lighting");
+    out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+PointSh Renderer::project_points_sh(const std::vector<glm::vec3>& points, const Lighting& lighting,
+                                   const VoxelFieldSettings& s, bool indirect_only) {
+    Impl& m = *impl_;
+    const std::string what = "point SH";
+    check_field_settings(s);
+    refuse_area_light(lighting, what);
+    const std::size_t P = points.size();
+    if (P == 0) throw InputError(what + ": no points");
+    if (P > kMaxFieldVoxels)
+        throw InputError(what + ": " + std::to_string(P) + " points, more than the " +
+                         std::to_string(kMaxFieldVoxels) + " one call takes");
+    // The cell of each point: its block (a point on the grid's far faces belongs to the last block), whose id
+    // seeds its random numbers and whose own surface it does not see.
+    std::vector<float> p(3 * P);
+    std::vector<std::int32_t> c(4 * P, 0);
+    const glm::vec3 box(m.size);
+    for (std::size_t i = 0; i < P; ++i) {
+        const glm::vec3 q = points[i];
+        if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) || glm::any(glm::lessThan(q, glm::vec3(0.0f))) ||
+            glm::any(glm::greaterThan(q, box)))
+            throw InputError(what + ": point " + std::to_string(i) + " (" + std::to_string(q.x) + ", " +
+                             std::to_string(q.y) + ", " + std::to_string(q.z) + ") is not inside the scene's grid " +
+                             dims(m.size));
+        const glm::ivec3 cell = glm::min(glm::ivec3(glm::floor(q)), m.size - 1);
+        for (int k = 0; k < 3; ++k) {
+            p[3 * i + std::size_t(k)] = q[k];
+            c[4 * i + std::size_t(k)] = cell[k];
+        }
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    detail::Context& ctx = *m.ctx;
+    m.upload_frame(CameraPose{}, lighting, field_render_settings(s), "voxel_field");
+    detail::Buffer probe = ctx.alloc(p.size() * 4, "point SH: points");
+    ctx.write(probe, 0, p.size() * 4, p.data(), "point SH: upload points");
+    detail::Buffer cells = ctx.alloc(c.size() * 4, "point SH: cells");
+    ctx.write(cells, 0, c.size() * 4, c.data(), "point SH: upload cells");
+    detail::Buffer rays = ctx.alloc(P * 4, "point SH: ray counts");
+    PointSh out;
+    const detail::Buffer sh = m.project_sh(probe, cells, P, lighting, s, indirect_only, rays, out.rays);
+    out.sh.resize(P * 27);
+    ctx.read(sh, 0, out.sh.size() * 4, out.sh.data(), "point SH: read SH");
     out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
