@@ -71,6 +71,12 @@ Scene("file.vox") for a MagicaVoxel file. 1 block = 1 metre, +y up (docs/RENDERE
         .def_readonly("name", &ngi::VoxelScene::name)
         .def_property_readonly("size", [](const ngi::VoxelScene& s) { return py::make_tuple(s.size.x, s.size.y, s.size.z); })
         .def_property_readonly("solid_count", &ngi::VoxelScene::solid_count)
+        .def_property_readonly("blocks", [](const ngi::VoxelScene& s) {
+            // A copy: the scene's storage order x + X (y + Y z) is C order for [Z, Y, X].
+            py::array_t<std::uint8_t> a({py::ssize_t(s.size.z), py::ssize_t(s.size.y), py::ssize_t(s.size.x)});
+            std::copy(s.voxels.begin(), s.voxels.end(), a.mutable_data());
+            return a;
+        }, "Material ids [Z, Y, X] (uint8, 0 = air; index [z, y, x] is block (x, y, z), 1 block = 1 metre).")
         .def_readonly("default_time", &ngi::VoxelScene::default_time, "Hours of the day renders use by default.")
         .def_static("families", &ngi::scene_families, "The procedural scene families.")
         .def("__repr__", [](const ngi::VoxelScene& s) {
@@ -133,7 +139,38 @@ time, settings and seed: same image). A pose is either frame `frame` of the scen
             return from_image(std::move(g));
         }, py::arg("n") = 256, py::arg("sigma") = 1.5f, py::arg("frame") = 0, py::arg("frames") = 100,
            py::arg("position") = py::none(), py::arg("look") = py::none(), py::arg("up") = py::none(),
-           "Object-space geometry of the front view [7, N, N]: smooth normal (3), voxel face normal (3), depth (1).");
+           "Object-space geometry of the front view [7, N, N]: smooth normal (3), voxel face normal (3), depth (1).")
+        .def("project_sh", [](PyRenderer& r, const py::handle& points, std::optional<float> time, int directions,
+                              int bounces, std::uint32_t seed, bool indirect) {
+            r.device->get("Renderer.project_sh");
+            const FloatArray a = float_array(points, "Renderer.project_sh: points");
+            if (a.ndim() != 2 || a.shape(1) != 3)
+                throw py::value_error("Renderer.project_sh: points must be [P, 3] (metres, inside the scene's grid)");
+            std::vector<glm::vec3> p(std::size_t(a.shape(0)));
+            for (std::size_t i = 0; i < p.size(); ++i) p[i] = {a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]};
+            const float hours = time ? *time : r.scene->default_time;
+            if (!(hours >= 0.0f && hours <= 48.0f)) throw py::value_error("Renderer.project_sh: time must be in 0 .. 48 hours");
+            if (bounces < 0 || bounces > 1000) throw py::value_error("Renderer.project_sh: bounces must be in 0 .. 1000");
+            ngi::VoxelFieldSettings vs;
+            vs.directions = directions;
+            vs.max_bounces = bounces;
+            vs.seed = seed;
+            vs.sun_rays = 64;
+            ngi::PointSh out = [&] {
+                py::gil_scoped_release release;
+                return r.renderer.project_points_sh(p, ngi::lighting_at(hours, r.scene->sun_azimuth), vs, indirect);
+            }();
+            py::dict d;
+            d["sh"] = from_vector(std::move(out.sh), {py::ssize_t(p.size()), 3, 9});
+            d["seconds"] = out.ms * 1e-3;
+            d["rays"] = out.rays;
+            return d;
+        }, py::arg("points"), py::arg("time") = py::none(), py::arg("directions") = 256, py::arg("bounces") = 8,
+           py::arg("seed") = 0u, py::arg("indirect") = true,
+           "SH (bands 0-2, [P, 3, 9], docs/CONVENTIONS.md section 14) of the radiance arriving at each point, "
+           "`directions` (a perfect square) stratified paths each: with indirect=True only light that has bounced "
+           "at least once (an irradiance-probe bake, added to an engine's own direct light). {'sh', 'seconds', "
+           "'rays'}; deterministic in `seed`.");
 
     py::class_<PyVoxelProbes, std::shared_ptr<PyVoxelProbes>>(m, "VoxelProbes", R"doc(
 A lighting bake at the scene's surface voxels (seed 004's probe points, docs/VOXEL_FIELD.md): VoxelProbes(renderer,
