@@ -1,12 +1,17 @@
 // Untrusted sizes and values in input files (findings of the fuzz targets in fuzz/ and of a manual probe): each
 // must be an InputError naming the file and the field, never a wrapped-around size, a std::bad_alloc, a
 // std::out_of_range from stoi, or a read that never ends.
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <future>
 #include <nlohmann/json.hpp>
 
 #include "io/decode.hpp"
@@ -17,6 +22,8 @@
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
+#include "ngi/mesh.hpp"
+#include "ngi/scene.hpp"
 #include "ngi/tensor.hpp"
 
 namespace fs = std::filesystem;
@@ -59,6 +66,27 @@ void put_be32(std::string& s, std::size_t at, std::uint32_t v) {
     for (int i = 0; i < 4; ++i) s[at + i] = char((v >> (24 - 8 * i)) & 0xff);
 }
 
+// The InputError message of `read` on the FIFO `fifo` ("" if it returned). A reader that opens the FIFO blocking
+// waits for a writer forever: after 10 s the test plays that writer (open + close gives the reader end of file),
+// so a regression fails here instead of hanging the suite.
+std::string error_on_fifo(const std::string& fifo, const std::function<void()>& read) {
+    auto result = std::async(std::launch::async, [&]() -> std::string {
+        try {
+            read();
+        } catch (const ngi::InputError& e) {
+            return e.what();
+        }
+        return "";
+    });
+    if (result.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
+        const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+        if (fd >= 0) ::close(fd);
+        result.wait();
+        FAIL("reading " << fifo << " blocked for 10 s (it opened the FIFO)");
+    }
+    return result.get();
+}
+
 }  // namespace
 
 TEST_CASE("read_file refuses directories, devices, FIFOs and files over the size cap", "[io][limits]") {
@@ -81,6 +109,33 @@ TEST_CASE("read_file refuses directories, devices, FIFOs and files over the size
     CHECK_THROWS_WITH(ngi::detail::read_safetensors("/dev/zero"), Contains("load model /dev/zero"));
     CHECK_THROWS_WITH(ngi::DatasetConfig::load("/dev/zero"), Contains("dataset config /dev/zero"));
     CHECK_THROWS_WITH(ngi::DatasetConfig::load(dir.path.string()), Contains("dataset config") && Contains("directory"));
+}
+
+TEST_CASE("a FIFO where a file is expected is refused at once by every reader", "[io][limits]") {
+    TempDir dir("limits-fifo");
+    // The .vox loader once opened its file with a blocking std::ifstream: `ngi render --scene x.vox`, voxel-data and
+    // ao-data waited forever for a writer. Every reader now goes through read_file's rule (stat first: only
+    // regular files are opened).
+    for (const char* name : {"x.vox", "x.obj", "x.ply", "m.safetensors", "c.json", "i.npy"})
+        REQUIRE(::mkfifo((dir / name).c_str(), 0600) == 0);
+    CHECK_THAT(error_on_fifo(dir / "x.vox", [&] { ngi::make_scene(dir / "x.vox"); }),
+               Contains("x.vox") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "x.vox", [&] { ngi::load_vox(dir / "x.vox"); }), Contains("FIFO"));
+    // The mesh loader follows the same rule (its sidecar files too: tests/test_mesh.cpp).
+    CHECK_THAT(error_on_fifo(dir / "x.obj", [&] { ngi::make_scene(dir / "x.obj"); }),
+               Contains("x.obj") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "x.ply", [&] { ngi::load_mesh(dir / "x.ply"); }), Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "m.safetensors", [&] { ngi::detail::read_safetensors(dir / "m.safetensors"); }),
+               Contains("load model") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "c.json", [&] { ngi::DatasetConfig::load(dir / "c.json"); }),
+               Contains("dataset config") && Contains("FIFO"));
+    CHECK_THAT(error_on_fifo(dir / "i.npy", [&] { ngi::read_npy(dir / "i.npy"); }), Contains("FIFO"));
+    // The rule itself: judged by stat, so nothing is opened; sockets, directories and devices too; absent passes.
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file(dir / "x.vox", "load scene"),
+                      Contains("load scene") && Contains("it is a FIFO, not a regular file"));
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file("/dev/null"), Contains("device"));
+    CHECK_THROWS_WITH(ngi::detail::require_readable_file(dir.path.string()), Contains("directory"));
+    CHECK_NOTHROW(ngi::detail::require_readable_file(dir / "absent.vox"));
 }
 
 TEST_CASE(".npy: negative, oversized and overflowing shapes are refused", "[io][limits]") {

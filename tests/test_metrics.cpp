@@ -283,6 +283,37 @@ TEST_CASE("metrics: HDR values at and beyond the largest half float (65504)", "[
     }
 }
 
+TEST_CASE("metrics refuse a data range whose SSIM constants are not float32 numbers", "[metrics]") {
+    // --range 1e38 gave "ssim": null with an empty note (C1 = (0.01 R)^2 was Inf in the kernel); --range 1e-45 gave
+    // PSNR -892 dB. A positive range must lie in [1e-15, 1e15], the bound the values themselves have.
+    using Catch::Matchers::Contains;
+    auto& dev = ngi::test::device();
+    ngi::Image a(16, 16, 1), b(16, 16, 1);
+    for (std::size_t i = 0; i < a.data.size(); ++i) {
+        a.data[i] = float(i % 5) * 0.1f;
+        b.data[i] = float(i % 3) * 0.1f;
+    }
+    for (double r : {1e38, 1e16, 1e-16, 1e-45}) {
+        INFO(r);
+        // compare_images (what ngi lightmap scores with) reports them undefined, saying why; ssim() refuses them.
+        const ngi::ImageMetrics m = ngi::compare_images(dev, a, b, r);
+        CHECK(std::isnan(m.psnr));
+        CHECK(std::isnan(m.ssim));
+        CHECK_THAT(m.psnr_note, Contains("is outside [1e-15, 1e15]") && Contains("PSNR is not reported"));
+        CHECK_THAT(m.ssim_note, Contains("is outside [1e-15, 1e15]") && Contains("SSIM is not reported"));
+        CHECK_THROWS_WITH(ngi::ssim(dev, a, b, r), Contains("data_range must be in [1e-15, 1e15]"));
+        const ngi::ImageMetrics same = ngi::compare_images(dev, a, a, r);  // identical images: as for every range
+        CHECK(std::isinf(same.psnr));
+        CHECK(same.ssim == 1.0);
+    }
+    for (double r : {1e15, 1e-15, 1.0}) {
+        INFO(r);
+        const ngi::ImageMetrics m = ngi::compare_images(dev, a, b, r);
+        CHECK(std::isfinite(m.psnr));
+        CHECK(std::isfinite(m.ssim));
+    }
+}
+
 TEST_CASE("metrics: to_json writes null and a note where JSON has no number", "[metrics]") {
     auto& dev = ngi::test::device();
     std::mt19937 rng(19);

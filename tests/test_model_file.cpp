@@ -6,7 +6,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "models/family.hpp"
+#include "models/safetensors.hpp"
 #include "ngi/error.hpp"
 #include "ngi/model.hpp"
 #include "test_support.hpp"
@@ -89,6 +94,23 @@ void expect_error(const std::string& path, const std::string& fragment) {
     REQUIRE_THROWS_WITH(ngi::Model::load(ngi::test::device(), path), Contains(fragment));
 }
 
+// A safetensors file's bytes: the 8-byte header length, the header as given, then the data.
+std::string safetensors_bytes(const std::string& header_json, const std::string& data) {
+    std::string b(8, '\0');
+    for (int i = 0; i < 8; ++i) b[i] = char((std::uint64_t(header_json.size()) >> (8 * i)) & 0xff);
+    return b + header_json + data;
+}
+
+// The InputError message of parsing `config` as the model config of m.safetensors ("" if it parsed).
+std::string model_config_error(const nlohmann::json& config) {
+    try {
+        ngi::detail::parse_model_config(config.dump(), "m.safetensors");
+    } catch (const ngi::InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
 }  // namespace
 
 TEST_CASE("a valid tiny model loads and runs and its output is finite", "[model][file][oclgrind]") {
@@ -162,8 +184,7 @@ TEST_CASE("broken model files give clear errors", "[model][file][oclgrind]") {
     SECTION("missing file") { expect_error("/nonexistent/model.safetensors", "cannot open file"); }
 }
 
-TEST_CASE("round 2: a bn_eps that is 0 in float32, or a negative running variance, is refused at load",
-          "[model][file][reliability2]") {
+TEST_CASE("a bn_eps that is 0 in float32, or a negative running variance, is refused at load", "[model][file]") {
     // Issue 31: bn_eps 1e-300 passed "(0, 1]" as a double and became 0 in float32; per-image batch norm of an
     // all-zero input then divided 0 by sqrt(0 + 0): every output NaN, exit 0, no warning.
     auto cfg = tiny_config();
@@ -182,6 +203,68 @@ TEST_CASE("round 2: a bn_eps that is 0 in float32, or a negative running varianc
     for (auto& t : e)
         if (t.name.ends_with(".running_var")) t.value = -1.0f;
     expect_error(write_file("var_negative", e, tiny_config()), ".running_var' channel 0 is -1");
+}
+
+TEST_CASE("every float field of a model config must survive float32", "[model][limits]") {
+    const nlohmann::json unet = {{"family", "pix2pix_unet"}, {"input_nc", 12}, {"output_nc", 3}, {"ngf", 8},
+                                 {"num_downs", 6}, {"bn_eps", 1e-5}, {"leaky_slope", 0.2}, {"dropout_p", 0.5},
+                                 {"input_range", {-1, 1}}, {"output_range", {-1, 1}}};
+    REQUIRE(model_config_error(unet).empty());
+    // bn_eps 1e-300 passed "(0, 1]" as a double and was 0 in float32: an all-zero input gave 49,152 NaN outputs.
+    for (const auto& [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+             {"bn_eps", 1e-300}, {"bn_eps", 1e-40}, {"leaky_slope", 1e-300}, {"dropout_p", 1e-45},
+             {"input_range", {1e-300, 2e-300}}, {"output_range", {-1e-39, 1e-39}}}) {
+        nlohmann::json c = unet;
+        c[key] = value;
+        INFO(key << " = " << value.dump());
+        CHECK_THAT(model_config_error(c),
+                   Contains("m.safetensors") && Contains("'" + key + "'") && Contains("representable in float32"));
+    }
+    nlohmann::json ok = unet;
+    ok["bn_eps"] = 1.2e-38;  // a normal float: kept
+    ok["leaky_slope"] = 0.0;  // zero is exact
+    CHECK(model_config_error(ok).empty());
+
+    // The other families: an MLP layer's slope, neural_gi's scene box, voxel_sh's statistics.
+    const nlohmann::json mlp = {{"family", "mlp"}, {"input_nc", 3},
+                                {"layers", {{{"out", 1}, {"activation", "leaky_relu"}, {"slope", 0.1}}}}};
+    REQUIRE(model_config_error(mlp).empty());
+    nlohmann::json bad = mlp;
+    bad["layers"][0]["slope"] = 1e-300;
+    CHECK_THAT(model_config_error(bad), Contains("layers[0].slope") && Contains("float32"));
+
+    const nlohmann::json neural = {
+        {"family", "neural_gi"}, {"input_nc", 18}, {"output_nc", 3}, {"ngf", 8}, {"num_downs", 5},
+        {"dropout", "off"},
+        {"neural_gi", {{"buffer_channels", 4}, {"mlp_width", 8}, {"mlp_depth", 2}, {"skip_layer", 1}, {"decode", "exp"},
+                       {"scene_box", {{"min", {0, 0, 0}}, {"max", {8, 8, 8}}}}}}};
+    REQUIRE(model_config_error(neural).empty());
+    bad = neural;
+    bad["neural_gi"]["scene_box"]["min"] = {1e-300, 0, 0};
+    CHECK_THAT(model_config_error(bad), Contains("neural_gi.scene_box") && Contains("float32"));
+
+    nlohmann::json voxel = {{"family", "voxel_sh"}, {"architecture", "mlp"}, {"grid", {4, 4, 4}}, {"hidden", {8}},
+                            {"input_lo", std::vector<double>(10, 0.0)}, {"input_hi", std::vector<double>(10, 1.0)},
+                            {"output_mean", std::vector<double>(27, 0.0)}, {"output_std", std::vector<double>(27, 1.0)}};
+    REQUIRE(model_config_error(voxel).empty());
+    voxel["output_std"][3] = 1e-300;  // would be 0 in float32: every output the mean
+    CHECK_THAT(model_config_error(voxel), Contains("output_std") && Contains("float32"));
+}
+
+TEST_CASE("safetensors with trailing bytes or a NUL-padded header are refused", "[model][limits]") {
+    const std::string header = R"({"w": {"dtype": "F32", "shape": [2], "data_offsets": [0, 8]}})";
+    const std::string data(8, '\0');
+    REQUIRE(ngi::detail::parse_safetensors(safetensors_bytes(header, data), "ok").tensors.size() == 1);
+    // Space padding is the format's own: accepted.
+    REQUIRE(ngi::detail::parse_safetensors(safetensors_bytes(header + "    ", data), "ok").tensors.size() == 1);
+    CHECK_THROWS_WITH(ngi::detail::parse_safetensors(safetensors_bytes(header, data + "junk"), "tail.safetensors"),
+                      Contains("tail.safetensors") && Contains("4 trailing bytes after the last tensor"));
+    CHECK_THROWS_WITH(
+        ngi::detail::parse_safetensors(safetensors_bytes(header + std::string(6, '\0'), data), "nul.safetensors"),
+        Contains("nul.safetensors") && Contains("NUL byte"));
+    // A header of only metadata holds no data: any byte after it is trailing.
+    CHECK_THROWS_WITH(ngi::detail::parse_safetensors(safetensors_bytes(R"({"__metadata__": {}})", "x"), "meta"),
+                      Contains("1 trailing bytes"));
 }
 
 TEST_CASE("output_mode: lightmap by default, indirect for pix2pix_unet, anything else refused", "[model][file]") {

@@ -1,10 +1,13 @@
 // OutputFolder: the all-or-nothing multi-file output of the CLI commands and write_frame. Every failure leaves
 // neither a partial <dir> nor a staging folder, and an existing <dir> survives until the new one is complete.
 #include <catch2/catch.hpp>
+#include <climits>
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "base/file_util.hpp"
 #include "io_test_support.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -108,4 +111,64 @@ TEST_CASE("output folder: a full disk in the middle leaves nothing behind", "[io
     }  // never committed
     CHECK(ngi::test::slurp(dir + "/a.txt") == "old");
     CHECK(root.list() == std::vector<std::string>{"out"});
+}
+
+TEST_CASE("OutputFolder::commit_all puts every folder in place or none", "[io][output]") {
+    TempDir dir("output-commit-all");
+    fs::create_directories(dir / "a");
+    ngi::test::spit(dir / "a/x.txt", "old a");
+    {  // Both staged; then b's target gains a foreign file, so b cannot be committed: a must stay as it was.
+        ngi::OutputFolder a(dir / "a", "write", std::vector<std::string>{"x.txt"});
+        ngi::OutputFolder b(dir / "b", "write", std::vector<std::string>{"y.txt"});
+        a.write_text("x.txt", "new a");
+        b.write_text("y.txt", "new b");
+        fs::create_directories(dir / "b");
+        ngi::test::spit(dir / "b/foreign.txt", "not ours");
+        CHECK_THROWS_WITH(ngi::OutputFolder::commit_all({&a, &b}), Contains("foreign.txt"));
+    }
+    CHECK(ngi::test::slurp(dir / "a/x.txt") == "old a");
+    CHECK(ngi::test::slurp(dir / "b/foreign.txt") == "not ours");
+    CHECK(!fs::exists(dir / "b/y.txt"));
+    CHECK(dir.list() == std::vector<std::string>{"a", "b"});  // no staging or .old folder left
+    fs::remove_all(dir / "b");
+    {  // Now both commit.
+        ngi::OutputFolder a(dir / "a", "write", std::vector<std::string>{"x.txt"});
+        ngi::OutputFolder b(dir / "b", "write", std::vector<std::string>{"y.txt"});
+        a.write_text("x.txt", "new a");
+        b.write_text("y.txt", "new b");
+        ngi::OutputFolder::commit_all({&a, &b});
+    }
+    CHECK(ngi::test::slurp(dir / "a/x.txt") == "new a");
+    CHECK(ngi::test::slurp(dir / "b/y.txt") == "new b");
+    CHECK(dir.list() == std::vector<std::string>{"a", "b"});
+}
+
+TEST_CASE("output names up to NAME_MAX work: staging names are shortened to fit", "[io][output]") {
+    TempDir dir("output-long-names");
+    for (std::size_t len : {std::size_t(240), std::size_t(241), std::size_t(250), std::size_t(NAME_MAX)}) {
+        INFO(len);
+        const std::string name(len, 'n');
+        const std::string tmp = ngi::detail::temp_name(dir / name);
+        CHECK(fs::path(tmp).filename().string().size() <= std::size_t(NAME_MAX));
+        CHECK(tmp.find(".tmp-") != std::string::npos);
+        // A folder (the staging folder and the .old name of a re-run) and a single file (write_file_atomic).
+        for (int run = 0; run < 2; ++run) {
+            ngi::OutputFolder f(dir / name, "write", std::vector<std::string>{"a.txt"});
+            f.write_text("a.txt", "run " + std::to_string(run));
+            f.commit();
+        }
+        CHECK(ngi::test::slurp(dir / name + "/a.txt") == "run 1");
+        fs::remove_all(dir / name);
+        ngi::detail::write_file_atomic(dir / name, "file");
+        CHECK(ngi::test::slurp(dir / name) == "file");
+        fs::remove(dir / name);
+    }
+    CHECK(dir.list().empty());
+    // A long name of multi-byte characters is cut at a character boundary.
+    std::string wide;
+    while (wide.size() + 2 <= 254) wide += "\xc3\xa9";  // U+00E9, two bytes
+    const std::string cut = fs::path(ngi::detail::temp_name(dir / wide)).filename().string();
+    const std::string stem = cut.substr(0, cut.find(".tmp-"));
+    CHECK(stem.size() % 2 == 0);
+    CHECK(cut.size() <= std::size_t(NAME_MAX));
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "models/family.hpp"
 #include "ngi/dataset.hpp"
 #include "ngi/error.hpp"
 #include "ngi/image_io.hpp"
@@ -15,6 +16,7 @@
 
 using namespace ngi;
 namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
 
 namespace {
 
@@ -81,6 +83,33 @@ TEST_CASE("dataset config: entries, times, and disjoint splits", "[render]") {
     CHECK_THAT(config_error(R"({"train": [{"scene": "room", "time": [1]}]})"), Catch::Contains("'time'"));
     CHECK_THAT(config_error(R"({"n": 0, "train": []})"), Catch::Contains("'n'"));
     CHECK_THAT(config_error("{\"train\": [,]}"), Catch::Contains("not valid JSON"));
+}
+
+TEST_CASE("dataset configs refuse duplicate keys and backwards time ranges", "[render][dataset]") {
+    const std::string train = R"("train": [{"scene": "room:seed=1"}])";
+    REQUIRE_NOTHROW(ngi::DatasetConfig::parse("{\"n\": 8, " + train + "}", "/tmp/c.json"));
+    // nlohmann keeps the last of two equal keys silently: {"n": 64, "n": 8} rendered at 8.
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse("{\"n\": 64, \"n\": 8, " + train + "}", "/tmp/c.json"),
+                      Contains("/tmp/c.json") && Contains("duplicate key 'n'"));
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "frames": 2, "frames": 3}]})",
+                                                "/tmp/c.json"),
+                      Contains("duplicate key 'frames'"));
+    // Equal keys in different objects are fine.
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(
+        R"({"train": [{"scene": "room:seed=1", "frames": 2}], "test": [{"scene": "room:seed=2", "frames": 2}]})",
+        "/tmp/c.json"));
+    // A time range runs forward; hours go to 48 so that a night crosses midnight forward.
+    CHECK_THROWS_WITH(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [20, 10]}]})",
+                                                "/tmp/c.json"),
+                      Contains("train[0]") && Contains("end is before the start"));
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [22, 26]}]})", "/tmp/c.json"));
+    CHECK_NOTHROW(ngi::DatasetConfig::parse(R"({"train": [{"scene": "room:seed=1", "time": [12, 12]}]})", "/tmp/c.json"));
+    // Model metadata too.
+    REQUIRE_NOTHROW(ngi::detail::parse_model_config(R"({"family": "mlp", "input_nc": 3, "layers": [{"out": 1}]})",
+                                                    "m.safetensors"));
+    CHECK_THROWS_WITH(ngi::detail::parse_model_config(
+                          R"({"family": "mlp", "input_nc": 3, "input_nc": 4, "layers": [{"out": 1}]})", "dup.safetensors"),
+                      Contains("dup.safetensors") && Contains("duplicate key 'input_nc'"));
 }
 
 TEST_CASE("dataset: frame folders, resumable and deterministic", "[render][oclgrind-small]") {

@@ -2,18 +2,24 @@
 // overflow, counts far beyond the file's bytes. Each gives a clean InputError quickly (or a bounded scene), never a
 // crash, a hang or gigabytes of memory. The limits are the kMaxVox* constants of ngi/scene.hpp.
 #include <catch2/catch.hpp>
+#include <climits>
+#include <cmath>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "io_test_support.hpp"
+#include "ngi/area_light.hpp"
 #include "ngi/error.hpp"
 #include "ngi/scene.hpp"
 #include "vox_writer.hpp"
 
 using namespace ngi;
 using namespace vox_test;
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
 
 namespace {
 
@@ -186,6 +192,18 @@ TEST_CASE(".vox hostile: counts beyond the bytes left are refused before allocat
                Catch::Contains("negative string length in MATL"));
 }
 
+TEST_CASE("a .vox nTRN frame count beyond its bytes is refused", "[vox]") {
+    // nTRN: id, attributes, child, reserved, layer, frame count, frames (a dictionary each; only frame 0 is read).
+    auto ntrn_frames = [](int frames) {
+        return chunk("nTRN", i32(0) + dict({}) + i32(1) + i32(-1) + i32(-1) + i32(frames) + dict({}));
+    };
+    const std::string model = size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 1}});
+    const std::string shape = nshp(1, 0);
+    CHECK_THROWS_WITH(ngi::parse_vox(vox_file(model + ntrn_frames(INT_MAX) + shape), "frames.vox"),
+                      Contains("frames.vox") && Contains("nTRN declares 2147483647 frames"));
+    CHECK(ngi::parse_vox(vox_file(model + ntrn_frames(1) + shape), "frames.vox").solid_count() == 1);
+}
+
 TEST_CASE(".vox hostile: MATL numbers must be finite", "[vox]") {
     auto matl = [](const std::string& key, const std::string& value) {
         return vox_file(kCube + chunk("MATL", i32(1) + dict({{"_type", "_emit"}, {key, value}})));
@@ -198,6 +216,54 @@ TEST_CASE(".vox hostile: MATL numbers must be finite", "[vox]") {
     const VoxelScene s = parse_vox(matl("_emit", "0.5"), kName);
     REQUIRE(s.solid_count() == 1);
     CHECK(s.palette[s.at({0, 0, 0})].emission.r > 0.0f);
+}
+
+TEST_CASE(".vox emission that overflows after the flux scaling is refused", "[vox][render]") {
+    const std::string cube = size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 7}});
+    auto matl = [&](const Dict& d) { return vox_file(cube + chunk("MATL", i32(7) + dict(d))); };
+    auto error = [](const std::string& bytes) -> std::string {
+        try {
+            ngi::parse_vox(bytes, "lamp.vox");
+        } catch (const ngi::InputError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    // Finite in the file, Inf after x 4 x 2^flux in float: the light then lit nothing and the reference was black.
+    for (const Dict& d : {Dict{{"_type", "_emit"}, {"_emit", "3e38"}},
+                          Dict{{"_type", "_emit"}, {"_emit", "1e37"}, {"_flux", "4"}},
+                          Dict{{"_type", "_emit"}, {"_emit", "1100"}, {"_flux", "4"}}}) {  // 70,400 > 65,504
+        INFO(d[1].second);
+        CHECK_THAT(error(matl(d)), Contains("lamp.vox") && Contains("colour index 7") && Contains("exceeds the bound"));
+    }
+    // At the bound's edge: 1000 x 4 x 2^4 = 64,000 is accepted.
+    const ngi::VoxelScene s = ngi::parse_vox(matl({{"_type", "_emit"}, {"_emit", "1000"}, {"_flux", "4"}}), "lamp.vox");
+    CHECK(s.palette[s.at({0, 0, 0})].emission.r <= ngi::kMaxEmission);
+    CHECK(s.palette[s.at({0, 0, 0})].emission.r > 1000.0f);
+
+    // Every loader's materials pass through add_material, which holds the bound (procedural, meshes, API callers).
+    ngi::VoxelScene api({2, 2, 2}, "api scene");
+    CHECK_THROWS_WITH(api.add_material({glm::vec3(0.5f), glm::vec3(1e30f), false}),
+                      Contains("api scene") && Contains("material 1") && Contains("emission"));
+    CHECK_THROWS_AS(api.add_material({glm::vec3(0.5f), glm::vec3(std::nanf("")), false}), ngi::InputError);
+    CHECK_THROWS_AS(api.add_material({glm::vec3(0.5f), glm::vec3(-1.0f), false}), ngi::InputError);
+    CHECK(api.add_material({glm::vec3(0.5f), glm::vec3(ngi::kMaxEmission), false}) == 1);
+
+    // A mesh's emission (OBJ Ke) meets the same bound, naming the file.
+    ngi::test::TempDir dir("vox-emission");
+    ngi::test::spit(dir / "hot.obj", "mtllib hot.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n");
+    ngi::test::spit(dir / "hot.mtl", "newmtl hot\nKd 1 1 1\nKe 1e30 1e30 1e30\n");
+    CHECK_THROWS_WITH(ngi::make_scene(dir / "hot.obj"), Contains("hot.obj") && Contains("emission"));
+
+    // The area light too.
+    ngi::AreaLight l;
+    l.centre = {1, 2, 3};
+    l.half_u = {1, 0, 0};
+    l.half_v = {0, 0, 1};
+    l.radiance = {1e5f, 1, 1};
+    CHECK_THROWS_WITH(ngi::check_area_light(l, "--area-light"), Contains("--area-light") && Contains("emission bound"));
+    l.radiance = {60, 56, 50};
+    CHECK_NOTHROW(ngi::check_area_light(l, "--area-light"));
 }
 
 TEST_CASE(".vox: load_vox(path) is parse_vox of the file's bytes", "[vox]") {
@@ -215,6 +281,18 @@ TEST_CASE(".vox: load_vox(path) is parse_vox of the file's bytes", "[vox]") {
     CHECK(a.voxels == b.voxels);
     CHECK(a.palette.size() == b.palette.size());
     CHECK(a.solid_count() == 3);
+}
+
+// Issue 31, item 6: a valid 14 KB scene padded to a 3 GiB sparse .vox was read whole (38 s, 4 GB RSS, exit 0).
+TEST_CASE("a .vox file beyond kMaxVoxFileBytes is refused before it is read", "[vox][limits]") {
+    ngi::test::TempDir dir("vox-size");
+    const fs::path path = dir / "padded.vox";
+    ngi::test::spit(path, vox_file(size_chunk(1, 1, 1) + xyzi({{0, 0, 0, 7}})));
+    CHECK(ngi::load_vox(path.string()).palette.size() > 1);  // valid as written
+    fs::resize_file(path, ngi::kMaxVoxFileBytes + 1);           // sparse: no disk space, no memory
+    // Refused from the size fstat reports (the message quotes it), before any byte is read.
+    CHECK_THROWS_WITH(ngi::load_vox(path.string()),
+                      Contains("padded.vox") && Contains("is larger (" + std::to_string(ngi::kMaxVoxFileBytes + 1)));
 }
 
 TEST_CASE(".vox: the fuzzer's seed files are valid scenes", "[vox]") {
