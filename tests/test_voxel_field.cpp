@@ -571,7 +571,7 @@ std::vector<double> floor_integral(glm::dvec3 p, double W, int cells) {
 
 }  // namespace
 
-TEST_CASE("point SH: indirect light of a floor under a uniform sky equals the naive integral; the sky itself is "
+TEST_CASE("point SH: indirect light of a floor under a uniform sky equals the naive integral, the sky itself is "
           "not in it",
           "[voxel_field][point_sh]") {
     const int W = 24;
@@ -608,7 +608,7 @@ TEST_CASE("point SH: indirect light of a floor under a uniform sky equals the na
     for (float v : none.sh) REQUIRE(v == 0.0f);
 }
 
-TEST_CASE("point SH: full(B) - full(0) = indirect(B) on random grids with sun, sky, lamps and emitters; "
+TEST_CASE("point SH: full(B) - full(0) = indirect(B) on random grids with sun, sky, lamps and emitters, "
           "deterministic under any split of the directions",
           "[voxel_field][point_sh]") {
     std::mt19937 rng(4601);
