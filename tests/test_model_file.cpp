@@ -2,9 +2,11 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -12,6 +14,7 @@
 
 #include "models/family.hpp"
 #include "models/safetensors.hpp"
+#include "ngi.h"
 #include "ngi/error.hpp"
 #include "ngi/model.hpp"
 #include "test_support.hpp"
@@ -388,4 +391,115 @@ TEST_CASE("broken mlp model files give clear errors naming the field or tensor",
     REQUIRE_THROWS_WITH(ngi::Model::load(ngi::test::device(), write_file("mlp_path", ok, cfg),
                                          ngi::ModelOptions{"", "", "turbo"}),
                         Contains("'turbo'"));
+}
+
+TEST_CASE("every registered family's parser sets the traits the code outside models/ chooses by", "[model][file]") {
+    using ngi::ModelInput;
+    struct Case {
+        nlohmann::json config;
+        ModelInput input;
+        bool has_network, output_keeps_size;
+    };
+    // A graph with no tensors whose output is C x 1 x 1 (it resamples), and an "nc" one (items).
+    const nlohmann::json pool = nlohmann::json::parse(R"({"family": "graph", "input_nc": 2, "graph": {"input": "x",
+        "output": "y", "nodes": [{"name": "pool", "op": "global_avg_pool", "inputs": ["x"], "output": "y"}]}})");
+    const nlohmann::json relu = nlohmann::json::parse(R"({"family": "graph", "input_nc": 2, "graph": {"layout": "nc",
+        "input": "x", "output": "y", "nodes": [{"name": "relu", "op": "activation", "inputs": ["x"], "output": "y",
+        "activation": "relu"}]}})");
+    const nlohmann::json voxel = {{"family", "voxel_sh"}, {"architecture", "mlp"}, {"grid", {4, 4, 4}}, {"hidden", {8}},
+                                  {"input_lo", std::vector<double>(10, 0.0)}, {"input_hi", std::vector<double>(10, 1.0)},
+                                  {"output_mean", std::vector<double>(27, 0.0)},
+                                  {"output_std", std::vector<double>(27, 1.0)}};
+    const nlohmann::json neural = nlohmann::json::parse(R"({"family": "neural_gi", "input_nc": 18, "output_nc": 3,
+        "ngf": 8, "num_downs": 5, "dropout": "off", "neural_gi": {"buffer_channels": 4, "mlp_width": 8, "mlp_depth": 2,
+        "skip_layer": 1, "decode": "exp"}})");
+    // A config of every family, keyed by its name: a family added to the registry fails here until its config and
+    // traits are added (graph: both layouts).
+    const std::map<std::string, std::vector<Case>> cases = {
+        {"pix2pix_unet", {{tiny_config(), ModelInput::image, true, true}}},
+        {"deepillumination",
+         {{nlohmann::json::parse(R"({"family": "deepillumination", "input_nc": 1, "output_nc": 1, "ngf": 1,
+               "num_downs": 8})"),
+           ModelInput::image, true, true}}},
+        {"mlp",
+         {{nlohmann::json::parse(R"({"family": "mlp", "input_nc": 3, "layers": [{"out": 1}]})"), ModelInput::items,
+           true, true}}},
+        {"voxel_sh", {{voxel, ModelInput::items, true, true}}},
+        {"neural_gi", {{neural, ModelInput::image, true, true}}},
+        {"graph", {{pool, ModelInput::image, true, false}, {relu, ModelInput::items, true, false}}},
+        {"ssgi", {{nlohmann::json::parse(R"({"family": "ssgi"})"), ModelInput::image, false, true}}},
+        {"pixel_cnn",
+         {{nlohmann::json::parse(R"({"family": "pixel_cnn", "input_nc": 2, "layers": [{"out": 3, "kernel": 3}]})"),
+           ModelInput::image, true, true}}},
+    };
+    std::size_t families = 0;
+    for (const ngi::detail::ModelFamily* f : ngi::detail::model_families()) {
+        ++families;
+        const std::string name(f->name);
+        INFO("family " << name);
+        const auto it = cases.find(name);
+        REQUIRE(it != cases.end());
+        for (const Case& k : it->second) {
+            INFO("config " << k.config.dump());
+            const ngi::detail::FamilyConfig parsed = ngi::detail::parse_family_config(k.config.dump(), "m.safetensors");
+            REQUIRE(parsed.family == f);
+            CHECK(parsed.config.family == name);
+            CHECK(parsed.config.input == k.input);
+            CHECK(parsed.config.has_network == k.has_network);
+            CHECK(parsed.config.output_keeps_size == k.output_keeps_size);
+        }
+    }
+    CHECK(families == cases.size());  // no config left of a family the registry no longer lists
+
+    // The tensorless ones load: an ssgi rung, and the pooling graph, whose output the network sizes.
+    ngi::Device& dev = ngi::test::device();
+    const ngi::Model rung = ngi::Model::load(dev, write_file("traits_ssgi", {}, {{"family", "ssgi"}}));
+    CHECK(!rung.config().has_network);
+    ngi::Model graph = ngi::Model::load(dev, write_file("traits_pool", {}, pool));
+    CHECK(!graph.config().output_keeps_size);
+    CHECK(graph.run(ngi::Tensor({1, 2, 4, 4})).shape == std::vector<int>{1, 2, 1, 1});
+}
+
+TEST_CASE("a family parser that leaves a trait unset fails every parse of its family", "[model][file]") {
+    ngi::detail::FamilyConfig parsed;
+    parsed.traits.input = ngi::ModelInput::items;  // output_keeps_size forgotten
+    parsed.traits.has_network = true;
+    bool input_error = false;
+    std::string message;
+    try {
+        ngi::detail::apply_family_traits(parsed, "new_family");
+    } catch (const ngi::InputError&) {
+        input_error = true;
+    } catch (const ngi::Error& e) {
+        message = e.what();
+    }
+    CHECK(!input_error);  // a bug of the library, not a file's fault
+    CHECK_THAT(message, Contains("new_family") && Contains("'output_keeps_size'"));
+    parsed.traits.output_keeps_size = false;
+    ngi::detail::apply_family_traits(parsed, "new_family");
+    CHECK(parsed.config.input == ngi::ModelInput::items);
+    CHECK(parsed.config.has_network);
+    CHECK(!parsed.config.output_keeps_size);
+}
+
+TEST_CASE("ngi_model_run refuses a network whose output has another size than its input", "[model][file]") {
+    // A graph's global average pool makes C x 1 x 1: the C call's output_nc x height x width would be read past it.
+    const std::string path = write_file("c_pool", {}, nlohmann::json::parse(R"({"family": "graph", "input_nc": 2,
+        "graph": {"input": "x", "output": "y", "nodes": [{"name": "pool", "op": "global_avg_pool", "inputs": ["x"],
+        "output": "y"}]}})"));
+    const char* spec = std::getenv("NGI_TEST_DEVICE");
+    ngi_device* cdev = nullptr;
+    ngi_model* cm = nullptr;
+    REQUIRE(ngi_device_open(spec ? spec : "cpu", &cdev) == NGI_OK);
+    REQUIRE(ngi_model_load(cdev, path.c_str(), &cm) == NGI_OK);
+    ngi_model_input input = NGI_INPUT_ITEMS;
+    int has_network = -1, keeps = -1;
+    CHECK(ngi_model_traits(cm, &input, &has_network, &keeps) == NGI_OK);
+    CHECK((input == NGI_INPUT_IMAGE && has_network == 1 && keeps == 0));
+    std::vector<float> x(2 * 4 * 4, 0.5f), y(2 * 4 * 4, -1.0f);
+    CHECK(ngi_model_run(cm, x.data(), x.size() * sizeof(float), 4, 4, y.data(), y.size() * sizeof(float)) ==
+          NGI_ERROR_INPUT);
+    CHECK_THAT(std::string(ngi_last_error()), Contains("[1, 2, 1, 1]") && Contains("resamples"));
+    CHECK(ngi_model_release(cm) == NGI_OK);
+    CHECK(ngi_device_release(cdev) == NGI_OK);
 }

@@ -32,8 +32,6 @@ ngi_status load_model(const char* call, ngi_device* device, const char* path, ng
     });
 }
 
-bool item_family(const ngi::ModelConfig& c) { return c.family == "mlp" || c.family == "voxel_sh"; }
-
 }  // namespace
 
 extern "C" {
@@ -88,6 +86,15 @@ ngi_status ngi_model_family(const ngi_model* model, ngi_family* family) {
     });
 }
 
+ngi_status ngi_model_traits(const ngi_model* model, ngi_model_input* input, int* has_network, int* output_keeps_size) {
+    return guarded(__func__, [&] {
+        const auto& c = live(model, "model").model.config();
+        if (input) *input = c.input == ngi::ModelInput::items ? NGI_INPUT_ITEMS : NGI_INPUT_IMAGE;
+        if (has_network) *has_network = c.has_network ? 1 : 0;
+        if (output_keeps_size) *output_keeps_size = c.output_keeps_size ? 1 : 0;
+    });
+}
+
 ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
                          float* output, size_t output_bytes) {
     return guarded(__func__, [&] {
@@ -103,21 +110,32 @@ ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_byte
         require(output_bytes >= out_need, "output_bytes is " + std::to_string(output_bytes) + ", the model writes " +
                                               std::to_string(out_need));
         ngi::RunInfo info;
-        if (c.family == "voxel_sh") {
-            // Model::run takes voxel_sh items by item, [V][10] -> [V][27]; this call's layout is planar, as
-            // ngi_model_enqueue's: [10][V] -> [27][V].
+        // The output this call's caller sized, output_nc x height x width: a network that resamples (e.g. a graph
+        // with a stride or a pool) writes another size, refused instead of read past or cut.
+        auto check_output = [&](const ngi::Tensor& y) {
+            if (y.data.size() * sizeof(float) != out_need)
+                fail(NGI_ERROR_INPUT, "the model's output is " + ngi::shape_string(y.shape) + ", not " +
+                                          std::to_string(c.output_nc) + "x" + std::to_string(height) + "x" +
+                                          std::to_string(width) + ": its network resamples (run it from C++ or "
+                                          "Python, which size the output from the network)");
+        };
+        if (c.input == ngi::ModelInput::items) {
+            // Model::run takes items by item, [N][input_nc] -> [N][output_nc] (voxel_sh takes nothing else); this
+            // call's layout is planar, as ngi_model_enqueue's: [input_nc][N] -> [output_nc][N].
             const std::size_t items = std::size_t(height) * std::size_t(width);
-            require(items <= std::size_t(std::numeric_limits<int>::max()), "height x width is over 2^31 voxels");
+            require(items <= std::size_t(std::numeric_limits<int>::max()), "height x width is over 2^31 items");
             ngi::Tensor in({int(items), c.input_nc});
             for (std::size_t i = 0; i < items; ++i)
                 for (int k = 0; k < c.input_nc; ++k) in.data[i * c.input_nc + k] = input[std::size_t(k) * items + i];
             const ngi::Tensor y = m.model.run(in, &info);
+            check_output(y);
             for (std::size_t i = 0; i < items; ++i)
                 for (int k = 0; k < c.output_nc; ++k) output[std::size_t(k) * items + i] = y.data[i * c.output_nc + k];
         } else {
             ngi::Tensor in({1, c.input_nc, height, width});
             std::memcpy(in.data.data(), input, in_need);
             const ngi::Tensor y = m.model.run(in, &info);
+            check_output(y);
             std::memcpy(output, y.data.data(), out_need);
         }
         m.sanitized_inputs = info.sanitized_inputs;
@@ -130,9 +148,9 @@ ngi_status ngi_model_run_items(ngi_model* model, const float* input, size_t inpu
     return guarded(__func__, [&] {
         ngi_model& m = live(model, "model");
         const auto& c = m.model.config();
-        if (!item_family(c))
-            fail(NGI_ERROR_INPUT, "the model's family is " + c.family +
-                                      "; items are for the mlp and voxel_sh families (images: ngi_model_run)");
+        if (c.input != ngi::ModelInput::items)
+            fail(NGI_ERROR_INPUT, "the model's family is " + c.family + ", which takes images (ngi_model_run); "
+                                  "items are for per-item networks (ngi_model_traits: NGI_INPUT_ITEMS)");
         require(input, "input is NULL");
         require(output, "output is NULL");
         require(count > 0, "count must be positive, got " + std::to_string(count));

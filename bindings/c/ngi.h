@@ -183,11 +183,11 @@ NGI_API ngi_status ngi_model_load(ngi_device* device, const char* path, ngi_mode
 /* The file a model name (or path) stands for, as ngi_model_load resolves it, into buf (ngi_device_list_string's
  * rules for buf, size and *needed). */
 NGI_API ngi_status ngi_model_resolve(const char* name_or_path, char* buf, size_t size, size_t* needed);
-/* Cold start (ngi/warmup.hpp): runs `model` (a frame rung: pix2pix_unet, deepillumination or ssgi) twice on a
- * synthetic frame at face size n on `device`, and through a display view of display_size^2 pixels when display_size
+/* Cold start (ngi/warmup.hpp): runs `model` (a frame rung: an image generator whose input the surround pipeline
+ * makes, or an ssgi rung: ngi_model_traits NGI_INPUT_IMAGE, or no network) twice on a synthetic frame at face size n on `device`, and through a display view of display_size^2 pixels when display_size
  * > 0, so that every OpenCL program and work-group size its frames need is built into the program caches (ngi's
  * folder, ngi_program_cache_dir, and $POCL_CACHE_DIR on PoCL): later processes start fast. report may be NULL.
- * NGI_ERROR_INPUT for another family or a cache folder that cannot be written (checked before any work). */
+ * NGI_ERROR_INPUT for another model or a cache folder that cannot be written (checked before any work). */
 typedef struct ngi_warmup_report {
     int programs_built;      /* compiled from source by this call (and written to the cache) */
     int programs_from_cache; /* loaded from the cache by this call */
@@ -230,14 +230,30 @@ typedef NGI_ENUM(ngi_family) {
     NGI_FAMILY_MAX_ENUM = 0x7FFFFFFF
 } ngi_family;
 NGI_API ngi_status ngi_model_family(const ngi_model* model, ngi_family* family);
+/* What a model takes (the family's traits, docs/MODEL_FORMAT.md "family"): what to choose by instead of the family,
+ * which also answers for a family this header does not name (NGI_FAMILY_OTHER). */
+typedef NGI_ENUM(ngi_model_input) {
+    NGI_INPUT_IMAGE = 0, /* images: input_nc x height x width (families pix2pix_unet, deepillumination, neural_gi,
+                            graph with layout "nchw", pixel_cnn; ssgi's frames) */
+    NGI_INPUT_ITEMS = 1, /* a per-item network: ngi_model_run_items, or height x width items stored planar (mlp,
+                            voxel_sh, graph with layout "nc") */
+    NGI_MODEL_INPUT_MAX_ENUM = 0x7FFFFFFF
+} ngi_model_input;
+/* Any pointer may be NULL. *has_network: 0 for a rung with no network and no tensors (ssgi): ngi_model_run and
+ * _enqueue refuse it, ngi_pipeline_* run it. *output_keeps_size: 0 when the network decides its output's size (it
+ * may resample: family graph); ngi_model_run then refuses an output that is not output_nc x height x width. */
+NGI_API ngi_status ngi_model_traits(const ngi_model* model, ngi_model_input* input, int* has_network,
+                                    int* output_keeps_size);
 /* input: input_nc x height x width floats (CHW, batch 1, input_bytes >= that many bytes); output: output_nc x height
- * x width floats. height and width must be positive multiples of 2^num_downs. Families mlp and voxel_sh take
- * height x width items stored planar ([input_nc][items] -> [output_nc][items], as ngi_model_enqueue; voxel_sh: the
- * voxels of one scene). Blocking. */
+ * x width floats. height and width must be positive multiples of 2^num_downs. A per-item network (NGI_INPUT_ITEMS)
+ * takes height x width items stored planar ([input_nc][items] -> [output_nc][items], as ngi_model_enqueue; voxel_sh:
+ * the voxels of one scene). NGI_ERROR_INPUT when the network's output has another size (output_keeps_size 0).
+ * Blocking. */
 NGI_API ngi_status ngi_model_run(ngi_model* model, const float* input, size_t input_bytes, int height, int width,
                                  float* output, size_t output_bytes);
-/* Families mlp and voxel_sh: `count` items stored by item, [count][input_nc] -> [count][output_nc] (row-major, as
- * Model::run takes them; voxel_sh: the count voxels of one scene, e.g. ngi_voxels_attributes). Blocking. */
+/* A per-item network (NGI_INPUT_ITEMS): `count` items stored by item, [count][input_nc] -> [count][output_nc]
+ * (row-major, as Model::run takes them; voxel_sh: the count voxels of one scene, e.g. ngi_voxels_attributes);
+ * NGI_ERROR_INPUT for an image model. Blocking. */
 NGI_API ngi_status ngi_model_run_items(ngi_model* model, const float* input, size_t input_bytes, int count,
                                        float* output, size_t output_bytes);
 /* The same as ngi_model_run on device buffers, asynchronous (ngi_device_sync waits): no host transfer. */

@@ -205,7 +205,7 @@ public:
                           o_.gi ? rung_.c_str() : "GI off (direct light only)", o_.n, o_.width, o_.height, o_.side(),
                           fps_, last_.raster, last_.display_raster, last_.readback,
                           last_.display_readback, last_.gather + last_.input + last_.network + last_.outputs,
-                          last_.input, model_.config().family == "ssgi" ? "ssgi" : "network", last_.network,
+                          last_.input, model_.config().has_network ? "network" : "ssgi", last_.network,
                           last_.display_ngi, d.geometry_ms, d.upsample_ms, d.temporal_ms, d.outputs_ms, hours_);
             return b;
         }
@@ -213,7 +213,7 @@ public:
                       "%s  N=%d  %.1f fps\nraster %.1f ms\ntransfer %.1f ms (readback %.1f + gather %.1f)\n"
                       "merge %.1f  %s %.1f  compose %.1f ms\n%s  %.1f h  no area light",
                       rung_.c_str(), o_.n, fps_, last_.raster, last_.transfer(), last_.readback, last_.gather,
-                      last_.input, model_.config().family == "ssgi" ? "ssgi" : "network", last_.network,
+                      last_.input, model_.config().has_network ? "network" : "ssgi", last_.network,
                       last_.outputs, transfer_.used.c_str(), hours_);
         return b;
     }
@@ -480,7 +480,7 @@ int main(int argc, char** argv) {
     try {
         model = ngi::Model::load(*device, ngi::resolve_model(o.model));
         const ngi::ModelConfig& c = model->config();
-        if (c.input_nc != 12 && c.family != "ssgi")  // the viewer renders all six faces: any ssgi rung runs
+        if (c.input_nc != 12 && c.has_network)  // the viewer renders all six faces: any SSGI rung (no network) runs
             throw ngi::InputError("model " + o.model + " has input_nc " + std::to_string(c.input_nc) +
                                   ": the viewer runs surround models (12 input channels) and ssgi rungs");
     } catch (const ngi::ClError& e) {

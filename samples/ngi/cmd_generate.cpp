@@ -38,14 +38,19 @@ int run(const Options& o) {
     const auto& c = model.config();
     auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
     std::printf("device     %s\n", device.info().name.c_str());
-    if (c.family == "mlp") {
+    // What the model's config holds, by its sections (not by its family's name): a dense-layer list (mlp), a U-Net
+    // (the generators), or neither (the family and its channels).
+    if (!c.layers.empty()) {
         std::string widths;
         for (const auto& l : c.layers) widths += (widths.empty() ? "" : "-") + std::to_string(l.out) + " " + l.activation;
-        std::printf("model      %s: mlp, %d inputs, encoding %d bands, layers %s\n", model_path.c_str(), c.input_nc,
-                    c.encoding_bands, widths.c_str());
-    } else {
+        std::printf("model      %s: %s, %d inputs, encoding %d bands, layers %s\n", model_path.c_str(),
+                    c.family.c_str(), c.input_nc, c.encoding_bands, widths.c_str());
+    } else if (c.ngf > 0) {
         std::printf("model      %s: %s, %d -> %d channels, ngf %d, %d downs, bn %s, dropout %s\n", model_path.c_str(),
                     c.family.c_str(), c.input_nc, c.output_nc, c.ngf, c.num_downs, c.bn_mode.c_str(), c.dropout.c_str());
+    } else {
+        std::printf("model      %s: %s, %d -> %d channels\n", model_path.c_str(), c.family.c_str(), c.input_nc,
+                    c.output_nc);
     }
     std::printf("input      %s %s\n", input_path.c_str(), ngi::shape_string(x.shape).c_str());
     std::printf("output     %s %s\n", output_path.c_str(), ngi::shape_string(y.shape).c_str());

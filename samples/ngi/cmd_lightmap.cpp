@@ -142,7 +142,7 @@ int run(const Options& o) {
                          replaced);
         const ngi::ModelConfig& c = model->config();
         const bool surround = c.input_nc == 12;
-        if (c.family == "ssgi")  // no network: the gather of the faces' light, added to the direct light
+        if (!c.has_network)  // an SSGI rung: the gather of the faces' light, added to the direct light
             input_text = "none (ssgi, " + c.ssgi.view + " faces, " + std::to_string(c.ssgi.bounces) + " bounce" +
                          (c.ssgi.bounces > 1 ? "s" : "") + ")";
         else

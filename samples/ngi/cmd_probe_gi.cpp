@@ -190,6 +190,7 @@ int run(Options o) {
     for (const std::string& model_path : o.models) {
         ngi::Model model = ngi::Model::load(device, ngi::resolve_model(model_path));
         const ngi::ModelConfig& c = model.config();
+        // A requirement of this command, not a dispatch: it feeds the voxel attributes and reads SH-27 per voxel.
         if (c.family != "voxel_sh")
             throw ngi::InputError("load model " + model_path + ": family " + c.family + ", ngi probe-gi needs voxel_sh");
         try {

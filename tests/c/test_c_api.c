@@ -149,6 +149,12 @@ static void test_model(ngi_device* dev, const char* models) {
         CHECK(ngi_model_load(dev, "ssgi_surround", &by_name) == NGI_OK);
         ngi_family rung_family = NGI_FAMILY_OTHER;
         CHECK(ngi_model_family(by_name, &rung_family) == NGI_OK && rung_family == NGI_FAMILY_SSGI);
+        {   /* no network: the pipeline runs its gather; its lightmap has the face's size */
+            ngi_model_input input = NGI_INPUT_ITEMS;
+            int has_network = -1, keeps = -1;
+            CHECK(ngi_model_traits(by_name, &input, &has_network, &keeps) == NGI_OK && input == NGI_INPUT_IMAGE &&
+                  has_network == 0 && keeps == 1);
+        }
         CHECK(ngi_model_release(by_name) == NGI_OK);
         CHECK_FAILS(ngi_model_load(dev, "no_such_model", &m), NGI_ERROR_INPUT, "ngi_model_load:", "known names");
         CHECK_FAILS(ngi_model_resolve(NULL, file, sizeof file, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_resolve",
@@ -604,6 +610,14 @@ static void test_model_enqueue(ngi_device* dev, const char* models) {
     CHECK(ngi_model_load(dev, path, &m) == NGI_OK);
     CHECK(ngi_model_family(m, &family) == NGI_OK && family == NGI_FAMILY_PIX2PIX_UNET);
     CHECK_FAILS(ngi_model_family(m, NULL), NGI_ERROR_INVALID_ARGUMENT, "ngi_model_family", "family is NULL");
+    {   /* the traits to choose by instead of the family: an image network whose output has its input's size */
+        ngi_model_input input = NGI_INPUT_ITEMS;
+        int has_network = -1, keeps = -1;
+        CHECK(ngi_model_traits(m, &input, &has_network, &keeps) == NGI_OK && input == NGI_INPUT_IMAGE &&
+              has_network == 1 && keeps == 1);
+        CHECK(ngi_model_traits(m, NULL, NULL, NULL) == NGI_OK);
+        CHECK_FAILS(ngi_model_traits(NULL, &input, NULL, NULL), NGI_ERROR_INVALID_HANDLE, "ngi_model_traits", "model");
+    }
     for (i = 0; i < in_bytes / sizeof(float); ++i) x[i] = (float)((i * 2654435761u) % 2000u) / 1000.0f - 1.0f;
     CHECK(ngi_model_run(m, x, in_bytes, h, w, y, out_bytes) == NGI_OK);
     CHECK(ngi_buffer_new(dev, in_bytes, &in_b) == NGI_OK);
@@ -665,6 +679,12 @@ static void test_ao(ngi_device* dev, const char* models) {
     /* The same file as a plain mlp model, fed the ring by hand: channel 3k + c = component c of point k. */
     CHECK(ngi_model_load(dev, path, &mlp) == NGI_OK);
     CHECK(ngi_model_family(mlp, &family) == NGI_OK && family == NGI_FAMILY_MLP);
+    {
+        ngi_model_input input = NGI_INPUT_IMAGE;
+        int has_network = -1;
+        CHECK(ngi_model_traits(mlp, &input, &has_network, NULL) == NGI_OK && input == NGI_INPUT_ITEMS &&
+              has_network == 1);
+    }
     CHECK(ngi_model_channels(mlp, &in_nc, &out_nc, NULL) == NGI_OK && in_nc == 48 && out_nc == 1);
     for (k = 0; k < 16; ++k)
         for (c = 0; c < 3; ++c)
@@ -791,6 +811,10 @@ static void test_voxels(ngi_device* dev, const char* models) {
     snprintf(path, sizeof path, "%s/voxel_sh_set.safetensors", models);
     CHECK(ngi_model_load(dev, path, &sh_model) == NGI_OK);
     CHECK(ngi_model_family(sh_model, &family) == NGI_OK && family == NGI_FAMILY_VOXEL_SH);
+    {
+        ngi_model_input input = NGI_INPUT_IMAGE;
+        CHECK(ngi_model_traits(sh_model, &input, NULL, NULL) == NGI_OK && input == NGI_INPUT_ITEMS);
+    }
     CHECK(ngi_model_channels(sh_model, &in_nc, &out_nc, NULL) == NGI_OK && in_nc == 10 && out_nc == 27);
     CHECK(ngi_model_run_items(sh_model, attr, V * 10 * sizeof(float), count, sh1, V * 27 * sizeof(float)) == NGI_OK);
     CHECK(ngi_voxels_predict_sh(vox, sh_model, sh2, V * 27 * sizeof(float)) == NGI_OK);

@@ -15,12 +15,18 @@ py::dict config_dict(const ngi::ModelConfig& c) {
     d["family"] = c.family;
     d["input_nc"] = c.input_nc;
     d["output_nc"] = c.output_nc;
-    if (c.family == "voxel_sh") {
+    // The family's traits (ngi/model.hpp): what to choose by instead of the family's name.
+    d["input"] = c.input == ngi::ModelInput::items ? "items" : "image";
+    d["has_network"] = c.has_network;
+    d["output_keeps_size"] = c.output_keeps_size;
+    // The sections of the public config a model has (which fields to show, not what to do with it): a family with
+    // none (pixel_cnn, ssgi) shows none.
+    if (!c.voxel_sh.architecture.empty()) {  // voxel_sh's parser sets its required architecture
         d["architecture"] = c.voxel_sh.architecture;
         d["grid"] = py::make_tuple(c.voxel_sh.grid[0], c.voxel_sh.grid[1], c.voxel_sh.grid[2]);
-    } else if (c.family == "graph") {
-        d["layout"] = c.graph.layout;
-    } else if (c.family != "mlp") {
+    }
+    if (c.family == "graph") d["layout"] = c.graph.layout;  // ModelConfig::graph, that family's own section
+    if (c.ngf > 0) {  // a U-Net (the generators; neural_gi's buffer network)
         d["ngf"] = c.ngf;
         d["num_downs"] = c.num_downs;
         d["bn_mode"] = c.bn_mode;
@@ -104,11 +110,11 @@ source tree's models/ (ngi/model.hpp "Shipped models by name").)doc");
         d["second_frame_ms"] = r.second_frame_ms;
         return d;
     }, py::arg("model"), py::arg("n") = 64, py::arg("display") = 0, R"doc(
-Cold start (ngi/warmup.hpp): runs the model (a frame rung: pix2pix_unet, deepillumination or ssgi) twice on a
-synthetic frame at face size n, and through a display view of display x display pixels when display > 0, so that
+Cold start (ngi/warmup.hpp): runs the model (a frame rung: an image generator whose input the surround pipeline
+makes, or an ssgi rung; config["input"] == "image" or not config["has_network"]) twice on a synthetic frame at face size n, and through a display view of display x display pixels when display > 0, so that
 every OpenCL program and work-group size its frames need is built into the program caches (program_cache_dir(), and
 $POCL_CACHE_DIR on PoCL): a later process starts fast. Returns {cache_dir, programs_built, programs_from_cache,
-first_frame_ms, second_frame_ms}. Raises ngi.InputError for another family or a cache folder it cannot write.)doc");
+first_frame_ms, second_frame_ms}. Raises ngi.InputError for another model or a cache folder it cannot write.)doc");
     py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model", R"doc(
 A model file loaded on a device: a generator (pix2pix_unet, deepillumination), an mlp or a voxel_sh field network
 (docs/MODEL_FORMAT.md).
@@ -129,7 +135,9 @@ each input size is built on first use.)doc")
              py::arg("device"), py::arg("path"), py::arg("bn_mode") = py::none(), py::arg("dropout") = py::none(),
              py::arg("mlp_path") = py::none())
         .def_property_readonly("config", [](const PyModel& pm) { return config_dict(pm.model.config()); },
-                               "The architecture (family, channel counts, ranges, ...) and the file's metadata.")
+                               "The architecture (family, channel counts, ranges, ...), the family's traits "
+                               "(input: 'image' or 'items', what run() takes; has_network: False for an ssgi rung; "
+                               "output_keeps_size: False when the network sizes its output) and the file's metadata.")
         .def_property_readonly("path", [](const PyModel& pm) { return pm.path; })
         .def_property_readonly("output_mode", [](const PyModel& pm) { return pm.model.config().output_mode; },
                                "What the decoded output is: 'lightmap' (the front view's direct + indirect light; "
@@ -141,18 +149,18 @@ each input size is built on first use.)doc")
         .def("run", [](PyModel& pm, const py::object& input) -> py::array_t<float> {
             FloatArray x = float_array(input, "Model.run: input");
             const ngi::ModelConfig& c = pm.model.config();
-            // Per-item families take point lists [N, C] too (voxel_sh: [V, 10], one scene's voxels).
-            const bool mlp = c.family == "mlp" || c.family == "voxel_sh" ||
-                             (c.family == "graph" && c.graph.layout == "nc");
-            expect_ndim(x, mlp ? std::initializer_list<int>{2, 4} : std::initializer_list<int>{4}, "Model.run: input",
-                        mlp ? "[1, C, H, W] or [N, C]" : "[1, C, H, W]");
+            // Per-item networks take point lists [N, C] too (voxel_sh: [V, 10], one scene's voxels).
+            const bool items = c.input == ngi::ModelInput::items;
+            expect_ndim(x, items ? std::initializer_list<int>{2, 4} : std::initializer_list<int>{4},
+                        "Model.run: input", items ? "[1, C, H, W] or [N, C]" : "[1, C, H, W]");
             if (x.ndim() == 4) {
                 if (x.shape(0) != 1 || x.shape(1) != c.input_nc)
                     throw py::value_error("Model.run: input: expected [1, " + std::to_string(c.input_nc) +
                                           ", H, W] for " + pm.path + ", got [" + std::to_string(x.shape(0)) + ", " +
                                           std::to_string(x.shape(1)) + ", ...]");
-                // An imported graph may resample (its output's size is the graph's): through the library's Tensor.
-                if (c.family != "graph") return run_nchw(pm, x);
+                // A network that may resample (an imported graph: its output's size is its own) goes through the
+                // library's Tensor, which is sized from the network.
+                if (c.output_keeps_size) return run_nchw(pm, x);
             }
             // [N, C] points: channels last, so the library transposes; one copy into its Tensor.
             std::vector<int> shape;

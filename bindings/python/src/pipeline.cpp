@@ -274,8 +274,9 @@ ngi::ModelConfig merge_config(const PyModel* model, bool single_view, const PyMo
                                   "of a network that corrects that SSGI rung)");
         ssgi->device->get("network_input: ssgi");
         const ngi::ModelConfig& s = ssgi->model.config();
-        if (s.family != "ssgi")
-            throw py::value_error("network_input: ssgi must be a model of family ssgi, got family " + s.family);
+        if (s.has_network)  // an SSGI rung is a model with no network: its `ssgi` section is the gather's
+            throw py::value_error("network_input: ssgi must be an SSGI rung (a model with no network, family ssgi), "
+                                  "got family " + s.family);
         ngi::ModelConfig c;
         c.family = "pix2pix_unet";
         c.output_mode = "ssgi_residual";

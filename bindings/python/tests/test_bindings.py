@@ -130,6 +130,19 @@ def test_mlp_points_and_pixels(dev):
     np.testing.assert_allclose(points[:, 0], per_pixel.reshape(-1), rtol=0, atol=1e-6)
 
 
+def test_model_config_traits_and_sections(dev, surround):
+    # The family's traits (what to choose by instead of the family's name) and only the sections a model has.
+    c = surround.config
+    assert (c["input"], c["has_network"], c["output_keeps_size"]) == ("image", True, True) and c["ngf"] > 0
+    mlp = ngi.Model(dev, MODELS / "ao_sculpture_16x8.safetensors").config
+    assert (mlp["input"], mlp["has_network"], mlp["output_keeps_size"]) == ("items", True, True)
+    assert "ngf" not in mlp and "architecture" not in mlp
+    voxel = ngi.Model(dev, "voxel_sh_set").config
+    assert voxel["input"] == "items" and voxel["architecture"] == "set" and "ngf" not in voxel
+    rung = ngi.Model(dev, "ssgi_surround").config
+    assert (rung["input"], rung["has_network"]) == ("image", False) and "ngf" not in rung and "bn_mode" not in rung
+
+
 def test_pipeline_numpy_dict_equals_frame_folder_and_cli(dev, surround, frame, frame_dir, tmp_path):
     pipe = ngi.Pipeline(dev, 64)
     # The folder stores colours as half floats, so the dict is made from the frame as read back.

@@ -15,9 +15,27 @@ namespace ngi {
 
 namespace detail { struct ModelAccess; }
 
+// What Model::run takes (ModelConfig::input).
+enum class ModelInput {
+    image,  // [1, input_nc, H, W] NCHW images (the generators, neural_gi, pixel_cnn, graph layout "nchw")
+    items,  // a per-item network: [N, input_nc] item lists (mlp, voxel_sh, graph layout "nc"); Model::enqueue takes
+            // height x width items stored planar. mlp and graph also take [1, input_nc, H, W] (one item per pixel)
+};
+
 // The architecture config stored as JSON in the file's __metadata__["ngi"] (docs/MODEL_FORMAT.md).
 struct ModelConfig {
-    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi" | "graph" | "ssgi"
+    std::string family;              // "pix2pix_unet" | "deepillumination" | "mlp" | "voxel_sh" | "neural_gi" | "graph" | "ssgi" | ...
+    // The family's traits: what the library, the bindings and the CLI choose by, instead of comparing `family` with
+    // a name (docs/ARCHITECTURE.md "Models"). Every family's parser sets all three for the file it reads (the
+    // registry refuses a config whose parser forgot one); the defaults are those of a plain image network, for
+    // configs built by hand.
+    ModelInput input = ModelInput::image;  // graph: follows its layout ("nc": items)
+    // false: no network and no tensors (family ssgi): Model::run and Model::enqueue refuse the model, and the
+    // surround pipeline runs the SSGI gather of its `ssgi` section on the frame instead.
+    bool has_network = true;
+    // false: the output's H x W is the network's own, not the input's (family graph: its nodes may stride, pool or
+    // resize); Model::run sizes the output, and Model::enqueue's output buffer must hold what the network writes.
+    bool output_keeps_size = true;
     int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
     std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
     float bn_eps = 1e-5f;

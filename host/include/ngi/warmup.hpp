@@ -24,7 +24,8 @@ struct WarmUpReport {
     double second_frame_ms = 0;   // the same frame again: what a frame costs once warm
 };
 
-// Runs `model` (a frame rung: pix2pix_unet, deepillumination or ssgi) on a synthetic frame at face size n through
+// Runs `model` (a frame rung: an image generator the surround pipeline can feed -- ModelConfig::input image, 12 or
+// the single view's input channels -- or an ssgi rung, has_network false) on a synthetic frame at face size n through
 // SurroundPipeline::enqueue with every output, and, when display_size > 0, through a DisplayView of that size; twice,
 // timed. Throws InputError for a model that is no frame rung, a face size the pipeline refuses, or a program cache
 // folder that cannot be created or written (checked first, before any work: nothing is left behind).

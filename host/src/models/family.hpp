@@ -1,12 +1,15 @@
 // Model families (docs/ARCHITECTURE.md "Models"): what Model dispatches to. Each family is a front-end file,
 // models/<family>_family.cpp, defining one ModelFamily: its name, the parser of its config and its loader, which
 // builds the FamilyRunner that Model's methods call. family_registry.cpp lists the families, once; nothing else
-// compares family names to choose what to do with a model file. Library-internal.
+// compares family names to choose what to do with a model file: the code outside models/ reads the traits each
+// parser sets (ModelConfig::input, ::has_network, ::output_keeps_size). Library-internal.
 #pragma once
 #include <CL/cl.h>
 
 #include <cstddef>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -22,9 +25,22 @@ namespace ngi::detail {
 class Context;
 struct ModelFamily;
 
+// The family's traits for one file (ModelConfig::input, ::has_network, ::output_keeps_size: what the code outside
+// models/ chooses by instead of the family's name). Part of what a parse returns, not constants of ModelFamily,
+// because they may depend on the file (graph's input follows its layout); optional, so that a parser that forgets
+// one makes every load of its family fail (apply_family_traits, and the every-family test in
+// tests/test_model_file.cpp) instead of the family silently passing for an image network by ModelConfig's defaults.
+// A parser sets all three: parsed.traits = {.input = ..., .has_network = ..., .output_keeps_size = ...}.
+struct FamilyTraits {
+    std::optional<ModelInput> input;
+    std::optional<bool> has_network;
+    std::optional<bool> output_keeps_size;
+};
+
 // What a family's parser returns.
 struct FamilyConfig {
-    ModelConfig config;  // the fields the family has, the others at their defaults; json set by the registry
+    ModelConfig config;  // the fields the family has, the others at their defaults; json and traits set by the registry
+    FamilyTraits traits;  // set by the parser, copied into `config` by the registry
     // Metadata the public config does not hold, for the library's own readers (ModelAccess::ao reads the "ao" object
     // of an mlp); null when the family keeps none.
     nlohmann::json internal;
@@ -52,7 +68,8 @@ public:
 struct ModelFamily {
     std::string_view name;  // the metadata's "family"
     // The config of a file of this family from its parsed metadata object: every field the family reads checked for
-    // its JSON type and range (models/config_fields.hpp); InputError naming the file and the field otherwise.
+    // its JSON type and range (models/config_fields.hpp), and the traits (FamilyTraits) set; InputError naming the
+    // file and the field otherwise.
     FamilyConfig (*parse)(const nlohmann::json& metadata, const std::string& path);
     // Model::load after the parse: `options` applied to `config` or refused, the tensors of `file` checked against
     // the config, the network built on the device. InputError naming the file otherwise.
@@ -64,6 +81,8 @@ struct ModelFamily {
 
 // The family named `name`; nullptr when there is none.
 const ModelFamily* find_model_family(std::string_view name);
+// Every family, in the registry's order.
+std::span<const ModelFamily* const> model_families();
 // Every family's name, in the registry's order: "pix2pix_unet, deepillumination, ...".
 std::string model_family_names();
 // Parses the metadata text (once; a key repeated in one object is refused) and hands it to the family its "family"
@@ -71,6 +90,9 @@ std::string model_family_names();
 FamilyConfig parse_family_config(const std::string& json, const std::string& path);
 // parse_family_config's public config: what Model::load reads (the tests and fuzz targets call it directly).
 ModelConfig parse_model_config(const std::string& json, const std::string& path);
+// Copies parsed.traits into parsed.config; ngi::Error naming `family` and the trait (a bug of that family's parser,
+// not of the file) when the parser left one unset. parse_family_config calls it after every parse.
+void apply_family_traits(FamilyConfig& parsed, std::string_view family);
 
 // ---- what the loaders and runners share (family.cpp) ------------------------------------------------------------
 

@@ -11,8 +11,9 @@
 #include "models/config_fields.hpp"
 #include "models/family.hpp"
 
-// A new family: its front-end file (models/<family>_family.cpp) defines `extern constinit const ModelFamily k<Name>Family`,
-// and one line here names it. The order is the order error messages list the families in.
+// A new family: its front-end file (models/<family>_family.cpp) defines `extern constinit const ModelFamily k<Name>Family`
+// (its parser setting the family's traits, models/family.hpp FamilyTraits), and one line here names it. The order is
+// the order error messages list the families in.
 #define NGI_MODEL_FAMILIES(X)  \
     X(kPix2pixUnetFamily)      \
     X(kDeepIlluminationFamily) \
@@ -55,9 +56,11 @@ const ModelFamily* find_model_family(std::string_view name) {
     return it == std::end(kModelFamilies) ? nullptr : *it;
 }
 
+std::span<const ModelFamily* const> model_families() { return kModelFamilies; }
+
 std::string model_family_names() {
     std::string s;
-    for (const ModelFamily* f : kModelFamilies) s += (s.empty() ? "" : ", ") + std::string(f->name);
+    for (const ModelFamily* f : model_families()) s += (s.empty() ? "" : ", ") + std::string(f->name);
     return s;
 }
 
@@ -75,9 +78,24 @@ FamilyConfig parse_family_config(const std::string& text, const std::string& pat
         name != j.end() && name->is_string() ? find_model_family(name->get<std::string>()) : nullptr;
     if (!family) refuse_family(j, path);
     FamilyConfig c = family->parse(j, path);
+    apply_family_traits(c, family->name);
     c.config.json = text;
     c.family = family;
     return c;
+}
+
+void apply_family_traits(FamilyConfig& parsed, std::string_view family) {
+    auto unset = [&](const char* trait) {
+        return Error("model family " + std::string(family) + ": its parser did not set the trait '" + trait +
+                     "' (models/family.hpp FamilyTraits); a bug in the library, not in the file");
+    };
+    const FamilyTraits& t = parsed.traits;
+    if (!t.input) throw unset("input");
+    if (!t.has_network) throw unset("has_network");
+    if (!t.output_keeps_size) throw unset("output_keeps_size");
+    parsed.config.input = *t.input;
+    parsed.config.has_network = *t.has_network;
+    parsed.config.output_keeps_size = *t.output_keeps_size;
 }
 
 ModelConfig parse_model_config(const std::string& text, const std::string& path) {

@@ -26,6 +26,9 @@ FamilyConfig parse_graph(const nlohmann::json& j, const std::string& path) {
     c.input_nc = d.input_nc;
     c.output_nc = d.nodes[d.output - 1].out_channels;
     c.graph.layout = d.layout;
+    // Its nodes decide the output's size (strides, pools, resizes; not analysed here, so never assumed to keep it).
+    parsed.traits = {.input = d.layout == "nc" ? ModelInput::items : ModelInput::image, .has_network = true,
+                     .output_keeps_size = false};
     if (j.contains("output_nc") && !(is_integer_in(j["output_nc"], 1, kMaxChannels) && j["output_nc"] == c.output_nc))
         throw fail("output_nc", "the graph output's channel count (" + std::to_string(c.output_nc) + ")");
     // An imported network's inputs have no known range: the guard replaces only NaN (-> 0) and +-Inf.

@@ -61,6 +61,7 @@ FamilyConfig parse_mlp(const nlohmann::json& j, const std::string& path) {
     FamilyConfig parsed;
     ModelConfig& c = parsed.config;
     c.family = "mlp";
+    parsed.traits = {.input = ModelInput::items, .has_network = true, .output_keeps_size = true};
     network_config_start(f, c);
     parse_mlp_fields(j, c, f.what());  // layers, encoding; output_nc = the last layer's width
     if (j.contains("ao")) parsed.internal["ao"] = j["ao"];  // seed 001's AO network (ModelAccess::ao)

@@ -83,6 +83,7 @@ FamilyConfig parse_pixel_cnn(const nlohmann::json& j, const std::string& path) {
     FamilyConfig parsed;
     ModelConfig& c = parsed.config;
     c.family = "pixel_cnn";
+    parsed.traits = {.input = ModelInput::image, .has_network = true, .output_keeps_size = true};  // same padding
     f.format_version();
     c.input_nc = int(f.integer("input_nc", 1, kPixelCnnMaxWidth, 0, true));
     c.output_nc = read_pixel_cnn_layers(f).back().out;

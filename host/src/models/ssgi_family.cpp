@@ -14,6 +14,9 @@ FamilyConfig parse_ssgi(const nlohmann::json& j, const std::string& path) {
     FamilyConfig parsed;
     ModelConfig& c = parsed.config;
     c.family = "ssgi";
+    // No network (Model::run and enqueue refuse it: the pipeline runs the gather on the frame's images), and the
+    // lightmap it makes has the front face's size.
+    parsed.traits = {.input = ModelInput::image, .has_network = false, .output_keeps_size = true};
     f.format_version();
     read_ssgi_gather_fields(j, f.what(), c.ssgi);
     // No network: nothing is read from or written to a tensor. The pipeline's output is 3 channels of light; an

@@ -33,6 +33,7 @@ FamilyConfig parse_unet_generator(const nlohmann::json& j, const std::string& pa
     FamilyConfig parsed;
     ModelConfig& c = parsed.config;
     c.family = family;
+    parsed.traits = {.input = ModelInput::image, .has_network = true, .output_keeps_size = true};
     network_config_start(f, c);
     c.output_nc = int(f.integer("output_nc", 1, kMaxChannels, 0, true));
     c.ngf = int(f.integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels

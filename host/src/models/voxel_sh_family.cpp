@@ -77,6 +77,8 @@ FamilyConfig parse_voxel_sh(const nlohmann::json& metadata, const std::string& p
     FamilyConfig parsed;
     ModelConfig& c = parsed.config;
     c.family = "voxel_sh";
+    // One scene's voxels: [V, 10] by Model::run, planar [10, V] by Model::enqueue (no per-pixel images).
+    parsed.traits = {.input = ModelInput::items, .has_network = true, .output_keeps_size = true};
     f.format_version();
     c.input_nc = kVoxelShInputs;
     c.output_nc = kVoxelShOutputs;

@@ -36,6 +36,7 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
     Model model = Model::load(device, path, options);
     const ModelConfig& c = model.config();
     auto fail = [&](const std::string& why) { return InputError("AO model " + path + ": " + why); };
+    // A requirement of AoNetwork, not a dispatch: the "ao" metadata and the layers it checks are the mlp family's.
     if (c.family != "mlp") throw fail("family is '" + c.family + "', an AO model is an \"mlp\"");
     if (c.input_nc != 3 * kRingPoints) throw fail("input_nc is " + std::to_string(c.input_nc) + ", expected 48 (16 normals)");
     if (c.layers.back().out != 1) throw fail("the last layer has " + std::to_string(c.layers.back().out) + " outputs, expected 1");

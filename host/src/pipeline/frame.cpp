@@ -147,7 +147,7 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
         throw InputError("enqueue frame: the model was loaded on another device than the pipeline's");
     if (desc.faces != 1 && desc.faces != kFaceCount)
         throw InputError("enqueue frame: faces must be 1 (front only) or 6, got " + std::to_string(desc.faces));
-    if (config.family == "ssgi") {
+    if (!config.has_network) {  // an SSGI rung: the gather of its `ssgi` settings instead of a network
         im.enqueue_ssgi(config, planes, desc, outputs, stats, timings);
         return;
     }

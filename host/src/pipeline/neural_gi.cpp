@@ -115,6 +115,8 @@ NeuralGiRenderer::~NeuralGiRenderer() = default;
 NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const NeuralGiOptions& options) {
     Impl& im = *impl_;
     const ModelConfig& config = model.config();
+    // A requirement of the renderer, not a dispatch: it assembles neural_gi's 18 inputs and reads the family's own
+    // section (ModelConfig::neural_gi).
     if (config.family != "neural_gi")
         throw InputError("neural GI: the model is a " + config.family + " model; a neural_gi model is needed");
     if (!config.neural_gi.has_scene_box)

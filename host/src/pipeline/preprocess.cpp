@@ -104,15 +104,15 @@ std::string preprocess_defines() {
 }
 
 int frame_faces(const ModelConfig& config) {
-    if (config.family == "ssgi" || config.output_mode == "ssgi_residual")
+    if (!config.has_network || config.output_mode == "ssgi_residual")  // the SSGI gather's faces
         return config.ssgi.view == "front" ? 1 : kFaceCount;
     return check_model_input(config) ? kFaceCount : 1;
 }
 
 bool check_model_input(const ModelConfig& config) {
-    if (config.family == "ssgi")
-        throw InputError("network input: family ssgi has no network and no network input; run it on frames "
-                         "(SurroundPipeline::run or enqueue)");
+    if (!config.has_network)
+        throw InputError("network input: family " + config.family + " has no network and no network input; run it "
+                         "on frames (SurroundPipeline::run or enqueue)");
     const bool residual = config.output_mode == "ssgi_residual";
     const bool surround = !residual && config.input_nc == int(surround_input_channels().size());
     const auto& names = residual   ? ssgi_residual_input_channels()

@@ -58,12 +58,21 @@ std::filesystem::path program_cache_dir() { return detail::cache_dir(); }
 
 WarmUpReport warm_up(const Device& device, Model& model, int n, int display_size) {
     const ModelConfig& c = model.config();
-    if (c.family != "pix2pix_unet" && c.family != "deepillumination" && c.family != "ssgi")
-        throw InputError("warm up: model family '" + c.family + "' is not a frame rung (pix2pix_unet, "
-                         "deepillumination, ssgi); warm it up by running one of its own inputs");
+    // A frame rung: an SSGI rung (no network) or an image network; the pipeline's own checks (its input channels,
+    // below) refuse an image network it cannot feed.
+    if (c.has_network && c.input != ModelInput::image)
+        throw InputError("warm up: model family '" + c.family + "' takes items, not images: it is not a frame rung "
+                         "(an image generator or an ssgi rung); warm it up by running one of its own inputs");
     if (display_size < 0 || (display_size > 0 && display_size < n))
         throw InputError("warm up: display size " + std::to_string(display_size) + " is not 0 (none) or at least N = " +
                          std::to_string(n));
+    const int faces = [&] {  // InputError for a network whose input the pipeline cannot make
+        try {
+            return detail::frame_faces(c);
+        } catch (const InputError& e) {
+            throw InputError(std::string("warm up: ") + e.what());
+        }
+    }();
     WarmUpReport r;
     const std::filesystem::path dir = program_cache_dir();
     r.cache_dir = dir.string();
@@ -72,7 +81,6 @@ WarmUpReport warm_up(const Device& device, Model& model, int n, int display_size
     detail::Context& ctx = detail::context_of(device);
     const detail::Context::ProgramCounts before = ctx.program_counts();
     SurroundPipeline pipeline(device, n);  // InputError for a face size it refuses
-    const int faces = detail::frame_faces(c);
     const Frame frame = synthetic_frame(n);
     const std::vector<float> planes = pack_frame_planes(frame, faces);
     DeviceBuffer in = DeviceBuffer::allocate(device, planes.size() * sizeof(float));
