@@ -37,17 +37,21 @@ from ngi_train import adapt_eval, ngi_paths
 from ngi_train.generator import engine_eval, gi_eval, ladder_eval as le
 
 log = le.log
-VERSION = "grid-1"  # part of the cache key: the grid's placement and shading
+VERSION = "grid-2"  # part of the cache key: the grid's placement and shading
+
+
+MAX_SIDE = 1024  # directions are m^2 <= 2^20, the tracer's limit per point
 
 
 def calibrated_grid(grid, renderer, seconds):
     """Bakes `grid` with the most directions m^2 whose bake takes ~`seconds` (fitted as a + b directions from
-    bakes of 4 and 16); returns (directions, the bake's {'seconds', 'rays'})."""
-    t4 = grid.bake(renderer, directions=4, seed=99)["seconds"]
-    t16 = grid.bake(renderer, directions=16, seed=98)["seconds"]
-    per = max(1e-9, (t16 - t4) / 12.0)
-    fixed = max(0.0, t4 - 4 * per)
-    m = max(1, int(math.sqrt(max(1.0, (seconds - fixed) / per))))
+    bakes of 16 and 256: on a few hundred probes the smaller bakes are all fixed cost and noise); returns
+    (directions, the bake's {'seconds', 'rays'})."""
+    t16 = grid.bake(renderer, directions=16, seed=99)["seconds"]
+    t256 = grid.bake(renderer, directions=256, seed=98)["seconds"]
+    per = max(1e-9, (t256 - t16) / 240.0)
+    fixed = max(0.0, t16 - 16 * per)
+    m = min(MAX_SIDE, max(1, int(math.sqrt(max(1.0, (seconds - fixed) / per)))))
     return m * m, grid.bake(renderer, directions=m * m, seed=0)
 
 
