@@ -1,6 +1,7 @@
-// conv2d and conv_transpose2d (im2col / pack + packed GEMM + epilogue / col2im) against the naive reference,
-// over random shapes: odd sizes, 1x1 spatial, channel counts and pixel counts that are not tile multiples.
-// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// conv2d and conv_transpose2d (im2col / pack + packed GEMM + epilogue / col2im, and the implicit GEMM) against the
+// naive reference: knob sets beyond the tuning table, the implicit path's geometries, tilings and extremes.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded,
+// random shapes among them (odd sizes, 1x1 spatial, channel and pixel counts that are not tile multiples, both paths);
 // each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <algorithm>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <catch2/catch.hpp>
 
 #include "ops/conv.hpp"
+#include "op_harness/op_cases.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "reference.hpp"
 #include "test_support.hpp"
@@ -50,12 +52,10 @@ std::vector<float> run_conv(const Case& k, const std::vector<float>& x, const st
     return y;
 }
 
-// The path a case takes when asked for the implicit one: exact geometry (S divides the kernel; transposed: also
-// K - 2P = S), an input activation conv_pad applies, and a gemm_packed knob set (the test shapes are far below
-// any loop limit).
+// The path a case takes when asked for the implicit one (the op harness's rule; the test shapes are far below any
+// loop limit).
 bool implicit_expected(const Case& k, bool transposed, const GemmParams& gp) {
-    if (gp.kwg > 0 || k.in_act > 2 || k.kh % k.s || k.kw % k.s) return false;
-    return !transposed || (k.kh - 2 * k.p == k.s && k.kw - 2 * k.p == k.s);
+    return harness::conv_takes_implicit(k.kh, k.kw, k.s, k.p, k.in_act, transposed, gp);
 }
 
 // Checks one case through one path; returns whether the op took the implicit path.
@@ -93,51 +93,8 @@ void check_both_paths(const Case& k, bool transposed, std::mt19937& rng, const G
 
 }  // namespace
 
-// Outside the harness: the path each random geometry takes (implicit_expected; kernels 1-5, strides 1-3, 1x1 inputs).
-TEST_CASE("conv2d matches the naive reference on random shapes", "[conv2d]") {
-    std::mt19937 rng(42);
-    const GemmParams gp = gemm_params_for(test::device().info());
-    const std::vector<Case> fixed = {
-        {12, 64, 128, 16, 4, 4, 2, 1, 0, 2},  // the U-Net's first layer, shrunk
-        {3, 7, 9, 5, 3, 3, 1, 1, 0, 1},       // k3 s1 p1, odd sizes
-        {13, 5, 3, 11, 1, 1, 1, 0, 1, 0},     // k1 s1 p0 with input ReLU
-        {8, 2, 2, 9, 4, 4, 2, 1, 2, 3},       // 2x2 -> 1x1 spatial, tanh
-        {5, 1, 1, 7, 3, 3, 1, 1, 0, 4},       // 1x1 input, sigmoid
-        {4, 11, 6, 3, 5, 3, 3, 2, 0, 2},      // non-square kernel, stride 3
-    };
-    for (const auto& k : fixed) check_both_paths(k, false, rng, gp);
-    std::uniform_int_distribution<int> C(1, 40), S(1, 23), K(1, 5), ST(1, 3), A(0, 4);
-    for (int i = 0; i < 12; ++i) {
-        Case k{C(rng), S(rng), S(rng), C(rng), K(rng), K(rng), ST(rng), 0, A(rng) % 3, A(rng)};
-        k.p = std::min(k.kh, k.kw) / 2;
-        if (k.h + 2 * k.p < k.kh || k.w + 2 * k.p < k.kw) continue;
-        check_both_paths(k, false, rng, gp);
-    }
-}
-
-// Outside the harness: the path each random geometry takes (implicit_expected: K - 2P = S), both paths.
-TEST_CASE("conv_transpose2d matches the naive reference on random shapes", "[conv_transpose2d]") {
-    std::mt19937 rng(7);
-    const GemmParams gp = gemm_params_for(test::device().info());
-    const std::vector<Case> fixed = {
-        {16, 4, 8, 12, 4, 4, 2, 1, 1, 0},  // the U-Net's up-convolution: k4 s2 p1 with input ReLU
-        {9, 1, 1, 5, 4, 4, 2, 1, 1, 2},    // 1x1 bottleneck -> 2x2
-        {7, 3, 5, 3, 4, 4, 2, 1, 0, 3},    // odd sizes, tanh
-        {5, 6, 7, 4, 3, 3, 2, 1, 0, 0},    // k3 s2 p1
-        {3, 5, 4, 6, 5, 5, 3, 2, 2, 4},    // k5 s3 p2
-        {6, 4, 4, 2, 3, 2, 1, 0, 0, 1},    // non-square kernel, stride 1
-    };
-    for (const auto& k : fixed) check_both_paths(k, true, rng, gp);
-    std::uniform_int_distribution<int> C(1, 40), S(1, 17), K(1, 5), ST(1, 3), A(0, 4);
-    for (int i = 0; i < 12; ++i) {
-        Case k{C(rng), S(rng), S(rng), C(rng), K(rng), K(rng), ST(rng), 0, A(rng) % 3, A(rng)};
-        k.p = std::min(k.kh, k.kw) / 2;
-        if ((k.h - 1) * k.s - 2 * k.p + k.kh < 1 || (k.w - 1) * k.s - 2 * k.p + k.kw < 1) continue;
-        check_both_paths(k, true, rng, gp);
-    }
-}
-
-// Outside the harness: knob sets beyond the tuning table (the harness convolves with the device set).
+// Outside the harness: knob sets beyond the tuning table through the convolution, left out on rusticl (tools/test.sh:
+// a minute of llvmpipe compiling per program), which a harness row, run on every device, cannot be.
 TEST_CASE("every GEMM parameter set in the tuning space gives the same convolution", "[gemm]") {
     std::mt19937 rng(3);
     const Case k{19, 9, 13, 21, 4, 4, 2, 1, 0, 2};

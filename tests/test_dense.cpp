@@ -1,8 +1,9 @@
 // The dense layer over planar items (ops/dense.hpp: gemm_conv reading its input in place) against a naive double
-// reference: random widths and item counts (fewer than a tile, not a tile multiple, odd), a row stride beyond n,
-// planar and item-major outputs, a residual, every activation, and every GPU and CPU knob set; guard words around
-// each buffer stay untouched (the last tile is kept inside the input, nothing is written past the output).
-// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// reference through every GPU and CPU knob set; guard words around each buffer stay untouched (the last tile is kept
+// inside the input, nothing is written past the output).
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded:
+// random widths and item counts (fewer than a tile, not a tile multiple, odd), a row stride beyond n, planar and
+// item-major outputs, a residual, every activation, with the device's set;
 // each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <catch2/catch.hpp>
 
@@ -71,39 +72,7 @@ void run_case(const GemmParams& p, const Case& c, std::mt19937& rng) {
     test::check_close(std::span<const float>(y_all).subspan(kGuard, y_floats), want, test::tol::short_sum());
 }
 
-Act act_of(int a) {
-    switch (a % 8) {
-        case 1: return Act::relu();
-        case 2: return Act::leaky(0.2f);
-        case 3: return Act::tanh();
-        case 4: return Act::sigmoid();
-        case 5: return Act::exp();
-        case 6: return Act::softplus();
-        case 7: return Act::erf();
-        default: return Act::none();
-    }
-}
-
 }  // namespace
-
-// Outside the harness: a random sweep (40 shapes) and every activation (Dense rows: none, ReLU, tanh).
-TEST_CASE("dense layer: random widths and item counts, planar and item-major, residual, every activation",
-          "[dense]") {
-    std::mt19937 rng(29);
-    std::uniform_int_distribution<int> width(1, 70), items(1, 300), extra(0, 9);
-    const GemmParams p = gemm_params_for(test::ctx().info());
-    for (int trial = 0; trial < 40; ++trial) {
-        Case c{width(rng), width(rng), items(rng), 0, trial % 3 == 1, trial % 4 == 2, act_of(trial)};
-        c.x_ld = c.n < p.nr() ? c.n : c.n + extra(rng);  // below a tile the rows must be exactly n
-        run_case(p, c, rng);
-    }
-    // Exact tile multiples, one item, and the voxel networks' widths.
-    for (const Case& c : {Case{128, 128, 4 * p.nr(), 4 * p.nr(), false, true, Act::tanh()},
-                          Case{10, 128, 1, 1, false, false, Act::tanh()},
-                          Case{256, 128, 1, 1, false, false, Act::none()},
-                          Case{128, 27, 1000, 1000, true, false, Act::none()}})
-        run_case(p, c, rng);
-}
 
 // Outside the harness: every table knob set (the Dense rows use the device set).
 TEST_CASE("dense layer: every GPU and CPU knob set at small odd shapes", "[dense][oclgrind]") {

@@ -1,18 +1,19 @@
-// The packed GEMM (kernels/gemm.cl) against a naive double-precision reference, for every knob set of the tuning
-// space and the fallback chain, at random small shapes and at the shapes of the real generators (ngf 32-64: K up
-// to 8192, M up to 4096); and the self-check that keeps a variant the device gets wrong from being used.
+// The packed GEMM (kernels/gemm.cl) against a naive double-precision reference, for every knob set the library can
+// select on the device and a covering set of the tuning space, at the shapes of the real generators (ngf 32-64: K up
+// to 8192, M up to 4096); and the self-check that keeps a variant the device gets wrong from being used. The same
+// knob sets at random small shapes (and gemm_local's at the edges of their blocks) are op harness rows.
 // The realistic shapes matter: on Mesa rusticl (llvmpipe) the loop form of the kernel is silently truncated
 // beyond K ~ 1,000-3,000 (a 65,535-iteration loop limiter, docs/RELIABILITY.md), which shapes of a few dozen
 // never showed.
 // The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
 // each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <algorithm>
-#include <array>
 #include <cstdlib>
 #include <string>
 #include <catch2/catch.hpp>
 #include <sstream>
 
+#include "op_harness/op_cases.hpp"
 #include "ops/gemm.hpp"
 #include "ops/gemm_selfcheck.hpp"
 #include "reference.hpp"
@@ -100,27 +101,12 @@ std::vector<GemmParams> test_variants() {
     GemmParams rolled = v.front();
     rolled.unroll = 0;
     v.push_back(rolled);
-    // Small micro-kernels where a knob is at its extreme: unrolled bodies of hundreds of vector fmas take minutes
-    // to compile on Mesa, and the extreme value is what a wrong index would break.
-    for (const char* k : {"16,1,1,1,1,2,1", "1,2,8,1,4,1,1", "1,1,1,16,1,1,1", "3,16,1,2,2,1,1", "5,8,1,3,3,1,0",
-                          "2,4,2,2,4,4,1"})
-        v.push_back(parse_gemm_params(k));
+    // Small micro-kernels where a knob is at its extreme (the op harness's; its rows run them at random small shapes).
+    for (const GemmParams& p : harness::gemm_extreme_variants()) v.push_back(p);
     return v;
 }
 
 }  // namespace
-
-// Outside the harness: knob sets beyond the table (each knob at its extremes, the loop form).
-TEST_CASE("GEMM: every knob set matches the reference on random small shapes", "[gemm][small]") {
-    std::mt19937 rng(11);
-    std::uniform_int_distribution<int> D(1, 70), A(0, 4);
-    for (const auto& p : test_variants())
-        for (int i = 0; i < 3; ++i) {
-            const int M = D(rng), N = D(rng), K = D(rng);
-            INFO("GEMM M" << M << " N" << N << " K" << K << " knobs " << p.to_string());
-            test::check_comparison(gemm_compare(p, M, N, K, A(rng), rng));
-        }
-}
 
 // Outside the harness: K up to 8192, where loop limiters show (the rows' largest K is 512).
 TEST_CASE("GEMM: every knob set matches the reference at the generators' layer shapes", "[gemm][realistic]") {
@@ -254,48 +240,9 @@ TEST_CASE("GEMM self-check: NGI_SELFCHECK chooses the full or the small problem 
 
 // --- gemm_local: the GPU-shaped variant (KWG > 0): work-groups of exactly L0 x L1 work-items stage K chunks of their
 // A and B panels in local memory (kernels/gemm.cl). Same packed layouts, same tolerance as gemm_packed: the sum is
-// the same fma chain in the same k order, only read from local memory.
-
-namespace {
-
-// Knob sets that cover gemm_local's edges: square, tall and wide work-groups (8x8, 4x16, 16x16, 2x8), VW 2..8 and
-// NV 1..2, KU 2 (chunks of whole unroll steps), a KWG that is not a power of two, MR 3 (blocks no shape divides),
-// copies that do not divide among the work-items, both UNROLL forms.
-std::vector<GemmParams> local_variants() {
-    std::vector<GemmParams> v;
-    for (const char* k : {"4,4,1,1,8,8,1,16", "2,2,2,1,4,16,1,8", "8,8,1,1,4,4,0,32", "3,4,2,2,2,8,1,12",
-                          "4,4,1,1,16,16,1,16"})
-        v.push_back(parse_gemm_params(k));
-    return v;
-}
-
-// Shapes around one knob set's block (L0 MR) x (L1 NR) and chunk KWG: one less, equal and one more, several
-// blocks with a remainder, K = 1, a single output, skinny rows and columns.
-std::vector<std::array<int, 3>> local_edge_shapes(const GemmParams& p) {
-    const int bm = p.local0 * p.mr, bn = p.local1 * p.nr(), kc = p.kwg;
-    return {{1, 1, 1},           {1, 300, 1},         {300, 1, 7},          {bm - 1, bn + 1, kc + 1},
-            {bm, bn, kc},        {bm + 1, bn - 1, 2 * kc - 1}, {2 * bm + 3, 3, 3 * kc + 5}, {5, 2 * bn + 7, kc - 1},
-            {64, 1031, 192}};
-}
-
-}  // namespace
-
-// Outside the harness: gemm_local knob sets beyond the table, at shapes around their blocks.
-TEST_CASE("GEMM local-memory variant: matches the reference at random, odd, tiny and skinny shapes",
-          "[gemm][local]") {
-    std::mt19937 rng(23);
-    std::uniform_int_distribution<int> D(1, 150), A(0, 4);
-    for (const GemmParams& p : local_variants()) {
-        REQUIRE(p.kwg > 0);
-        auto shapes = local_edge_shapes(p);
-        for (int i = 0; i < 6; ++i) shapes.push_back({D(rng), D(rng), D(rng)});
-        for (const auto& s : shapes) {
-            const int act = A(rng);
-            INFO("GEMM M" << s[0] << " N" << s[1] << " K" << s[2] << " act " << act << " knobs " << p.to_string());
-            test::check_comparison(gemm_compare(p, s[0], s[1], s[2], act, rng));
-        }
-    }
-}
+// the same fma chain in the same k order, only read from local memory. Its knob sets beyond the table
+// (harness::gemm_local_variants: square, tall and wide work-groups, VW 2..8, NV 1..2, KU 2, a KWG that is not a power
+// of two, MR 3, both UNROLL forms) run as op harness rows at the edges of their blocks and at random shapes.
 
 // Outside the harness: K up to 8192 through gemm_local knob sets beyond the table.
 TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192", "[gemm][local][realistic]") {
@@ -303,7 +250,7 @@ TEST_CASE("GEMM local-memory variant: the generators' layer shapes, K up to 8192
     // ~10,000 there, kernels/gemm.cl); the UNROLL=0 set may exceed it, which the self-check must then catch.
     std::mt19937 rng(24);
     const int shapes[][3] = {{32, 1031, 192}, {256, 37, 4096}, {64, 9, 8192}, {1024, 65, 512}};
-    for (const GemmParams& p : local_variants())
+    for (const GemmParams& p : harness::gemm_local_variants())
         for (const auto& s : shapes) {
             std::ostringstream shape;
             shape << "M" << s[0] << " N" << s[1] << " K" << s[2];

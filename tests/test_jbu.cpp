@@ -1,8 +1,9 @@
-// Joint bilateral upsampling (ops/jbu.*) against the double-precision reference (tests/reference_jbu.hpp): random
-// sizes and ratios (odd, non-integer, 1x), synthetic scenes of planar regions seen at both resolutions, the property
-// the op exists for (no light bleeds across a depth step or a crease where bilinear does), the bilinear fallback,
-// surfaceless pixels, HDR and non-finite values, surfaces 10^5 m away, and bad input.
-// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded;
+// Joint bilateral upsampling (ops/jbu.*) against the double-precision reference (tests/reference_jbu.hpp) on
+// synthetic scenes of planar regions seen at both resolutions (tests/jbu_scene.hpp): the property the op exists for
+// (no light bleeds across a depth step or a crease where bilinear does), the bilinear fallback, surfaceless pixels,
+// HDR and non-finite values, surfaces 10^5 m away, both kernels under the simulators, and bad input.
+// The op harness's rows (tests/op_harness/op_cases.cpp) are the op's oracle at odd shapes, every buffer guarded,
+// random scenes, sizes and ratios (odd, non-integer, 1x, down), radii, normal powers and both kernels among them;
 // each case here says on its first line why it is outside the harness. Comparisons: tests/compare.hpp.
 #include <array>
 #include <cfloat>
@@ -10,106 +11,16 @@
 #include <limits>
 
 #include "ops/jbu.hpp"
+#include "jbu_scene.hpp"
 #include "reference_jbu.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
 using namespace ngi::detail;
 using Catch::Matchers::Contains;
+using namespace ngi::test::jbu_scene;
 
 namespace {
-
-// A planar region of the synthetic scene: the image-space rectangle [u0, u1) x [v0, v1) of the unit square shows
-// the plane through `origin` spanned by t1, t2 (orthonormal, normal = t1 x t2); zero normal = no surface.
-struct Region {
-    double u0, v0, u1, v1;
-    std::array<double, 3> origin, t1, t2, normal;
-};
-
-// Regions are tried in order; the last one should cover the whole square.
-struct Scene {
-    std::vector<Region> regions;
-    double scale = 2.0;  // metres per unit of image space
-};
-
-const Region* region_at(const Scene& s, double u, double v) {
-    for (const Region& r : s.regions)
-        if (u >= r.u0 && u < r.u1 && v >= r.v0 && v < r.v1) return &r;
-    return nullptr;
-}
-
-// The guides of a w x h view of the scene (pixel centres), and each pixel's region index (-1: none).
-struct Guides {
-    std::vector<float> normal, position;
-    std::vector<int> region;
-};
-
-Guides render_guides(const Scene& s, int w, int h) {
-    const std::size_t plane = std::size_t(w) * h;
-    Guides g;
-    g.normal.assign(3 * plane, 0.0f);
-    g.position.assign(3 * plane, 0.0f);
-    g.region.assign(plane, -1);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const double u = (x + 0.5) / w, v = (y + 0.5) / h;
-            const Region* r = region_at(s, u, v);
-            if (!r) continue;
-            const std::size_t i = std::size_t(y) * w + x;
-            g.region[i] = int(r - s.regions.data());
-            for (int k = 0; k < 3; ++k) {
-                g.normal[k * plane + i] = float(r->normal[k]);
-                g.position[k * plane + i] = float(r->origin[k] + s.scale * (u * r->t1[k] + v * r->t2[k]));
-            }
-        }
-    return g;
-}
-
-std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-std::array<double, 3> unit(std::array<double, 3> a) {
-    const double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    for (double& x : a) x /= l;
-    return a;
-}
-
-// A region on a random plane (an axis-aligned one half of the time, as voxel faces are).
-Region random_region(std::mt19937& rng, double u0, double v0, double u1, double v1) {
-    std::uniform_real_distribution<double> d(-1.0, 1.0);
-    Region r{u0, v0, u1, v1, {d(rng) * 3, d(rng) * 3, d(rng) * 3}, {}, {}, {}};
-    std::array<double, 3> n;
-    if (rng() % 2) {
-        n = {0, 0, 0};
-        n[rng() % 3] = rng() % 2 ? 1.0 : -1.0;
-    } else {
-        n = unit({d(rng), d(rng), d(rng)});
-    }
-    // A tangent frame: any vector not parallel to n, made orthogonal.
-    const std::array<double, 3> a = std::abs(n[0]) < 0.9 ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
-    r.t1 = unit(cross(n, a));
-    r.t2 = cross(n, r.t1);
-    r.normal = cross(r.t1, r.t2);
-    return r;
-}
-
-// Several random rectangles over a random background plane; sometimes a surfaceless (sky) rectangle.
-Scene random_scene(std::mt19937& rng) {
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    Scene s;
-    const int k = 1 + int(rng() % 4);
-    for (int i = 0; i < k; ++i) {
-        const double a = u(rng), b = u(rng), c = u(rng), d = u(rng);
-        s.regions.push_back(random_region(rng, std::min(a, b), std::min(c, d), std::max(a, b), std::max(c, d)));
-    }
-    if (rng() % 2) {
-        const double a = u(rng), c = u(rng);
-        s.regions.insert(s.regions.begin(), Region{a, c, a + 0.2, c + 0.3, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
-    }
-    s.regions.push_back(random_region(rng, 0, 0, 1, 1));
-    return s;
-}
 
 struct Run {
     std::vector<float> out;
@@ -161,59 +72,7 @@ test::Tol weights(double range) {
 // Where a saturated tap (FLT_MAX) takes part the sums are near FLT_MAX: relative to the largest magnitude.
 const test::Tol kSaturated = test::Tol::scaled(1e-5, "sums of taps near FLT_MAX").of(FLT_MAX);
 
-int borderline_count(const test::JbuRefResult& ref) {
-    int n = 0;
-    for (char b : ref.borderline) n += b;
-    return n;
-}
-
 }  // namespace
-
-// Outside the harness: random scenes, both kernels (a knob) and normal_power values (the rows: one scene).
-TEST_CASE("JBU: random scenes, sizes and ratios against the reference", "[jbu]") {
-    std::mt19937 rng(20261126);
-    double worst = 0;
-    int pixels = 0, fallbacks = 0;
-    for (int trial = 0; trial < 40; ++trial) {
-        const Scene scene = random_scene(rng);
-        const int w = 1 + int(rng() % 23), h = 1 + int(rng() % 19);
-        // Integer ratios 1-5 and arbitrary sizes (non-integer ratios, a few smaller than the input).
-        int W, H;
-        if (trial % 2) {
-            const int f = 1 + int(rng() % 5);
-            W = w * f;
-            H = h * f;
-        } else {
-            W = 1 + int(rng() % 61);
-            H = 1 + int(rng() % 47);
-        }
-        const int channels = std::array<int, 3>{1, 3, 5}[trial % 3];
-        JbuParams params;
-        params.radius = 1 + trial % 3;
-        if (trial % 4 == 3) params.normal_power = 0.0f;  // normal term off: the plane term alone
-        if (trial % 4 == 1) params.normal_power = 7.5f;  // not an integer: pow() rather than repeated squaring
-        // Both kernels where Auto would pick jbu_upsample8 (PoCL's CPUs, up to 4 channels); elsewhere the one-pixel
-        // kernel (on Mesa's llvmpipe the vector kernel's build alone takes ~65 s; the simulators' case runs it).
-        if (channels <= kJbuVecMaxChannels && jbu_vector_device(test::device().info()))
-            params.kernel = trial % 5 < 2 ? JbuParams::Kernel::OnePixel : JbuParams::Kernel::Rows8;
-        const test::JbuRefImage low =
-            low_view(scene, w, h, channels, test::random_vector(std::size_t(channels) * w * h, rng, 0.0f, 4.0f));
-        const Guides hi = render_guides(scene, W, H);
-        const test::JbuRefResult ref = test::jbu_reference(low, hi.normal, hi.position, W, H, test::jbu_ref_params(params));
-        const Run got = run_jbu(low, hi.normal, hi.position, W, H, params);
-        INFO("trial " << trial << ": " << w << "x" << h << " -> " << W << "x" << H << ", " << channels
-                      << " channels, radius " << params.radius << ", normal power " << params.normal_power
-                      << ", kernel " << int(params.kernel));
-        // Values in [0, 4].
-        const test::Comparison e = test::check_close(got.out, ref.out, weights(4.0), borderline_mask(ref, channels));
-        CHECK(std::abs(got.fallbacks - ref.fallbacks) <= borderline_count(ref));
-        worst = std::max(worst, e.max_abs / 4.0);
-        pixels += W * H;
-        fallbacks += ref.fallbacks;
-    }
-    WARN("JBU vs reference: worst error " << worst << " of the value range over " << pixels << " pixels (" << fallbacks
-                                          << " bilinear fallbacks)");
-}
 
 // Outside the harness: the property the op exists for, with plain bilinear failing the same check.
 TEST_CASE("JBU: no light crosses a depth step or a crease, bilinear does", "[jbu]") {

@@ -1,11 +1,14 @@
 #include "op_harness/op_cases.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "ops/conv.hpp"
 #include "ops/dense.hpp"
@@ -22,6 +25,7 @@
 #include "ops/set_pool.hpp"
 #include "ops/sh.hpp"
 #include "compare.hpp"
+#include "jbu_scene.hpp"
 #include "ops/voxel_ltf.hpp"
 #include "reference.hpp"
 #include "reference_image_desc.hpp"
@@ -38,14 +42,14 @@ namespace {
 // ---- buffers and data ----------------------------------------------------------------------------------------
 
 template <class T>
-BufferPtr add(Context& ctx, Prepared& p, const char* name, Role role, const std::vector<T>& v) {
+BufferPtr add(Context& ctx, Prepared& p, const std::string& name, Role role, const std::vector<T>& v) {
     static_assert(sizeof(T) == 4, "the harness counts buffers in 4-byte words");
     auto b = std::make_shared<GuardedBuffer>(ctx, name, role, v.size(), v.empty() ? nullptr : v.data());
     p.buffers.push_back(b);
     return b;
 }
 
-BufferPtr add_out(Context& ctx, Prepared& p, const char* name, Role role, std::size_t words) {
+BufferPtr add_out(Context& ctx, Prepared& p, const std::string& name, Role role, std::size_t words) {
     auto b = std::make_shared<GuardedBuffer>(ctx, name, role, words, nullptr);
     p.buffers.push_back(b);
     return b;
@@ -60,6 +64,9 @@ std::vector<float> uniform(std::size_t n, std::mt19937& rng, float lo = -1.0f, f
 
 std::vector<double> to_double(const std::vector<float>& v) { return {v.begin(), v.end()}; }
 
+// An integer in [lo, hi], for the rows whose shapes are drawn from their own seeded RNG ("random shape k").
+int draw(std::mt19937& rng, int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
+
 std::string dims(std::initializer_list<std::pair<const char*, long>> d) {
     std::ostringstream s;
     for (const auto& [k, v] : d) s << (s.tellp() > 0 ? " " : "") << k << v;
@@ -70,34 +77,91 @@ Act act_of(int code) { return {Activation(code), 0.2f}; }
 
 // ---- GEMM and packing ----------------------------------------------------------------------------------------
 
-Prepared gemm_case(Context& ctx, const GemmParams& p, int M, int N, int K, int act, std::mt19937& rng) {
+// One GEMM of a knob set at a shape (M N K) with an activation in the epilogue.
+struct GemmRun {
+    GemmParams p;
+    int M, N, K, act;
+};
+
+// One or more GEMMs, each on its own guarded buffers, compared together (their outputs concatenated, all O(1)): a
+// knob set at several shapes, or every set of a fallback chain. `knobs`: each run's shape names its set.
+Prepared gemm_runs_case(Context& ctx, const std::vector<GemmRun>& runs, bool knobs, std::mt19937& rng) {
     Prepared r;
-    r.shape = dims({{"M", M}, {"N", N}, {"K", K}, {"act", act}});
-    auto op = std::make_shared<Gemm>(ctx, p);
-    // Weights ~ U(-1/sqrt(K), 1/sqrt(K)), as the generators' layers: outputs O(1) at any K.
-    const float wa = 1.0f / std::sqrt(float(K));
-    const auto a = uniform(std::size_t(M) * K, rng, -wa, wa), b = uniform(std::size_t(K) * N, rng);
-    const auto scale = uniform(M, rng, 0.5f, 1.5f), shift = uniform(M, rng);
-    const int ldc = N + 3;  // a row stride > N, as the planner's arena rows
-    auto ap = add(ctx, r, "Ap", Role::Input, pack_a(a.data(), M, K, K, p));
-    auto bp = add(ctx, r, "Bp", Role::Input, pack_b(b.data(), K, N, N, p));
-    auto sc = add(ctx, r, "scale", Role::Input, scale), sh = add(ctx, r, "shift", Role::Input, shift);
-    auto c = add_out(ctx, r, "C", Role::Output, std::size_t(M) * ldc);
-    r.flops = 2.0 * M * N * K;
-    r.bytes = 4.0 * (double(ap->words()) + double(bp->words()) + double(M) * N + 2.0 * M);
-    r.run = [=](Context& cx) {
-        op->enqueue(cx, M, N, K, ap->payload(), bp->mem(), bp->offset(), c->mem(), c->offset(), ldc, sc->payload(),
-                    sh->payload(), act_of(act));
+    std::vector<std::function<void(Context&)>> enqueues;
+    std::vector<std::function<void(Context&, Comparison&)>> compares;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        const auto [p, M, N, K, act] = runs[i];
+        const std::string tag = runs.size() == 1 ? "" : "[" + std::to_string(i) + "]";
+        r.shape += (i ? ", " : "") + (knobs ? p.to_string() + ": " : "") +
+                   dims({{"M", M}, {"N", N}, {"K", K}, {"act", act}});
+        auto op = std::make_shared<Gemm>(ctx, p);
+        // Weights ~ U(-1/sqrt(K), 1/sqrt(K)), as the generators' layers: outputs O(1) at any K.
+        const float wa = 1.0f / std::sqrt(float(K));
+        const auto a = uniform(std::size_t(M) * K, rng, -wa, wa), b = uniform(std::size_t(K) * N, rng);
+        const auto scale = uniform(M, rng, 0.5f, 1.5f), shift = uniform(M, rng);
+        const int ldc = N + 3;  // a row stride > N, as the planner's arena rows
+        auto ap = add(ctx, r, "Ap" + tag, Role::Input, pack_a(a.data(), M, K, K, p));
+        auto bp = add(ctx, r, "Bp" + tag, Role::Input, pack_b(b.data(), K, N, N, p));
+        auto sc = add(ctx, r, "scale" + tag, Role::Input, scale), sh = add(ctx, r, "shift" + tag, Role::Input, shift);
+        auto c = add_out(ctx, r, "C" + tag, Role::Output, std::size_t(M) * ldc);
+        r.flops += 2.0 * M * N * K;
+        r.bytes += 4.0 * (double(ap->words()) + double(bp->words()) + double(M) * N + 2.0 * M);
+        enqueues.push_back([=](Context& cx) {
+            op->enqueue(cx, M, N, K, ap->payload(), bp->mem(), bp->offset(), c->mem(), c->offset(), ldc,
+                        sc->payload(), sh->payload(), act_of(act));
+        });
+        compares.push_back([=](Context& cx, Comparison& cmp) {
+            const auto full = c->read_floats(cx);
+            for (int m = 0; m < M; ++m)
+                for (int n = 0; n < N; ++n) cmp.got.push_back(full[std::size_t(m) * ldc + n]);
+            const auto want = ref::gemm(M, N, K, a, b, scale, shift, act);
+            cmp.want.insert(cmp.want.end(), want.begin(), want.end());
+        });
+    }
+    r.run = [enqueues](Context& cx) {
+        for (const auto& e : enqueues) e(cx);
     };
-    r.compare = [=](Context& cx) {
-        const auto full = c->read_floats(cx);
+    r.compare = [compares](Context& cx) {
         Comparison cmp;
-        for (int m = 0; m < M; ++m)
-            for (int n = 0; n < N; ++n) cmp.got.push_back(full[std::size_t(m) * ldc + n]);
-        cmp.want = to_double(ref::gemm(M, N, K, a, b, scale, shift, act));
+        for (const auto& c : compares) c(cx, cmp);
         return cmp;
     };
     return r;
+}
+
+Prepared gemm_case(Context& ctx, const GemmParams& p, int M, int N, int K, int act, std::mt19937& rng) {
+    return gemm_runs_case(ctx, {{p, M, N, K, act}}, false, rng);
+}
+
+// tests/test_gemm.cpp's random small shapes: M, N, K in 1..70 and an activation 0..4, `count` of them per knob set.
+std::vector<GemmRun> random_gemm_runs(const std::vector<GemmParams>& sets, int count, std::mt19937& rng) {
+    std::vector<GemmRun> runs;
+    for (const GemmParams& p : sets)
+        for (int i = 0; i < count; ++i) {
+            const int M = draw(rng, 1, 70), N = draw(rng, 1, 70), K = draw(rng, 1, 70);
+            runs.push_back({p, M, N, K, draw(rng, 0, 4)});
+        }
+    return runs;
+}
+
+// gemm_local's edges for one knob set (tests/test_gemm.cpp's): shapes around its block (L0 MR) x (L1 NR) and chunk
+// KWG (one less, equal and one more, several blocks with a remainder), K = 1, a single output, skinny rows and
+// columns, a generator layer (64 x 1031 x 192); those of K <= 90 (`long_sums` false) or K > 90, then 3 random shapes
+// of M, N in 1..150 and K in 1..90 or 91..150 (that file drew 6 in 1..150). Each with an activation 0..4.
+std::vector<GemmRun> local_gemm_runs(const GemmParams& p, bool long_sums, std::mt19937& rng) {
+    const int bm = p.local0 * p.mr, bn = p.local1 * p.nr(), kc = p.kwg;
+    const std::array<int, 3> edges[] = {{1, 1, 1},    {1, 300, 1},          {300, 1, 7},
+                                        {bm - 1, bn + 1, kc + 1},           {bm, bn, kc},
+                                        {bm + 1, bn - 1, 2 * kc - 1},       {2 * bm + 3, 3, 3 * kc + 5},
+                                        {5, 2 * bn + 7, kc - 1},            {64, 1031, 192}};
+    std::vector<std::array<int, 3>> shapes;
+    for (const auto& e : edges)
+        if ((e[2] > 90) == long_sums) shapes.push_back(e);
+    for (int i = 0; i < 3; ++i)
+        shapes.push_back({draw(rng, 1, 150), draw(rng, 1, 150), long_sums ? draw(rng, 91, 150) : draw(rng, 1, 90)});
+    std::vector<GemmRun> runs;
+    for (const auto& [M, N, K] : shapes) runs.push_back({p, M, N, K, draw(rng, 0, 4)});
+    return runs;
 }
 
 Prepared pack_b_case(Context& ctx, const GemmParams& p, int K, int N, int act, std::mt19937& rng) {
@@ -163,8 +227,11 @@ struct ConvShape {
     int c, h, w, co, kh, kw, s, p, in_act, act;
 };
 
+// expect_implicit: the path the op must take (default: the one asked for; a random geometry asking for the implicit
+// path keeps im2col where it is not exact, conv_takes_implicit).
 Prepared conv_case(Context& ctx, const GemmParams& gp, const ConvShape& k, bool transposed, ConvPath path,
-                   std::mt19937& rng) {
+                   std::mt19937& rng, std::optional<bool> expect_implicit = std::nullopt) {
+    const bool expected = expect_implicit.value_or(path == ConvPath::implicit);
     Prepared r;
     r.shape = dims({{"C", k.c}, {"H", k.h}, {"W", k.w}, {"Co", k.co}, {"k", k.kh}, {"x", k.kw}, {"s", k.s},
                     {"p", k.p}, {"in_act", k.in_act}, {"act", k.act}});
@@ -203,11 +270,37 @@ Prepared conv_case(Context& ctx, const GemmParams& gp, const ConvShape& k, bool 
                                                       aff.shift, k.in_act, k.act, 0.2, oh, ow));
         if (oh != out.h || ow != out.w) cmp.mismatch = "output shape differs from the reference's";
         // The case's name says which path it covers: the op must have taken it.
-        if ((path == ConvPath::implicit) != implicit)
+        if (expected != implicit)
             cmp.mismatch = std::string("the op took the ") + (implicit ? "implicit" : "im2col") + " path";
         return cmp;
     };
     return r;
+}
+
+// A convolution of tests/test_conv.cpp's random sweep at the given stride: C, Cout 1..40, H, W 1..23 (transposed:
+// 1..17), kernels 1..5 on each axis, padding min(KH, KW) / 2, an input activation 0..2, an output activation 0..4;
+// redrawn until the output is at least 1 x 1. `exact`: redrawn until the implicit path takes it (transposed: the
+// padding drawn in 0..min(KH, KW) / 2, as K - 2P = S needs; the sweep's min / 2 gives it at stride 1 only).
+ConvShape random_conv(std::mt19937& rng, bool transposed, int stride, bool exact, const GemmParams& gp) {
+    for (int attempt = 0; attempt < 100000; ++attempt) {
+        ConvShape k{draw(rng, 1, 40), 0, 0, draw(rng, 1, 40), draw(rng, 1, 5), draw(rng, 1, 5), stride, 0,
+                    draw(rng, 0, 2), draw(rng, 0, 4)};
+        k.h = draw(rng, 1, transposed ? 17 : 23);
+        k.w = draw(rng, 1, transposed ? 17 : 23);
+        k.p = exact && transposed ? draw(rng, 0, std::min(k.kh, k.kw) / 2) : std::min(k.kh, k.kw) / 2;
+        const bool fits = transposed ? (k.h - 1) * k.s - 2 * k.p + k.kh >= 1 && (k.w - 1) * k.s - 2 * k.p + k.kw >= 1
+                                     : k.h + 2 * k.p >= k.kh && k.w + 2 * k.p >= k.kw;
+        if (fits && (!exact || conv_takes_implicit(k.kh, k.kw, k.s, k.p, k.in_act, transposed, gp))) return k;
+    }
+    throw std::runtime_error("random_conv: no geometry found");
+}
+
+// A drawn geometry at perf size: its kernel, stride, padding and activations over 32 channels of a U-Net-sized plane.
+ConvShape perf_conv(ConvShape k, bool transposed) {
+    k.c = k.co = 32;
+    k.h = transposed ? 64 : 128;
+    k.w = transposed ? 128 : 256;
+    return k;
 }
 
 // ---- batch norm and elementwise ------------------------------------------------------------------------------
@@ -366,6 +459,46 @@ MlpSpec mlp_spec(int inputs, const FrequencyEncoding& enc, const std::vector<int
     return s;
 }
 
+// tests/test_mlp.cpp's random architectures: 1..6 inputs, a random encoding (0..4 bands, none at 0, first exponent
+// -1..2, with or without pi and the raw input, either order; redrawn while wider than the fused kernel's
+// kFusedMlpMaxWidth), 1..4 layers, hidden widths 1..40 with ReLU, LeakyReLU, tanh, sigmoid or none, 1..5 outputs
+// linear or exp, biases on three layers in four. top_band: the encoding's highest frequency the draw allows, 4 bands
+// from 2^2 (arguments up to 2^5 pi = 100 rad), the rest drawn.
+MlpSpec random_mlp_spec(std::mt19937& rng, bool top_band = false) {
+    FrequencyEncoding e;
+    const int inputs = draw(rng, 1, 6);
+    do {
+        e.bands = draw(rng, 0, 4);
+        e.first_exponent = draw(rng, -1, 2);
+        e.pi = draw(rng, 0, 1);
+        e.include_input = draw(rng, 0, 1);
+        e.order = draw(rng, 0, 1) ? FrequencyEncoding::Order::BandMajor : FrequencyEncoding::Order::ComponentMajor;
+        if (top_band) {
+            e.bands = 4;
+            e.first_exponent = 2;
+        }
+    } while (e.width(inputs) > kFusedMlpMaxWidth);
+    const int depth = draw(rng, 1, 4);
+    MlpSpec s;
+    s.inputs = inputs;
+    s.encoding = e;
+    int in = e.width(inputs);
+    const Act acts[5] = {Act::relu(), Act::leaky(0.2f), Act::tanh(), Act::sigmoid(), Act::none()};
+    for (int l = 0; l < depth; ++l) {
+        const bool last = l + 1 == depth;
+        DenseSpec d;
+        d.in = in;
+        d.out = last ? draw(rng, 1, 5) : draw(rng, 1, 40);
+        d.act = last ? (draw(rng, 0, 1) ? Act::none() : Act::exp()) : acts[draw(rng, 0, 4)];
+        const float a = std::sqrt(3.0f / float(in));  // He-like: activations O(1) through the layers
+        d.weight = uniform(std::size_t(d.in) * d.out, rng, -a, a);
+        if (draw(rng, 0, 3)) d.bias = uniform(d.out, rng, -0.5f, 0.5f);
+        s.layers.push_back(std::move(d));
+        in = s.layers.back().out;
+    }
+    return s;
+}
+
 // The reference of n items: [n][out] in double (ref::frequency_encode, then ref::dense per layer).
 std::vector<std::vector<double>> mlp_reference(const MlpSpec& s, const std::vector<float>& x, int n, ItemLayout in) {
     std::vector<std::vector<double>> out(n);
@@ -389,8 +522,9 @@ double mlp_flops(const MlpSpec& s) {
 Prepared fused_mlp_case(Context& ctx, const MlpSpec& spec, int n, bool planar_in, std::mt19937& rng) {
     Prepared r;
     const int out_c = spec.layers.back().out;
-    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"layers", long(spec.layers.size())},
-                    {"out", out_c}}) + (planar_in ? " planar->points" : " points->planar");
+    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"e0", spec.encoding.first_exponent},
+                    {"layers", long(spec.layers.size())}, {"out", out_c}}) +
+              (planar_in ? " planar->points" : " points->planar");
     const ItemLayout lin = planar_in ? ItemLayout::planar(n) : ItemLayout::points(spec.inputs);
     const ItemLayout lout = planar_in ? ItemLayout::points(out_c) : ItemLayout::planar(n);
     const auto x = uniform(std::size_t(n) * spec.inputs, rng);
@@ -418,8 +552,8 @@ Prepared fused_mlp_case(Context& ctx, const MlpSpec& spec, int n, bool planar_in
 Prepared dense_mlp_case(Context& ctx, const MlpSpec& spec, int n, std::mt19937& rng) {
     Prepared r;
     const int out_c = spec.layers.back().out;
-    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"layers", long(spec.layers.size())},
-                    {"out", out_c}});
+    r.shape = dims({{"n", n}, {"in", spec.inputs}, {"bands", spec.encoding.bands}, {"e0", spec.encoding.first_exponent},
+                    {"layers", long(spec.layers.size())}, {"out", out_c}});
     auto op = std::make_shared<DenseMlp>(ctx, gemm_selection(ctx).params, spec);
     const auto x = uniform(std::size_t(n) * spec.inputs, rng);
     auto xb = add(ctx, r, "x", Role::Input, x);
@@ -491,16 +625,29 @@ void jbu_guides(int w, int h, std::vector<float>& normal, std::vector<float>& po
         }
 }
 
-Prepared jbu_case(Context& ctx, int w, int h, int W, int H, int channels, int radius, std::mt19937& rng) {
+// Low values in [0, 4]; the guides of `scene` (tests/jbu_scene.hpp) or, without one, of jbu_guides' fixed scene.
+Prepared jbu_case(Context& ctx, int w, int h, int W, int H, int channels, const JbuParams& params,
+                  const test::jbu_scene::Scene* scene, std::mt19937& rng) {
     Prepared r;
+    const int radius = params.radius;
+    std::ostringstream extra;
+    if (params.normal_power != JbuParams{}.normal_power) extra << " normal power " << params.normal_power;
+    if (params.kernel != JbuParams::Kernel::Auto)
+        extra << (params.kernel == JbuParams::Kernel::Rows8 ? " kernel rows8" : " kernel one-pixel");
     r.shape = std::to_string(w) + "x" + std::to_string(h) + " -> " + std::to_string(W) + "x" + std::to_string(H) +
-              " C" + std::to_string(channels) + " r" + std::to_string(radius);
+              " C" + std::to_string(channels) + " r" + std::to_string(radius) + extra.str();
     test::JbuRefImage low{w, h, channels, uniform(std::size_t(channels) * w * h, rng, 0.0f, 4.0f), {}, {}};
-    jbu_guides(w, h, low.normal, low.position);
     std::vector<float> normal, position;
-    jbu_guides(W, H, normal, position);
-    JbuParams params;
-    params.radius = radius;
+    if (scene) {
+        const auto lo = test::jbu_scene::render_guides(*scene, w, h), hi = test::jbu_scene::render_guides(*scene, W, H);
+        low.normal = lo.normal;
+        low.position = lo.position;
+        normal = hi.normal;
+        position = hi.position;
+    } else {
+        jbu_guides(w, h, low.normal, low.position);
+        jbu_guides(W, H, normal, position);
+    }
     auto op = std::make_shared<JointBilateralUpsample>(ctx);
     auto vb = add(ctx, r, "low", Role::Input, low.values), lnb = add(ctx, r, "low_normal", Role::Input, low.normal);
     auto lpb = add(ctx, r, "low_position", Role::Input, low.position);
@@ -838,10 +985,108 @@ test::ProbeRefInputs probe_scene(int n, bool sh, std::mt19937& rng) {
     return r;
 }
 
-Prepared probe_case(Context& ctx, int n, bool sh, std::mt19937& rng) {
+// tests/test_probe_shade.cpp's random scenes: a random orthonormal face basis (right x up = -look) from a centre in
+// or near a grid of 4..10 blocks per axis; per pixel sky (10%), a damaged pixel (4%: NaN depth or an infinite
+// normal component), else a random axis normal and a depth in 0.3..14.3 m whose hit point keeps 2e-3 m from the
+// 0.25 m lattice; the block behind three hit points in four occupied, 10 random blocks more, in shuffled order;
+// one index out of range (empty); at n >= 7 pixel 3 a surface without a normal (a miss). (A pixel whose 1,000 depths
+// all came near the lattice stays sky; that file required there was none.)
+test::ProbeRefInputs probe_random_scene(int n, bool sh, std::mt19937& rng) {
+    using Vec = std::array<double, 3>;
+    auto dot = [](const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    auto normalized = [&](Vec a) {
+        const double l = std::sqrt(dot(a, a));
+        for (double& x : a) x /= l;
+        return a;
+    };
+    auto near_lattice = [](double x) { return std::abs(x * 4.0 - std::round(x * 4.0)) < 8e-3; };
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    std::normal_distribution<double> g(0.0, 1.0);
+    test::ProbeRefInputs r;
+    r.n = n;
+    r.sh = sh;
+    for (int c = 0; c < 3; ++c) r.grid[c] = draw(rng, 4, 10);
+    const Vec look = normalized({g(rng), g(rng), g(rng)});
+    Vec right = {g(rng), g(rng), g(rng)};
+    const double k = dot(right, look);
+    for (int c = 0; c < 3; ++c) right[c] -= k * look[c];
+    right = normalized(right);
+    const Vec up = {right[1] * look[2] - right[2] * look[1], right[2] * look[0] - right[0] * look[2],
+                    right[0] * look[1] - right[1] * look[0]};  // right x look: right x up = -look
+    for (int c = 0; c < 3; ++c) {  // the float camera is the one both see
+        r.centre[c] = float(u01(rng) * (r.grid[c] + 4) - 2);
+        r.look[c] = float(look[c]);
+        r.right[c] = float(right[c]);
+        r.up[c] = float(up[c]);
+    }
+    const int npix = n * n;
+    r.depth.assign(npix, 1.0e4f);
+    r.normal.assign(std::size_t(3) * npix, 0.0f);
+    r.index_of.assign(std::size_t(r.grid[0]) * r.grid[1] * r.grid[2], -1);
+    std::vector<int> cells;  // cells to occupy, in the order pixels claimed them
+    for (int pix = 0; pix < npix; ++pix) {
+        const double kind = u01(rng);
+        if (kind < 0.1) continue;  // sky
+        if (kind < 0.14) {         // a damaged pixel
+            if (draw(rng, 0, 1)) r.depth[pix] = std::numeric_limits<float>::quiet_NaN();
+            else r.normal[std::size_t(draw(rng, 0, 2)) * npix + pix] = std::numeric_limits<float>::infinity();
+            continue;
+        }
+        const int row = pix / n, col = pix % n;
+        const double u = 2.0 * (col + 0.5) / n - 1.0, v = 1.0 - 2.0 * (row + 0.5) / n;
+        Vec dir;
+        for (int c = 0; c < 3; ++c) dir[c] = r.look[c] + u * r.right[c] + v * r.up[c];
+        dir = normalized(dir);
+        const double along = dir[0] * r.look[0] + dir[1] * r.look[1] + dir[2] * r.look[2];
+        const int f = draw(rng, 0, 5);
+        double nr[3] = {0, 0, 0};
+        nr[f >> 1] = (f & 1) ? -1.0 : 1.0;
+        // A ray nearly parallel to a lattice plane near that plane keeps every depth ambiguous: left as sky then.
+        for (int attempt = 0; attempt < 1000; ++attempt) {
+            const float depth = float(0.3 + u01(rng) * 14.0);
+            double q[3];
+            bool ambiguous = false;
+            for (int c = 0; c < 3; ++c) {
+                q[c] = r.centre[c] + dir[c] * (double(depth) / along) - 0.5 * nr[c];
+                ambiguous |= near_lattice(q[c]);
+            }
+            if (ambiguous) continue;
+            r.depth[pix] = depth;
+            for (int c = 0; c < 3; ++c) r.normal[std::size_t(c) * npix + pix] = float(nr[c]);
+            bool inside = true;
+            for (int c = 0; c < 3; ++c) inside &= q[c] >= 0 && q[c] < r.grid[c];
+            if (inside && u01(rng) < 0.75) cells.push_back(int(q[0]) + r.grid[0] * (int(q[1]) + r.grid[1] * int(q[2])));
+            break;
+        }
+    }
+    if (n >= 7) {  // a surface pixel with no normal: counted as a miss
+        r.depth[3] = 2.0f;
+        for (int c = 0; c < 3; ++c) r.normal[std::size_t(c) * npix + 3] = 0.0f;
+    }
+    const int blocks = int(r.index_of.size());
+    for (int extra = 0; extra < 10; ++extra) cells.push_back(draw(rng, 0, blocks - 1));
+    std::shuffle(cells.begin(), cells.end(), rng);
+    for (int cell : cells)
+        if (r.index_of[cell] < 0) r.index_of[cell] = r.voxels++;
+    r.index_of[draw(rng, 0, blocks - 1)] = r.voxels + 3;  // out of range: empty
+    // Band 0 mostly dominant (most pixels lit, some clamped at 0); per-voxel light >= 0.
+    r.field = uniform(std::size_t(r.voxels) * (sh ? 27 : 4), rng);
+    if (sh)
+        for (int i = 0; i < r.voxels; ++i)
+            for (int c = 0; c < 3; ++c) {
+                float& band0 = r.field[std::size_t(27) * i + 9 * c];
+                band0 = std::abs(band0) * 3.0f;
+            }
+    else
+        for (float& x : r.field) x = std::abs(x) * 5.0f;
+    return r;
+}
+
+// random: probe_random_scene, else probe_scene (looking down -z).
+Prepared probe_case(Context& ctx, int n, bool sh, std::mt19937& rng, bool random = false) {
     Prepared r;
-    r.shape = dims({{"n", n}}) + (sh ? " SH-27" : " per-voxel");
-    const test::ProbeRefInputs s = probe_scene(n, sh, rng);
+    r.shape = dims({{"n", n}}) + (sh ? " SH-27" : " per-voxel") + (random ? " random camera" : "");
+    const test::ProbeRefInputs s = random ? probe_random_scene(n, sh, rng) : probe_scene(n, sh, rng);
     auto op = std::make_shared<ProbeShade>(ctx);
     auto db = add(ctx, r, "depth", Role::Input, s.depth), nb = add(ctx, r, "normal", Role::Input, s.normal);
     auto ib = add(ctx, r, "index_of", Role::Input, s.index_of), fb = add(ctx, r, "field", Role::Input, s.field);
@@ -955,6 +1200,12 @@ Prepared ltf_case(Context& ctx, int V, int bounces, LtfVariant variant, LtfKerne
 // GEMM: fp32 fma accumulation over K in another order than the double reference; worst 5.4e-7 at K = 512 (the
 // generator-layer row), 1.8e-7 at K = 45. docs/RELIABILITY.md claims "near 1e-6"; 4x the worst.
 constexpr double kTolGemm = 2e-6;
+// GEMMs of K <= 90 only (the rows of tests/test_gemm.cpp's random small shapes): that file's bound, sum_of(K + 8),
+// allows at the largest output at least gamma_(K + 8) |want| >= gamma_9 max |want| = 5.4e-7 of it (K = 1); worst
+// 2.2e-7 (the device's fallback chain, K <= 70).
+constexpr double kTolGemmShortK = 5e-7;
+// A dense layer whose exp outputs reach 8.9 (tests/test_dense.cpp bounded it by 1e-5 absolute + relative).
+constexpr double kTolDenseExp = 1e-6;
 // Convolutions: the same GEMM over K = Cin KH KW <= 192 here; worst 4.4e-7 (k4 s2 im2col).
 constexpr double kTolConv = 2e-6;
 // PackB: a copy, but for the activation's slope (0.2f on the device, 0.2 in the reference): worst 2.0e-8.
@@ -968,6 +1219,11 @@ constexpr double kTolExactish = 2.5e-7;
 constexpr double kTolExact = 0.0;
 // MLPs: fp32 dense layers of <= 37 inputs, sin/cos of the encoding; worst 3.7e-7 (fused, band-major encoding).
 constexpr double kTolMlp = 2e-6;
+// MLPs whose encoding reaches 2^5 pi (the random architectures' top band): the float argument (up to 100 rad) alone
+// is rounded by up to ~1e-5 rad (an ulp at 100 is 7.6e-6, and the constant 2^5 pi's rounding as much), which the
+// sin/cos features carry into the first layer; worst 1.6e-6 (fused, one layer, max |want| 5.2). Below the 1e-4
+// absolute + relative of tests/test_mlp.cpp's sweep while max |want| <= 10 (5.2 and 0.64 for these rows).
+constexpr double kTolMlpTopBand = 1e-5;
 // Frequency encoding alone: sin/cos of arguments up to 2^2 pi, rounded in float first; worst 8.2e-7.
 constexpr double kTolEncode = 4e-6;
 // JBU: float exp/pow weights of up to 36 taps; worst 3.7e-7 (radius 3). Its test claims < 1e-5 of the range.
@@ -1030,6 +1286,44 @@ std::vector<OpCase> build_table() {
                 [p](Context& c, Size, std::mt19937& rng) { return gemm_case(c, p, 7, 9, 13, 3, rng); });
     }
 
+    // Knob sets beyond the table, at tests/test_gemm.cpp's random small shapes (M, N, K in 1..70, an activation 0..4;
+    // 3 per set, drawn by the row): the device's fallback chain (its tuning entry's set, often none of the table's
+    // generic ones, and every fallback), that set's loop form (UNROLL 0) and each knob at an extreme; gemm_local's
+    // sets at the edges of their blocks and at random shapes in 1..150, in a row of sums of K <= 90 and one of longer
+    // ones. That file bounded K <= 90 by sum_of(K + 8) (kTolGemmShortK: no looser at the largest output) and longer
+    // sums by 1e-4 absolute + relative (kTolGemm is stricter). Perf: the first set at a mid-sized layer (gemm_local's
+    // short-sum rows: K 64 over 4099 columns).
+    const auto perf_gemm = [](const GemmParams& p, bool short_k = false) {
+        return std::vector<GemmRun>{{p, 256, short_k ? 4099 : 1031, short_k ? 64 : 576, 2}};
+    };
+    row("Gemm::enqueue", "device fallback chain, every set, 3 random shapes each", false, kTolGemmShortK,
+        [perf_gemm](Context& c, Size z, std::mt19937& rng) {
+            const auto chain = gemm_fallback_chain(gemm_params_for(c.info()));
+            return gemm_runs_case(c, z == Size::Perf ? perf_gemm(chain.front()) : random_gemm_runs(chain, 3, rng),
+                                  true, rng);
+        });
+    row("Gemm::enqueue", "device set's loop form (UNROLL 0), 3 random shapes", false, kTolGemmShortK,
+        [perf_gemm](Context& c, Size z, std::mt19937& rng) {
+            GemmParams p = gemm_params_for(c.info());
+            p.unroll = 0;
+            return gemm_runs_case(c, z == Size::Perf ? perf_gemm(p) : random_gemm_runs({p}, 3, rng), true, rng);
+        });
+    for (const GemmParams& p : gemm_extreme_variants())
+        row("Gemm::enqueue", "extreme " + knobs_name(p) + ", 3 random shapes", false, kTolGemmShortK,
+            [p, perf_gemm](Context& c, Size z, std::mt19937& rng) {
+                return gemm_runs_case(c, z == Size::Perf ? perf_gemm(p) : random_gemm_runs({p}, 3, rng), false, rng);
+            });
+    for (const GemmParams& p : gemm_local_variants())
+        for (bool long_sums : {false, true})
+            row("Gemm::enqueue",
+                "gemm_local " + knobs_name(p) + (long_sums ? ", K 91..192: " : ", K <= 90: ") +
+                    "its block's edges and 3 random shapes",
+                false, long_sums ? kTolGemm : kTolGemmShortK,
+                [p, long_sums, perf_gemm](Context& c, Size z, std::mt19937& rng) {
+                    const auto runs = z == Size::Perf ? perf_gemm(p, !long_sums) : local_gemm_runs(p, long_sums, rng);
+                    return gemm_runs_case(c, runs, false, rng);
+                });
+
     // PackB: the device's set, K and N not multiples of KU and NR, LeakyReLU on the way (the slope fast path).
     row("PackB::enqueue", "device set", false, kTolPack, [](Context& c, Size z, std::mt19937& rng) {
         const GemmParams p = device_gemm(c);
@@ -1068,6 +1362,59 @@ std::vector<OpCase> build_table() {
                 const GemmParams p = k.path == ConvPath::implicit ? implicit_gemm(c) : device_gemm(c);
                 return conv_case(c, p, z == Size::Perf && !k.tiny ? k.perf : k.test, k.transposed, k.path, rng);
             });
+    // tests/test_conv.cpp's random sweeps: geometries drawn by each row (random_conv: C, Cout 1..40, H, W 1..23 or
+    // 1..17, kernels 1..5 per axis, padding min / 2, input activation 0..2, output activation 0..4), each stride
+    // through im2col, and through an implicit request, which keeps im2col where the geometry is not exact
+    // (conv_takes_implicit says which path the op must take); one drawn among the exact geometries. K = Cin KH KW
+    // reaches 1,000 here: that file bounded these by 1e-4 absolute + relative (fp32 accumulation); kTolConv is
+    // stricter (2e-6 of max |want| <= 2.2 here).
+    const struct {
+        const char* name;
+        int stride;
+        ConvPath path;
+        bool exact;
+    } random_convs[] = {
+        {"random shape 1, stride 1, im2col", 1, ConvPath::im2col, false},
+        {"random shape 2, stride 2, im2col", 2, ConvPath::im2col, false},
+        {"random shape 3, stride 3, im2col", 3, ConvPath::im2col, false},
+        {"random shape 4, stride 1, implicit asked", 1, ConvPath::implicit, false},
+        {"random shape 5, stride 2, implicit asked", 2, ConvPath::implicit, false},
+        {"random exact geometry 6, stride 2, implicit", 2, ConvPath::implicit, true},
+    };
+    for (bool transposed : {false, true})
+        for (const auto& m : random_convs)
+            row(transposed ? "ConvTranspose2d::enqueue" : "Conv2d::enqueue", m.name, false, kTolConv,
+                [m, transposed](Context& c, Size z, std::mt19937& rng) {
+                    const GemmParams p = m.path == ConvPath::implicit ? implicit_gemm(c) : device_gemm(c);
+                    const ConvShape k = random_conv(rng, transposed, m.stride, m.exact, p);
+                    const bool implicit = m.path == ConvPath::implicit &&
+                                          conv_takes_implicit(k.kh, k.kw, k.s, k.p, k.in_act, transposed, p);
+                    return conv_case(c, p, z == Size::Perf ? perf_conv(k, transposed) : k, transposed, m.path, rng,
+                                     implicit);
+                });
+    // The sweeps' fixed corners the rows above leave out: a 1 x 1 output, a 1 x 1 input, a stride-3 k5 transposed
+    // convolution asked for the implicit path (not exact: im2col).
+    const struct {
+        const char* name;
+        ConvShape test, perf;
+        ConvPath path;
+        bool transposed, implicit;
+    } conv_corners[] = {
+        {"2x2 -> 1x1, k4 s2 p1 implicit", {8, 2, 2, 9, 4, 4, 2, 1, 2, 3}, {64, 2, 2, 64, 4, 4, 2, 1, 2, 3},
+         ConvPath::implicit, false, true},
+        {"1x1 input, k3 s1 p1 im2col", {5, 1, 1, 7, 3, 3, 1, 1, 0, 4}, {256, 1, 1, 256, 3, 3, 1, 1, 0, 4},
+         ConvPath::im2col, false, false},
+        {"1x1 bottleneck -> 2x2, k4 s2 p1 implicit", {9, 1, 1, 5, 4, 4, 2, 1, 1, 2}, {256, 1, 1, 256, 4, 4, 2, 1, 1, 2},
+         ConvPath::implicit, true, true},
+        {"k5 s3 p2, implicit asked (im2col: not exact)", {3, 5, 4, 6, 5, 5, 3, 2, 2, 4},
+         {32, 64, 128, 16, 5, 5, 3, 2, 2, 4}, ConvPath::implicit, true, false},
+    };
+    for (const auto& k : conv_corners)
+        row(k.transposed ? "ConvTranspose2d::enqueue" : "Conv2d::enqueue", k.name, false, kTolConv,
+            [k](Context& c, Size z, std::mt19937& rng) {
+                const GemmParams p = k.path == ConvPath::implicit ? implicit_gemm(c) : device_gemm(c);
+                return conv_case(c, p, z == Size::Perf ? k.perf : k.test, k.transposed, k.path, rng, k.implicit);
+            });
 
     // Dense layers over planar items: tiles of the device's set at odd sizes (n not a tile multiple, a row stride
     // beyond n), item-major output, a residual, fewer items than a tile; perf at seed 004's 128-wide layers.
@@ -1088,6 +1435,31 @@ std::vector<OpCase> build_table() {
     });
     row("Dense::enqueue", "tiny", true, kTolGemm, [](Context& c, Size, std::mt19937& rng) {
         return dense_case(c, implicit_gemm(c), 5, 7, 3, 3, true, true, 1, rng);
+    });
+    // tests/test_dense.cpp's random sweep: widths 1..70, 1..300 items, a row stride n + 0..9 (exactly n below a
+    // tile), one row per activation, item-major output on rows 1, 4, 7, a residual on rows 2 and 6 (that file's
+    // pattern over its trials); perf: the drawn options at 128 -> 128 over 10,000 items. That file bounded them by
+    // 1e-5 absolute + relative (fp32 sums of <= 256 terms); kTolGemm is stricter where max |want| <= 5 (2.9 here).
+    // (The exp row's outputs reach 8.9: 2e-6 of that would pass 1e-5 absolute, so it keeps 1e-6: worst 1.7e-7.)
+    for (int a = 0; a <= int(Activation::Erf); ++a)
+        row("Dense::enqueue", "random shape " + std::to_string(a) + ", " + to_string(Activation(a)), false,
+            a == int(Activation::Exp) ? kTolDenseExp : kTolGemm,
+            [a](Context& c, Size z, std::mt19937& rng) {
+                const GemmParams p = implicit_gemm(c);
+                const int in = draw(rng, 1, 70), out = draw(rng, 1, 70), n = draw(rng, 1, 300);
+                const int ld = n < p.nr() ? n : n + draw(rng, 0, 9);
+                const bool item_major = a % 3 == 1, residual = a % 4 == 2;
+                if (z == Size::Perf) return dense_case(c, p, 128, 128, 10000, 10007, item_major, residual, a, rng);
+                return dense_case(c, p, in, out, n, ld, item_major, residual, a, rng);
+            });
+    // Its fixed corners: exact tile multiples everywhere, and a voxel network's layer on one item.
+    row("Dense::enqueue", "exact tile multiples, residual", false, kTolGemm, [](Context& c, Size z, std::mt19937& rng) {
+        const GemmParams p = implicit_gemm(c);
+        const int n = pick(z, 4, 2048) * p.nr();
+        return dense_case(c, p, 128, 128, n, n, false, true, 3, rng);
+    });
+    row("Dense::enqueue", "256 -> 128, one item", false, kTolGemm, [](Context& c, Size, std::mt19937& rng) {
+        return dense_case(c, implicit_gemm(c), 256, 128, 1, 1, false, false, 0, rng);
     });
 
     // Per-image batch norm: both reductions, in two launches and in one (the small-plane form; at perf size a
@@ -1174,6 +1546,26 @@ std::vector<OpCase> build_table() {
         const MlpSpec s = mlp_spec(3, band_major, {7, 2}, Act::exp(), rng);
         return dense_mlp_case(c, s, 5, rng);
     });
+    // tests/test_mlp.cpp's random architectures (random_mlp_spec), drawn by each row: the fused kernel with planar
+    // input and point output and the reverse, the dense path (planar); one item on the first rows, else 1..700; the
+    // last rows with the highest band the draw allows. Perf: the drawn network over 2^18 items. That file bounded them
+    // by 1e-4 absolute + relative; kTolMlp is stricter (2e-6 of max |want| <= 7.9 here), kTolMlpTopBand too (above).
+    for (int k = 1; k <= 6; ++k)
+        row("FusedMlp::enqueue",
+            "random architecture " + std::to_string(k) + (k % 2 ? ", planar in" : ", points in") +
+                (k == 6 ? ", top band" : ""),
+            false, k == 6 ? kTolMlpTopBand : kTolMlp, [k](Context& c, Size z, std::mt19937& rng) {
+                const MlpSpec s = random_mlp_spec(rng, k == 6);
+                const int n = k == 1 ? 1 : draw(rng, 1, 700);
+                return fused_mlp_case(c, s, pick(z, n, 1 << 18), k % 2 == 1, rng);
+            });
+    for (int k = 1; k <= 3; ++k)
+        row("DenseMlp::enqueue", "random architecture " + std::to_string(k) + (k == 3 ? ", top band" : ""), false,
+            k == 3 ? kTolMlpTopBand : kTolMlp, [k](Context& c, Size z, std::mt19937& rng) {
+                const MlpSpec s = random_mlp_spec(rng, k == 3);
+                const int n = k == 1 ? 1 : draw(rng, 1, 700);
+                return dense_mlp_case(c, s, pick(z, n, 1 << 18), rng);
+            });
     row("FrequencyEncodePlanar::enqueue", "Eq. 3 style, 4 bands", false, kTolEncode, [](Context& c, Size z, std::mt19937& rng) {
         return frequency_encode_case(c, 3, {4, -1, true, true, FrequencyEncoding::Order::BandMajor}, pick(z, 517, 1 << 18), rng);
     });
@@ -1182,15 +1574,60 @@ std::vector<OpCase> build_table() {
     });
 
     // JBU: a non-integer ratio, an integer one, tiny.
+    const auto radius = [](int r) {
+        JbuParams p;
+        p.radius = r;
+        return p;
+    };
     row("JointBilateralUpsample::enqueue", "non-integer ratio, radius 2", false, kTolJbu,
-        [](Context& c, Size z, std::mt19937& rng) {
-            return jbu_case(c, pick(z, 13, 128), pick(z, 9, 64), pick(z, 41, 512), pick(z, 29, 256), 3, 2, rng);
+        [radius](Context& c, Size z, std::mt19937& rng) {
+            return jbu_case(c, pick(z, 13, 128), pick(z, 9, 64), pick(z, 41, 512), pick(z, 29, 256), 3, radius(2),
+                            nullptr, rng);
         });
-    row("JointBilateralUpsample::enqueue", "ratio 3, radius 3", false, kTolJbu, [](Context& c, Size z, std::mt19937& rng) {
-        return jbu_case(c, pick(z, 11, 128), pick(z, 7, 64), pick(z, 33, 384), pick(z, 21, 192), 5, 3, rng);
+    row("JointBilateralUpsample::enqueue", "ratio 3, radius 3", false, kTolJbu,
+        [radius](Context& c, Size z, std::mt19937& rng) {
+            return jbu_case(c, pick(z, 11, 128), pick(z, 7, 64), pick(z, 33, 384), pick(z, 21, 192), 5, radius(3),
+                            nullptr, rng);
+        });
+    row("JointBilateralUpsample::enqueue", "tiny", true, kTolJbu, [radius](Context& c, Size, std::mt19937& rng) {
+        return jbu_case(c, 5, 3, 19, 11, 3, radius(2), nullptr, rng);
     });
-    row("JointBilateralUpsample::enqueue", "tiny", true, kTolJbu,
-        [](Context& c, Size, std::mt19937& rng) { return jbu_case(c, 5, 3, 19, 11, 3, 2, rng); });
+    // tests/test_jbu.cpp's random sweep, its trials 0..7 as rows: a random scene (tests/jbu_scene.hpp: 1..4 random
+    // planar rectangles, axis-aligned half of the time, sometimes a sky rectangle, over a random background plane),
+    // low sizes 1..23 x 1..19; odd rows an integer ratio 1..5, even rows any output size 1..61 x 1..47 (smaller than
+    // the input too); channels 1, 3, 5; radius 1..3; normal power 7.5 (pow, not squaring) on rows 1 and 5, 0 (the
+    // normal term off) on rows 3 and 7; where Auto would pick the 8-pixel kernel (PoCL's CPUs, <= 4 channels) rows 0,
+    // 1, 5, 6 force the one-pixel one (on Mesa's llvmpipe the 8-pixel kernel's build alone takes ~65 s: it runs
+    // under oclgrind there). Perf: the drawn scene and options, 128 x 64 up by the ratio or to 501 x 247. That file
+    // bounded them by 1e-4 of the value range 4 (observed < 1e-5); kTolJbu is stricter.
+    for (int k = 0; k < 8; ++k)
+        row("JointBilateralUpsample::enqueue", "random scene " + std::to_string(k), false, kTolJbu,
+            [k](Context& c, Size z, std::mt19937& rng) {
+                const test::jbu_scene::Scene scene = test::jbu_scene::random_scene(rng);
+                int w = draw(rng, 1, 23), h = draw(rng, 1, 19), W, H;
+                const int f = draw(rng, 1, 5);
+                if (k % 2) {
+                    W = w * f;
+                    H = h * f;
+                } else {
+                    W = draw(rng, 1, 61);
+                    H = draw(rng, 1, 47);
+                }
+                if (z == Size::Perf) {
+                    w = 128;
+                    h = 64;
+                    W = k % 2 ? w * f : 501;
+                    H = k % 2 ? h * f : 247;
+                }
+                const int channels = std::array<int, 3>{1, 3, 5}[k % 3];
+                JbuParams p;
+                p.radius = 1 + k % 3;
+                if (k % 4 == 3) p.normal_power = 0.0f;
+                if (k % 4 == 1) p.normal_power = 7.5f;
+                if (channels <= kJbuVecMaxChannels && jbu_vector_device(c.info()))
+                    p.kernel = k % 5 < 2 ? JbuParams::Kernel::OnePixel : JbuParams::Kernel::Rows8;
+                return jbu_case(c, w, h, W, H, channels, p, &scene, rng);
+            });
 
     // SH.
     for (bool irr : {false, true})
@@ -1319,6 +1756,16 @@ std::vector<OpCase> build_table() {
             [sh](Context& c, Size z, std::mt19937& rng) { return probe_case(c, pick(z, 37, 512), sh, rng); });
     row("ProbeShade::enqueue", "tiny SH-27", true, kTolProbe,
         [](Context& c, Size, std::mt19937& rng) { return probe_case(c, 3, true, rng); });
+    // tests/test_probe_shade.cpp's random sweep (probe_random_scene: random cameras, NaN and Inf pixels, grids of
+    // 4..10 blocks), odd and even faces, both fields; perf at n 512. That file bounded them by 1e-5 absolute +
+    // relative; kTolProbe is stricter (1e-6 of max |want| <= 5 here).
+    const std::pair<int, bool> random_probes[] = {{1, true},   {2, false},  {7, true},
+                                                  {16, false}, {33, true}, {33, false}};
+    for (const auto& [n, sh] : random_probes)
+        row("ProbeShade::enqueue", "random camera, n " + std::to_string(n) + (sh ? ", SH-27" : ", per-voxel"), false,
+            kTolProbe, [n, sh](Context& c, Size z, std::mt19937& rng) {
+                return probe_case(c, pick(z, n, 512), sh, rng, true);
+            });
 
     // Light-transition function: each kernel shape, both variants, the visibility mask, a split of the senders.
     const struct {
@@ -1359,16 +1806,42 @@ std::vector<GemmParams> gemm_variants() {
     return sets;
 }
 
+std::vector<GemmParams> gemm_extreme_variants() {
+    // Small micro-kernels: unrolled bodies of hundreds of vector fmas take minutes to compile on Mesa, and the extreme
+    // value is what a wrong index would break.
+    std::vector<GemmParams> v;
+    for (const char* k : {"16,1,1,1,1,2,1", "1,2,8,1,4,1,1", "1,1,1,16,1,1,1", "3,16,1,2,2,1,1", "5,8,1,3,3,1,0",
+                          "2,4,2,2,4,4,1"})
+        v.push_back(parse_gemm_params(k));
+    return v;
+}
+
+std::vector<GemmParams> gemm_local_variants() {
+    std::vector<GemmParams> v;
+    for (const char* k : {"4,4,1,1,8,8,1,16", "2,2,2,1,4,16,1,8", "8,8,1,1,4,4,0,32", "3,4,2,2,2,8,1,12",
+                          "4,4,1,1,16,16,1,16"})
+        v.push_back(parse_gemm_params(k));
+    return v;
+}
+
+bool conv_takes_implicit(int kh, int kw, int stride, int pad, int in_act, bool transposed, const GemmParams& gp) {
+    if (gp.kwg > 0 || in_act > int(Activation::LeakyReLU) || kh % stride || kw % stride) return false;
+    return !transposed || (kh - 2 * pad == stride && kw - 2 * pad == stride);
+}
+
+std::mt19937 case_rng(const OpCase& c) {
+    std::uint32_t seed = 2166136261u;  // FNV-1a of the id
+    for (char ch : c.id()) seed = (seed ^ std::uint8_t(ch)) * 16777619u;
+    return std::mt19937(seed);
+}
+
 const std::vector<OpCase>& op_cases() {
     static const std::vector<OpCase> table = build_table();
     return table;
 }
 
 Outcome run_case(Context& ctx, const OpCase& c, Size size) {
-    // FNV-1a of the id: the same data on every run and device, independent of the table's order.
-    std::uint32_t seed = 2166136261u;
-    for (char ch : c.id()) seed = (seed ^ std::uint8_t(ch)) * 16777619u;
-    std::mt19937 rng(seed);
+    std::mt19937 rng = case_rng(c);  // the same data on every run and device, independent of the table's order
     Prepared p = c.prepare(ctx, size, rng);
     p.run(ctx);
     ctx.finish();

@@ -56,13 +56,31 @@ struct OpCase {
     std::string id() const { return op + " / " + name; }
 };
 
-// Every case. Built once; the GEMM knob sets come from gemm_variants().
+// Every case. Built once; the GEMM knob sets come from gemm_variants(), gemm_extreme_variants() and
+// gemm_local_variants().
 const std::vector<OpCase>& op_cases();
+
+// The RNG a case's prepare gets (run_case, perf/op_bench): seeded from the case's id (FNV-1a), so every run and
+// device sees the same data and the same randomly drawn shapes, independent of the table's order.
+std::mt19937 case_rng(const OpCase& c);
 
 // The GEMM knob sets the table picks for a GPU and for a CPU, each with its fallback chain, without duplicates: the
 // same sets as test::gpu_and_cpu_gemm_variants() (tests/test_support.hpp, which the harness cannot include: it
 // pulls in Catch2, and perf/op_bench links the harness without it); test_op_harness.cpp checks they agree.
 std::vector<detail::GemmParams> gemm_variants();
+
+// Knob sets beyond the tuning table that the GEMM rows run too (tests/test_gemm.cpp also runs them at the generators'
+// layer shapes): small micro-kernels with one knob at its extreme (MR 16, NV 8, KU 16, VW 16, work-groups 4 wide, the
+// loop form); and gemm_local's (KWG > 0): square, tall and wide work-groups, VW 2..8, NV 1..2, KU 2, a KWG that is
+// not a power of two, MR 3, both UNROLL forms.
+std::vector<detail::GemmParams> gemm_extreme_variants();
+std::vector<detail::GemmParams> gemm_local_variants();
+
+// Whether a convolution asked for the implicit path (ConvPath::implicit) takes it at the small shapes of the tests:
+// an exact geometry (the stride divides the kernel; transposed: also K - 2P = S on both axes), an input activation
+// conv_pad applies (none, ReLU, LeakyReLU) and a gemm_packed knob set (KWG 0). Otherwise it keeps im2col / col2im.
+bool conv_takes_implicit(int kh, int kw, int stride, int pad, int in_act, bool transposed,
+                         const detail::GemmParams& gp);
 
 struct Outcome {
     std::string shape;
