@@ -90,7 +90,9 @@ Prepared gemm_runs_case(Context& ctx, const std::vector<GemmRun>& runs, bool kno
     std::vector<std::function<void(Context&)>> enqueues;
     std::vector<std::function<void(Context&, Comparison&)>> compares;
     for (std::size_t i = 0; i < runs.size(); ++i) {
-        const auto [p, M, N, K, act] = runs[i];
+        // Plain copies, not a structured binding: clang 15 (the sanitize build) cannot capture bindings in lambdas.
+        const GemmParams p = runs[i].p;
+        const int M = runs[i].M, N = runs[i].N, K = runs[i].K, act = runs[i].act;
         const std::string tag = runs.size() == 1 ? "" : "[" + std::to_string(i) + "]";
         r.shape += (i ? ", " : "") + (knobs ? p.to_string() + ": " : "") +
                    dims({{"M", M}, {"N", N}, {"K", K}, {"act", act}});
@@ -1761,11 +1763,14 @@ std::vector<OpCase> build_table() {
     // relative; kTolProbe is stricter (1e-6 of max |want| <= 5 here).
     const std::pair<int, bool> random_probes[] = {{1, true},   {2, false},  {7, true},
                                                   {16, false}, {33, true}, {33, false}};
-    for (const auto& [n, sh] : random_probes)
+    for (const auto& probe_row : random_probes) {
+        const int n = probe_row.first;  // copies: clang 15 cannot capture structured bindings in lambdas
+        const bool sh = probe_row.second;
         row("ProbeShade::enqueue", "random camera, n " + std::to_string(n) + (sh ? ", SH-27" : ", per-voxel"), false,
             kTolProbe, [n, sh](Context& c, Size z, std::mt19937& rng) {
                 return probe_case(c, pick(z, n, 512), sh, rng, true);
             });
+    }
 
     // Light-transition function: each kernel shape, both variants, the visibility mask, a split of the senders.
     const struct {
