@@ -928,8 +928,8 @@ class _Importer:
             return None
         # starts, ends, axes, steps: [0], [2] and, when given, [0] and [1] (a bound given but not constant, or not
         # a whole number, reads as [] and fails the match)
-        given = [i for i in sl.input[1:]]
-        bounds = [(_integers(self.const(i)) or []) if self.const(i) is not None else [] if i else None for i in given]
+        consts = [self.const(i) if i else None for i in sl.input[1:]]
+        bounds = [None if not i else [] if v is None else (_integers(v) or []) for i, v in zip(sl.input[1:], consts)]
         wanted = ([0], [2], [0], [1])
         if len(bounds) < 2 or any(b is not None and b[:1] != w for b, w in zip(bounds, wanted)) \
                 or bounds[0] is None or bounds[1] is None:

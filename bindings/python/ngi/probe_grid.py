@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from .temporal import SKY_DEPTH, _basis
+from .temporal import SKY_DEPTH, world_points
 
 # Cosine-lobe factors A_l per coefficient k = l (l + 1) + m (Ramamoorthi & Hanrahan 2001).
 LOBE = np.array([math.pi] + [2.0 * math.pi / 3.0] * 3 + [math.pi / 4.0] * 5)
@@ -40,7 +40,8 @@ def sh9(d):
 
 
 def _dilate(solid, radius):
-    """Blocks within `radius` blocks (Chebyshev distance) of a solid block, by separable running maxima."""
+    """Blocks within `radius` blocks (Chebyshev distance) of a solid block, by separable running maxima (written
+    here: scipy.ndimage's maximum_filter would do it, but the ngi package depends on NumPy only)."""
     out = solid.copy()
     for axis in range(3):
         grown = out.copy()
@@ -100,14 +101,10 @@ class ProbeGrid:
         if self.sh is None:
             raise ValueError("ProbeGrid.shade: bake() first")
         n = depth.shape[0]
-        pos, look, right, up = (np.asarray(camera[0], np.float64), *_basis(camera[1], camera[2]))
-        c = 2.0 * (np.arange(n) + 0.5) / n - 1.0
-        u, v = np.meshgrid(c, -c)
-        d = depth.astype(np.float64)
-        surface = d < SKY_DEPTH
+        surface = depth < SKY_DEPTH
         nrm = np.moveaxis(normal.astype(np.float64), 0, -1)[surface]  # [S, 3]
         nrm /= np.maximum(np.linalg.norm(nrm, axis=-1, keepdims=True), 1e-12)
-        p = (pos + d[..., None] * (look + u[..., None] * right + v[..., None] * up))[surface] + SURFACE_OFFSET * nrm
+        p = world_points(depth, camera)[surface] + SURFACE_OFFSET * nrm
         g = p / self.spacing - 0.5
         base = np.floor(g).astype(np.int64)
         frac = g - base
@@ -125,9 +122,7 @@ class ProbeGrid:
             idx = np.where(inside, self.index[tuple(np.clip(ijk, 0, self.dims - 1).T)], -1)
             have = idx >= 0
             tri = np.prod(np.where(offset == 1, frac, 1.0 - frac), axis=-1)
-            q = (ijk + 0.5) * self.spacing
-            q = np.minimum(q, self.size)
-            to = q - p
+            to = self.points[np.maximum(idx, 0)] - p  # a missing probe's weight is 0 below
             dist = np.maximum(np.linalg.norm(to, axis=-1), 1e-9)
             back = ((np.sum(to * nrm, axis=-1) / dist + 1.0) * 0.5) ** 2 + 0.2
             w = np.where(have, tri * back, 0.0)

@@ -45,19 +45,26 @@ def _basis(look, up):
     return look, np.cross(look, up), up
 
 
+def world_points(depth, camera):
+    """The world point [N, N, 3] (float64) each pixel of a front view sees: planar depth [N, N] along the camera's
+    look, camera = (position, look, up) with the 90-degree view of docs/CONVENTIONS.md."""
+    n = depth.shape[0]
+    pos, look, right, up = (np.asarray(camera[0], np.float64), *_basis(camera[1], camera[2]))
+    c = 2.0 * (np.arange(n) + 0.5) / n - 1.0
+    u, v = np.meshgrid(c, -c)  # v: row 0 is the top
+    d = depth.astype(np.float64)
+    return pos + d[..., None] * (look + u[..., None] * right + v[..., None] * up)
+
+
 def reprojection(depth_t, camera_t, camera_prev):
     """For every pixel of frame t (planar depth [N, N]; camera = (position, look, up)): the (row, col) of frame
     t-1's pixel that sees the same world point, and the point's planar depth in t-1's camera. Returns
     (rows, cols, depth_in_prev, inside) with `inside` False where the point is behind or outside t-1's view or
     frame t sees the sky."""
     n = depth_t.shape[0]
-    pos, look, right, up = (np.asarray(camera_t[0], np.float64), *_basis(camera_t[1], camera_t[2]))
     pos_p, look_p, right_p, up_p = (np.asarray(camera_prev[0], np.float64), *_basis(camera_prev[1], camera_prev[2]))
-    c = 2.0 * (np.arange(n) + 0.5) / n - 1.0
-    u, v = np.meshgrid(c, -c)  # v: row 0 is the top
     d = depth_t.astype(np.float64)
-    world = pos + d[..., None] * (look + u[..., None] * right + v[..., None] * up)
-    q = world - pos_p
+    q = world_points(depth_t, camera_t) - pos_p
     z = q @ look_p
     safe = np.where(z > 1e-6, z, 1.0)
     up_ = (q @ right_p) / safe
