@@ -38,6 +38,36 @@ static inline float8 jbu_power8(float8 f, float np, int np_int) {
     return r;
 }
 
+// One low-resolution texel (i, j) as the shared-columns path of jbu_upsample8 reads it: its normal and position, its
+// values cleaned as jbu_clean8 cleans them (channels >= nc are 0), and whether it is a tap (valid: -1, inside the image
+// with a surface; else 0, and nothing is read).
+typedef struct {
+    float3 n, p;
+    float4 v;
+    int valid;
+} JbuColumn;
+
+static inline JbuColumn jbu_column(__global const float* restrict low, __global const float* restrict low_normal,
+                                   __global const float* restrict low_position, const int lw, const int lh,
+                                   const int nc, const int i, const int j) {
+    JbuColumn c;
+    c.n = c.p = (float3)(0.0f);
+    c.v = (float4)(0.0f);
+    c.valid = 0;
+    if (i < 0 || i >= lw) return c;
+    const int plane = lw * lh, l = j * lw + i;
+    c.n = jbu_load3(low_normal, l, plane);
+    c.p = jbu_load3(low_position, l, plane);
+    // The gather path's test, term for term (its |m|^2 sum, not dot(): the same rounding).
+    if (!(jbu_finite3(c.n) && c.n.x * c.n.x + c.n.y * c.n.y + c.n.z * c.n.z >= 0.25f && jbu_finite3(c.p))) return c;
+    c.valid = -1;
+    c.v.x = jbu_clean(low[l]);
+    if (nc > 1) c.v.y = jbu_clean(low[plane + l]);
+    if (nc > 2) c.v.z = jbu_clean(low[2 * plane + l]);
+    if (nc > 3) c.v.w = jbu_clean(low[3 * plane + l]);
+    return c;
+}
+
 // floor(a / b) per lane for b > 0.
 static inline int8 jbu_floor_div8(int8 a, int b) { return select(a / b, -((-a + b - 1) / b), a < 0); }
 
@@ -46,10 +76,11 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
                             __global const float* restrict normal, __global const float* restrict position,
                             const int W, const int H, const float inv_two_sigma_s2, const float normal_power,
                             const float inv_two_sigma_p2, const int radius, const float fallback_ratio,
-                            __global float* restrict out, volatile __global uint* fallbacks) {
+                            const int shared_columns, __global float* restrict out, volatile __global uint* fallbacks) {
     const int gx = get_global_id(0), y = get_global_id(1);
     const int lw = w, lh = h, nc = channels, ow = W, oh = H, r = clamp(radius, 1, JBU_MAX_RADIUS);
     const float s2 = inv_two_sigma_s2, np = normal_power, p2 = inv_two_sigma_p2, ratio = fallback_ratio;
+    const int share = shared_columns;
     const int np_int = np == floor(np) ? (int)np : -1;
     const int x0 = gx * JBU_VEC;
     if (x0 >= ow || y >= oh) return;
@@ -77,14 +108,62 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
     const int by = fy0 - r + 1;
     float8 spatial_sum = (float8)(0.0f), weight_sum = (float8)(0.0f);
     float8 acc0 = (float8)(0.0f), acc1 = acc0, acc2 = acc0, acc3 = acc0;
+    // The spatial Gaussian is separable: exp(-(dx^2 + dy^2) s2) = exp(-dx^2 s2) exp(-dy^2 s2), the column factors
+    // computed once per work-item (2r exps per lane instead of 4r^2), the row factor once per tap row. Both paths below
+    // use them (their results are the same bits); the one-pixel kernel takes one exp per tap (rounding differs).
+    float8 col_weight[2 * JBU_MAX_RADIUS];
+    for (int tc = 0; tc < 2 * r; ++tc) {
+        const float8 dx = convert_float8((bx + tc) * den_x - num_x) / (float)den_x;
+        col_weight[tc] = exp(-dx * dx * s2);
+    }
+    // Shared columns: when the live lanes' first tap columns differ by at most one (the output at least ~8x the input
+    // along x, as a display view of an N = 64 lightmap is), the work-item's taps are 2r + 1 columns of each tap row.
+    // They are read once, as scalars, and every lane selects its own: the same values the gathers below read, so the
+    // same arithmetic in the same order and the same bits, with 2r + 1 scalar loads per value and tap row instead of
+    // 8 x 2r gathered ones (the gathers were the kernel's cost, docs/PERFORMANCE.md).
+    const int8 shift = bx - bx.s0;  // lane 0 is live and has the smallest column (bx grows with x)
+    if (share && all(~live | (shift <= 1))) {
+        const int8 right = shift == 1;  // lanes whose tap column c is the row's column c + 1
+        for (int tj = 0; tj < 2 * r; ++tj) {
+            const int j = by + tj;
+            if (j < 0 || j >= lh) continue;
+            const float dy = (float)(j * den_y - num_y) / (float)den_y, row_weight = exp(-dy * dy * s2);
+            JbuColumn prev = jbu_column(low, low_normal, low_position, lw, lh, nc, bx.s0, j);
+            for (int tc = 0; tc < 2 * r; ++tc) {
+                const JbuColumn next = jbu_column(low, low_normal, low_position, lw, lh, nc, bx.s0 + tc + 1, j);
+                const int8 i = bx + tc;
+                const int8 in = surface & (i >= 0) & (i < lw);
+                const float8 spatial = col_weight[tc] * row_weight;
+                spatial_sum += select((float8)(0.0f), spatial, in);
+                const int8 ok = in & select((int8)(prev.valid), (int8)(next.valid), right);
+                if (any(ok)) {
+                    const float8 mx = select((float8)(prev.n.x), (float8)(next.n.x), right),
+                                 my = select((float8)(prev.n.y), (float8)(next.n.y), right),
+                                 mz = select((float8)(prev.n.z), (float8)(next.n.z), right);
+                    const float8 qx = select((float8)(prev.p.x), (float8)(next.p.x), right),
+                                 qy = select((float8)(prev.p.y), (float8)(next.p.y), right),
+                                 qz = select((float8)(prev.p.z), (float8)(next.p.z), right);
+                    const float8 facing = fmax(nx * mx + ny * my + nz * mz, 0.0f);
+                    const float8 plane = mx * (px - qx) + my * (py - qy) + mz * (pz - qz);
+                    const float8 wt =
+                        select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
+                    weight_sum += wt;
+                    acc0 += wt * select((float8)(prev.v.s0), (float8)(next.v.s0), right);
+                    if (nc > 1) acc1 += wt * select((float8)(prev.v.s1), (float8)(next.v.s1), right);
+                    if (nc > 2) acc2 += wt * select((float8)(prev.v.s2), (float8)(next.v.s2), right);
+                    if (nc > 3) acc3 += wt * select((float8)(prev.v.s3), (float8)(next.v.s3), right);
+                }
+                prev = next;
+            }
+        }
+    } else
     for (int t = 0; t < 4 * r * r; ++t) {
         const int j = by + t / (2 * r);
         if (j < 0 || j >= lh) continue;  // the same row for every lane
         const int8 i = bx + t % (2 * r);
         const int8 in = surface & (i >= 0) & (i < lw);
-        const float8 dx = convert_float8(i * den_x - num_x) / (float)den_x;
         const float dy = (float)(j * den_y - num_y) / (float)den_y;
-        const float8 spatial = exp(-(dx * dx + dy * dy) * s2);
+        const float8 spatial = col_weight[t % (2 * r)] * exp(-dy * dy * s2);
         spatial_sum += select((float8)(0.0f), spatial, in);
         const int8 l = j * lw + i;
         const float8 mx = jbu_gather8(low_normal, l, in), my = jbu_gather8(low_normal + lo_plane, l, in),

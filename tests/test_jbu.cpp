@@ -8,6 +8,7 @@
 #include <array>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "ops/jbu.hpp"
@@ -203,6 +204,47 @@ TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
         const Run got = run_jbu(low, hi.normal, hi.position, W, H, p);
         test::check_close(got.out, ref.out, weights(1.0), borderline_mask(ref, channels));
         CHECK(got.fallbacks == ref.fallbacks);
+    }
+}
+
+// Outside the harness: two paths of one kernel against each other, bit for bit. jbu_upsample8 reads the taps once per
+// work-item where its eight pixels share their tap columns (outputs ~8x the input and more, as a display view is);
+// that path must give the per-lane gathers' exact bits, hostile values and broken guides included. Ratios 6.7 to 16
+// (both paths taken within one image below ~8), 1 to 4 channels, every radius, widths that are not multiples of 8.
+// Small enough for oclgrind, where the scalar tap reads are checked for bounds.
+TEST_CASE("JBU: the 8-pixel kernel's shared tap columns give the gathers' bits", "[jbu][oclgrind]") {
+    // Not on Mesa's llvmpipe: building jbu_upsample8 there takes ~65 s, and only PoCL's CPUs run it by default.
+    if (test::device().info().name.rfind("llvmpipe", 0) == 0) {
+        WARN("jbu_upsample8 is not built on llvmpipe (~65 s); its paths are compared on PoCL and oclgrind");
+        return;
+    }
+    std::mt19937 rng(11);
+    const std::array<std::array<int, 4>, 4> shapes = {{{3, 2, 41, 13}, {4, 3, 27, 20}, {2, 2, 32, 9}, {5, 1, 53, 7}}};
+    for (int k = 0; k < 4; ++k) {
+        const auto [w, h, W, H] = shapes[std::size_t(k)];
+        const Scene scene = random_scene(rng);
+        const int channels = 1 + k;
+        std::vector<float> values = test::random_vector(std::size_t(channels) * w * h, rng, -1.0f, 4.0f);
+        values[0] = std::numeric_limits<float>::quiet_NaN();
+        values[1] = k % 2 ? FLT_MAX : -std::numeric_limits<float>::infinity();
+        test::JbuRefImage low = low_view(scene, w, h, channels, values);
+        if (k == 1) low.normal[2] = std::numeric_limits<float>::quiet_NaN();  // a tap without a surface
+        if (k == 2) low.position[w * h + 1] = std::numeric_limits<float>::infinity();
+        const Guides hi = render_guides(scene, W, H);
+        JbuParams p;
+        p.kernel = JbuParams::Kernel::Rows8;
+        p.radius = 1 + k % 3;
+        if (k == 3) p.normal_power = 7.5f;
+        const Run shared = run_jbu(low, hi.normal, hi.position, W, H, p);
+        p.shared_columns = false;
+        const Run gathered = run_jbu(low, hi.normal, hi.position, W, H, p);
+        INFO("shape " << k << ": " << w << "x" << h << " -> " << W << "x" << H);
+        REQUIRE(shared.out.size() == gathered.out.size());
+        int differ = 0;
+        for (std::size_t i = 0; i < shared.out.size(); ++i)
+            differ += std::memcmp(&shared.out[i], &gathered.out[i], sizeof(float)) != 0;
+        CHECK(differ == 0);
+        CHECK(shared.fallbacks == gathered.fallbacks);
     }
 }
 

@@ -1594,6 +1594,18 @@ std::vector<OpCase> build_table() {
     row("JointBilateralUpsample::enqueue", "tiny", true, kTolJbu, [radius](Context& c, Size, std::mt19937& rng) {
         return jbu_case(c, 5, 3, 19, 11, 3, radius(2), nullptr, rng);
     });
+    // A display view's ratio (~15x: an N = 64 lightmap shown at 960 x 960, the pixels of 1280 x 720; perf size exactly
+    // that): jbu_upsample8 with its shared tap columns and with the per-lane gathers they replace, a random scene. On
+    // devices that do not run the 8-pixel kernel by default both rows take the one-pixel kernel.
+    for (bool shared : {true, false})
+        row("JointBilateralUpsample::enqueue", std::string("display ratio 15, ") + (shared ? "shared columns" : "gathers"),
+            false, kTolJbu, [shared](Context& c, Size z, std::mt19937& rng) {
+                const test::jbu_scene::Scene scene = test::jbu_scene::random_scene(rng);
+                JbuParams p;
+                p.shared_columns = shared;
+                return jbu_case(c, pick(z, 9, 64), pick(z, 7, 64), pick(z, 133, 960), pick(z, 101, 960), 3, p, &scene,
+                                rng);
+            });
     // tests/test_jbu.cpp's random sweep, its trials 0..7 as rows: a random scene (tests/jbu_scene.hpp: 1..4 random
     // planar rectangles, axis-aligned half of the time, sometimes a sky rectangle, over a random background plane),
     // low sizes 1..23 x 1..19; odd rows an integer ratio 1..5, even rows any output size 1..61 x 1..47 (smaller than

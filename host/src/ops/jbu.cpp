@@ -80,8 +80,13 @@ int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const Jbu
     // The vector kernel's program is built only where it runs (llvmpipe took ~65 s to build it).
     if (vec && !kernel_vec_.get()) kernel_vec_ = ctx.kernel("jbu_vec", "jbu_upsample8", jbu_defines());
     Kernel& k = vec ? kernel_vec_ : kernel_;
-    k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
-           in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);
+    if (vec)
+        k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
+               in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio,
+               int(p.shared_columns), out, fallbacks_);
+    else
+        k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
+               in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);
     static const std::size_t local[2] = {8, 8};
     const std::size_t global[2] = {vec ? (std::size_t(in.width) + kJbuVec - 1) / kJbuVec : std::size_t(in.width),
                                    std::size_t(in.height)};

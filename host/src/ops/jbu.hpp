@@ -49,6 +49,9 @@ struct JbuParams {
     // Which kernel: Auto = jbu_upsample8 on jbu_vector_device()s for up to kJbuVecMaxChannels channels, else
     // jbu_upsample. Tests force either on any device (the simulators run both); the results agree to rounding.
     enum class Kernel { Auto, OnePixel, Rows8 } kernel = Kernel::Auto;
+    // jbu_upsample8 only: read the taps once per work-item where its eight pixels share their tap columns (outputs
+    // ~8x the input and more; same bits as the per-lane gathers). false forces the gathers (tests, A/B timing).
+    bool shared_columns = true;
 };
 
 struct JbuInputs {
