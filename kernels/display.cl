@@ -270,21 +270,32 @@ __kernel void display_temporal(__global const float* restrict current, __global 
     display_store8(out, 2 * plane + base, count, select(c2, clamp(h2 + a * (c2 - h2), -lim, lim), used));
 }
 
-// The display-resolution outputs, per value (count = 3 size^2, one work-item each): lightmap = clean(direct) +
-// indirect, at least 0; final = clamp(albedo, 0, 1) lightmap + clean(emission) + clean(env) (compose.cl's
-// compose_final), each saturating at FLT_MAX. Face 0 of the display planes; has_lightmap 0: only `final` is written
-// (lightmap may then alias it).
+// The display-resolution outputs, per value (count = 3 size^2; DISPLAY_VEC = 8 values per work-item in float8 lanes,
+// a last partial group through the same code on lanes loaded one by one): lightmap = clean(direct) + indirect, at
+// least 0; final = clamp(albedo, 0, 1) lightmap + clean(emission) + clean(env) (compose.cl's compose_final), each
+// saturating at FLT_MAX; display = tonemap8(final) (kernels/tonemap.cl), so the final image need not be stored and read
+// back for the display. Face 0 of the display planes. Each output is written only when its has_ flag is set (an
+// unused output may be any buffer, also another output).
+static inline float8 display_light8(float8 v) { return select(clamp(v, 0.0f, FLT_MAX), (float8)(0.0f), isnan(v)); }
+
 __kernel void display_compose(__global const float* restrict planes, __global const float* restrict indirect,
                               const int count, const int has_emission, const int has_env, const int has_lightmap,
-                              __global float* lightmap, __global float* final_image) {
-    const int i = get_global_id(0), nc = count, em = has_emission, ev = has_env, hl = has_lightmap;
-    if (i >= nc) return;
-    const int plane = nc / 3;
-    const float light = clamp(display_light(planes[F_DIRECT * plane + i]) + display_signed(indirect[i]), 0.0f, FLT_MAX);
-    if (hl) lightmap[i] = light;
-    const float alb = planes[F_ALBEDO * plane + i];
-    float v = (isnan(alb) ? 0.0f : clamp(alb, 0.0f, 1.0f)) * light;
-    if (em) v = fmin(v + display_light(planes[F_EMISSION * plane + i]), FLT_MAX);
-    if (ev) v = fmin(v + display_light(planes[F_ENV * plane + i]), FLT_MAX);
-    final_image[i] = v;
+                              const int has_final, const int has_display, const float scale, const int curve,
+                              const int srgb, __global float* lightmap, __global float* final_image,
+                              __global float* display) {
+    const int i0 = get_global_id(0) * DISPLAY_VEC, nc = count, em = has_emission, ev = has_env;
+    const int hl = has_lightmap, hf = has_final, hd = has_display, cv = curve, sr = srgb;
+    const float sc = scale;
+    if (i0 >= nc) return;
+    const int plane = nc / 3, n = min(DISPLAY_VEC, nc - i0);
+    const int8 live = i0 + (int8)(0, 1, 2, 3, 4, 5, 6, 7) < nc;
+    const float8 direct = display_light8(display_row8(planes + F_DIRECT * plane, i0, n, live));
+    const float8 light = clamp(direct + display_signed8(display_row8(indirect, i0, n, live)), 0.0f, FLT_MAX);
+    if (hl) display_store8(lightmap, i0, n, light);
+    const float8 alb = display_row8(planes + F_ALBEDO * plane, i0, n, live);
+    float8 v = select(clamp(alb, 0.0f, 1.0f), (float8)(0.0f), isnan(alb)) * light;
+    if (em) v = fmin(v + display_light8(display_row8(planes + F_EMISSION * plane, i0, n, live)), FLT_MAX);
+    if (ev) v = fmin(v + display_light8(display_row8(planes + F_ENV * plane, i0, n, live)), FLT_MAX);
+    if (hf) display_store8(final_image, i0, n, v);
+    if (hd) display_store8(display, i0, n, tonemap8(v, sc, cv, sr));
 }

@@ -6,9 +6,11 @@
 // infinite planes and lightmaps, HDR, sky and surfaces past 1000 m); transfers; and bad input.
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 
 #include "ngi/display.hpp"
 #include "reference_display.hpp"
+#include "reference_pipeline.hpp"
 #include "test_support.hpp"
 
 using namespace ngi;
@@ -304,6 +306,13 @@ TEST_CASE("display: non-finite and HDR planes and lightmaps, sky and surfaces pa
                 CHECK(std::abs(fin[i] - r.final_image[i]) <= 1e-5 * (1.0 + std::abs(r.final_image[i])));
             }
             CHECK(light[hp + 60] >= 70000.0f);  // HDR direct light passes
+            // The display is the tone map of the final image, computed in the same pass (kernels/display.cl): against
+            // the tone map's double reference applied to the final values read back (test_compose's bound).
+            double tone_worst = 0;
+            for (std::size_t i = 0; i < 3 * hp; ++i)
+                tone_worst = std::max(tone_worst, std::abs(disp[i] - ref::tonemap(fin[i], std::exp2(double(outs.tonemap.exposure_ev)),
+                                                                                   int(outs.tonemap.curve), outs.tonemap.srgb)));
+            CHECK(tone_worst < 2e-6);
         }
     }
 }
@@ -369,6 +378,17 @@ TEST_CASE("display: run() from host frames is one upload and one download, and b
     for (std::size_t i = 0; i < ref.lightmap.size(); ++i)
         if (!ref.borderline[i % (std::size_t(S) * S)])
             CHECK(std::abs(r.lightmap.data[i] - ref.lightmap[i]) <= 1e-4 * (1.0 + ref.lightmap[i]));
+
+    // Outputs not asked for are not written: a view asked for the display alone gives the same display bits.
+    DisplayView alone(dev, S), all(dev, S);
+    for (int t = 0; t < 2; ++t) {
+        const FrameImages a = alone.run(low, lightmap, display, p.position, false, false, true);
+        const FrameImages b = all.run(low, lightmap, display, p.position, true, true, true);
+        CHECK(a.lightmap.data.empty());
+        CHECK(a.final_image.data.empty());
+        REQUIRE(a.display.data.size() == b.display.data.size());
+        CHECK(std::memcmp(a.display.data.data(), b.display.data.data(), a.display.data.size() * sizeof(float)) == 0);
+    }
 
     Frame turned = display;
     turned.look = {1, 0, 0};

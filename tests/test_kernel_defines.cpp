@@ -62,6 +62,8 @@ TEST_CASE("kernel defines: every kernel file that needs host constants refuses t
         {"probe_shade", "probe_shade", "probe_shade_defines"},
         {"gbuffer", "preprocess_gbuffer", "preprocess_defines"},
         {"compose", "tonemap", "compose_defines"},
+        {"compose", "tonemap", "tonemap_defines"},  // tonemap.cl, listed before compose.cl
+        {"display", "display_compose", "tonemap_defines"},
         {"neural_gi", "neural_gi_inputs", "NGI_RADIANCE_MAX"},
         {"ssgi", "ssgi_gather", "ssgi_defines"},
         {"voxel_compact", "vc_flag", "VC_LOCAL"},

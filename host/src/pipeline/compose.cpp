@@ -9,12 +9,15 @@
 
 namespace ngi {
 
+std::string detail::tonemap_defines() {
+    return join_defines({define("CURVE_ACES", int(ToneCurve::AcesFitted)), define("CURVE_REINHARD", int(ToneCurve::Reinhard)),
+                         define("CURVE_CLAMP", int(ToneCurve::Clamp)), define("TONEMAP_VEC", kTonemapVec)});
+}
+
 std::string detail::compose_defines() {
     return join_defines({define("TRANSFER_REINHARD", int(LuminationTransfer::Reinhard)),
-                         define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)),
-                         define("CURVE_ACES", int(ToneCurve::AcesFitted)), define("CURVE_REINHARD", int(ToneCurve::Reinhard)),
-                         define("CURVE_CLAMP", int(ToneCurve::Clamp)), define("LIGHT_MAX", kLightMax),
-                         define("TONEMAP_VEC", kTonemapVec)});
+                         define("TRANSFER_CLAMP", int(LuminationTransfer::Clamp)), define("LIGHT_MAX", kLightMax),
+                         tonemap_defines()});
 }
 
 namespace {

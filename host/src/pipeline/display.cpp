@@ -29,7 +29,7 @@ constexpr int kDisplayVec = 8;
 std::string display_defines() {
     // Beyond the preprocessing's depth range a pixel is sky (the renderer writes 1e4 m there), as for the ssgi gather.
     return detail::join_defines({detail::frame_plane_defines(), detail::define("DISPLAY_MAX_DEPTH", detail::kMaxSurfaceDepth),
-                                 detail::define("DISPLAY_VEC", kDisplayVec)});
+                                 detail::define("DISPLAY_VEC", kDisplayVec), detail::tonemap_defines()});
 }
 
 void require(bool ok, const std::string& what) {
@@ -89,10 +89,10 @@ struct DisplayView::Impl {
     detail::Context& ctx;
     int size;
     DisplaySettings settings;
-    detail::Kernel geometry, low_indirect, clip_box, temporal, compose, resize, tonemap;
+    detail::Kernel geometry, low_indirect, clip_box, temporal, compose, resize;
     detail::JointBilateralUpsample jbu;
     detail::Buffer low_normal, low_position, low_light, low_box, normal, position, upsampled, history[2], prev_depth, counters;
-    detail::Buffer scratch_final, result, staging, low_planes_buf, low_light_buf, display_planes_buf;
+    detail::Buffer result, staging, low_planes_buf, low_light_buf, display_planes_buf;
     DeviceBuffer out_handles[3];
     int latest = 0;             // history[latest] holds the last frame's accumulated indirect light
     bool has_history = false;
@@ -105,8 +105,7 @@ struct DisplayView::Impl {
           clip_box(ctx.kernel("display", "display_clip_box", display_defines())),
           temporal(ctx.kernel("display", "display_temporal", display_defines())),
           compose(ctx.kernel("display", "display_compose", display_defines())),
-          resize(ctx.kernel("compose", "resize_bilinear", detail::compose_defines())),
-          tonemap(ctx.kernel("compose", "tonemap", detail::compose_defines())), jbu(ctx) {
+          resize(ctx.kernel("compose", "resize_bilinear", detail::compose_defines())), jbu(ctx) {
         const std::size_t plane = std::size_t(s) * s * sizeof(float);
         counters = ctx.alloc(2 * sizeof(std::uint32_t), "display view: counters");
         for (detail::Buffer* b : {&normal, &position, &upsampled, &history[0], &history[1]})
@@ -238,23 +237,18 @@ void DisplayView::enqueue(int n, const DeviceBuffer& low_planes, const DeviceBuf
     // Outputs.
     const int hi_count = int(3 * hi_plane);
     if (outputs.lightmap || outputs.final_image || outputs.display) {
-        cl_mem final_dst = outputs.final_image.opencl_mem();
-        if (!final_dst) {
-            detail::ensure_buffer(im.ctx, im.scratch_final, 3 * hi_plane * sizeof(float), "display view: final image");
-            final_dst = im.scratch_final.get();
-        }
-        cl_mem light_dst = outputs.lightmap ? outputs.lightmap.opencl_mem() : final_dst;
+        // One pass writes every output asked for (the display tone-mapped from the final value in registers); an
+        // output not asked for is never written, so any of the others stands in for its argument.
+        cl_mem any = outputs.display ? outputs.display.opencl_mem()
+                     : outputs.final_image ? outputs.final_image.opencl_mem() : outputs.lightmap.opencl_mem();
+        auto or_any = [any](const DeviceBuffer& b) { return b ? b.opencl_mem() : any; };
+        const ToneMapOptions& tm = outputs.tonemap;
         im.compose.args(display_planes.opencl_mem(), indirect, hi_count, int(desc.has_emission), int(desc.has_env),
-                        int(bool(outputs.lightmap)), light_dst, final_dst);
-        const std::size_t g[1] = {std::size_t(hi_count)};
+                        int(bool(outputs.lightmap)), int(bool(outputs.final_image)), int(bool(outputs.display)),
+                        std::exp2(tm.exposure_ev), int(tm.curve), int(tm.srgb), or_any(outputs.lightmap),
+                        or_any(outputs.final_image), or_any(outputs.display));
+        const std::size_t g[1] = {(std::size_t(hi_count) + kDisplayVec - 1) / kDisplayVec};
         im.ctx.launch(im.compose, 1, g, detail::kLocal1);
-        if (outputs.display) {
-            const ToneMapOptions& tm = outputs.tonemap;
-            im.tonemap.args(final_dst, outputs.display.opencl_mem(), hi_count, std::exp2(tm.exposure_ev),
-                            int(tm.curve), int(tm.srgb));
-            const std::size_t gt[1] = {detail::tonemap_items(hi_count)};
-            im.ctx.launch(im.tonemap, 1, gt, detail::kLocal1);
-        }
     }
     lap(&DisplayTimings::outputs_ms);
 

@@ -38,6 +38,9 @@ bool optional_feature_present(const Frame& frame, Feature feature, const Face* f
 // kernels/compose.cl (the lumination transfer and tone curve codes): the host's values, defined once.
 std::string preprocess_defines();
 std::string compose_defines();
+// Build options of kernels/tonemap.cl (the tone curve codes, TONEMAP_VEC): part of compose_defines() and of the display
+// program's options.
+std::string tonemap_defines();
 // Values per work-item of compose.cl's tonemap (TONEMAP_VEC, a float8): PoCL evaluates the sRGB curve's scalar exp2
 // and log2 one value at a time (~25 ns per value, 0.3 ms of a 64 x 64 frame); in vector lanes they are ~1 ns.
 constexpr int kTonemapVec = 8;

@@ -27,11 +27,11 @@ const std::vector<ProgramSources>& programs() {
         // Pipelines (host/src/pipeline).
         {"globalview", {"globalview"}},
         {"gbuffer", {"gbuffer"}},
-        {"compose", {"compose"}},
+        {"compose", {"tonemap", "compose"}},
         {"metrics", {"metrics"}},
         {"neural_gi", {"neural_gi"}},
         {"ssgi", {"ssgi"}},
-        {"display", {"display"}},
+        {"display", {"tonemap", "display"}},
         {"ao", {"ao"}},
         // Renderer (host/src/render): every tracing program is the scene (geometry, BVH, grid DDA) and its kernels;
         // only those that trace paths add the lighting (with the sunlit-patch weights every lit frame needs), its
