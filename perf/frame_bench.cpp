@@ -14,7 +14,9 @@
 // per stage (medians of runs with stage timings, where each stage waits for the device) and for the whole frame
 // (medians of runs without: one enqueue of each, one finish). 960^2 has the pixels of 1280 x 720. --frame DIR: a
 // rendered frame folder as the N x N input (the ssgi gather's cost depends on the scene; default: a synthetic frame);
-// the display face is synthetic (the display kernels are branch-free: their cost does not depend on the values).
+// --display-frame DIR: the same view rendered at S x S as the display face (ngi render --face S --spp 1 --feature-spp 1;
+// a real frame's geometry: the JBU's bilinear fallback, one pixel at a time, is rare there); default: a synthetic
+// face of random values, where many pixels take that fallback (an upper bound for the upsampling).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -22,6 +24,7 @@
 #include <cstring>
 #include <functional>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -58,7 +61,7 @@ double median_of(std::vector<double> v) {
 
 // --display S: the whole displayed frame per stage and in one piece (see the top of the file).
 nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, const ngi::Frame& low, int display,
-                               int runs) {
+                               int runs, const ngi::Frame* rendered_display) {
     // All six faces, as an engine hands them over: every rung reads what it needs of them (a front-only rung face 0).
     const int n = low.n, faces = ngi::kFaceCount;
     ngi::SurroundPipeline pl(device, n);
@@ -70,12 +73,14 @@ nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, con
     const ngi::FrameDesc desc = ngi::FrameDesc::of(low, faces);
 
     std::mt19937 rng(2);
-    ngi::Frame hi = ngi_bench::synthetic_frame(2, rng);  // six tiny faces; face 0 replaced at S x S below
+    ngi::Frame hi = rendered_display ? *rendered_display : ngi_bench::synthetic_frame(2, rng);
+    if (rendered_display && (hi.n != display || hi.look != low.look || hi.up != low.up))
+        throw std::runtime_error("--display-frame: not the --frame's view at the --display size");
     hi.n = display;
     hi.look = low.look;
     hi.up = low.up;
     std::mt19937 rng_hi(3);
-    for (int fi = 0; fi < ngi::kFeatureCount; ++fi) {
+    for (int fi = 0; fi < ngi::kFeatureCount && !rendered_display; ++fi) {  // synthetic: face 0 replaced at S x S
         const ngi::Feature f = ngi::Feature(fi);
         ngi::Image im(display, display, ngi::feature_channels(f));
         std::uniform_real_distribution<float> u(0.0f, f == ngi::Feature::Depth ? 20.0f : 1.0f);
@@ -127,7 +132,7 @@ nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, con
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string device_spec, sizes = "64,128,256", model_path = "models/surround.safetensors", frame_dir;
+    std::string device_spec, sizes = "64,128,256", model_path = "models/surround.safetensors", frame_dir, display_dir;
     int runs = 9, display = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--device")) device_spec = argv[i + 1];
@@ -136,9 +141,10 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
         else if (!std::strcmp(argv[i], "--display")) display = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--frame")) frame_dir = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--display-frame")) display_dir = argv[i + 1];
         else {
             std::fprintf(stderr, "usage: frame_bench [--device D] [--model M] [--n 64,128,256] [--runs 9] "
-                                 "[--display S [--frame DIR]]\n");
+                                 "[--display S [--frame DIR [--display-frame DIR]]]\n");
             return 2;
         }
     }
@@ -148,14 +154,19 @@ int main(int argc, char** argv) {
         if (display > 0) {
             nlohmann::json out = {{"device", device.info().name}, {"driver", device.info().driver_version},
                                   {"model", model_path}, {"runs", runs}, {"frame", frame_dir.empty() ? "synthetic" : frame_dir},
+                                  {"display_frame", display_dir.empty() ? "synthetic" : display_dir},
                                   {"displayed", nlohmann::json::array()}};
             std::mt19937 rng(1);
+            if (!display_dir.empty() && frame_dir.empty())
+                throw std::runtime_error("--display-frame needs --frame (the same view at N)");
             if (!frame_dir.empty()) {
-                out["displayed"].push_back(displayed_frame(device, model, ngi::read_frame(frame_dir), display, runs));
+                const ngi::Frame shown = display_dir.empty() ? ngi::Frame{} : ngi::read_frame(display_dir);
+                out["displayed"].push_back(displayed_frame(device, model, ngi::read_frame(frame_dir), display, runs,
+                                                           display_dir.empty() ? nullptr : &shown));
             } else {
                 for (int n : ngi_bench::parse_sizes(sizes))
                     out["displayed"].push_back(displayed_frame(device, model, ngi_bench::synthetic_frame(n, rng),
-                                                               display, runs));
+                                                               display, runs, nullptr));
             }
             std::printf("%s\n", out.dump(2).c_str());
             return 0;
