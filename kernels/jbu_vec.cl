@@ -117,43 +117,42 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
         col_weight[tc] = exp(-dx * dx * s2);
     }
     // Shared columns: when the live lanes' first tap columns differ by at most one (the output at least ~8x the input
-    // along x, as a display view of an N = 64 lightmap is), the work-item's taps are 2r + 1 columns of each tap row.
-    // They are read once, as scalars, and every lane selects its own: the same values the gathers below read, so the
-    // same arithmetic in the same order and the same bits, with 2r + 1 scalar loads per value and tap row instead of
-    // 8 x 2r gathered ones (the gathers were the kernel's cost, docs/PERFORMANCE.md).
+    // along x, as a display view of an N = 64 lightmap is), the work-item's taps are the 2r + 1 columns bx.s0 ...
+    // bx.s0 + 2r of each tap row: lanes with shift 0 use the first 2r, lanes with shift 1 the last 2r. Each column's
+    // texel is read once, as scalars, and its weight computed for all lanes, masked to the lanes whose window holds
+    // it: per lane the same values and arithmetic as the gathers below, in the same order (a masked column adds +0),
+    // so the same bits, without 8 x 2r gathered loads per value and tap row (the gathers were the kernel's cost).
     const int8 shift = bx - bx.s0;  // lane 0 is live and has the smallest column (bx grows with x)
     if (share && all(~live | (shift <= 1))) {
-        const int8 right = shift == 1;  // lanes whose tap column c is the row's column c + 1
+        const int8 right = shift == 1;
+        float8 abs_weight[2 * JBU_MAX_RADIUS + 1];  // col_weight by absolute column bx.s0 + c: the same values
+        for (int c = 0; c <= 2 * r; ++c) {
+            const float8 dx = convert_float8((bx.s0 + c) * den_x - num_x) / (float)den_x;
+            abs_weight[c] = exp(-dx * dx * s2);
+        }
         for (int tj = 0; tj < 2 * r; ++tj) {
             const int j = by + tj;
             if (j < 0 || j >= lh) continue;
             const float dy = (float)(j * den_y - num_y) / (float)den_y, row_weight = exp(-dy * dy * s2);
-            JbuColumn prev = jbu_column(low, low_normal, low_position, lw, lh, nc, bx.s0, j);
-            for (int tc = 0; tc < 2 * r; ++tc) {
-                const JbuColumn next = jbu_column(low, low_normal, low_position, lw, lh, nc, bx.s0 + tc + 1, j);
-                const int8 i = bx + tc;
-                const int8 in = surface & (i >= 0) & (i < lw);
-                const float8 spatial = col_weight[tc] * row_weight;
+            for (int c = 0; c <= 2 * r; ++c) {
+                const int i = bx.s0 + c;
+                if (i < 0 || i >= lw) continue;  // no lane's tap: every lane's `in` is 0 there
+                const int8 window = c == 0 ? ~right : c == 2 * r ? right : (int8)(-1);
+                const int8 in = surface & window;
+                const float8 spatial = abs_weight[c] * row_weight;
                 spatial_sum += select((float8)(0.0f), spatial, in);
-                const int8 ok = in & select((int8)(prev.valid), (int8)(next.valid), right);
-                if (any(ok)) {
-                    const float8 mx = select((float8)(prev.n.x), (float8)(next.n.x), right),
-                                 my = select((float8)(prev.n.y), (float8)(next.n.y), right),
-                                 mz = select((float8)(prev.n.z), (float8)(next.n.z), right);
-                    const float8 qx = select((float8)(prev.p.x), (float8)(next.p.x), right),
-                                 qy = select((float8)(prev.p.y), (float8)(next.p.y), right),
-                                 qz = select((float8)(prev.p.z), (float8)(next.p.z), right);
-                    const float8 facing = fmax(nx * mx + ny * my + nz * mz, 0.0f);
-                    const float8 plane = mx * (px - qx) + my * (py - qy) + mz * (pz - qz);
-                    const float8 wt =
-                        select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
-                    weight_sum += wt;
-                    acc0 += wt * select((float8)(prev.v.s0), (float8)(next.v.s0), right);
-                    if (nc > 1) acc1 += wt * select((float8)(prev.v.s1), (float8)(next.v.s1), right);
-                    if (nc > 2) acc2 += wt * select((float8)(prev.v.s2), (float8)(next.v.s2), right);
-                    if (nc > 3) acc3 += wt * select((float8)(prev.v.s3), (float8)(next.v.s3), right);
-                }
-                prev = next;
+                const JbuColumn col = jbu_column(low, low_normal, low_position, lw, lh, nc, i, j);
+                const int8 ok = in & (int8)(col.valid);
+                if (!any(ok)) continue;
+                const float8 facing = fmax(nx * col.n.x + ny * col.n.y + nz * col.n.z, 0.0f);
+                const float8 plane = col.n.x * (px - col.p.x) + col.n.y * (py - col.p.y) + col.n.z * (pz - col.p.z);
+                const float8 wt =
+                    select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
+                weight_sum += wt;
+                acc0 += wt * col.v.x;
+                if (nc > 1) acc1 += wt * col.v.y;
+                if (nc > 2) acc2 += wt * col.v.z;
+                if (nc > 3) acc3 += wt * col.v.w;
             }
         }
     } else
