@@ -6,6 +6,7 @@
 #include <set>
 
 #include "graph/nodes.hpp"
+#include "models/graph_fuse.hpp"
 #include "models/mlp_model.hpp"
 
 namespace ngi::detail {
@@ -196,22 +197,25 @@ GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const 
     } catch (const nlohmann::json::exception& e) {
         throw InputError(std::string("load model: metadata 'ngi': malformed JSON: ") + e.what());
     }
-    m.desc = parse_graph_desc(j, "load model: metadata 'ngi': ");
+    const GraphDesc file_desc = parse_graph_desc(j, "load model: metadata 'ngi': ");
+    // Pass 1: the weights of the list as written, checked before anything touches the device.
+    const std::vector<GraphNodeWeights> file_weights = check_graph_weights(file_desc, file);
+    // Pass 2: affines and activations folded into the layers before them where exact (graph_fuse.hpp).
+    const FusedGraph fused = fuse_graph(file_desc, file_weights);
+    m.desc = fused.desc;
     const GraphDesc& d = m.desc;
     std::vector<int> channels = {d.input_nc};
     for (const GraphNodeDesc& n : d.nodes) channels.push_back(n.out_channels);
-    // Pass 1: the weights, checked before anything touches the device.
-    const std::vector<GraphNodeWeights> weights = check_graph_weights(d, file);
 
-    // Pass 2: the ops (weights uploaded).
+    // Pass 3: the ops (weights uploaded).
     m.copy = std::make_shared<CopyNode>();
     for (std::size_t k = 0; k < d.nodes.size(); ++k) {
         const GraphNodeDesc& n = d.nodes[k];
         std::shared_ptr<Op> op;
         try {
-            op = make_node_op(ctx, n, weights[k], channels[n.inputs[0]], gemm, conv_gemm, m.weight_bytes);
+            op = make_node_op(ctx, n, fused.weights[k], channels[n.inputs[0]], gemm, conv_gemm, m.weight_bytes);
         } catch (const InputError& e) {
-            throw InputError("load model: node '" + n.name + "' (" + n.op + "): " + e.what());
+            throw InputError("load model: node '" + graph_node_label(n) + "' (" + n.op + "): " + e.what());
         }
         m.ops.push_back(std::move(op));
     }
@@ -250,7 +254,7 @@ std::unique_ptr<Graph> build_graph_model_graph(const GraphModelOps& m, int heigh
             else
                 concat_memory[k + 1] = concat_memory[n.inputs[0]];
         }
-        t[k + 1] = g->add(m.ops[k], in, n.name);
+        t[k + 1] = g->add(m.ops[k], in, graph_node_label(n));  // errors and profiles name what was folded in
     }
     g->set_output(t[d.output]);
     return g;

@@ -36,7 +36,15 @@ struct GraphNodeDesc {
     std::vector<int> inputs;
     int out_channels = 0;
     nlohmann::json fields;  // the node's JSON object (weights, geometry, activation)
+    std::vector<std::string> folded;  // the nodes the loader's fusion folded into this one (graph_fuse.hpp), in order
 };
+
+// A node as errors and profiles name it: its name, then what was folded into it ("conv + bn + relu").
+inline std::string graph_node_label(const GraphNodeDesc& n) {
+    std::string s = n.name;
+    for (const std::string& f : n.folded) s += " + " + f;
+    return s;
+}
 
 struct GraphDesc {
     std::string layout = "nchw";  // "nchw" | "nc"
@@ -60,13 +68,14 @@ struct GraphNodeWeights {
 std::vector<GraphNodeWeights> check_graph_weights(const GraphDesc& d, const SafetensorsFile& file);
 
 struct GraphModelOps {
-    GraphDesc desc;
+    GraphDesc desc;  // the node list after the loader's fusion (graph_fuse.hpp)
     std::vector<std::shared_ptr<Op>> ops;  // per node; nullptr for concat
     std::shared_ptr<Op> copy;              // inserted where a tensor must live in a second place
     std::size_t weight_bytes = 0;
 };
 
 // Every weight the nodes name present with the shape the node implies (and no other tensor in the file), then the
+// node list fused (fuse_graph: affines and activations folded into the layers before them where exact), then the
 // ops built and their weights uploaded.
 GraphModelOps build_graph_model_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file,
                                     const GemmParams& gemm, const std::optional<GemmParams>& conv_gemm);
