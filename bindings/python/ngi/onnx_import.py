@@ -16,13 +16,12 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
                                     only with count_include_pad) -> conv2d / conv_transpose2d whose kernel copies or
                                     averages each channel (exact up to float summation order)
   Gemm, MatMul (weights constant) -> dense (a 1 x 1 convolution over the items)
-  BatchNormalization (inference) -> folded into the convolution before it, else a per-channel affine
-  Add, Sub, Mul, Div by a constant that varies along channels only (or not at all) -> affine (folded likewise)
+  BatchNormalization (inference) -> affine (a per-channel scale and shift)
+  Add, Sub, Mul, Div by a constant that varies along channels only (or not at all) -> affine
   Add, Mul of two computed tensors of one shape -> add, mul; of a tensor and a [1, C, 1, 1] one (a global pool's
                                     result and what 1 x 1 convolutions and activations make of it: squeeze-excitation)
                                     -> add, mul with broadcast
-  Relu, LeakyRelu, Tanh, Sigmoid, Exp, Softplus, Erf (GELU's), Clip(min=0) -> activation (fused into the convolution
-                                    before it, or into the convolutions that read it, where that is exact)
+  Relu, LeakyRelu, Tanh, Sigmoid, Exp, Softplus, Erf (GELU's), Clip(min=0) -> activation
   MaxPool (ceil_mode 0, dilation 1, each pad below its kernel side) -> max_pool2d
   GlobalAveragePool, ReduceMean over H and W -> global_avg_pool; Flatten, Reshape, Unsqueeze, Squeeze of its result
                                     -> the same tensor, Gemm / MatMul on it -> a 1 x 1 conv2d
@@ -37,12 +36,16 @@ topologically and mapped node by node onto ngi's graph ops (docs/MODEL_FORMAT.md
   Mul by constants + Sin + Cos + Concat as ngi.reference_models.encode_frequencies builds it -> frequency_encode
   torch.nan_to_num's IsNaN/IsInf/Where pattern (default limits) -> nan_to_num
 
+The file describes the network as the ONNX graph does: affine and activation nodes stay nodes. ngi's loader fuses
+them into the convolution or dense layer before them (or a ReLU into the convolutions that read it) where that is
+exact (host/src/models/graph_fuse.hpp): every reader of the file gets the network, not one backend's rewriting of it.
+
 Anything else is refused with the node's name and op (every such node of a model in one error). So are files that do not parse (truncated, corrupt), graphs
 with a cycle, opsets outside 9..17 or other domains, symbolic, zero or negative input dimensions, initializers whose
 data does not match their shape, more than one input or output, attributes that are not finite numbers and weights
-that are not finite as stored (after folding; as F16 with half=True), which the loader would refuse. Only a regular
-file of at most 2 GiB is read (a FIFO or /dev/zero is refused before it is opened). Nothing is written unless the
-whole graph maps; the file appears at its path only when complete (written beside it, then renamed).
+that are not finite as stored (as F16 with half=True), which the loader would refuse. Only a regular file of at
+most 2 GiB is read (a FIFO or /dev/zero is refused before it is opened). Nothing is written unless the whole graph
+maps; the file appears at its path only when complete (written beside it, then renamed).
 """
 
 import heapq
@@ -1560,97 +1563,9 @@ class _Importer:
         raise self.fail(node, "supported only as part of torch.nan_to_num(x) with its default limits")
 
 
-# --------------------------------------------------------------------------
-# Fusion passes over the ngi node list
-# --------------------------------------------------------------------------
-
-_LAYERS = ("conv2d", "conv_transpose2d", "dense")
-_GATHERING_LAYERS = ("conv2d", "conv_transpose2d")  # the layers whose loader entry takes an input_activation
-
-
-def _fuse(ir, weights, output):
-    """Folds affines into the convolution before them, then activations into its epilogue, then ReLU / LeakyReLU
-    into the convolutions that read them, where each is exact (the producer's output read by that node alone).
-
-    `ir` is in topological order. Each pass is one walk over it with maps of producers and readers kept up to date,
-    linear in the node count (a pass that restarted after each fold was quadratic, and cubic for the second pass:
-    a 3,900-node file took minutes). One walk reaches what repeating until nothing changes would: a fold only ever
-    makes the node that reads its output foldable, and that node comes later in the walk."""
-    readers = {}  # tensor -> how many nodes read it (the graph output counts as one more)
-    for n in ir:
-        for i in n["inputs"]:
-            readers[i] = readers.get(i, 0) + 1
-    readers[output] = readers.get(output, 0) + 1
-    made_by = {n["output"]: n for n in ir}
-    removed = set()  # id() of the folded nodes
-    for n in ir:
-        if n["op"] not in ("affine", "activation"):
-            continue
-        src = made_by.get(n["inputs"][0])
-        if src is None or readers.get(src["output"], 0) != 1 or src["op"] not in _LAYERS or "activation" in src:
-            continue
-        if n["op"] == "affine":
-            scale = weights[n["scale"]] if "scale" in n else np.ones(src["out"])
-            shift = weights[n["shift"]] if "shift" in n else np.zeros(src["out"])
-            w = weights[src["weight"]]
-            axis = 1 if src["op"] == "conv_transpose2d" else 0
-            shape = [1] * w.ndim
-            shape[axis] = -1
-            weights[src["weight"]] = w * scale.reshape(shape)
-            bias = weights[src["bias"]] if "bias" in src else np.zeros(src["out"])
-            if "bias" not in src:
-                src["bias"] = src["name"] + ".bias"  # node names are unique; weight keys end in .weight or .copy
-            weights[src["bias"]] = bias * scale + shift
-            for key in ("scale", "shift"):
-                weights.pop(n.get(key), None)
-        else:
-            src["activation"] = n["activation"]
-            if "slope" in n:
-                src["slope"] = n["slope"]
-        src.setdefault("folded", []).append(n["name"])
-        src["output"] = n["output"]
-        made_by[n["output"]] = src
-        removed.add(id(n))
-    ir[:] = [n for n in ir if id(n) not in removed]
-
-    # ReLU / LeakyReLU read only by convolutions without an input activation: applied while they gather. Folding one
-    # changes only its readers, which read nothing else (one input each), so no fold makes or unmakes another. Not
-    # into dense nodes: the loader takes input_activation on convolutions only (the fuzz target's load check found
-    # a dense node written with one, which the loader then refused).
-    users = {}  # tensor -> the nodes that read it, in order (a dict as an ordered set)
-    for m in ir:
-        for i in m["inputs"]:
-            users.setdefault(i, {})[id(m)] = m
-    removed = set()
-    for n in ir:
-        if n["op"] != "activation" or n["activation"] not in ("relu", "leaky_relu") or n["output"] == output:
-            continue
-        readers_of_n = list(users.get(n["output"], {}).values())
-        if not readers_of_n or any(m["op"] not in _GATHERING_LAYERS or "input_activation" in m
-                                   or ("slope" in m and "slope" in n and m["slope"] != n["slope"])
-                                   or ("slope" in m and n["activation"] == "leaky_relu")
-                                   for m in readers_of_n):
-            continue
-        source = n["inputs"][0]
-        users[source].pop(id(n), None)
-        for m in readers_of_n:
-            m["inputs"] = [source]
-            users[source][id(m)] = m
-            m["input_activation"] = n["activation"]
-            if "slope" in n:
-                m["slope"] = n["slope"]
-            m.setdefault("folded", []).append(n["name"])
-        del users[n["output"]]
-        removed.add(id(n))
-    ir[:] = [n for n in ir if id(n) not in removed]
-    for n in ir:
-        if "folded" in n:
-            n["source"] = n["name"] + " + " + " + ".join(n.pop("folded"))
-
-
 def _check_weights(ir, weights, path, half):
-    """Refuse a node whose tensor is not finite as stored (NaN or Inf in the file, or made by folding, or beyond
-    F16's range with --half), naming the .onnx file and the node."""
+    """Refuse a node whose tensor is not finite as stored (NaN or Inf in the file, made by folding constants, or
+    beyond F16's range with --half), naming the .onnx file and the node."""
     dtype, name = (np.float16, "F16") if half else (np.float32, "F32")
     for n in ir:
         for field in ("weight", "bias", "scale", "shift"):
@@ -1672,7 +1587,7 @@ def _check_loader_limits(config, channels, path):
     g = config["graph"]
     nodes = g["nodes"]
     if len(nodes) > c.GRAPH_MAX_NODES:
-        raise ConversionError(f"{path}: {len(nodes)} nodes after fusing; ngi loads at most {c.GRAPH_MAX_NODES}")
+        raise ConversionError(f"{path}: {len(nodes)} nodes; ngi loads at most {c.GRAPH_MAX_NODES}")
 
     def name_ok(x):
         return isinstance(x, str) and 1 <= len(x.encode()) <= c.GRAPH_MAX_NAME_BYTES
@@ -1732,7 +1647,6 @@ def import_onnx(onnx_path, out_path, *, half=False, source=None, input_range=Non
     output = imp.run()
     ir = imp.ir
     weights = imp.weights
-    _fuse(ir, weights, output)
     _check_weights(ir, weights, onnx_path, half)
     used = {n[k] for n in ir for k in ("weight", "bias", "scale", "shift") if k in n}
     tensors = {k: v.astype(np.float32) for k, v in weights.items() if k in used}
