@@ -16,7 +16,8 @@
 // rendered frame folder as the N x N input (the ssgi gather's cost depends on the scene; default: a synthetic frame);
 // --display-frame DIR: the same view rendered at S x S as the display face (ngi render --face S --spp 1 --feature-spp 1;
 // a real frame's geometry: the JBU's bilinear fallback, one pixel at a time, is rare there); default: a synthetic
-// face of random values, where many pixels take that fallback (an upper bound for the upsampling).
+// face of random values, where many pixels take that fallback (an upper bound for the upsampling). --jbu-radius R:
+// the display view's JBU radius (default DisplaySettings': 2; 1 is the fast setting, docs/RESULTS.md measures both).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -61,7 +62,7 @@ double median_of(std::vector<double> v) {
 
 // --display S: the whole displayed frame per stage and in one piece (see the top of the file).
 nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, const ngi::Frame& low, int display,
-                               int runs, const ngi::Frame* rendered_display) {
+                               int runs, const ngi::Frame* rendered_display, int jbu_radius) {
     // All six faces, as an engine hands them over: every rung reads what it needs of them (a front-only rung face 0).
     const int n = low.n, faces = ngi::kFaceCount;
     ngi::SurroundPipeline pl(device, n);
@@ -93,7 +94,9 @@ nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, con
     const ngi::FrameDesc hi_desc = ngi::FrameDesc::of(hi, 1);
     ngi::FrameOutputs shown;
     shown.display = ngi::DeviceBuffer::allocate(device, 3 * std::size_t(display) * display * sizeof(float));
-    ngi::DisplayView view(device, display);
+    ngi::DisplaySettings settings;
+    if (jbu_radius > 0) settings.radius = jbu_radius;
+    ngi::DisplayView view(device, display, settings);
     const glm::vec3 position(0.0f);
 
     auto frame = [&](ngi::FrameTimings* ft, ngi::DisplayTimings* dt) {
@@ -123,6 +126,7 @@ nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, con
         sum += median_of(stage[k]);
     }
     return {{"n", n}, {"display", display}, {"display_pixels", std::size_t(display) * display},
+            {"jbu_radius", settings.radius},
             {"frame_median_ms", median_of(whole)}, {"frame_min_ms", *std::min_element(whole.begin(), whole.end())},
             {"stages_median_ms", st}, {"stages_sum_ms", sum},
             {"display_share_of_stages", (median_of(stage[4]) + median_of(stage[5]) + median_of(stage[6]) +
@@ -133,7 +137,7 @@ nlohmann::json displayed_frame(const ngi::Device& device, ngi::Model& model, con
 
 int main(int argc, char** argv) {
     std::string device_spec, sizes = "64,128,256", model_path = "models/surround.safetensors", frame_dir, display_dir;
-    int runs = 9, display = 0;
+    int runs = 9, display = 0, jbu_radius = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--device")) device_spec = argv[i + 1];
         else if (!std::strcmp(argv[i], "--n")) sizes = argv[i + 1];
@@ -142,9 +146,10 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--display")) display = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--frame")) frame_dir = argv[i + 1];
         else if (!std::strcmp(argv[i], "--display-frame")) display_dir = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--jbu-radius")) jbu_radius = std::atoi(argv[i + 1]);
         else {
             std::fprintf(stderr, "usage: frame_bench [--device D] [--model M] [--n 64,128,256] [--runs 9] "
-                                 "[--display S [--frame DIR [--display-frame DIR]]]\n");
+                                 "[--display S [--frame DIR [--display-frame DIR]] [--jbu-radius R]]\n");
             return 2;
         }
     }
@@ -162,11 +167,11 @@ int main(int argc, char** argv) {
             if (!frame_dir.empty()) {
                 const ngi::Frame shown = display_dir.empty() ? ngi::Frame{} : ngi::read_frame(display_dir);
                 out["displayed"].push_back(displayed_frame(device, model, ngi::read_frame(frame_dir), display, runs,
-                                                           display_dir.empty() ? nullptr : &shown));
+                                                           display_dir.empty() ? nullptr : &shown, jbu_radius));
             } else {
                 for (int n : ngi_bench::parse_sizes(sizes))
                     out["displayed"].push_back(displayed_frame(device, model, ngi_bench::synthetic_frame(n, rng),
-                                                               display, runs, nullptr));
+                                                               display, runs, nullptr, jbu_radius));
             }
             std::printf("%s\n", out.dump(2).c_str());
             return 0;
