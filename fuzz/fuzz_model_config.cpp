@@ -17,7 +17,8 @@
 //   voxel_sh: the widths and grid within their ranges;
 //   graph: the node list as build_graph_model_ops re-reads it (parse_graph_desc) agrees with the config (output
 //       channels, inputs made before use); a file with the weight shapes of docs/MODEL_FORMAT.md's op table passes
-//       check_graph_weights, unless two nodes name one tensor with different shapes (then an InputError);
+//       check_graph_weights, unless two nodes name one tensor with different shapes (then an InputError); the
+//       loader's fusion of it throws nothing and leaves a list of nodes reading only earlier tensors;
 //   any other family (reached "as written"): the registry knows it (models/family.hpp).
 // Only ngi::Error may come out for bad input (fuzz_common.hpp); a failed check is a crash.
 #include <cmath>
@@ -30,6 +31,7 @@
 #include "fuzz_common.hpp"
 #include "models/config_fields.hpp"
 #include "models/family.hpp"
+#include "models/graph_fuse.hpp"
 #include "models/graph_model.hpp"
 #include "models/mlp_model.hpp"
 #include "models/neural_gi_model.hpp"
@@ -83,17 +85,51 @@ void check_graph(const ngi::ModelConfig& cfg) {
         } else if (n.op == "dense") {
             want(n, "weight", {cout, cin});
             want(n, "bias", {cout});
-        } else if (n.op == "affine") {
+        } else if (n.op == "affine" || n.op == "instance_norm") {
             want(n, "scale", {cin});
             want(n, "shift", {cin});
+        } else if (n.op == "group_norm") {
+            want(n, "scale", {n.fields["groups"].get<int>()});
+            want(n, "shift", {n.fields["groups"].get<int>()});
         }
     }
+    std::vector<GraphNodeWeights> w;
     try {
-        const std::vector<GraphNodeWeights> w = check_graph_weights(d, file);
+        w = check_graph_weights(d, file);
         if (clash || w.size() != d.nodes.size()) __builtin_trap();
     } catch (const ngi::Error&) {
         if (!clash) __builtin_trap();  // the documented shapes were refused
+        return;
     }
+    // The loader's fusion (graph_fuse.hpp) on weights of value 1 (bounded: a few million values in all): it throws
+    // nothing, removes one node a fold, and leaves a list every node of which reads only earlier tensors, ending in
+    // the output's channels.
+    std::size_t values = 0;
+    for (const auto& [name, t] : file.tensors) {
+        std::size_t n = 1;
+        for (int s : t.shape) n *= std::size_t(s);
+        values += n;
+        if (values > (std::size_t(1) << 22)) return;
+    }
+    for (auto& [name, t] : file.tensors) {
+        std::size_t n = 1;
+        for (int s : t.shape) n *= std::size_t(s);
+        t.data.assign(n, 1.0f);
+    }
+    FusedGraph f;
+    try {
+        f = fuse_graph(d, check_graph_weights(d, file));
+    } catch (...) {
+        __builtin_trap();  // a checked list and its weights: nothing to refuse
+    }
+    if (f.desc.nodes.size() + std::size_t(f.affines + f.activations + f.input_activations) != d.nodes.size())
+        __builtin_trap();
+    if (f.desc.output < 1 || std::size_t(f.desc.output) > f.desc.nodes.size() ||
+        f.desc.nodes[std::size_t(f.desc.output) - 1].out_channels != cfg.output_nc)
+        __builtin_trap();
+    for (std::size_t k = 0; k < f.desc.nodes.size(); ++k)
+        for (int i : f.desc.nodes[k].inputs)
+            if (i < 0 || std::size_t(i) > k) __builtin_trap();
 }
 
 void check_mlp(const ngi::ModelConfig& cfg) {

@@ -335,6 +335,29 @@ int main(int argc, char** argv) {
              {"kernel", {1, 1}}, {"stride", 1}, {"pad", 0}, {"weight", "mix.w"}, {"activation", "sigmoid"}}})}}},
         {"input_range", {-1, 1}}, {"source", "fuzz seed"}};
     put("model_config", "graph_every_op", std::string(1, char(5)) + graph.dump());
+    // "up" above carries an input_activation, as files the converter fused did; since issue 49 ngi.convert writes the
+    // network unfused and the loader fuses (models/graph_fuse.hpp): a batch norm's affine and a ReLU after a
+    // convolution, a leaky ReLU read by two convolutions, a tanh at the output.
+    auto seed_conv = [](const char* name, const char* in, const char* out, int cin, int cout, int k) {
+        return json{{"name", name}, {"op", "conv2d"}, {"inputs", {in}}, {"output", out}, {"in", cin}, {"out", cout},
+                    {"kernel", {k, k}}, {"stride", 1}, {"pad", k / 2}, {"weight", std::string(name) + ".w"}};
+    };
+    json c1 = seed_conv("c1", "x", "t1", 3, 4, 3);
+    c1["bias"] = "c1.b";
+    const json graph_unfused = {
+        {"format_version", 1}, {"family", "graph"}, {"input_nc", 3}, {"output_nc", 3},
+        {"graph", {{"layout", "nchw"}, {"input", "x"}, {"output", "y"}, {"nodes", json::array({
+            c1,
+            {{"name", "bn"}, {"op", "affine"}, {"inputs", {"t1"}}, {"output", "t2"}, {"scale", "bn.s"}, {"shift", "bn.t"}},
+            {{"name", "r"}, {"op", "activation"}, {"inputs", {"t2"}}, {"output", "t3"}, {"activation", "relu"}},
+            {{"name", "lk"}, {"op", "activation"}, {"inputs", {"x"}}, {"output", "t4"}, {"activation", "leaky_relu"},
+             {"slope", 0.2}},
+            seed_conv("c2", "t4", "t5", 3, 2, 1), seed_conv("c3", "t4", "t6", 3, 2, 1),
+            {{"name", "cat"}, {"op", "concat"}, {"inputs", {"t3", "t5", "t6"}}, {"output", "t7"}},
+            seed_conv("c4", "t7", "t8", 8, 3, 1),
+            {{"name", "th"}, {"op", "activation"}, {"inputs", {"t8"}}, {"output", "y"}, {"activation", "tanh"}}})}}},
+        {"input_range", {-1, 1}}, {"source", "fuzz seed"}};
+    put("model_config", "graph_unfused", std::string(1, char(5)) + graph_unfused.dump());
     json graph_nc = {{"family", "graph"}, {"input_nc", 4},
                      {"graph", {{"layout", "nc"}, {"input", "in"}, {"output", "out"}, {"nodes", json::array({
                          {{"name", "d0"}, {"op", "dense"}, {"inputs", {"in"}}, {"output", "h"}, {"in", 4}, {"out", 8},
