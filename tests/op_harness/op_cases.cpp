@@ -1417,6 +1417,47 @@ std::vector<OpCase> build_table() {
                 const GemmParams p = k.path == ConvPath::implicit ? implicit_gemm(c) : device_gemm(c);
                 return conv_case(c, p, z == Size::Perf ? k.perf : k.test, k.transposed, k.path, rng, k.implicit);
             });
+    // tests/test_conv.cpp's implicit-GEMM geometries (ops/conv_implicit.hpp), each through im2col and the implicit
+    // path with the implicit path's knob set (the device's set, KWG 0), as that file ran them: every stride that
+    // divides the kernel, polyphase splits of 2, 3 and 4, 1 to 9 taps, odd sizes, spatial sizes below a tile (the
+    // junk columns of one partial tile), a 1 x 1 input, channel counts below and above MR. That file bounded them
+    // by 1e-4 absolute + relative; K = Cin KH KW <= 192 (kTolConv). Perf: each geometry over a U-Net-sized plane.
+    const struct {
+        const char* name;
+        ConvShape test;
+        bool transposed;
+    } implicit_geometries[] = {
+        {"the U-Net's first layer, shrunk", {12, 64, 128, 16, 4, 4, 2, 1, 0, 2}, false},
+        {"odd sizes: the last row's polyphase planes short", {7, 13, 11, 9, 4, 4, 2, 1, 2, 0}, false},
+        {"k2 s2 p0: one tap over 4 planes", {5, 9, 7, 10, 2, 2, 2, 0, 1, 1}, false},
+        {"k6 s2 p2: 3 x 3 taps", {3, 10, 14, 8, 6, 6, 2, 2, 0, 3}, false},
+        {"k3 s3: a 3 x 3 polyphase split, one tap", {4, 11, 13, 9, 3, 3, 3, 1, 1, 0}, false},
+        {"k3 s1 p1: padding only", {6, 17, 9, 11, 3, 3, 1, 1, 2, 4}, false},
+        {"k1: a plain copy as B", {9, 5, 3, 12, 1, 1, 1, 0, 1, 0}, false},
+        {"2x2 -> 1x1", {5, 2, 2, 9, 4, 4, 2, 1, 2, 3}, false},
+        {"1x1 input", {3, 1, 1, 8, 3, 3, 1, 1, 0, 0}, false},
+        {"non-square kernel, Cout < MR", {2, 6, 10, 3, 4, 2, 2, 1, 0, 0}, false},
+        {"the U-Net's up-convolution", {16, 4, 8, 12, 4, 4, 2, 1, 1, 0}, true},
+        {"odd sizes", {7, 3, 5, 9, 4, 4, 2, 1, 0, 3}, true},
+        {"1x1 bottleneck -> 2x2", {9, 1, 1, 10, 4, 4, 2, 1, 1, 2}, true},
+        {"k2 s2 p0: one tap per phase, no padding", {5, 6, 7, 8, 2, 2, 2, 0, 2, 0}, true},
+        {"k6 s2 p2: 3 x 3 taps per phase", {4, 5, 6, 9, 6, 6, 2, 2, 0, 1}, true},
+        {"k8 s4 p2: 16 phases of 2 x 2 taps", {3, 4, 5, 8, 8, 8, 4, 2, 1, 0}, true},
+        {"k3 s1 p1: one phase, a flipped 3 x 3 convolution", {6, 7, 3, 9, 3, 3, 1, 1, 0, 4}, true},
+        {"k3 s3 p0: 9 phases of one tap", {5, 3, 4, 11, 3, 3, 3, 0, 1, 0}, true},
+        {"Cout 3 < MR: tiles of 4 rows", {6, 5, 9, 3, 4, 4, 2, 1, 1, 3}, true},
+    };
+    for (const auto& g : implicit_geometries)
+        for (const ConvPath path : {ConvPath::im2col, ConvPath::implicit})
+            row(g.transposed ? "ConvTranspose2d::enqueue" : "Conv2d::enqueue",
+                std::string("exact geometry, ") + g.name + (path == ConvPath::implicit ? ", implicit" : ", im2col"),
+                false, kTolConv, [g, path](Context& c, Size z, std::mt19937& rng) {
+                    const GemmParams p = implicit_gemm(c);
+                    const ConvShape k = z == Size::Perf ? perf_conv(g.test, g.transposed) : g.test;
+                    const bool implicit = path == ConvPath::implicit &&
+                                          conv_takes_implicit(k.kh, k.kw, k.s, k.p, k.in_act, g.transposed, p);
+                    return conv_case(c, p, k, g.transposed, path, rng, implicit);
+                });
 
     // Dense layers over planar items: tiles of the device's set at odd sizes (n not a tile multiple, a row stride
     // beyond n), item-major output, a residual, fewer items than a tile; perf at seed 004's 128-wide layers.
