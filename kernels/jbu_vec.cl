@@ -38,34 +38,34 @@ static inline float8 jbu_power8(float8 f, float np, int np_int) {
     return r;
 }
 
-// One low-resolution texel (i, j) as the shared-columns path of jbu_upsample8 reads it: its normal and position, its
-// values cleaned as jbu_clean8 cleans them (channels >= nc are 0), and whether it is a tap (valid: -1, inside the image
-// with a surface; else 0, and nothing is read).
-typedef struct {
-    float3 n, p;
-    float4 v;
-    int valid;
-} JbuColumn;
-
-static inline JbuColumn jbu_column(__global const float* restrict low, __global const float* restrict low_normal,
-                                   __global const float* restrict low_position, const int lw, const int lh,
-                                   const int nc, const int i, const int j) {
-    JbuColumn c;
-    c.n = c.p = (float3)(0.0f);
-    c.v = (float4)(0.0f);
-    c.valid = 0;
-    if (i < 0 || i >= lw) return c;
-    const int plane = lw * lh, l = j * lw + i;
-    c.n = jbu_load3(low_normal, l, plane);
-    c.p = jbu_load3(low_position, l, plane);
+// The low-resolution taps as the shared-columns path of jbu_upsample8 reads them, made once per call by jbu_pack_taps
+// (w x h work-items; every display row of a tap row reads the same texels again, ~15 times at a display view's ratio):
+// per texel 12 floats, [0..7] normal xyz, position xyz, 1 if it is a tap (a surface: the gather path's test, term for
+// term) else 0, 0; [8..11] its values cleaned as jbu_clean8 cleans them (channels >= nc and non-taps: 0). Two vector
+// loads per tap instead of nine scalar loads and the tests.
+#ifndef JBU_TAP_FLOATS
+#error "jbu_vec.cl needs JBU_TAP_FLOATS: build it with jbu_defines() (host/src/ops/jbu.hpp)"
+#endif
+#if JBU_TAP_FLOATS != 12
+#error "jbu_pack_taps writes 12 floats per texel (host/src/ops/jbu.hpp kJbuTapFloats)"
+#endif
+__kernel void jbu_pack_taps(__global const float* restrict low, __global const float* restrict low_normal,
+                            __global const float* restrict low_position, const int w, const int h, const int channels,
+                            __global float* restrict taps) {
+    const int l = get_global_id(0), plane = w * h, nc = channels;
+    if (l >= plane) return;
+    const float3 n = jbu_load3(low_normal, l, plane), p = jbu_load3(low_position, l, plane);
     // The gather path's test, term for term (its |m|^2 sum, not dot(): the same rounding).
-    if (!(jbu_finite3(c.n) && c.n.x * c.n.x + c.n.y * c.n.y + c.n.z * c.n.z >= 0.25f && jbu_finite3(c.p))) return c;
-    c.valid = -1;
-    c.v.x = jbu_clean(low[l]);
-    if (nc > 1) c.v.y = jbu_clean(low[plane + l]);
-    if (nc > 2) c.v.z = jbu_clean(low[2 * plane + l]);
-    if (nc > 3) c.v.w = jbu_clean(low[3 * plane + l]);
-    return c;
+    const int valid = jbu_finite3(n) && n.x * n.x + n.y * n.y + n.z * n.z >= 0.25f && jbu_finite3(p);
+    float4 v = (float4)(0.0f);
+    if (valid) {
+        v.x = jbu_clean(low[l]);
+        if (nc > 1) v.y = jbu_clean(low[plane + l]);
+        if (nc > 2) v.z = jbu_clean(low[2 * plane + l]);
+        if (nc > 3) v.w = jbu_clean(low[3 * plane + l]);
+    }
+    vstore8((float8)(n, p, valid ? 1.0f : 0.0f, 0.0f), 0, taps + JBU_TAP_FLOATS * l);
+    vstore4(v, 0, taps + JBU_TAP_FLOATS * l + 8);
 }
 
 // floor(a / b) per lane for b > 0.
@@ -76,7 +76,8 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
                             __global const float* restrict normal, __global const float* restrict position,
                             const int W, const int H, const float inv_two_sigma_s2, const float normal_power,
                             const float inv_two_sigma_p2, const int radius, const float fallback_ratio,
-                            const int shared_columns, __global float* restrict out, volatile __global uint* fallbacks) {
+                            const int shared_columns, __global const float* restrict taps, __global float* restrict out,
+                            volatile __global uint* fallbacks) {
     const int gx = get_global_id(0), y = get_global_id(1);
     const int lw = w, lh = h, nc = channels, ow = W, oh = H, r = clamp(radius, 1, JBU_MAX_RADIUS);
     const float s2 = inv_two_sigma_s2, np = normal_power, p2 = inv_two_sigma_p2, ratio = fallback_ratio;
@@ -119,7 +120,7 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
     // Shared columns: when the live lanes' first tap columns differ by at most one (the output at least ~8x the input
     // along x, as a display view of an N = 64 lightmap is), the work-item's taps are the 2r + 1 columns bx.s0 ...
     // bx.s0 + 2r of each tap row: lanes with shift 0 use the first 2r, lanes with shift 1 the last 2r. Each column's
-    // texel is read once, as scalars, and its weight computed for all lanes, masked to the lanes whose window holds
+    // texel is read once, from jbu_pack_taps' record, and its weight computed for all lanes, masked to the lanes whose window holds
     // it: per lane the same values and arithmetic as the gathers below, in the same order (a masked column adds +0),
     // so the same bits, without 8 x 2r gathered loads per value and tap row (the gathers were the kernel's cost).
     const int8 shift = bx - bx.s0;  // lane 0 is live and has the smallest column (bx grows with x)
@@ -141,18 +142,20 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
                 const int8 in = surface & window;
                 const float8 spatial = abs_weight[c] * row_weight;
                 spatial_sum += select((float8)(0.0f), spatial, in);
-                const JbuColumn col = jbu_column(low, low_normal, low_position, lw, lh, nc, i, j);
-                const int8 ok = in & (int8)(col.valid);
+                __global const float* tap = taps + JBU_TAP_FLOATS * (j * lw + i);
+                const float8 g = vload8(0, tap);
+                const int8 ok = in & (int8)(g.s6 != 0.0f ? -1 : 0);
                 if (!any(ok)) continue;
-                const float8 facing = fmax(nx * col.n.x + ny * col.n.y + nz * col.n.z, 0.0f);
-                const float8 plane = col.n.x * (px - col.p.x) + col.n.y * (py - col.p.y) + col.n.z * (pz - col.p.z);
+                const float4 v = vload4(0, tap + 8);
+                const float8 facing = fmax(nx * g.s0 + ny * g.s1 + nz * g.s2, 0.0f);
+                const float8 plane = g.s0 * (px - g.s3) + g.s1 * (py - g.s4) + g.s2 * (pz - g.s5);
                 const float8 wt =
                     select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
                 weight_sum += wt;
-                acc0 += wt * col.v.x;
-                if (nc > 1) acc1 += wt * col.v.y;
-                if (nc > 2) acc2 += wt * col.v.z;
-                if (nc > 3) acc3 += wt * col.v.w;
+                acc0 += wt * v.x;
+                if (nc > 1) acc1 += wt * v.y;
+                if (nc > 2) acc2 += wt * v.z;
+                if (nc > 3) acc3 += wt * v.w;
             }
         }
     } else

@@ -78,13 +78,21 @@ int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const Jbu
     const bool vec = p.kernel == K::Rows8 ||
                      (p.kernel == K::Auto && vector_device_ && in.channels <= kJbuVecMaxChannels);
     // The vector kernel's program is built only where it runs (llvmpipe took ~65 s to build it).
-    if (vec && !kernel_vec_.get()) kernel_vec_ = ctx.kernel("jbu_vec", "jbu_upsample8", jbu_defines());
+    if (vec && !kernel_vec_.get()) {
+        kernel_vec_ = ctx.kernel("jbu_vec", "jbu_upsample8", jbu_defines());
+        pack_taps_ = ctx.kernel("jbu_vec", "jbu_pack_taps", jbu_defines());
+    }
     Kernel& k = vec ? kernel_vec_ : kernel_;
-    if (vec)
+    if (vec) {
+        // The taps' records for the shared-columns path (kernels/jbu_vec.cl jbu_pack_taps), one work-item per texel.
+        ensure_buffer(ctx, taps_, kJbuTapFloats * lo * sizeof(float), "joint bilateral upsampling: tap records");
+        pack_taps_.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, taps_);
+        const std::size_t items[1] = {round_up(lo, 64)}, group[1] = {64};
+        ctx.launch(pack_taps_, 1, items, group);
         k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
                in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio,
-               int(p.shared_columns), out, fallbacks_);
-    else
+               int(p.shared_columns), taps_, out, fallbacks_);
+    } else
         k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
                in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);
     static const std::size_t local[2] = {8, 8};

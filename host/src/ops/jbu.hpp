@@ -23,6 +23,8 @@ constexpr int kJbuMaxSide = 16384;
 // in the rusticl stage).
 constexpr int kJbuVec = 8;
 constexpr int kJbuVecMaxChannels = 4;
+// Floats per low-resolution texel of jbu_pack_taps' records (JBU_TAP_FLOATS).
+constexpr int kJbuTapFloats = 12;
 // Whether `info` is a device that runs jbu_upsample8 (PoCL on a CPU).
 inline bool jbu_vector_device(const DeviceInfo& info) {
     return info.is_cpu && info.platform_name == "Portable Computing Language";
@@ -30,7 +32,8 @@ inline bool jbu_vector_device(const DeviceInfo& info) {
 
 // The build options of kernels/jbu.cl.
 inline std::string jbu_defines() {
-    return join_defines({define("JBU_MAX_RADIUS", kJbuMaxRadius), define("JBU_VEC", kJbuVec)});
+    return join_defines({define("JBU_MAX_RADIUS", kJbuMaxRadius), define("JBU_VEC", kJbuVec),
+                         define("JBU_TAP_FLOATS", kJbuTapFloats)});
 }
 
 struct JbuParams {
@@ -73,9 +76,10 @@ public:
     int fallback_count(Context& ctx) const;
 
 private:
-    Kernel kernel_, kernel_vec_;  // jbu_upsample (any channel count), jbu_upsample8 (built when first used)
+    Kernel kernel_, kernel_vec_, pack_taps_;  // jbu_upsample (any channel count); jbu_upsample8 and jbu_pack_taps
+                                              // (built when first used)
     bool vector_device_ = false;
-    Buffer fallbacks_;
+    Buffer fallbacks_, taps_;  // taps_: jbu_pack_taps' records (12 floats per low-resolution texel)
 };
 
 }  // namespace ngi::detail
