@@ -134,17 +134,17 @@ void check_graph(const ngi::ModelConfig& cfg) {
 
 void check_mlp(const ngi::ModelConfig& cfg) {
     using namespace ngi::detail;
-    if (cfg.layers.empty() || cfg.output_nc != cfg.layers.back().out) __builtin_trap();
+    if (cfg.mlp.layers.empty() || cfg.output_nc != cfg.mlp.layers.back().out) __builtin_trap();
     SafetensorsFile file;
-    int in = frequency_encoding(cfg).width(cfg.input_nc);
+    int in = frequency_encoding(cfg.encoding).width(cfg.input_nc);
     if (in < 1) __builtin_trap();
-    for (std::size_t i = 0; i < cfg.layers.size(); ++i) {
-        file.tensors["layers." + std::to_string(i) + ".weight"] = shaped({cfg.layers[i].out, in});
-        file.tensors["layers." + std::to_string(i) + ".bias"] = shaped({cfg.layers[i].out});
-        in = cfg.layers[i].out;
+    for (std::size_t i = 0; i < cfg.mlp.layers.size(); ++i) {
+        file.tensors["layers." + std::to_string(i) + ".weight"] = shaped({cfg.mlp.layers[i].out, in});
+        file.tensors["layers." + std::to_string(i) + ".bias"] = shaped({cfg.mlp.layers[i].out});
+        in = cfg.mlp.layers[i].out;
     }
     const MlpSpec s = mlp_spec(cfg, file, "fuzz.safetensors");  // must accept the documented shapes
-    if (s.layers.size() != cfg.layers.size()) __builtin_trap();
+    if (s.layers.size() != cfg.mlp.layers.size()) __builtin_trap();
     for (std::size_t i = 1; i < s.layers.size(); ++i)
         if (s.layers[i].in != s.layers[i - 1].out) __builtin_trap();
 }

@@ -441,8 +441,8 @@ int run_generator(int argc, char** argv) {
         const auto ms = time_runs(ngi::detail::context_of(d), repeats, [&] { y = m.run(x, &info); });
         if (const std::string o = arg(argc, argv, "--output"); !o.empty()) write_npy(o, y);
         out = {{"device", device_json(d, gemm_params_for(d.info()))},
-               {"model", {{"family", c.family}, {"ngf", c.ngf}, {"num_downs", c.num_downs}, {"bn_mode", c.bn_mode},
-                          {"width", w}, {"height", h}}},
+               {"model", {{"family", c.family}, {"ngf", c.unet.ngf}, {"num_downs", c.unet.num_downs},
+                          {"bn_mode", c.unet.bn_mode}, {"width", w}, {"height", h}}},
                {"ms_median", median(ms)}, {"ms_all", ms},
                {"memory_mib", {{"weights", info.weight_bytes / 1048576.0}, {"arena", info.arena_bytes / 1048576.0},
                                {"arena_without_reuse", info.naive_bytes / 1048576.0},
@@ -496,7 +496,7 @@ int run_mlp(int argc, char** argv) {
     if (ao) {
         AoNetwork net = AoNetwork::load(d, path, opt);
         int in = net.config().input_nc;
-        for (const auto& l : net.config().layers) macs += double(in) * l.out, in = l.out;
+        for (const auto& l : net.config().mlp.layers) macs += double(in) * l.out, in = l.out;
         std::vector<float> n(3 * hw);
         for (std::size_t i = 0; i < hw; ++i) {  // random unit normals, no background
             float x = u(rng), y = u(rng), z = u(rng) + 1e-3f, len = std::sqrt(x * x + y * y + z * z);
@@ -511,7 +511,7 @@ int run_mlp(int argc, char** argv) {
     } else {
         Model m = Model::load(d, path, opt);
         int in = m.config().input_nc;
-        for (const auto& l : m.config().layers) macs += double(in) * l.out, in = l.out;
+        for (const auto& l : m.config().mlp.layers) macs += double(in) * l.out, in = l.out;
         std::vector<float> x(std::size_t(m.config().input_nc) * hw);
         for (auto& v : x) v = u(rng);
         DeviceBuffer xb = DeviceBuffer::allocate(d, x.size() * 4), yb = DeviceBuffer::allocate(d, std::size_t(in) * hw * 4);
@@ -662,7 +662,7 @@ int run_neural_gi(int argc, char** argv) {
     const JbuParams jbu_params;  // NeuralGiOptions' defaults
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    const int step = 1 << c.num_downs;
+    const int step = 1 << c.unet.num_downs;
     std::vector<int> network_sides;
     json cases = json::array();
     RoomFrame room;
@@ -757,8 +757,8 @@ int run_neural_gi(int argc, char** argv) {
     }
 
     const json model_json = {
-        {"file", std::filesystem::path(path).filename().string()}, {"family", c.family}, {"ngf", c.ngf},
-        {"num_downs", c.num_downs}, {"bn_mode", c.bn_mode}, {"buffer_channels", c.neural_gi.buffer_channels},
+        {"file", std::filesystem::path(path).filename().string()}, {"family", c.family}, {"ngf", c.unet.ngf},
+        {"num_downs", c.unet.num_downs}, {"bn_mode", c.unet.bn_mode}, {"buffer_channels", c.neural_gi.buffer_channels},
         {"mlp_width", c.neural_gi.mlp_width}, {"mlp_depth", c.neural_gi.mlp_depth},
         {"skip_layer", c.neural_gi.skip_layer},
         {"scene_box", {{"min", std::vector<float>(c.neural_gi.scene_min, c.neural_gi.scene_min + 3)},

@@ -183,7 +183,7 @@ TEST_CASE("safetensors: dimensions and offsets are range-checked, byte counts ca
 }
 
 TEST_CASE("model config: every field is type- and range-checked, naming the field", "[model][limits]") {
-    CHECK(ngi::detail::parse_model_config(good_config().dump(), "m.safetensors").ngf == 64);
+    CHECK(ngi::detail::parse_model_config(good_config().dump(), "m.safetensors").unet.ngf == 64);
     auto refuse = [](const char* key, nlohmann::json value, const std::string& expect) {
         nlohmann::json c = good_config();
         c[key] = value;
@@ -219,7 +219,7 @@ TEST_CASE("model config: every field is type- and range-checked, naming the fiel
         nlohmann::json c = good_config();
         c["required"] = nlohmann::json::array({"ngf", "bn_mode"});
         c["some_future_hint"] = 3;  // unknown but optional: ignored
-        CHECK(ngi::detail::parse_model_config(c.dump(), "m.safetensors").ngf == 64);
+        CHECK(ngi::detail::parse_model_config(c.dump(), "m.safetensors").unet.ngf == 64);
     }
     nlohmann::json di = good_config();
     di["family"] = "deepillumination";

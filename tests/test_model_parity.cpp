@@ -25,7 +25,7 @@ fs::path parity_dir() { return ngi::test::python_oracle_data("make_parity.py", "
 void check_parity_case(const fs::path& dir, const nlohmann::json& c) {
     const std::string name = c["name"];
     ngi::Model model = ngi::Model::load(ngi::test::device(), (dir / c["model"].get<std::string>()).string());
-    CHECK(model.config().bn_mode == c["bn_mode"].get<std::string>());
+    CHECK(model.config().unet.bn_mode == c["bn_mode"].get<std::string>());
     const ngi::Tensor x = ngi::read_npy((dir / c["input"].get<std::string>()).string());
     const ngi::Tensor expected = ngi::read_npy((dir / c["expected"].get<std::string>()).string());
     ngi::RunInfo info;

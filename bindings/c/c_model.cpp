@@ -57,7 +57,7 @@ ngi_status ngi_model_channels(const ngi_model* model, int* input_nc, int* output
         const auto& c = live(model, "model").model.config();
         if (input_nc) *input_nc = c.input_nc;
         if (output_nc) *output_nc = c.output_nc;
-        if (num_downs) *num_downs = c.num_downs;
+        if (num_downs) *num_downs = c.unet.num_downs;
     });
 }
 

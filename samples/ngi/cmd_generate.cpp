@@ -40,14 +40,15 @@ int run(const Options& o) {
     std::printf("device     %s\n", device.info().name.c_str());
     // What the model's config holds, by its sections (not by its family's name): a dense-layer list (mlp), a U-Net
     // (the generators), or neither (the family and its channels).
-    if (!c.layers.empty()) {
+    if (!c.mlp.layers.empty()) {
         std::string widths;
-        for (const auto& l : c.layers) widths += (widths.empty() ? "" : "-") + std::to_string(l.out) + " " + l.activation;
+        for (const auto& l : c.mlp.layers) widths += (widths.empty() ? "" : "-") + std::to_string(l.out) + " " + l.activation;
         std::printf("model      %s: %s, %d inputs, encoding %d bands, layers %s\n", model_path.c_str(),
-                    c.family.c_str(), c.input_nc, c.encoding_bands, widths.c_str());
-    } else if (c.ngf > 0) {
+                    c.family.c_str(), c.input_nc, c.encoding.bands, widths.c_str());
+    } else if (c.unet.ngf > 0) {
         std::printf("model      %s: %s, %d -> %d channels, ngf %d, %d downs, bn %s, dropout %s\n", model_path.c_str(),
-                    c.family.c_str(), c.input_nc, c.output_nc, c.ngf, c.num_downs, c.bn_mode.c_str(), c.dropout.c_str());
+                    c.family.c_str(), c.input_nc, c.output_nc, c.unet.ngf, c.unet.num_downs, c.unet.bn_mode.c_str(),
+                    c.unet.dropout.c_str());
     } else {
         std::printf("model      %s: %s, %d -> %d channels\n", model_path.c_str(), c.family.c_str(), c.input_nc,
                     c.output_nc);

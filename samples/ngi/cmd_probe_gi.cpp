@@ -122,7 +122,7 @@ int run(Options o) {
     std::optional<ngi::Model> surround;
     if (!o.surround_model.empty()) {
         surround.emplace(ngi::Model::load(device, ngi::resolve_model(o.surround_model)));
-        const int k = surround->config().num_downs;  // global view 2N x 4N: 2N must be divisible by 2^num_downs
+        const int k = surround->config().unet.num_downs;  // global view 2N x 4N: 2N must be divisible by 2^num_downs
         if (k < 1 || k > 12 || (2 * o.rs.n) % (1 << k) != 0)
             throw UsageError("--face " + std::to_string(o.rs.n) + ": the surround model " + o.surround_model +
                              " needs 2N divisible by 2^" + std::to_string(k) + " (N a multiple of " +

@@ -26,11 +26,11 @@ py::dict config_dict(const ngi::ModelConfig& c) {
         d["grid"] = py::make_tuple(c.voxel_sh.grid[0], c.voxel_sh.grid[1], c.voxel_sh.grid[2]);
     }
     if (c.family == "graph") d["layout"] = c.graph.layout;  // ModelConfig::graph, that family's own section
-    if (c.ngf > 0) {  // a U-Net (the generators; neural_gi's buffer network)
-        d["ngf"] = c.ngf;
-        d["num_downs"] = c.num_downs;
-        d["bn_mode"] = c.bn_mode;
-        d["dropout"] = c.dropout;
+    if (c.unet.ngf > 0) {  // ModelConfig::unet: a U-Net (the generators; neural_gi's buffer network)
+        d["ngf"] = c.unet.ngf;
+        d["num_downs"] = c.unet.num_downs;
+        d["bn_mode"] = c.unet.bn_mode;
+        d["dropout"] = c.unet.dropout;
     }
     d["input_layout"] = c.input_layout;
     d["input_range"] = py::make_tuple(c.input_range[0], c.input_range[1]);

@@ -36,35 +36,57 @@ struct ModelConfig {
     // false: the output's H x W is the network's own, not the input's (family graph: its nodes may stride, pool or
     // resize); Model::run sizes the output, and Model::enqueue's output buffer must hold what the network writes.
     bool output_keeps_size = true;
-    int input_nc = 0, output_nc = 0, ngf = 0, num_downs = 0;
-    std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
-    float bn_eps = 1e-5f;
-    std::string dropout = "off";     // "off" | "seeded"
-    float dropout_p = 0.5f;
-    std::uint32_t dropout_seed = 0;
-    float leaky_slope = 0.2f;
+    int input_nc = 0, output_nc = 0;
     std::vector<std::string> input_layout;  // channel names, may be empty
     float input_range[2] = {-1.0f, 1.0f};
     float output_range[2] = {-1.0f, 1.0f};
     // What the decoded output is (family pix2pix_unet; docs/MODEL_FORMAT.md, docs/CONVENTIONS.md section 8):
     // "lightmap" (the thesis's; default) the front view's whole lightmap, direct + indirect; "indirect" indirect
     // light only, and the pipeline adds the frame's front direct light to make the lightmap (so front_lightmap
-    // needs the frame).
+    // needs the frame). At the top, not in `unet`: the pipeline reads it for every family (ssgi's is "indirect").
     std::string output_mode = "lightmap";
     std::string source;
     std::string json;                // the metadata exactly as stored
 
-    // family "mlp": a network evaluated per item (pixel of an NCHW image, or row of an [N, C] point list):
-    // optional frequency encoding, then dense layers (docs/MODEL_FORMAT.md "mlp", docs/CONVENTIONS.md section 13).
-    struct Layer {
-        int out = 0;
-        std::string activation = "none";  // none | relu | leaky_relu | tanh | sigmoid | exp
-        float slope = 0.01f;              // leaky_relu only
-    };
-    std::vector<Layer> layers;
-    int encoding_bands = 0, encoding_first_exponent = 0;  // bands = 0: no encoding
-    bool encoding_pi = true, encoding_include_input = true;
-    std::string encoding_order = "band";  // "band" (NeRF, Neural GI Eq. 3) | "component" (tiny-cuda-nn)
+    // The sections below are the network's parts, each read by the families built from it (as tiny-cuda-nn
+    // composes a network from an encoding and a network config); a family's parser fills the sections it reads
+    // and leaves the others at their defaults:
+    //   unet      pix2pix_unet, deepillumination, neural_gi (its neural buffer)
+    //   encoding  mlp, neural_gi (graph's frequency_encode nodes read the same JSON object)
+    //   mlp       mlp
+    //   voxel_sh, neural_gi, graph, ssgi: that family's own section (ssgi's also for output_mode "ssgi_residual").
+
+    // A pix2pix-style U-Net generator's fields (docs/MODEL_FORMAT.md "Config"). ngf == 0: the model has no U-Net,
+    // and then num_downs is 0 too (its inputs' H and W need be multiples of 2^num_downs = 1 only).
+    struct UNet {
+        int ngf = 0, num_downs = 0;
+        std::string bn_mode = "running"; // "running" (eval-mode statistics) | "per_image" (train-mode, batch 1)
+        float bn_eps = 1e-5f;
+        std::string dropout = "off";     // "off" | "seeded"
+        float dropout_p = 0.5f;
+        std::uint32_t dropout_seed = 0;
+        float leaky_slope = 0.2f;
+    } unet;
+
+    // The optional per-item frequency encoding before the first dense layer (the file's "encoding" object;
+    // docs/CONVENTIONS.md section 13).
+    struct Encoding {
+        int bands = 0, first_exponent = 0;  // bands = 0: no encoding
+        bool pi = true, include_input = true;
+        std::string order = "band";  // "band" (NeRF, Neural GI Eq. 3) | "component" (tiny-cuda-nn)
+    } encoding;
+
+    // family "mlp": a network evaluated per item (pixel of an NCHW image, or row of an [N, C] point list): the
+    // `encoding` above, then these dense layers (docs/MODEL_FORMAT.md "mlp", docs/CONVENTIONS.md section 13). The
+    // file's bn_mode / dropout keys are checked and have nothing to act on.
+    struct Mlp {
+        struct Layer {
+            int out = 0;
+            std::string activation = "none";  // none | relu | leaky_relu | tanh | sigmoid | exp
+            float slope = 0.01f;              // leaky_relu only
+        };
+        std::vector<Layer> layers;
+    } mlp;
 
     // family "voxel_sh" (seed 004): the 27 SH coefficients ([3][9], docs/CONVENTIONS.md section 14) of the light
     // each occupied voxel receives, from its 10 raw attributes (docs/MODEL_FORMAT.md "voxel_sh"). Model::run takes
@@ -83,8 +105,8 @@ struct ModelConfig {
     } voxel_sh;
 
     // family "neural_gi" (seed 002, docs/MODEL_FORMAT.md "neural_gi"): per scene, [1, 18, H, W] assembled inputs
-    // -> [1, 3, H, W] indirect light (>= 0). The neural buffer is a pix2pix U-Net (ngf, num_downs, bn_mode above;
-    // linear output, buffer_channels); the encoding uses the encoding_* fields above; the MLP takes
+    // -> [1, 3, H, W] indirect light (>= 0). The neural buffer is a pix2pix U-Net (the `unet` section; linear
+    // output, buffer_channels); the encoding is the `encoding` section; the MLP takes
     // [encoded inputs, buffer] through `mlp_depth` ReLU layers of `mlp_width`, the input concatenated again before
     // layer `skip_layer`, then a linear layer to RGB decoded by exp(min(x, 88)).
     struct NeuralGi {
@@ -126,7 +148,7 @@ struct ModelConfig {
 
 // Overrides of the file's settings; an empty string keeps the file's value.
 struct ModelOptions {
-    std::string bn_mode;
+    std::string bn_mode;   // ModelConfig::unet's (a family without a U-Net refuses or ignores them)
     std::string dropout;
     std::string mlp_path;  // family "mlp": "fused" | "dense" | "" (auto: fused when it fits the device)
 };
@@ -157,7 +179,7 @@ public:
     ~Model();
 
     const ModelConfig& config() const;
-    // input: [1, input_nc, H, W] with H and W multiples of 2^num_downs. Returns [1, output_nc, H, W].
+    // input: [1, input_nc, H, W] with H and W multiples of 2^unet.num_downs. Returns [1, output_nc, H, W].
     // Family "mlp": [1, input_nc, H, W] (per pixel) -> [1, output_nc, H, W], or [N, input_nc] -> [N, output_nc].
     // Family "voxel_sh": [V, 10] raw voxel attributes (one scene) -> [V, 27] SH coefficients.
     // Family "neural_gi": [1, 18, H, W] assembled inputs -> [1, 3, H, W] indirect light.

@@ -6,8 +6,8 @@
 namespace ngi::detail {
 
 void apply_network_options(ModelConfig& config, const ModelOptions& options) {
-    if (!options.bn_mode.empty()) config.bn_mode = options.bn_mode;
-    if (!options.dropout.empty()) config.dropout = options.dropout;
+    if (!options.bn_mode.empty()) config.unet.bn_mode = options.bn_mode;
+    if (!options.dropout.empty()) config.unet.dropout = options.dropout;
 }
 
 void refuse_mlp_path(const ModelOptions& options, const std::string& path, const ModelConfig& config) {

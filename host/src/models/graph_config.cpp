@@ -250,9 +250,9 @@ GraphDesc parse_graph_desc(const nlohmann::json& j, const std::string& what) {
             node.out_channels = cin;
         } else if (node.kind == NodeKind::frequency_encode) {
             if (!n.contains("encoding") || !n["encoding"].is_object()) throw bad("'encoding' must be an object");
-            ModelConfig e;
+            ModelConfig::Encoding e;
             parse_encoding_fields(n, e, what + label + ": ");
-            if (e.encoding_bands < 1) throw bad("'encoding.bands' must be at least 1");
+            if (e.bands < 1) throw bad("'encoding.bands' must be at least 1");
             node.out_channels = frequency_encoding(e).width(cin);
             if (node.out_channels > kMaxChannels) throw bad("encodes to more than " + std::to_string(kMaxChannels) + " channels");
         } else {  // activation, nan_to_num

@@ -70,7 +70,7 @@ std::shared_ptr<Op> make_node_op(Context& ctx, const GraphNodeDesc& n, const Gra
             if (f.value("broadcast", false)) return std::make_shared<BroadcastNode>(ctx, n.kind == NodeKind::mul, cin);
             return std::make_shared<BinaryNode>(ctx, n.kind == NodeKind::mul);
         case NodeKind::frequency_encode: {
-            ModelConfig e;
+            ModelConfig::Encoding e;
             parse_encoding_fields(f, e, "");
             return std::make_shared<FrequencyEncodeNode>(ctx, cin, frequency_encoding(e));
         }

@@ -52,7 +52,7 @@ std::size_t GraphRunner::output_bytes(Context&, const ModelConfig& cfg, int heig
 
 void GraphRunner::enqueue(const Device& device, const ModelConfig& c, const DeviceBuffer& input,
                           const DeviceBuffer& output, int height, int width) {
-    const int step = 1 << c.num_downs;
+    const int step = 1 << c.unet.num_downs;
     if (height < step || width < step || height % step || width % step)
         throw InputError("enqueue model: input " + std::to_string(height) + "x" + std::to_string(width) +
                          " (HxW) must be positive multiples of 2^num_downs = " + std::to_string(step));

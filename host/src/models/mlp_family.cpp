@@ -17,7 +17,7 @@ namespace {
 constexpr int kMaxMlpLayers = 64;
 constexpr int kMaxMlpWidth = 65536;
 
-// c.layers, the encoding fields and c.output_nc from the metadata `j`; `what` prefixes errors.
+// c.mlp.layers, c.encoding and c.output_nc from the metadata `j`; `what` prefixes errors.
 void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
     auto fail = [&](const std::string& key, const std::string& rule) {
         return InputError(what + "field '" + key + "' must be " + rule);
@@ -29,7 +29,7 @@ void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string
         const nlohmann::json& l = j["layers"][i];
         const std::string key = "layers[" + std::to_string(i) + "]";
         if (!l.is_object()) throw fail(key, "an object {\"out\": n, \"activation\": a}");
-        ModelConfig::Layer layer;
+        ModelConfig::Mlp::Layer layer;
         if (!l.contains("out") || !l["out"].is_number_integer() || l["out"].get<long long>() < 1 ||
             l["out"].get<long long>() > kMaxMlpWidth)
             throw fail(key + ".out", "an integer in 1.." + std::to_string(kMaxMlpWidth));
@@ -46,14 +46,14 @@ void parse_mlp_fields(const nlohmann::json& j, ModelConfig& c, const std::string
                                                l["slope"].dump().substr(0, 40));
             layer.slope = l["slope"].get<float>();
         }
-        c.layers.push_back(layer);
+        c.mlp.layers.push_back(layer);
     }
-    c.output_nc = c.layers.back().out;
+    c.output_nc = c.mlp.layers.back().out;
     // An MLP's inputs (normals, positions, radiance) have no common range: unless the file says otherwise, the
     // guard replaces only NaN (-> 0) and +-Inf (-> +-FLT_MAX).
     c.input_range[0] = -3.402823466e38f;
     c.input_range[1] = 3.402823466e38f;
-    parse_encoding_fields(j, c, what);
+    parse_encoding_fields(j, c.encoding, what);
 }
 
 FamilyConfig parse_mlp(const nlohmann::json& j, const std::string& path) {
@@ -67,7 +67,10 @@ FamilyConfig parse_mlp(const nlohmann::json& j, const std::string& path) {
     if (j.contains("ao")) parsed.internal["ao"] = j["ao"];  // seed 001's AO network (ModelAccess::ao)
     if (j.contains("output_nc") && f.integer("output_nc", 1, kMaxChannels, 0, true) != c.output_nc)
         throw f.fail("output_nc", "the last layer's width (" + std::to_string(c.output_nc) + ")");
-    network_config_fields(f, c, false);
+    // The U-Net's norm and dropout keys, accepted since the four families shared one parser: checked, then dropped
+    // (an mlp has no U-Net: ModelConfig::unet stays empty).
+    ModelConfig::UNet no_unet;
+    network_config_fields(f, c, no_unet, false);
     network_config_end(f);
     return parsed;
 }
@@ -103,7 +106,7 @@ private:
 
 std::unique_ptr<FamilyRunner> load_mlp(Context& ctx, ModelConfig& cfg, const SafetensorsFile& file,
                                        const std::string& path, const ModelOptions& options) {
-    apply_network_options(cfg, options);
+    // options.bn_mode and options.dropout are accepted and have nothing to act on (no U-Net).
     return std::make_unique<MlpFamilyRunner>(ctx, mlp_spec(cfg, file, path), gemm_selection(ctx).params,
                                              options.mlp_path, cfg.input_range[0], cfg.input_range[1]);
 }

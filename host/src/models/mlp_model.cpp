@@ -6,7 +6,7 @@ namespace ngi::detail {
 
 namespace {
 
-Act activation_of(const ModelConfig::Layer& l) {
+Act activation_of(const ModelConfig::Mlp::Layer& l) {
     if (l.activation == "none") return Act::none();
     if (l.activation == "relu") return Act::relu();
     if (l.activation == "leaky_relu") return Act::leaky(l.slope);
@@ -18,7 +18,7 @@ Act activation_of(const ModelConfig::Layer& l) {
 
 }  // namespace
 
-void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
+void parse_encoding_fields(const nlohmann::json& j, ModelConfig::Encoding& c, const std::string& what) {
     auto fail = [&](const std::string& key, const std::string& rule) {
         return InputError(what + "field '" + key + "' must be " + rule);
     };
@@ -36,27 +36,27 @@ void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::s
             if (!e[k].is_boolean()) throw fail(std::string("encoding.") + k, "true or false");
             return e[k].get<bool>();
         };
-        c.encoding_bands = integer("bands", 0, 24, 0);
-        c.encoding_first_exponent = integer("first_exponent", -32, 31, 0);
-        if (c.encoding_first_exponent + c.encoding_bands > 32)
+        c.bands = integer("bands", 0, 24, 0);
+        c.first_exponent = integer("first_exponent", -32, 31, 0);
+        if (c.first_exponent + c.bands > 32)
             throw fail("encoding.first_exponent", "such that the last band's exponent is at most 31");
-        c.encoding_pi = boolean("pi", true);
-        c.encoding_include_input = boolean("include_input", true);
+        c.pi = boolean("pi", true);
+        c.include_input = boolean("include_input", true);
         if (e.contains("order")) {
             if (!e["order"].is_string() || (e["order"] != "band" && e["order"] != "component"))
                 throw fail("encoding.order", "\"band\" | \"component\"");
-            c.encoding_order = e["order"].get<std::string>();
+            c.order = e["order"].get<std::string>();
         }
     }
 }
 
-FrequencyEncoding frequency_encoding(const ModelConfig& c) {
+FrequencyEncoding frequency_encoding(const ModelConfig::Encoding& c) {
     FrequencyEncoding e;
-    e.bands = c.encoding_bands;
-    e.first_exponent = c.encoding_first_exponent;
-    e.pi = c.encoding_pi;
-    e.include_input = c.encoding_include_input;
-    e.order = c.encoding_order == "component" ? FrequencyEncoding::Order::ComponentMajor
+    e.bands = c.bands;
+    e.first_exponent = c.first_exponent;
+    e.pi = c.pi;
+    e.include_input = c.include_input;
+    e.order = c.order == "component" ? FrequencyEncoding::Order::ComponentMajor
                                                : FrequencyEncoding::Order::BandMajor;
     return e;
 }
@@ -64,14 +64,15 @@ FrequencyEncoding frequency_encoding(const ModelConfig& c) {
 MlpSpec mlp_spec(const ModelConfig& c, const SafetensorsFile& file, const std::string& path) {
     MlpSpec s;
     s.inputs = c.input_nc;
-    s.encoding = frequency_encoding(c);
+    s.encoding = frequency_encoding(c.encoding);
     int in = s.encoding.width(s.inputs);
     std::set<std::string> used;
-    for (std::size_t i = 0; i < c.layers.size(); ++i) {
+    const std::vector<ModelConfig::Mlp::Layer>& layers = c.mlp.layers;
+    for (std::size_t i = 0; i < layers.size(); ++i) {
         DenseSpec d;
         d.in = in;
-        d.out = c.layers[i].out;
-        d.act = activation_of(c.layers[i]);
+        d.out = layers[i].out;
+        d.act = activation_of(layers[i]);
         const std::string wname = "layers." + std::to_string(i) + ".weight", bname = "layers." + std::to_string(i) + ".bias";
         auto w = file.tensors.find(wname);
         if (w == file.tensors.end()) throw InputError("load model " + path + ": tensor '" + wname + "' is missing");
@@ -88,12 +89,12 @@ MlpSpec mlp_spec(const ModelConfig& c, const SafetensorsFile& file, const std::s
             used.insert(bname);
         }
         s.layers.push_back(std::move(d));
-        in = c.layers[i].out;
+        in = layers[i].out;
     }
     for (const auto& [name, t] : file.tensors)
         if (!used.count(name))
             throw InputError("load model " + path + ": tensor '" + name + "' is not part of this mlp (" +
-                             std::to_string(c.layers.size()) + " layers)");
+                             std::to_string(layers.size()) + " layers)");
     s.validate(("load model " + path).c_str());
     return s;
 }

@@ -13,10 +13,10 @@
 
 namespace ngi::detail {
 
-// The optional "encoding" object into c.encoding_* (docs/MODEL_FORMAT.md; absent: no encoding).
-void parse_encoding_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what);
-// c.encoding_* as the ops take it.
-FrequencyEncoding frequency_encoding(const ModelConfig& c);
+// The optional "encoding" object of `j` into `e` (docs/MODEL_FORMAT.md; absent: no encoding).
+void parse_encoding_fields(const nlohmann::json& j, ModelConfig::Encoding& e, const std::string& what);
+// `e` as the ops take it.
+FrequencyEncoding frequency_encoding(const ModelConfig::Encoding& e);
 
 // The network of an "mlp" model file: tensors layers.<i>.weight [out, in] and layers.<i>.bias [out]; every tensor
 // present, of that shape, finite, and no other tensor. `path` names the file in errors.

@@ -11,14 +11,14 @@ void network_config_start(const ConfigFields& f, ModelConfig& c) {
     c.input_nc = int(f.integer("input_nc", 1, kMaxChannels, 0, true));
 }
 
-void network_config_fields(const ConfigFields& f, ModelConfig& c, bool other_output_modes) {
+void network_config_fields(const ConfigFields& f, ModelConfig& c, ModelConfig::UNet& u, bool other_output_modes) {
     f.string("norm", {"batch"}, "batch", false);
-    c.bn_mode = f.string("bn_mode", {"running", "per_image"}, c.bn_mode, false);
-    c.bn_eps = f.number("bn_eps", 0.0, 1.0, true, false, c.bn_eps);
-    c.dropout = f.string("dropout", {"off", "seeded"}, c.dropout, false);
-    c.dropout_p = f.number("dropout_p", 0.0, 1.0, false, true, c.dropout_p);  // 1 would divide by 1 - p = 0
-    c.dropout_seed = std::uint32_t(f.integer("dropout_seed", 0, 0xffffffffll, c.dropout_seed, false));
-    c.leaky_slope = f.number("leaky_slope", 0.0, 1.0, false, false, c.leaky_slope);
+    u.bn_mode = f.string("bn_mode", {"running", "per_image"}, u.bn_mode, false);
+    u.bn_eps = f.number("bn_eps", 0.0, 1.0, true, false, u.bn_eps);
+    u.dropout = f.string("dropout", {"off", "seeded"}, u.dropout, false);
+    u.dropout_p = f.number("dropout_p", 0.0, 1.0, false, true, u.dropout_p);  // 1 would divide by 1 - p = 0
+    u.dropout_seed = std::uint32_t(f.integer("dropout_seed", 0, 0xffffffffll, u.dropout_seed, false));
+    u.leaky_slope = f.number("leaky_slope", 0.0, 1.0, false, false, u.leaky_slope);
     if (f.has("input_layout") && !read_input_layout(f.at("input_layout"), c.input_nc, c.input_layout))
         throw f.fail("input_layout", input_layout_rule(c.input_nc));
     f.range("input_range", c.input_range);

@@ -17,14 +17,14 @@ namespace {
 
 constexpr int kMaxBufferChannels = 4096, kMaxNeuralGiMlpWidth = 4096, kMaxMlpDepth = 64;
 
-// c.neural_gi and the encoding from the metadata (the U-Net's fields are read: ngf, num_downs, bn_mode, ...).
+// c.neural_gi and c.encoding from the metadata (c.unet, the buffer network's, is read: ngf, num_downs, bn_mode, ...).
 void parse_neural_gi_fields(const nlohmann::json& j, ModelConfig& c, const std::string& what) {
     auto fail = [&](const std::string& key, const std::string& rule) {
         return InputError(what + "field '" + key + "' must be " + rule);
     };
     if (c.output_nc != 3) throw fail("output_nc", "3 (RGB indirect light) for family neural_gi");
-    if (c.dropout != "off") throw fail("dropout", "\"off\" for family neural_gi (its U-Net has no dropout)");
-    parse_encoding_fields(j, c, what);
+    if (c.unet.dropout != "off") throw fail("dropout", "\"off\" for family neural_gi (its U-Net has no dropout)");
+    parse_encoding_fields(j, c.encoding, what);
     if (!j.contains("neural_gi") || !j["neural_gi"].is_object())
         throw fail("neural_gi", "an object {buffer_channels, mlp_width, mlp_depth, skip_layer, decode}");
     const nlohmann::json& n = j["neural_gi"];
@@ -73,9 +73,9 @@ FamilyConfig parse_neural_gi(const nlohmann::json& j, const std::string& path) {
     parsed.traits = {.input = ModelInput::image, .has_network = true, .output_keeps_size = true};
     network_config_start(f, c);
     c.output_nc = int(f.integer("output_nc", 1, kMaxChannels, 0, true));
-    c.ngf = int(f.integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
-    c.num_downs = int(f.integer("num_downs", 5, 12, 0, true));
-    network_config_fields(f, c, false);
+    c.unet.ngf = int(f.integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
+    c.unet.num_downs = int(f.integer("num_downs", 5, 12, 0, true));
+    network_config_fields(f, c, c.unet, false);
     parse_neural_gi_fields(j, c, f.what());  // after dropout: it must be off
     network_config_end(f);
     return parsed;

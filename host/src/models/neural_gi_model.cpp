@@ -17,7 +17,7 @@ ModelConfig buffer_config(const ModelConfig& cfg) {
     ModelConfig b = cfg;
     b.family = "pix2pix_unet";
     b.output_nc = cfg.neural_gi.buffer_channels;
-    b.dropout = "off";
+    b.unet.dropout = "off";
     return b;
 }
 
@@ -29,7 +29,7 @@ SafetensorsFile buffer_tensors(const SafetensorsFile& file) {
     return b;
 }
 
-int encoded_width(const ModelConfig& cfg) { return frequency_encoding(cfg).width(cfg.input_nc); }
+int encoded_width(const ModelConfig& cfg) { return frequency_encoding(cfg.encoding).width(cfg.input_nc); }
 
 // Input width of hidden layer i.
 int hidden_in(const ModelConfig& cfg, int i) {
@@ -75,7 +75,7 @@ NeuralGiOps build_neural_gi_ops(Context& ctx, const ModelConfig& cfg, const Safe
     const ModelConfig::NeuralGi& n = cfg.neural_gi;
     NeuralGiOps ops;
     ops.buffer = build_unet_ops(ctx, buffer_config(cfg), buffer_tensors(file), gemm, conv_gemm, Act::none());
-    ops.encode = std::make_shared<FrequencyEncodeNode>(ctx, cfg.input_nc, frequency_encoding(cfg));
+    ops.encode = std::make_shared<FrequencyEncodeNode>(ctx, cfg.input_nc, frequency_encoding(cfg.encoding));
     ops.skip_copy = std::make_shared<CopyNode>();
     ops.skip_layer = n.skip_layer;
     ops.weight_bytes = ops.buffer.weight_bytes;

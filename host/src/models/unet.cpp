@@ -24,13 +24,13 @@ std::string pix2pix_seq(int level) {
 }
 
 UNetSpec pix2pix_spec(const ModelConfig& c) {
-    const int D = c.num_downs;
+    const int D = c.unet.num_downs;
     UNetSpec spec;
     spec.levels.resize(D);
     for (int i = 0; i < D; ++i) {
         LevelSpec& l = spec.levels[i];
         l.in_c = i == 0 ? c.input_nc : spec.levels[i - 1].inner_c;
-        l.inner_c = c.ngf * std::min(1 << std::min(i, 3), 8);
+        l.inner_c = c.unet.ngf * std::min(1 << std::min(i, 3), 8);
         const std::string s = pix2pix_seq(i) + ".";
         if (i == 0) {  // outermost: [downconv, submodule, uprelu, upconv(bias), tanh]
             l.down_w = s + "0.weight";
@@ -67,7 +67,7 @@ UNetSpec deepillumination_spec(const ModelConfig& c) {
     for (int i = 0; i < 8; ++i) {
         LevelSpec& l = spec.levels[i];
         l.in_c = i == 0 ? c.input_nc : spec.levels[i - 1].inner_c;
-        l.inner_c = c.ngf * std::min(1 << std::min(i, 3), 8);
+        l.inner_c = c.unet.ngf * std::min(1 << std::min(i, 3), 8);
         l.down_w = "conv" + std::to_string(i + 1) + ".weight";
         l.down_b = "conv" + std::to_string(i + 1) + ".bias";
         l.down_bn = down_bn[i];
@@ -160,11 +160,12 @@ void validate_unet_tensors(const ModelConfig& cfg, const SafetensorsFile& file) 
     if (!problems.empty())
         throw InputError("load model: the tensors do not match a " + cfg.family + " generator with input_nc " +
                          std::to_string(cfg.input_nc) + ", output_nc " + std::to_string(cfg.output_nc) + ", ngf " +
-                         std::to_string(cfg.ngf) + ", num_downs " + std::to_string(cfg.num_downs) + ":" + problems);
-    if (cfg.bn_mode != "running" && cfg.bn_mode != "per_image")
-        throw InputError("load model: bn_mode '" + cfg.bn_mode + "' is not running or per_image");
-    if (cfg.dropout != "off" && cfg.dropout != "seeded")
-        throw InputError("load model: dropout '" + cfg.dropout + "' is not off or seeded");
+                         std::to_string(cfg.unet.ngf) + ", num_downs " + std::to_string(cfg.unet.num_downs) + ":" +
+                         problems);
+    if (cfg.unet.bn_mode != "running" && cfg.unet.bn_mode != "per_image")
+        throw InputError("load model: bn_mode '" + cfg.unet.bn_mode + "' is not running or per_image");
+    if (cfg.unet.dropout != "off" && cfg.unet.dropout != "seeded")
+        throw InputError("load model: dropout '" + cfg.unet.dropout + "' is not off or seeded");
 }
 
 UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFile& file, const GemmParams& gemm,
@@ -172,9 +173,9 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
     const ConvPath conv_path = conv_gemm ? ConvPath::automatic : ConvPath::im2col;
     validate_unet_tensors(cfg, file);  // names, shapes and modes, before touching the device
     const UNetSpec spec = unet_spec(cfg);
-    const bool running = cfg.bn_mode == "running";
+    const bool running = cfg.unet.bn_mode == "running";
     const int D = int(spec.levels.size());
-    const Act leaky = Act::leaky(cfg.leaky_slope);
+    const Act leaky = Act::leaky(cfg.unet.leaky_slope);
     UNetOps ops;
     ops.decoder_first = spec.decoder_first;
     ops.input_nc = cfg.input_nc;
@@ -183,7 +184,7 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
     auto per_image_bn = [&](const std::string& bn, int channels, Act act) -> std::shared_ptr<Op> {
         if (bn.empty() || running) return nullptr;
         return std::make_shared<BatchNormNode>(ctx, channels, get(file, bn + ".weight").data,
-                                               get(file, bn + ".bias").data, cfg.bn_eps, act);
+                                               get(file, bn + ".bias").data, cfg.unet.bn_eps, act);
     };
     for (int i = 0; i < D; ++i) {
         const LevelSpec& l = spec.levels[i];
@@ -194,21 +195,22 @@ UNetOps build_unet_ops(Context& ctx, const ModelConfig& cfg, const SafetensorsFi
         const bool down_has_bn = !l.down_bn.empty() && !running;
         o.down = std::make_shared<ConvNode>(
             ctx, gemm, ConvSpec{l.in_c, l.inner_c, {4, 4, 2, 1}, Act::none(), down_has_bn ? Act::none() : down_act},
-            get(file, l.down_w).data.data(), fold(file, l.down_b, l.down_bn, l.inner_c, cfg.bn_eps, running),
+            get(file, l.down_w).data.data(), fold(file, l.down_b, l.down_bn, l.inner_c, cfg.unet.bn_eps, running),
             conv_path, conv_gemm);
         o.down_bn = per_image_bn(l.down_bn, l.inner_c, down_act);
         const Act up_in = i == D - 1 ? Act::none() : Act::relu();  // innermost input is already ReLU'd
         const Act up_act = i == 0 ? outer_act : Act::none();
         o.up = std::make_shared<ConvTransposeNode>(
             ctx, gemm, ConvSpec{l.up_in, l.up_out, {4, 4, 2, 1}, up_in, up_act}, get(file, l.up_w).data.data(),
-            fold(file, l.up_b, l.up_bn, l.up_out, cfg.bn_eps, running), conv_path, conv_gemm);
+            fold(file, l.up_b, l.up_bn, l.up_out, cfg.unet.bn_eps, running), conv_path, conv_gemm);
         o.up_bn = per_image_bn(l.up_bn, l.up_out, Act::none());
         ops.weight_bytes += (get(file, l.down_w).data.size() + get(file, l.up_w).data.size()) * sizeof(float);
     }
     // Dropout sites are numbered in execution order: the up path runs from the innermost level outwards.
     for (int i = D - 1; i >= 0; --i)
-        if (spec.levels[i].dropout && cfg.dropout == "seeded")
-            ops.levels[i].dropout = std::make_shared<DropoutNode>(ctx, cfg.dropout_seed, dropout_site++, cfg.dropout_p);
+        if (spec.levels[i].dropout && cfg.unet.dropout == "seeded")
+            ops.levels[i].dropout =
+                std::make_shared<DropoutNode>(ctx, cfg.unet.dropout_seed, dropout_site++, cfg.unet.dropout_p);
     return ops;
 }
 

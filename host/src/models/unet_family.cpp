@@ -1,5 +1,5 @@
 // Families "pix2pix_unet" and "deepillumination" (docs/MODEL_FORMAT.md): the U-Net generators' front-end. Their
-// config (the network fields every generator has, its channel counts, ngf and num_downs), the tensors checked and
+// config (the network fields every generator has, its channel counts, and ModelConfig::unet), the tensors checked and
 // the ops built by models/unet.cpp, run as graphs (models/graph_runner.hpp).
 #include "models/family.hpp"
 #include "models/graph_runner.hpp"
@@ -36,9 +36,9 @@ FamilyConfig parse_unet_generator(const nlohmann::json& j, const std::string& pa
     parsed.traits = {.input = ModelInput::image, .has_network = true, .output_keeps_size = true};
     network_config_start(f, c);
     c.output_nc = int(f.integer("output_nc", 1, kMaxChannels, 0, true));
-    c.ngf = int(f.integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
-    c.num_downs = int(f.integer("num_downs", min_downs, max_downs, 0, true));
-    network_config_fields(f, c, other_output_modes);
+    c.unet.ngf = int(f.integer("ngf", 1, kMaxChannels / 8, 0, true));  // the deepest levels have 8 * ngf channels
+    c.unet.num_downs = int(f.integer("num_downs", min_downs, max_downs, 0, true));
+    network_config_fields(f, c, c.unet, other_output_modes);
     network_config_end(f);
     return parsed;
 }

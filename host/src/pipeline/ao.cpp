@@ -39,7 +39,8 @@ AoNetwork AoNetwork::load(const Device& device, const std::string& path, const M
     // A requirement of AoNetwork, not a dispatch: the "ao" metadata and the layers it checks are the mlp family's.
     if (c.family != "mlp") throw fail("family is '" + c.family + "', an AO model is an \"mlp\"");
     if (c.input_nc != 3 * kRingPoints) throw fail("input_nc is " + std::to_string(c.input_nc) + ", expected 48 (16 normals)");
-    if (c.layers.back().out != 1) throw fail("the last layer has " + std::to_string(c.layers.back().out) + " outputs, expected 1");
+    if (c.mlp.layers.back().out != 1)
+        throw fail("the last layer has " + std::to_string(c.mlp.layers.back().out) + " outputs, expected 1");
     // The "ao" object (ring, radius, training size, normals), as the models library read it at load.
     const detail::AoMetadata a = detail::ModelAccess::ao(model, "AO model " + path + ": ");
     auto impl = std::make_unique<Impl>(device, std::move(model));

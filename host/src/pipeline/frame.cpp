@@ -169,7 +169,7 @@ void SurroundPipeline::enqueue(Model& model, const DeviceBuffer& planes, const F
     detail::indirect_output(config, "enqueue frame");  // an unknown output_mode fails before anything is enqueued
     // The generator's size: the global view (2N x 4N) or the front face; it must be divisible by 2^num_downs.
     const int h = surround ? 2 * im.n : im.n, w = surround ? 4 * im.n : im.n;
-    const int step = 1 << config.num_downs;
+    const int step = 1 << config.unet.num_downs;
     if (h % step || w % step)
         throw InputError("enqueue frame: the model needs sizes divisible by 2^num_downs = " + std::to_string(step) +
                          "; this pipeline's network input is " + std::to_string(h) + "x" + std::to_string(w) +

@@ -149,7 +149,7 @@ NeuralGiImages NeuralGiRenderer::run(Model& model, const Frame& frame, const Neu
     if (k < 1 || k > 64 || n < 1 || n % k)
         throw InputError("neural GI: upsample " + std::to_string(k) + " must be in 1..64 and divide the face size " +
                          std::to_string(n));
-    const int side = n / k, step = 1 << config.num_downs;
+    const int side = n / k, step = 1 << config.unet.num_downs;
     if (side % step)
         throw InputError("neural GI: the network runs at " + std::to_string(side) + "x" + std::to_string(side) +
                          " (face size " + std::to_string(n) + " / upsample " + std::to_string(k) +

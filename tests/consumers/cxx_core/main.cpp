@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
         ngi::Device device = ngi::Device::open();
         ngi::Model model = ngi::Model::load(device, file);
         const ngi::ModelConfig& c = model.config();
-        const int side = 1 << c.num_downs;
+        const int side = 1 << c.unet.num_downs;
         ngi::Tensor x({1, c.input_nc, side, side});
         for (std::size_t i = 0; i < x.data.size(); ++i) x.data[i] = float(i % 13) / 13.0f * 2.0f - 1.0f;
         const ngi::Tensor y = model.run(x);
