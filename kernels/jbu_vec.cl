@@ -110,23 +110,19 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
     float8 spatial_sum = (float8)(0.0f), weight_sum = (float8)(0.0f);
     float8 acc0 = (float8)(0.0f), acc1 = acc0, acc2 = acc0, acc3 = acc0;
     // The spatial Gaussian is separable: exp(-(dx^2 + dy^2) s2) = exp(-dx^2 s2) exp(-dy^2 s2), the column factors
-    // computed once per work-item (2r exps per lane instead of 4r^2), the row factor once per tap row. Both paths below
-    // use them (their results are the same bits); the one-pixel kernel takes one exp per tap (rounding differs).
-    float8 col_weight[2 * JBU_MAX_RADIUS];
-    for (int tc = 0; tc < 2 * r; ++tc) {
-        const float8 dx = convert_float8((bx + tc) * den_x - num_x) / (float)den_x;
-        col_weight[tc] = exp(-dx * dx * s2);
-    }
+    // computed once per work-item (2r or 2r + 1 exps per lane instead of 4r^2), the row factor once per tap row. Both
+    // paths below compute them from the same integer column, so their results are the same bits; the one-pixel kernel
+    // takes one exp per tap (rounding differs).
     // Shared columns: when the live lanes' first tap columns differ by at most one (the output at least ~8x the input
     // along x, as a display view of an N = 64 lightmap is), the work-item's taps are the 2r + 1 columns bx.s0 ...
     // bx.s0 + 2r of each tap row: lanes with shift 0 use the first 2r, lanes with shift 1 the last 2r. Each column's
-    // texel is read once, from jbu_pack_taps' record, and its weight computed for all lanes, masked to the lanes whose window holds
-    // it: per lane the same values and arithmetic as the gathers below, in the same order (a masked column adds +0),
-    // so the same bits, without 8 x 2r gathered loads per value and tap row (the gathers were the kernel's cost).
+    // texel is read once, from jbu_pack_taps' record, and its weight computed for all lanes, masked to the lanes whose
+    // window holds it: per lane the same values and arithmetic as the gathers below, in the same order (a masked column
+    // adds +0), so the same bits, without 8 x 2r gathered loads per value and tap row (the gathers were the cost).
     const int8 shift = bx - bx.s0;  // lane 0 is live and has the smallest column (bx grows with x)
     if (share && all(~live | (shift <= 1))) {
         const int8 right = shift == 1;
-        float8 abs_weight[2 * JBU_MAX_RADIUS + 1];  // col_weight by absolute column bx.s0 + c: the same values
+        float8 abs_weight[2 * JBU_MAX_RADIUS + 1];  // by absolute column bx.s0 + c (the gathers' col_weight values)
         for (int c = 0; c <= 2 * r; ++c) {
             const float8 dx = convert_float8((bx.s0 + c) * den_x - num_x) / (float)den_x;
             abs_weight[c] = exp(-dx * dx * s2);
@@ -158,31 +154,38 @@ __kernel void jbu_upsample8(__global const float* restrict low, __global const f
                 if (nc > 3) acc3 += wt * v.w;
             }
         }
-    } else
-    for (int t = 0; t < 4 * r * r; ++t) {
-        const int j = by + t / (2 * r);
-        if (j < 0 || j >= lh) continue;  // the same row for every lane
-        const int8 i = bx + t % (2 * r);
-        const int8 in = surface & (i >= 0) & (i < lw);
-        const float dy = (float)(j * den_y - num_y) / (float)den_y;
-        const float8 spatial = col_weight[t % (2 * r)] * exp(-dy * dy * s2);
-        spatial_sum += select((float8)(0.0f), spatial, in);
-        const int8 l = j * lw + i;
-        const float8 mx = jbu_gather8(low_normal, l, in), my = jbu_gather8(low_normal + lo_plane, l, in),
-                     mz = jbu_gather8(low_normal + 2 * lo_plane, l, in);
-        const float8 qx = jbu_gather8(low_position, l, in), qy = jbu_gather8(low_position + lo_plane, l, in),
-                     qz = jbu_gather8(low_position + 2 * lo_plane, l, in);
-        const int8 ok = in & jbu_finite8(mx) & jbu_finite8(my) & jbu_finite8(mz) & (mx * mx + my * my + mz * mz >= 0.25f) &
-                        jbu_finite8(qx) & jbu_finite8(qy) & jbu_finite8(qz);
-        if (!any(ok)) continue;
-        const float8 facing = fmax(nx * mx + ny * my + nz * mz, 0.0f);
-        const float8 plane = mx * (px - qx) + my * (py - qy) + mz * (pz - qz);
-        const float8 wt = select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
-        weight_sum += wt;
-        acc0 += wt * jbu_clean8(jbu_gather8(low, l, ok));
-        if (nc > 1) acc1 += wt * jbu_clean8(jbu_gather8(low + lo_plane, l, ok));
-        if (nc > 2) acc2 += wt * jbu_clean8(jbu_gather8(low + 2 * lo_plane, l, ok));
-        if (nc > 3) acc3 += wt * jbu_clean8(jbu_gather8(low + 3 * lo_plane, l, ok));
+    } else {
+        float8 col_weight[2 * JBU_MAX_RADIUS];  // by the lane's own tap column bx + tc
+        for (int tc = 0; tc < 2 * r; ++tc) {
+            const float8 dx = convert_float8((bx + tc) * den_x - num_x) / (float)den_x;
+            col_weight[tc] = exp(-dx * dx * s2);
+        }
+        for (int t = 0; t < 4 * r * r; ++t) {
+            const int j = by + t / (2 * r);
+            if (j < 0 || j >= lh) continue;  // the same row for every lane
+            const int8 i = bx + t % (2 * r);
+            const int8 in = surface & (i >= 0) & (i < lw);
+            const float dy = (float)(j * den_y - num_y) / (float)den_y;
+            const float8 spatial = col_weight[t % (2 * r)] * exp(-dy * dy * s2);
+            spatial_sum += select((float8)(0.0f), spatial, in);
+            const int8 l = j * lw + i;
+            const float8 mx = jbu_gather8(low_normal, l, in), my = jbu_gather8(low_normal + lo_plane, l, in),
+                         mz = jbu_gather8(low_normal + 2 * lo_plane, l, in);
+            const float8 qx = jbu_gather8(low_position, l, in), qy = jbu_gather8(low_position + lo_plane, l, in),
+                         qz = jbu_gather8(low_position + 2 * lo_plane, l, in);
+            const int8 ok = in & jbu_finite8(mx) & jbu_finite8(my) & jbu_finite8(mz) &
+                            (mx * mx + my * my + mz * mz >= 0.25f) & jbu_finite8(qx) & jbu_finite8(qy) & jbu_finite8(qz);
+            if (!any(ok)) continue;
+            const float8 facing = fmax(nx * mx + ny * my + nz * mz, 0.0f);
+            const float8 plane = mx * (px - qx) + my * (py - qy) + mz * (pz - qz);
+            const float8 wt =
+                select((float8)(0.0f), spatial * jbu_power8(facing, np, np_int) * exp(-plane * plane * p2), ok);
+            weight_sum += wt;
+            acc0 += wt * jbu_clean8(jbu_gather8(low, l, ok));
+            if (nc > 1) acc1 += wt * jbu_clean8(jbu_gather8(low + lo_plane, l, ok));
+            if (nc > 2) acc2 += wt * jbu_clean8(jbu_gather8(low + 2 * lo_plane, l, ok));
+            if (nc > 3) acc3 += wt * jbu_clean8(jbu_gather8(low + 3 * lo_plane, l, ok));
+        }
     }
 
     const int8 use = surface & (weight_sum > ratio * spatial_sum) & (weight_sum > 0.0f);

@@ -84,17 +84,21 @@ int JointBilateralUpsample::enqueue(Context& ctx, const JbuInputs& in, const Jbu
     }
     Kernel& k = vec ? kernel_vec_ : kernel_;
     if (vec) {
-        // The taps' records for the shared-columns path (kernels/jbu_vec.cl jbu_pack_taps), one work-item per texel.
+        // The taps' records for the shared-columns path (kernels/jbu_vec.cl jbu_pack_taps, one work-item per texel;
+        // not made when the knob turns that path off).
         ensure_buffer(ctx, taps_, kJbuTapFloats * lo * sizeof(float), "joint bilateral upsampling: tap records");
-        pack_taps_.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, taps_);
-        const std::size_t items[1] = {round_up(lo, 64)}, group[1] = {64};
-        ctx.launch(pack_taps_, 1, items, group);
+        if (p.shared_columns) {
+            pack_taps_.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, taps_);
+            const std::size_t items[1] = {round_up(lo, 64)}, group[1] = {64};
+            ctx.launch(pack_taps_, 1, items, group);
+        }
         k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
                in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio,
                int(p.shared_columns), taps_, out, fallbacks_);
-    } else
+    } else {
         k.args(in.low, in.low_normal, in.low_position, in.low_width, in.low_height, in.channels, in.normal, in.position,
                in.width, in.height, float(s2), p.normal_power, float(p2), p.radius, p.fallback_ratio, out, fallbacks_);
+    }
     static const std::size_t local[2] = {8, 8};
     const std::size_t global[2] = {vec ? (std::size_t(in.width) + kJbuVec - 1) / kJbuVec : std::size_t(in.width),
                                    std::size_t(in.height)};
