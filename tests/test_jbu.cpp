@@ -211,7 +211,7 @@ TEST_CASE("JBU: small random case for the simulators", "[jbu][oclgrind]") {
 // work-item where its eight pixels share their tap columns (outputs ~8x the input and more, as a display view is);
 // that path must give the per-lane gathers' exact bits, hostile values and broken guides included. Ratios 6.7 to 16
 // (both paths taken within one image below ~8), 1 to 4 channels, every radius, widths that are not multiples of 8.
-// Small enough for oclgrind, where the scalar tap reads are checked for bounds.
+// Small enough for oclgrind, where the tap records' reads (jbu_pack_taps) are checked for bounds.
 TEST_CASE("JBU: the 8-pixel kernel's shared tap columns give the gathers' bits", "[jbu][oclgrind]") {
     // Not on Mesa's llvmpipe: building jbu_upsample8 there takes ~65 s, and only PoCL's CPUs run it by default.
     if (test::device().info().name.rfind("llvmpipe", 0) == 0) {
